@@ -1,0 +1,26 @@
+"""Exceptions that breakwater raises for its users."""
+
+from __future__ import annotations
+
+
+class BreakwaterError(Exception):
+    """Base class: a problem the user can act on (bad input, failed solve)."""
+
+
+class MeshError(BreakwaterError):
+    """A mesh is unreadable or inconsistent with what the case asks of it."""
+
+
+class ConvergenceError(BreakwaterError):
+    """A nonlinear solve did not converge.
+
+    Attributes:
+        reason: PETSc SNES converged reason (negative on divergence).
+        iterations: Newton iterations done.
+
+    """
+
+    def __init__(self, message: str, reason: int, iterations: int) -> None:
+        super().__init__(message)
+        self.reason = reason
+        self.iterations = iterations

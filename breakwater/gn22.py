@@ -1,0 +1,259 @@
+"""The GN22 time stepper (Katona & Zienkiewicz 1985; SPEC §3, eqs. 24-28).
+
+The unknown of each step is the acceleration increment ``Δa``::
+
+    a₁ = a₀ + Δa
+    v₁ = v₀ + Δt a₀ + β₁ Δt Δa
+    u₁ = u₀ + Δt v₀ + ½Δt² a₀ + ½β₂ Δt² Δa
+
+and ``M a₁ + C v₁ + K u₁ + f_c(u₁, v₁) = f(t₁)`` is solved for ``Δa`` by Newton. The
+scheme is unconditionally stable for β₂ ≥ β₁ ≥ ½; β₁ = ½ is second-order accurate,
+β₁ > ½ adds numerical damping. Like dolfiny's ``odeint``, the integrator is an object
+(stage, solve, update) whose ``t`` and ``Δt`` are ``fem.Constant`` s, so the forms
+compile once for the whole run, whatever the step size.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from . import forms
+from .interface import InterfaceNodes, interface_nodes
+from .model import ContactModel
+from .solver import NewtonOptions, NewtonSolver
+
+
+@dataclass(frozen=True)
+class GN22Parameters:
+    """GN22 parameters.
+
+    Attributes:
+        beta1: β₁ (Newmark γ); ½ is second order, larger damps high frequencies.
+        beta2: β₂ (2 × Newmark β).
+        allow_conditional: Accept β₁ < ½ or β₂ < β₁ (conditionally stable or
+            unstable schemes), for studies only.
+
+    """
+
+    beta1: float = 0.6
+    beta2: float = 0.605
+    allow_conditional: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.allow_conditional and not (self.beta2 >= self.beta1 >= 0.5):
+            raise ValueError(
+                f"GN22 needs beta2 >= beta1 >= 0.5 for unconditional stability (got "
+                f"beta1={self.beta1}, beta2={self.beta2}); set allow_conditional to insist")
+        if self.beta1 <= 0 or self.beta2 <= 0:
+            raise ValueError("GN22 needs beta1 > 0 and beta2 > 0")
+
+
+def _scale(model: ContactModel) -> float:
+    """A force norm of the problem: ‖f‖ of gravity and loads at t = 0 (else 1)."""
+    b = fem_petsc.assemble_vector(model.form(ufl.extract_blocks(model.external_load())),
+                                  kind="mpi")
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    norm = b.norm()
+    b.destroy()
+    return norm if norm > 0 else 1.0
+
+
+def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
+                 options: NewtonOptions | None = None,
+                 tangential_stabilisation: float = 1e-6) -> tuple[list[fem.Function], int]:
+    """Frictionless static equilibrium under gravity and the loads at t = 0.
+
+    A frictionless state is an exact equilibrium of the velocity-regularised law,
+    which carries no shear at zero velocity, so the dynamics then starts at rest.
+    A body held only by frictionless contact can slide as a rigid body; a weak
+    tangential spring ``k_t = tangential_stabilisation · ε_n`` on the interface removes
+    that mode (its shear is about ``k_t/ε_n`` of the pressure: negligible).
+
+    Args:
+        model: The contact model.
+        u: Initial guess (one Function per body); zero when None.
+        options: Newton settings.
+        tangential_stabilisation: ``k_t / ε_n`` (0 to switch off).
+
+    Returns:
+        The displacements and the Newton iterations.
+
+    """
+    u = list(u) if u is not None else model.functions("u")
+    g = model.gravity.value
+    if not any(f.x.array.any() for f in u) and np.any(g):
+        # A small penetration along gravity so that every contact starts active.
+        for p in model.pairs:
+            f = u[p.slave]
+            f.x.array.reshape(-1, model.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
+    F = model.residual(u)
+    if tangential_stabilisation > 0:
+        for p in model.pairs:
+            k_t = tangential_stabilisation * p.ε_n
+            jump = forms.tangential_part(u[p.slave]("+") - u[p.master]("-"), p.n)
+            δw = forms.tangential_part(model.w[p.slave]("+") - model.w[p.master]("-"), p.n)
+            F += k_t * ufl.dot(jump, δw) * p.dS
+    solver = NewtonSolver(model, F, u, "static", options, force_scale=_scale(model))
+    its = solver.solve()
+    return u, its
+
+
+class GN22:
+    """GN22 integrator of a contact model.
+
+    Args:
+        model: The contact model.
+        dt: Time step (s).
+        parameters: β₁, β₂.
+        t0: Initial time (s).
+        newton: Newton settings.
+        flip_guard: Stop nodal slip velocities from reversing within one Newton step
+            (see :meth:`_precheck`); needed for small χ.
+
+    """
+
+    def __init__(self, model: ContactModel, dt: float, parameters: GN22Parameters | None = None,
+                 t0: float = 0.0, newton: NewtonOptions | None = None,
+                 flip_guard: bool = True) -> None:
+        self.model = model
+        self.params = p = parameters or GN22Parameters()
+        msh = model.mesh
+        self.t = fem.Constant(msh, dolfinx.default_scalar_type(t0))
+        self.dt = fem.Constant(msh, dolfinx.default_scalar_type(dt))
+        self.u, self.v, self.a = model.functions("u"), model.functions("v"), model.functions("a")
+        self.da = model.functions("da")
+        Δt, β1, β2 = self.dt, p.beta1, p.beta2
+        self.u1 = [u + Δt * v + 0.5 * Δt**2 * a + 0.5 * β2 * Δt**2 * d
+                   for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)]
+        self.v1 = [v + Δt * a + β1 * Δt * d
+                   for v, a, d in zip(self.v, self.a, self.da, strict=True)]
+        self.a1 = [a + d for a, d in zip(self.a, self.da, strict=True)]
+        self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
+        self._y = model.functions("step")
+        F = model.residual(self.u1, self.v1, self.a1)
+        self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
+                                   force_scale=_scale(model),
+                                   precheck=self._precheck if self.nodes else None)
+        self.flips = 0
+
+    # --- initial state ------------------------------------------------------------
+
+    def initialise(self, u0: Sequence[fem.Function] | None = None,
+                   v0: Sequence[fem.Function] | None = None) -> None:
+        """Set u₀, v₀ and solve M a₀ = f(t₀) − C v₀ − K u₀ − f_c(u₀, v₀) for a₀."""
+        for dst, src in ((self.u, u0), (self.v, v0)):
+            for f, g in zip(dst, src or [None] * len(dst), strict=True):
+                if g is None:
+                    f.x.array[:] = 0.0
+                else:
+                    f.x.array[:] = g.x.array
+        m = self.model
+        m.set_time(float(self.t.value))
+        for f in self.a:
+            f.x.array[:] = 0.0
+        trial = ufl.TrialFunctions(m.W)
+        M = fem_petsc.assemble_matrix(m.form(ufl.extract_blocks(m.mass(trial))), bcs=m.bcs,
+                                      kind="mpi")
+        M.assemble()
+        R = m.form(ufl.extract_blocks(m.residual(self.u, self.v, self.a)))
+        b = fem_petsc.assemble_vector(R, kind="mpi")
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.scale(-1.0)
+        fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
+        ksp = PETSc.KSP().create(m.comm)
+        ksp.setOptionsPrefix("breakwater_mass_")
+        ksp.setOperators(M)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        x = b.duplicate()
+        ksp.solve(b, x)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        fem_petsc.assign(x, self.a)
+        for obj in (ksp, M, b, x):
+            obj.destroy()
+
+    # --- one step -----------------------------------------------------------------
+
+    def stage(self, dt: float | None = None) -> None:
+        """Prepare the step to t + Δt: step size, loads at t + Δt, Δa = 0."""
+        if dt is not None:
+            self.dt.value = dt
+        self.model.set_time(float(self.t.value + self.dt.value))
+        for d in self.da:
+            d.x.array[:] = 0.0
+
+    def solve(self) -> int:
+        """Newton on the step's residual; returns the iterations.
+
+        Raises:
+            ConvergenceError: The step did not converge; the state at t is untouched.
+
+        """
+        return self.solver.solve()
+
+    def update(self) -> None:
+        """Accept the step: (u, v, a) ← (u₁, v₁, a₁), t ← t + Δt."""
+        Δt, β1, β2 = float(self.dt.value), self.params.beta1, self.params.beta2
+        for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True):
+            u.x.array[:] += Δt * v.x.array + 0.5 * Δt**2 * a.x.array + 0.5 * β2 * Δt**2 * d.x.array
+            v.x.array[:] += Δt * a.x.array + β1 * Δt * d.x.array
+            a.x.array[:] += d.x.array
+        self.t.value += Δt
+
+    def step(self, dt: float | None = None) -> int:
+        """Stage, solve and update one step; returns the Newton iterations."""
+        self.stage(dt)
+        its = self.solve()
+        self.update()
+        return its
+
+    # --- Newton safeguard for the regularised friction law ------------------------
+
+    def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """Keep nodal slip velocities from reversing within one Newton step.
+
+        With χ = 1e-10 the friction law is a step function of the slip velocity: a
+        Newton step that reverses the relative tangential velocity of a node jumps
+        from one branch of ``±μp`` to the other and Newton 2-cycles between stick
+        and slip. For each node whose velocity would reverse (and is not already
+        inside the regularisation band, ``|v_T| > χ``), the slave's tangential step
+        is cut so that the node lands at zero slip velocity, where the tangent
+        ``μp/χ`` is exact; Newton then converges to stick or leaves zero on the side
+        the residual asks for. The decision is taken from values gathered on every
+        rank, so it is the same for any partition.
+        """
+        y.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        fem_petsc.assign(y, self._y)
+        fem_petsc.assign(x, self.da)
+        Δt, β1 = float(self.dt.value), self.params.beta1
+        changed = False
+        for nodes in self.nodes:
+            p = nodes.pair
+            s, mm = p.slave, p.master
+            vel = [self.v[i].x.array + Δt * self.a[i].x.array + β1 * Δt * self.da[i].x.array
+                   for i in (s, mm)]
+            vs, vm = nodes.gather(vel[0], vel[1])
+            ys, ym = nodes.gather(self._y[s].x.array, self._y[mm].x.array)
+            w0 = nodes.tangential(vs - vm)
+            w1 = w0 - β1 * Δt * nodes.tangential(ys - ym)  # x_new = x − y
+            χ = p.spec.regularisation
+            flip = (np.sum(w0 * w1, axis=1) < 0) & (np.linalg.norm(w0, axis=1) > χ)
+            if not flip.any():
+                continue
+            changed = True
+            self.flips += int(flip.sum())
+            # New slave step: normal part kept, tangential part such that w1 = 0.
+            ys_new = ys - nodes.tangential(ys) + nodes.tangential(ym) + w0 / (β1 * Δt)
+            nodes.scatter_slave(ys_new, self._y[s].x.array, flip)
+        if changed:
+            fem_petsc.assign(self._y, y)

@@ -1,0 +1,149 @@
+"""Node pairs of a conforming contact interface, identical on every rank.
+
+On a conforming interface each slave node has a master node at the same place. The
+pairs, their master normals and, at run time, nodal values of both sides are gathered
+on every rank: the interface is small (one dimension below the bulk), and every rank
+then takes the same decisions, whatever the partition.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import dolfinx
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from .errors import MeshError
+from .mesh import group_tag
+from .model import ContactModel, _PairData
+
+
+def _owned_interface_blocks(V: fem.FunctionSpace, facets: np.ndarray) -> np.ndarray:
+    fdim = V.mesh.topology.dim - 1
+    V.mesh.topology.create_connectivity(fdim, V.mesh.topology.dim)
+    blocks = fem.locate_dofs_topological(V, fdim, facets)
+    return blocks[blocks < V.dofmap.index_map.size_local]
+
+
+class InterfaceNodes:
+    """The slave/master node pairs of one contact pair.
+
+    Attributes:
+        x: Node coordinates, shape ``(n, gdim)``, sorted, the same on every rank.
+        normal: Master outward unit normal at each node (facet normals averaged).
+
+    """
+
+    def __init__(self, model: ContactModel, pair: _PairData) -> None:
+        self.comm = comm = model.comm
+        self.gdim = gdim = model.gdim
+        self.pair = pair
+        tag = group_tag(model.mesh_data, pair.spec.interface, model.mesh.topology.dim - 1)
+        sides = []
+        for body in (model.bodies[pair.slave], model.bodies[pair.master]):
+            blocks = _owned_interface_blocks(body.V, body.facet_tags.find(tag))
+            x = body.V.tabulate_dof_coordinates()[blocks, :gdim]
+            allx = np.vstack(comm.allgather(x)) if comm.size > 1 else x
+            sides.append((blocks, x, allx))
+        (bs, xs, allxs), (bm, xm, allxm) = sides
+        if len(allxs) != len(allxm):
+            raise MeshError(f"interface '{pair.spec.interface}' is not conforming: "
+                            f"{len(allxs)} slave nodes, {len(allxm)} master nodes")
+        scale = max(float(np.ptp(allxs, axis=0).max()), 1e-300)
+        order_s = np.lexsort(np.round(allxs / scale, 9).T[::-1])
+        order_m = np.lexsort(np.round(allxm / scale, 9).T[::-1])
+        if not np.allclose(allxs[order_s], allxm[order_m], rtol=0, atol=1e-9 * scale):
+            raise MeshError(f"interface '{pair.spec.interface}' is not conforming: "
+                            "slave and master nodes do not coincide")
+        self.x = allxs[order_s]
+        self.size = len(self.x)
+        # Position in the sorted list of every node this rank owns.
+        offsets_s = np.cumsum([0, *comm.allgather(len(xs))])[comm.rank]
+        offsets_m = np.cumsum([0, *comm.allgather(len(xm))])[comm.rank]
+        pos_s = np.empty(len(allxs), np.int64)
+        pos_s[order_s] = np.arange(len(allxs))
+        pos_m = np.empty(len(allxm), np.int64)
+        pos_m[order_m] = np.arange(len(allxm))
+        self._slave = (bs, pos_s[offsets_s:offsets_s + len(bs)])
+        self._master = (bm, pos_m[offsets_m:offsets_m + len(bm)])
+        self.normal = self._normals(model, pair, comm)
+
+    def _normals(self, model: ContactModel, pair: _PairData, comm: MPI.Comm) -> np.ndarray:
+        """Average of the master outward facet normals around each node."""
+        msh = model.mesh
+        tdim, gdim = msh.topology.dim, self.gdim
+        data = pair.facet_data
+        c2f = msh.topology.connectivity(tdim, tdim - 1)
+        facets = np.array([c2f.links(c)[lf] for c, lf in data[:, :2]], dtype=np.int32)
+        cells = data[:, 0]
+        fx = dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets)
+        cx = dolfinx.mesh.entities_to_geometry(msh, tdim, cells)
+        X = msh.geometry.x[:, :gdim]
+        local = []
+        for f, c in zip(fx, cx, strict=True):
+            v = X[f[: tdim]]
+            if gdim == 2:
+                t = v[1] - v[0]
+                n = np.array([t[1], -t[0]])
+            else:
+                n = np.cross(v[1] - v[0], v[2] - v[0])
+            n /= np.linalg.norm(n)
+            if np.dot(X[c].mean(axis=0) - v.mean(axis=0), n) < 0:  # point into the slave
+                n = -n
+            local.append((v, n))
+        facet_list = [item for part in comm.allgather(local) for item in part]
+        normal = np.zeros((self.size, gdim))
+        for v, n in facet_list:
+            normal[self._on_facet(v)] += n
+        length = np.linalg.norm(normal, axis=1)
+        if np.any(length == 0):
+            raise MeshError(f"interface '{pair.spec.interface}': a node lies on no facet")
+        return normal / length[:, None]
+
+    def _on_facet(self, v: np.ndarray) -> np.ndarray:
+        """Mask of the nodes lying on the simplex facet with vertices ``v``."""
+        A = (v[1:] - v[0]).T
+        λ, *_ = np.linalg.lstsq(A, (self.x - v[0]).T, rcond=None)
+        dist = np.linalg.norm(A @ λ - (self.x - v[0]).T, axis=0)
+        h = np.linalg.norm(A, axis=0).max()
+        tol = 1e-9
+        inside = (λ >= -tol).all(axis=0) & (λ.sum(axis=0) <= 1 + tol)
+        return inside & (dist <= tol * h)
+
+    def gather(self, slave: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Nodal values of both sides on every rank.
+
+        Args:
+            slave: Local array of a slave-body Function (``f.x.array``).
+            master: Local array of a master-body Function.
+
+        Returns:
+            ``(s, m)``, each of shape ``(n, gdim)``, in the order of :attr:`x`.
+
+        """
+        out = np.zeros((2, self.size, self.gdim))
+        for k, ((blocks, pos), arr) in enumerate(((self._slave, slave),
+                                                  (self._master, master))):
+            out[k, pos] = arr.reshape(-1, self.gdim)[blocks]
+        self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out[0], out[1]
+
+    def scatter_slave(self, values: np.ndarray, slave: np.ndarray,
+                      mask: np.ndarray | None = None) -> None:
+        """Write nodal values into the owned entries of a slave-body array."""
+        blocks, pos = self._slave
+        if mask is not None:
+            keep = mask[pos]
+            blocks, pos = blocks[keep], pos[keep]
+        slave.reshape(-1, self.gdim)[blocks] = values[pos]
+
+    def tangential(self, v: np.ndarray) -> np.ndarray:
+        """Tangential part (I − n⊗n) v of nodal vectors."""
+        return v - np.sum(v * self.normal, axis=1)[:, None] * self.normal
+
+
+def interface_nodes(model: ContactModel) -> Sequence[InterfaceNodes]:
+    """The node pairs of every contact pair of a model."""
+    return [InterfaceNodes(model, p) for p in model.pairs]

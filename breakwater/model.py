@@ -1,0 +1,440 @@
+"""A contact model built from a gmsh mesh with named physical groups.
+
+Bodies are named cell groups; each gets its own vector Lagrange space on a submesh, so
+the displacement is discontinuous across the interfaces. Contact pairs are named facet
+groups where a slave body meets a master body on a conforming interface; their terms
+are interior-facet integrals on the parent mesh, with the slave always on the ``'+'``
+side. All measures live on the parent mesh and the submeshes reach it through
+``entity_maps``.
+
+The bulk terms (M, C, K, loads) and the interface terms are separate forms
+(:meth:`ContactModel.bulk_residual`, :meth:`ContactModel.interface_residual`), so
+that a solver may factor the constant bulk operator once.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.io import gmsh as gmshio
+from mpi4py import MPI
+
+from . import forms
+from .errors import MeshError
+from .mesh import group_tag
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear isotropic elastic material.
+
+    Give exactly one of ``shear_modulus`` or ``young_modulus``.
+
+    Attributes:
+        density: Mass density ρ (kg/m³).
+        poisson: Poisson's ratio ν (-), in (-1, 1/2).
+        shear_modulus: Shear modulus G (Pa).
+        young_modulus: Young's modulus E (Pa).
+
+    """
+
+    density: float
+    poisson: float
+    shear_modulus: float | None = None
+    young_modulus: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.shear_modulus is None) == (self.young_modulus is None):
+            raise ValueError("give exactly one of shear_modulus and young_modulus")
+        if not self.density > 0:
+            raise ValueError(f"density must be > 0 (got {self.density})")
+        if not -1.0 < self.poisson < 0.5:
+            raise ValueError(f"poisson must be in (-1, 0.5) (got {self.poisson})")
+        modulus = self.shear_modulus if self.young_modulus is None else self.young_modulus
+        if not modulus > 0:  # type: ignore[operator]
+            raise ValueError(f"elastic modulus must be > 0 (got {modulus})")
+
+    @property
+    def G(self) -> float:
+        """Shear modulus (Pa)."""
+        return self.lame[1]
+
+    @property
+    def E(self) -> float:
+        """Young's modulus (Pa)."""
+        return 2.0 * self.G * (1.0 + self.poisson)
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """Lamé parameters (λ, μ) in Pa."""
+        if self.shear_modulus is not None:
+            return forms.lame_from_shear(self.shear_modulus, self.poisson)
+        assert self.young_modulus is not None
+        return forms.lame_from_young(self.young_modulus, self.poisson)
+
+    @property
+    def p_wave_speed(self) -> float:
+        """Speed of dilatational waves, sqrt((λ + 2μ)/ρ) (m/s)."""
+        λ, μ = self.lame
+        return math.sqrt((λ + 2.0 * μ) / self.density)
+
+    @property
+    def constrained_modulus(self) -> float:
+        """Oedometric modulus λ + 2μ (Pa): the 1D plane-strain bar modulus."""
+        λ, μ = self.lame
+        return λ + 2.0 * μ
+
+
+@dataclass(frozen=True)
+class Body:
+    """A deformable body: a named cell group and its material."""
+
+    name: str
+    material: Material
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    """Penalty contact with regularised Coulomb friction on a named facet group.
+
+    Attributes:
+        interface: Facet group where the two bodies meet (conforming).
+        slave: Body whose displacement is penalised against the master's.
+        master: Body whose outward normal defines the gap.
+        penalty: Normal penalty ε_n (N/m³).
+        friction: Coulomb coefficient μ (-); 0 for frictionless contact.
+        regularisation: Regularisation velocity χ (m/s).
+        gap: Initial normal gap g_0 (m).
+
+    """
+
+    interface: str
+    slave: str
+    master: str
+    penalty: float
+    friction: float = 0.0
+    regularisation: float = 1e-10
+    gap: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.penalty > 0:
+            raise ValueError(f"contact penalty must be > 0 (got {self.penalty})")
+        if not self.friction >= 0:
+            raise ValueError(f"friction coefficient must be >= 0 (got {self.friction})")
+        if not self.regularisation > 0:
+            raise ValueError(f"regularisation must be > 0 (got {self.regularisation})")
+        if self.slave == self.master:
+            raise ValueError("a contact pair needs two different bodies")
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """Zero displacement on a named facet group.
+
+    Attributes:
+        group: Facet group name.
+        components: Displacement components fixed (0 = x, 1 = y, 2 = z); None for all.
+
+    """
+
+    group: str
+    components: tuple[int, ...] | None = None
+
+
+@dataclass(frozen=True)
+class SurfaceLoad:
+    """A traction ``amplitude(t) * direction`` (Pa) on a named facet group.
+
+    Attributes:
+        group: Facet group on the boundary of one body.
+        direction: Traction per unit amplitude (a vector of the geometric dimension).
+        amplitude: Time function t ↦ scale factor.
+
+    """
+
+    group: str
+    direction: tuple[float, ...]
+    amplitude: Callable[[float], float]
+
+
+@dataclass(frozen=True)
+class Damping:
+    """Rayleigh damping C = αM + βK (α in 1/s, β in s), the same for every body."""
+
+    alpha: float = 0.0
+    beta: float = 0.0
+
+
+@dataclass
+class _BodyData:
+    """What the model builds for one body."""
+
+    spec: Body
+    index: int
+    submesh: dolfinx.mesh.Mesh
+    cell_map: dolfinx.mesh.EntityMap
+    facet_tags: dolfinx.mesh.MeshTags
+    V: fem.FunctionSpace
+    dx: ufl.Measure
+    ρ: fem.Constant
+    λ: fem.Constant
+    μ: fem.Constant
+
+
+@dataclass
+class _PairData:
+    """What the model builds for one contact pair."""
+
+    spec: ContactPair
+    slave: int
+    master: int
+    facet_data: np.ndarray
+    dS: ufl.Measure
+    n: ufl.core.expr.Expr
+    ε_n: fem.Constant
+    μ: fem.Constant
+    χ: fem.Constant
+    g0: fem.Constant
+
+
+@dataclass
+class _LoadData:
+    spec: SurfaceLoad
+    body: int
+    ds: ufl.Measure
+    amplitude: fem.Constant
+    traction: ufl.core.expr.Expr = field(init=False)
+
+
+class ContactModel:
+    """N deformable bodies in frictional contact, from a gmsh mesh with named groups.
+
+    Args:
+        mesh_data: dolfinx ``MeshData`` (see :func:`breakwater.mesh.read_mesh`), read
+            with shared-facet ghosting.
+        bodies: The bodies (named cell groups).
+        pairs: The contact pairs (named facet groups).
+        fixed: Dirichlet boundaries (named facet groups).
+        loads: Time-dependent surface tractions.
+        gravity: Body force per unit mass (m/s²), e.g. ``(0, -9.81)``.
+        damping: Rayleigh damping.
+        degree: Polynomial degree of the displacement (2: six-node triangles).
+
+    """
+
+    def __init__(
+        self,
+        mesh_data: gmshio.MeshData,
+        bodies: Sequence[Body],
+        pairs: Sequence[ContactPair] = (),
+        fixed: Sequence[Fixed] = (),
+        loads: Sequence[SurfaceLoad] = (),
+        gravity: Sequence[float] | None = None,
+        damping: Damping | None = None,
+        degree: int = 2,
+    ) -> None:
+        self.mesh_data = mesh_data
+        self.mesh = msh = mesh_data.mesh
+        self.comm: MPI.Comm = msh.comm
+        tdim = msh.topology.dim
+        self.gdim = msh.geometry.dim
+        if mesh_data.cell_tags is None or mesh_data.facet_tags is None:
+            raise MeshError("the mesh needs cell and facet physical groups")
+        msh.topology.create_connectivity(tdim - 1, tdim)
+        self._cell_body = np.full(msh.topology.index_map(tdim).size_local
+                                  + msh.topology.index_map(tdim).num_ghosts, -1, np.int32)
+
+        dx = ufl.Measure("dx", domain=msh, subdomain_data=mesh_data.cell_tags)
+        self.bodies: list[_BodyData] = []
+        for i, body in enumerate(bodies):
+            tag = group_tag(mesh_data, body.name, tdim)
+            cells = mesh_data.cell_tags.find(tag)
+            ncells = self.comm.allreduce(len(cells))
+            if ncells == 0:
+                raise MeshError(f"body '{body.name}' has no cells")
+            if np.any(self._cell_body[cells] >= 0):
+                raise MeshError(f"body '{body.name}' overlaps another body")
+            self._cell_body[cells] = i
+            sub, cmap, vmap, _ = dolfinx.mesh.create_submesh(msh, tdim, cells)
+            ftags = dolfinx.mesh.transfer_meshtags_to_submesh(mesh_data.facet_tags, sub, vmap,
+                                                               cmap)
+            sub.topology.create_connectivity(tdim - 1, tdim)
+            V = fem.functionspace(sub, ("Lagrange", degree, (self.gdim,)))
+            λ, μ = body.material.lame
+            const = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
+            self.bodies.append(_BodyData(body, i, sub, cmap, ftags, V, dx(tag),
+                                         const(body.material.density), const(λ), const(μ)))
+        self.entity_maps = [b.cell_map for b in self.bodies]
+        self._by_name = {b.spec.name: b for b in self.bodies}
+
+        self.W = ufl.MixedFunctionSpace(*(b.V for b in self.bodies))
+        self.w = ufl.TestFunctions(self.W)
+        self.gravity = fem.Constant(msh, np.array(gravity if gravity is not None
+                                                  else np.zeros(self.gdim), dtype=float))
+        d = damping or Damping()
+        self.damping = d
+        self.α = fem.Constant(msh, dolfinx.default_scalar_type(d.alpha))
+        self.β = fem.Constant(msh, dolfinx.default_scalar_type(d.beta))
+
+        self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
+        self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
+        self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
+
+    # --- set-up -------------------------------------------------------------------
+
+    def body(self, name: str) -> _BodyData:
+        """The data of a body by name."""
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise KeyError(f"no body named '{name}' (bodies: {', '.join(self._by_name)})") \
+                from None
+
+    def _build_pair(self, k: int, pair: ContactPair) -> _PairData:
+        msh, data = self.mesh, self.mesh_data
+        tdim = msh.topology.dim
+        s, m = self.body(pair.slave).index, self.body(pair.master).index
+        assert data.facet_tags is not None
+        facets = data.facet_tags.find(group_tag(data, pair.interface, tdim - 1))
+        integration = fem.compute_integration_domains(fem.IntegralType.interior_facet,
+                                                      msh.topology, facets)
+        if self.comm.allreduce(len(facets)) == 0 or \
+                self.comm.allreduce(integration.size) == 0:
+            raise MeshError(f"interface '{pair.interface}' has no facet shared by two cells "
+                            "(is it a conforming interface between two bodies?)")
+        # Reorder so that '+' is always the slave: unordered data gives wrong numbers.
+        d = integration.reshape(-1, 4).copy()
+        flip = self._cell_body[d[:, 0]] != s
+        d[flip] = d[flip][:, [2, 3, 0, 1]]
+        if not (np.all(self._cell_body[d[:, 0]] == s) and np.all(self._cell_body[d[:, 2]] == m)):
+            raise MeshError(f"interface '{pair.interface}' does not lie between "
+                            f"'{pair.slave}' and '{pair.master}'")
+        # Nodal (Gauss-Lobatto) quadrature: the points are the facet's P2 nodes, i.e. the
+        # paper's node-to-node contact; it also decouples the friction law node by node.
+        tag = 1000 + k
+        dS = ufl.Measure("dS", domain=msh, subdomain_data=[(tag, d.ravel())],
+                         metadata={"quadrature_rule": "GLL", "quadrature_degree": 3})(tag)
+        n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
+        c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
+        return _PairData(pair, s, m, d, dS, n, c(pair.penalty), c(pair.friction),
+                         c(pair.regularisation), c(pair.gap))
+
+    def _locate(self, group: str) -> tuple[_BodyData, np.ndarray]:
+        """The body whose boundary holds a facet group, and its facets in the submesh."""
+        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
+        found = [(b, b.facet_tags.find(tag)) for b in self.bodies]
+        counts = [self.comm.allreduce(len(f)) for _, f in found]
+        owners = [i for i, c in enumerate(counts) if c > 0]
+        if len(owners) != 1:
+            raise MeshError(f"facet group '{group}' must lie on exactly one body "
+                            f"(found on {len(owners)})")
+        return found[owners[0]]
+
+    def _build_fixed(self, fixed: Fixed) -> list[fem.DirichletBC]:
+        body, facets = self._locate(fixed.group)
+        fdim = self.mesh.topology.dim - 1
+        comps = range(self.gdim) if fixed.components is None else fixed.components
+        bcs = []
+        for c in comps:
+            if not 0 <= c < self.gdim:
+                raise ValueError(f"fixed '{fixed.group}': component {c} out of range")
+            Vc = body.V.sub(c)
+            dofs = fem.locate_dofs_topological(Vc, fdim, facets)
+            bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
+        return bcs
+
+    def _build_load(self, k: int, load: SurfaceLoad) -> _LoadData:
+        body, _ = self._locate(load.group)
+        if len(load.direction) != self.gdim:
+            raise ValueError(f"load on '{load.group}': direction needs {self.gdim} components")
+        tag = group_tag(self.mesh_data, load.group, self.mesh.topology.dim - 1)
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.mesh_data.facet_tags)(tag)
+        amp = fem.Constant(self.mesh, dolfinx.default_scalar_type(load.amplitude(0.0)))
+        data = _LoadData(load, body.index, ds, amp)
+        data.traction = amp * ufl.as_vector(load.direction)
+        return data
+
+    # --- physics ------------------------------------------------------------------
+
+    def set_time(self, t: float) -> None:
+        """Evaluate the time-dependent loads at time ``t``."""
+        for ld in self.loads:
+            ld.amplitude.value = ld.spec.amplitude(t)
+
+    def mass(self, a: Sequence, w: Sequence | None = None) -> ufl.Form:
+        """Σ ∫ ρ a·w over the bodies (M a)."""
+        w = self.w if w is None else w
+        return sum(forms.inertia(b.ρ, a[i], w[i], b.dx) for i, b in enumerate(self.bodies))
+
+    def stiffness(self, u: Sequence, w: Sequence | None = None) -> ufl.Form:
+        """Σ ∫ σ(u):ε(w) over the bodies (K u)."""
+        w = self.w if w is None else w
+        return sum(forms.elastic_residual(u[i], w[i], b.λ, b.μ, b.dx)
+                   for i, b in enumerate(self.bodies))
+
+    def external_load(self, w: Sequence | None = None) -> ufl.Form:
+        """Gravity and surface tractions at the current load time (f)."""
+        w = self.w if w is None else w
+        f = sum(forms.body_force(b.ρ, self.gravity, w[i], b.dx)
+                for i, b in enumerate(self.bodies))
+        for ld in self.loads:
+            f += forms.surface_traction(ld.traction, w[ld.body], ld.ds)
+        return f
+
+    def bulk_residual(self, u: Sequence, v: Sequence | None = None,
+                      a: Sequence | None = None) -> ufl.Form:
+        """Linear bulk terms M a + C v + K u − f; ``v``/``a`` None for statics."""
+        F = self.stiffness(u) - self.external_load()
+        if a is not None:
+            F += self.mass(a)
+        if v is not None and (self.damping.alpha or self.damping.beta):
+            F += sum(forms.rayleigh_damping(self.α, self.β, b.ρ, v[i], self.w[i], b.λ, b.μ, b.dx)
+                     for i, b in enumerate(self.bodies))
+        return F
+
+    def traction(self, pair: _PairData, u: Sequence, v: Sequence | None):
+        """Contact traction on the slave of a pair; frictionless when ``v`` is None."""
+        us, um = u[pair.slave]("+"), u[pair.master]("-")
+        if v is None:
+            p = forms.penalty_pressure(forms.normal_gap(us, um, pair.n, pair.g0), pair.ε_n)
+            return p * pair.n
+        return forms.contact_traction(us, um, v[pair.slave]("+"), v[pair.master]("-"), pair.n,
+                                      pair.ε_n, pair.μ, pair.χ, pair.g0)
+
+    def interface_residual(self, u: Sequence, v: Sequence | None = None) -> ufl.Form:
+        """Contact terms of every pair; frictionless when ``v`` is None (statics)."""
+        return sum(forms.contact_residual(self.traction(p, u, v), self.w[p.slave]("+"),
+                                          self.w[p.master]("-"), p.dS) for p in self.pairs)
+
+    def residual(self, u: Sequence, v: Sequence | None = None,
+                 a: Sequence | None = None) -> ufl.Form:
+        """The whole residual: bulk plus interface."""
+        F = self.bulk_residual(u, v, a)
+        if self.pairs:
+            F += self.interface_residual(u, v)
+        return F
+
+    # --- helpers ------------------------------------------------------------------
+
+    def functions(self, name: str) -> list[fem.Function]:
+        """One new zero Function per body, named ``{name}_{body}``."""
+        return [fem.Function(b.V, name=f"{name}_{b.spec.name}") for b in self.bodies]
+
+    def form(self, expr: ufl.Form) -> fem.Form:
+        """Compile a form over the parent mesh with the bodies' entity maps."""
+        return fem.form(expr, entity_maps=self.entity_maps)
+
+    def assemble(self, compiled: fem.Form) -> float:
+        """Assemble a compiled scalar form and sum over the ranks."""
+        return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
+
+    def weight(self) -> list[float]:
+        """Weight |g| ∫ρ of each body (N, or N/m in plane strain)."""
+        g = float(np.linalg.norm(self.gravity.value))
+        return [self.assemble(self.form(g * b.ρ * b.dx)) for b in self.bodies]

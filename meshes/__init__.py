@@ -1,0 +1,48 @@
+"""Meshes of the breakwater case (gmsh geometry and format conversion)."""
+
+from .export import convert, read
+from .goda import (
+    BASE,
+    CAISSON,
+    CAISSON_FRONT,
+    CAISSON_REAR,
+    CAISSON_TOP,
+    CORNER_FRONT,
+    CORNER_REAR,
+    GAUGE_BOTTOM,
+    GAUGE_TOP,
+    IMPACT,
+    INTERFACE,
+    MOUND,
+    MOUND_SURFACE,
+    PHYSICAL_GROUPS,
+    GodaGeometry,
+    build_model,
+    generate,
+    gmsh_session,
+    run_on_rank0,
+)
+
+__all__ = [
+    "BASE",
+    "CAISSON",
+    "CAISSON_FRONT",
+    "CAISSON_REAR",
+    "CAISSON_TOP",
+    "CORNER_FRONT",
+    "CORNER_REAR",
+    "GAUGE_BOTTOM",
+    "GAUGE_TOP",
+    "IMPACT",
+    "INTERFACE",
+    "MOUND",
+    "MOUND_SURFACE",
+    "PHYSICAL_GROUPS",
+    "GodaGeometry",
+    "build_model",
+    "convert",
+    "generate",
+    "gmsh_session",
+    "read",
+    "run_on_rank0",
+]

@@ -1,0 +1,153 @@
+"""Conversion of gmsh ``.msh`` files to other mesh formats with meshio.
+
+The physical groups travel as cell data ``gmsh:physical`` (and
+``gmsh:geometrical``), one value per cell of every block; the output has one
+block per cell type (triangles, lines, vertices). Formats other than ``.msh``
+drop the group names: decode the tags with
+:data:`breakwater.meshes.goda.PHYSICAL_GROUPS`.
+
+Format notes:
+    * ``.msh`` output is a verbatim copy (meshio's gmsh 4.1 writer loses the
+      entity-to-group links of its own input).
+    * XDMF is written with inline XML data (one self-contained file) and without
+      the point (dim-0) groups: meshio cannot read back polyvertex cells in a
+      mixed topology.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+import shutil
+import sys
+import types
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import meshio  # type: ignore[import-untyped]
+import numpy as np
+from mpi4py import MPI
+
+from .goda import run_on_rank0
+
+_XDMF_SUFFIXES = (".xdmf", ".xmf")
+_TAGS = ("gmsh:physical", "gmsh:geometrical")
+
+
+@contextmanager
+def _h5py_not_required() -> Iterator[None]:
+    """Let meshio handle inline-XML XDMF without h5py installed.
+
+    meshio's XDMF reader and writer ``import h5py`` unconditionally although
+    inline XML data never uses it; a placeholder module satisfies that import.
+    """
+    if "h5py" in sys.modules or importlib.util.find_spec("h5py") is not None:
+        yield
+        return
+    sys.modules["h5py"] = types.ModuleType("h5py")
+    try:
+        yield
+    finally:
+        del sys.modules["h5py"]
+
+
+def _file_format(path: pathlib.Path) -> str:
+    suffix = path.suffix.lower()
+    formats = meshio.extension_to_filetypes.get(suffix)
+    if not formats:
+        known = ", ".join(sorted(meshio.extension_to_filetypes))
+        raise ValueError(
+            f"unknown mesh file suffix {suffix!r} of {path}; known: {known}"
+        )
+    return "gmsh" if "gmsh" in formats else str(formats[0])  # .msh is also ANSYS's
+
+
+def _by_cell_type(mesh: meshio.Mesh, skip: tuple[str, ...] = ()) -> meshio.Mesh:
+    """One block per cell type (except `skip`) with its gmsh tags, without cell sets."""
+    groups: dict[str, list[int]] = {}
+    for i, block in enumerate(mesh.cells):
+        if block.type not in skip:
+            groups.setdefault(block.type, []).append(i)
+    cells = [
+        (t, np.concatenate([mesh.cells[i].data for i in idx]))
+        for t, idx in groups.items()
+    ]
+    cell_data = {
+        key: [
+            np.concatenate([mesh.cell_data[key][i] for i in idx])
+            for idx in groups.values()
+        ]
+        for key in _TAGS
+    }
+    return meshio.Mesh(
+        mesh.points, cells, cell_data=cell_data, field_data=mesh.field_data
+    )
+
+
+def read(path: str | pathlib.Path) -> meshio.Mesh:
+    """Read any meshio-supported file (also inline-XML XDMF without h5py).
+
+    Args:
+        path: File to read; the format follows from the suffix.
+
+    Returns:
+        The meshio mesh.
+
+    Raises:
+        ValueError: For a suffix meshio does not know.
+
+    """
+    path = pathlib.Path(path)
+    file_format = _file_format(path)
+    with _h5py_not_required():
+        return meshio.read(path, file_format=file_format)
+
+
+def convert(
+    msh_path: str | pathlib.Path,
+    out_path: str | pathlib.Path,
+    comm: MPI.Comm | None = None,
+) -> pathlib.Path:
+    """Convert a gmsh file to the format given by the suffix of ``out_path``.
+
+    Only rank 0 of ``comm`` converts, with its paths (returned on all ranks);
+    all ranks return after the file is written.
+
+    Args:
+        msh_path: gmsh ``.msh`` file, e.g. from :func:`breakwater.meshes.goda.generate`.
+        out_path: Output file: ``.xdmf``, ``.vtu``, ``.msh``, or any meshio suffix.
+        comm: MPI communicator; ``MPI.COMM_WORLD`` if None.
+
+    Returns:
+        The output path.
+
+    Raises:
+        ValueError: For an unknown suffix (checked on all ranks before any work).
+        RuntimeError: On ranks other than 0 if the conversion failed on rank 0.
+
+    """
+    file_format = _file_format(pathlib.Path(out_path))
+    comm = MPI.COMM_WORLD if comm is None else comm
+    paths = (str(msh_path), str(out_path)) if comm.rank == 0 else None
+    src, out = (pathlib.Path(p) for p in comm.bcast(paths, root=0))
+
+    def write() -> None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        if file_format == "gmsh":
+            if not out.exists() or not out.samefile(src):
+                shutil.copyfile(src, out)
+            return
+        mesh = meshio.read(src, file_format="gmsh")
+        if out.suffix.lower() in _XDMF_SUFFIXES:
+            with _h5py_not_required():
+                meshio.write(
+                    out,
+                    _by_cell_type(mesh, skip=("vertex",)),
+                    file_format,
+                    data_format="XML",
+                )
+        else:
+            meshio.write(out, _by_cell_type(mesh), file_format)
+
+    run_on_rank0(comm, write, "mesh conversion")
+    return out

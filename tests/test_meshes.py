@@ -1,0 +1,275 @@
+"""Tests of the parametric Goda (1994) mesh and its export (serial and under MPI)."""
+
+from __future__ import annotations
+
+import gc
+import math
+import pathlib
+import sys
+from collections.abc import Iterator
+
+import gmsh
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+try:
+    from breakwater.meshes import export, goda
+except ImportError:  # running from a source checkout without installation
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+    from meshes import export, goda  # type: ignore[no-redef]
+
+import dolfinx_solver  # noqa: F401, I001  (must precede dolfinx)
+import dolfinx
+
+COMM = MPI.COMM_WORLD
+
+# Reference values from the geometry formulas of Goda's model (metres).
+H_MOUND, CREST, SLOPE = 0.190, 0.400, 2.0
+B_CAISSON, H_CAISSON = 0.205, 0.202
+BASE_WIDTH = CREST + 2 * SLOPE * H_MOUND
+CAISSON_AREA = B_CAISSON * H_CAISSON
+MOUND_AREA = 0.5 * (CREST + BASE_WIDTH) * H_MOUND
+PAPER_TRIANGLES = {goda.CAISSON: 156, goda.MOUND: 558}
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_sync() -> Iterator[None]:
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+@pytest.fixture
+def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A temporary folder of rank 0, the same on all ranks."""
+    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory: pytest.TempPathFactory) -> dict[float, pathlib.Path]:
+    """Goda's mesh at refinements 1 and 2 (order 1)."""
+    folder = tmp_path_factory.mktemp("goda") if COMM.rank == 0 else None
+    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
+    return {
+        r: goda.generate(folder / f"goda_r{r:g}.msh", refinement=r) for r in (1.0, 2.0)
+    }
+
+
+def _cells(mesh, name: str) -> np.ndarray:
+    """Connectivity of the cells of physical group `name` (corner nodes first)."""
+    dim, tag = goda.PHYSICAL_GROUPS[name]
+    blocks = [
+        block.data[phys == tag]
+        for block, phys in zip(mesh.cells, mesh.cell_data["gmsh:physical"], strict=True)
+        if block.dim == dim
+    ]
+    return np.concatenate(blocks)
+
+
+def _area(mesh, name: str) -> float:
+    x = mesh.points[_cells(mesh, name)[:, :3], :2]
+    d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    return float(np.sum(0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])))
+
+
+def _length(mesh, name: str) -> float:
+    x = mesh.points[_cells(mesh, name)[:, :2], :2]
+    return float(np.linalg.norm(x[:, 1] - x[:, 0], axis=1).sum())
+
+
+def test_physical_groups_present_with_dimensions(meshes):
+    mesh = export.read(meshes[1.0])
+    found = {name: (int(dim), int(tag)) for name, (tag, dim) in mesh.field_data.items()}
+    assert found == dict(goda.PHYSICAL_GROUPS)
+    for name in goda.PHYSICAL_GROUPS:
+        assert len(_cells(mesh, name)) > 0, name
+    assert {goda.CAISSON, goda.MOUND} == {n for n, (d, _) in found.items() if d == 2}
+
+
+def test_triangle_counts_match_paper_and_scale_with_refinement(meshes):
+    coarse, fine = export.read(meshes[1.0]), export.read(meshes[2.0])
+    for name, paper in PAPER_TRIANGLES.items():
+        n1, n2 = len(_cells(coarse, name)), len(_cells(fine, name))
+        assert abs(n1 - paper) <= 0.1 * paper, (name, n1)
+        assert 3.0 <= n2 / n1 <= 5.0, (name, n1, n2)
+
+
+@pytest.mark.parametrize("refinement", [1.0, 2.0])
+def test_areas_and_lengths(meshes, refinement):
+    mesh = export.read(meshes[refinement])
+    assert _area(mesh, goda.CAISSON) == pytest.approx(CAISSON_AREA, rel=1e-12)
+    assert _area(mesh, goda.MOUND) == pytest.approx(MOUND_AREA, rel=1e-12)
+    slope_length = H_MOUND * math.hypot(1.0, SLOPE)
+    expected = {
+        goda.INTERFACE: B_CAISSON,
+        goda.BASE: BASE_WIDTH,
+        goda.IMPACT: 0.010,
+        goda.CAISSON_FRONT: H_CAISSON - 0.010,
+        goda.CAISSON_REAR: H_CAISSON,
+        goda.CAISSON_TOP: B_CAISSON,
+        goda.MOUND_SURFACE: CREST - B_CAISSON + 2 * slope_length,
+    }
+    for name, length in expected.items():
+        assert _length(mesh, name) == pytest.approx(length, rel=1e-12), name
+    y = mesh.points[_cells(mesh, goda.IMPACT)][..., 1]
+    assert (y.min(), y.max()) == pytest.approx(
+        (H_MOUND + 0.163, H_MOUND + 0.173), rel=1e-12
+    )
+
+
+def test_named_points(meshes):
+    expected = {
+        goda.GAUGE_TOP: (-B_CAISSON / 2, H_MOUND + H_CAISSON - 0.041),
+        goda.GAUGE_BOTTOM: (-B_CAISSON / 2, H_MOUND + 0.041),
+        goda.CORNER_FRONT: (-B_CAISSON / 2, H_MOUND),
+        goda.CORNER_REAR: (B_CAISSON / 2, H_MOUND),
+    }
+    geometry = goda.GodaGeometry()
+    points = geometry.named_points()
+    assert points.keys() == expected.keys()
+    for name, xy in expected.items():
+        assert points[name] == pytest.approx(xy, rel=1e-12), name
+    assert geometry.impact_point == pytest.approx(
+        (-B_CAISSON / 2, H_MOUND + 0.168), rel=1e-12
+    )
+    mesh = export.read(meshes[1.0])
+    for name, xy in expected.items():
+        (node,) = _cells(mesh, name).ravel()
+        assert tuple(mesh.points[node, :2]) == pytest.approx(xy, rel=1e-12), name
+
+
+def test_interface_conforming_in_dolfinx(meshes):
+    lines = len(_cells(export.read(meshes[1.0]), goda.INTERFACE))
+    partitioner = dolfinx.mesh.create_cell_partitioner(
+        dolfinx.mesh.GhostMode.shared_facet, 2
+    )
+    data = dolfinx.io.gmsh.read_from_msh(
+        meshes[1.0], COMM, 0, gdim=2, partitioner=partitioner
+    )
+    assert data.physical_groups == dict(goda.PHYSICAL_GROUPS)
+    mesh, topology = data.mesh, data.mesh.topology
+    topology.create_connectivity(1, 2)
+    facet_to_cell = topology.connectivity(1, 2)
+    num_cells = topology.index_map(2).size_local + topology.index_map(2).num_ghosts
+    cell_value = np.full(num_cells, -1)
+    cell_value[data.cell_tags.indices] = data.cell_tags.values
+    bodies = sorted(data.physical_groups[n].tag for n in (goda.CAISSON, goda.MOUND))
+
+    facets = data.facet_tags.find(data.physical_groups[goda.INTERFACE].tag)
+    owned = facets[facets < topology.index_map(1).size_local]
+    for facet in owned:
+        assert sorted(cell_value[facet_to_cell.links(facet)]) == bodies
+    assert COMM.allreduce(len(owned)) == lines
+
+    # Points (dim 0) come as ridge tags, i.e. vertex tags in 2D.
+    ridges = data.ridge_tags
+    assert ridges is not None and ridges.dim == 0
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, 0, ridges.indices).ravel()
+    local = {
+        int(v): tuple(mesh.geometry.x[n, :2])
+        for v, n in zip(ridges.values, nodes, strict=True)
+    }
+    found = {k: v for d in COMM.allgather(local) for k, v in d.items()}
+    for name, xy in goda.GodaGeometry().named_points().items():
+        assert found[goda.PHYSICAL_GROUPS[name][1]] == pytest.approx(xy, rel=1e-12), (
+            name
+        )
+
+
+def test_second_order(shared_dir):
+    path = goda.generate(shared_dir / "goda_p2.msh", order=2)
+    mesh = export.read(path)
+    assert {b.type for b in mesh.cells} == {"triangle6", "line3", "vertex"}
+    assert len(_cells(mesh, goda.CAISSON)) == len(_cells(mesh, goda.CAISSON)[:, :3])
+    assert _area(mesh, goda.CAISSON) == pytest.approx(CAISSON_AREA, rel=1e-12)
+    assert _area(mesh, goda.MOUND) == pytest.approx(MOUND_AREA, rel=1e-12)
+    data = dolfinx.io.gmsh.read_from_msh(path, COMM, 0, gdim=2)
+    assert data.mesh.geometry.cmaps[0].degree == 2
+    cells = data.mesh.topology.index_map(2).size_global
+    assert cells == sum(len(_cells(mesh, n)) for n in PAPER_TRIANGLES)
+
+
+@pytest.mark.parametrize("offset_top", [H_CAISSON - 0.168, H_CAISSON - 0.163])
+def test_gauge_on_impact_patch(shared_dir, offset_top):
+    """A gauge inside the patch (or on its end) splits it but keeps it whole."""
+    geometry = goda.GodaGeometry(gauge_offset_top=offset_top)
+    mesh = export.read(goda.generate(shared_dir / "gauge.msh", geometry))
+    assert _length(mesh, goda.IMPACT) == pytest.approx(0.010, rel=1e-12)
+    assert _length(mesh, goda.CAISSON_FRONT) == pytest.approx(
+        H_CAISSON - 0.010, rel=1e-12
+    )
+    (node,) = _cells(mesh, goda.GAUGE_TOP).ravel()
+    assert tuple(mesh.points[node, :2]) == pytest.approx(geometry.gauge_top, rel=1e-12)
+
+
+def _group_cells(mesh, name: str) -> set[tuple[int, ...]]:
+    return {tuple(sorted(c)) for c in _cells(mesh, name).tolist()}
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".xdmf", ".msh"])
+def test_export_round_trip(meshes, shared_dir, suffix):
+    original = export.read(meshes[1.0])
+    copy = export.read(export.convert(meshes[1.0], shared_dir / f"goda{suffix}"))
+    np.testing.assert_array_equal(copy.points[:, :2], original.points[:, :2])
+    for name, (dim, _) in goda.PHYSICAL_GROUPS.items():
+        if dim == 0 and suffix == ".xdmf":  # point groups are not written to XDMF
+            continue
+        assert _group_cells(copy, name) == _group_cells(original, name), name
+
+
+def test_export_unknown_suffix(meshes, shared_dir):
+    with pytest.raises(ValueError, match=r"suffix '\.foo'"):
+        export.convert(meshes[1.0], shared_dir / "goda.foo")
+
+
+def test_export_failure_raises_on_all_ranks(shared_dir):
+    with pytest.raises(Exception, match="not found"):
+        export.convert(shared_dir / "missing.msh", shared_dir / "missing.vtu")
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [
+        ("mound_height", 0.0),
+        ("slope", math.nan),
+        ("caisson_width", 0.400),
+        ("caisson_height", -0.2),
+        ("bolt_height", 0.200),
+        ("bolt_height", 0.004),
+        ("impact_patch_height", 0.0),
+        ("gauge_offset_top", 0.202),
+        ("gauge_offset_bottom", 0.3),
+        ("caisson_element_size", math.inf),
+    ],
+)
+def test_validation_names_the_field(field, value):
+    with pytest.raises(ValueError, match=field):
+        goda.GodaGeometry(**{field: value})
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"), [({"refinement": 0.0}, "refinement"), ({"order": 3}, "order")]
+)
+def test_generate_rejects_bad_arguments(shared_dir, kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        goda.generate(shared_dir / "bad.msh", **kwargs)
+    assert not (shared_dir / "bad.msh").exists()
+
+
+def test_existing_gmsh_session_is_left_alone(shared_dir):
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("outer")
+        gmsh.model.geo.addPoint(1.0, 2.0, 0.0)
+        gmsh.model.geo.synchronize()
+        gmsh.option.setNumber("Mesh.Algorithm", 5)
+        goda.generate(shared_dir / "inside.msh")
+        assert gmsh.isInitialized()
+        assert gmsh.model.getCurrent() == "outer"
+        assert gmsh.model.getEntities() == [(0, 1)]
+        assert gmsh.option.getNumber("Mesh.Algorithm") == 5
+    finally:
+        gmsh.finalize()
+    assert (shared_dir / "inside.msh").exists()
