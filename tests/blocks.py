@@ -1,0 +1,108 @@
+"""Two-rectangle gmsh meshes for the verification tests.
+
+Body ``a`` (the slave in the tests) sits on top of body ``b`` (``layout="stacked"``)
+or to the left of it (``layout="side"``); they share one conforming interface curve.
+Physical names: ``a``, ``b`` (cells); ``interface``; ``a_top``, ``a_left``,
+``a_right``, ``a_bottom_free``; ``b_bottom``, ``b_left``, ``b_right``, ``b_top_free``
+(facets; free parts exist only when the widths differ). Points: ``a_corner`` (the
+lower-left corner of ``a``).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import gmsh
+from mpi4py import MPI
+
+from breakwater.meshes import gmsh_session, run_on_rank0
+
+
+def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, float],
+                   b: tuple[float, float], h: float, layout: str = "stacked",
+                   structured: bool = True) -> pathlib.Path:
+    """Write a mesh of two rectangles sharing a conforming interface.
+
+    Args:
+        path: Output ``.msh`` (must be the same on all ranks of ``comm``).
+        comm: Communicator (rank 0 writes).
+        a: (width, height) of body ``a``.
+        b: (width, height) of body ``b``.
+        h: Element size.
+        layout: ``"stacked"`` (a centred on top of b; interface horizontal at y = b_h)
+            or ``"side"`` (a left of b, same height; interface vertical at x = 0).
+        structured: Transfinite (structured) triangles, when the shapes allow it.
+    """
+    path = pathlib.Path(path)
+
+    def build() -> None:
+        with gmsh_session():
+            geo = gmsh.model.geo
+            (aw, ah), (bw, bh) = a, b
+            if layout == "stacked":
+                # b: [-bw/2, bw/2] x [0, bh]; a: [-aw/2, aw/2] x [bh, bh + ah]
+                xs = sorted({-bw / 2, -aw / 2, aw / 2, bw / 2})
+                pb = [geo.addPoint(x, bh, 0, h) for x in xs]
+                b0, b1 = geo.addPoint(-bw / 2, 0, 0, h), geo.addPoint(bw / 2, 0, 0, h)
+                a0, a1 = geo.addPoint(-aw / 2, bh + ah, 0, h), geo.addPoint(aw / 2, bh + ah, 0, h)
+                top_b = [geo.addLine(pb[i], pb[i + 1]) for i in range(len(pb) - 1)]
+                i0 = xs.index(-aw / 2)
+                itf = top_b[i0]
+                free = [c for c in top_b if c != itf]
+                bb = geo.addLine(b0, b1)
+                br = geo.addLine(b1, pb[-1])
+                bl = geo.addLine(pb[0], b0)
+                cb = geo.addCurveLoop([bb, br, *[-c for c in reversed(top_b)], bl])
+                sb = geo.addPlaneSurface([cb])
+                ar = geo.addLine(pb[i0 + 1], a1)
+                at = geo.addLine(a1, a0)
+                al = geo.addLine(a0, pb[i0])
+                ca = geo.addCurveLoop([itf, ar, at, al])
+                sa = geo.addPlaneSurface([ca])
+                geo.synchronize()
+                if structured and not free:
+                    nx = max(1, round(aw / h)) + 1
+                    for c in (itf, at, bb):
+                        gmsh.model.mesh.setTransfiniteCurve(c, nx)
+                    for c, L in ((ar, ah), (al, ah), (br, bh), (bl, bh)):
+                        gmsh.model.mesh.setTransfiniteCurve(c, max(1, round(L / h)) + 1)
+                    gmsh.model.mesh.setTransfiniteSurface(sa)
+                    gmsh.model.mesh.setTransfiniteSurface(sb)
+                groups = {(2, "a"): [sa], (2, "b"): [sb], (1, "interface"): [itf],
+                          (1, "a_top"): [at], (1, "a_left"): [al], (1, "a_right"): [ar],
+                          (1, "b_bottom"): [bb], (1, "b_left"): [bl], (1, "b_right"): [br]}
+                if free:
+                    groups[(1, "b_top_free")] = free
+                corner = pb[i0]
+            elif layout == "side":
+                (aw, ah), (bw, _) = a, b
+                p = [geo.addPoint(x, y, 0, h) for x, y in
+                     ((-aw, 0), (0, 0), (bw, 0), (bw, ah), (0, ah), (-aw, ah))]
+                l01, l12, l23 = geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2]), \
+                    geo.addLine(p[2], p[3])
+                l34, l45, l50 = geo.addLine(p[3], p[4]), geo.addLine(p[4], p[5]), \
+                    geo.addLine(p[5], p[0])
+                itf = geo.addLine(p[1], p[4])
+                sa = geo.addPlaneSurface([geo.addCurveLoop([l01, itf, l45, l50])])
+                sb = geo.addPlaneSurface([geo.addCurveLoop([l12, l23, l34, -itf])])
+                geo.synchronize()
+                if structured:
+                    for c, L in ((l01, aw), (l45, aw), (l12, bw), (l34, bw),
+                                 (itf, ah), (l50, ah), (l23, ah)):
+                        gmsh.model.mesh.setTransfiniteCurve(c, max(1, round(L / h)) + 1)
+                    gmsh.model.mesh.setTransfiniteSurface(sa)
+                    gmsh.model.mesh.setTransfiniteSurface(sb)
+                groups = {(2, "a"): [sa], (2, "b"): [sb], (1, "interface"): [itf],
+                          (1, "a_left"): [l50], (1, "a_top"): [l45], (1, "a_bottom"): [l01],
+                          (1, "b_right"): [l23], (1, "b_top"): [l34], (1, "b_bottom"): [l12]}
+                corner = p[0]
+            else:
+                raise ValueError(f"unknown layout {layout!r}")
+            for (dim, name), tags in groups.items():
+                gmsh.model.addPhysicalGroup(dim, tags, name=name)
+            gmsh.model.addPhysicalGroup(0, [corner], name="a_corner")
+            gmsh.model.mesh.generate(2)
+            gmsh.write(str(path))
+
+    run_on_rank0(comm, build, f"writing {path}")
+    return pathlib.Path(comm.bcast(str(path), root=0))
