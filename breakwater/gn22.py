@@ -25,7 +25,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
-from . import forms
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .interface import InterfaceNodes, interface_nodes
 from .model import ContactModel
 from .solver import NewtonOptions, NewtonSolver
@@ -168,7 +168,7 @@ class GN22:
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.scale(-1.0)
         fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
-        ksp = PETSc.KSP().create(m.comm)
+        ksp = PETSc.KSP().create(m.comm)  # type: ignore[arg-type]
         ksp.setOptionsPrefix("breakwater_mass_")
         ksp.setOperators(M)
         ksp.setType("preonly")

@@ -25,7 +25,7 @@ from dolfinx import fem
 from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
 
-from . import forms
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import MeshError
 from .mesh import group_tag
 

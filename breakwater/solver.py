@@ -92,7 +92,7 @@ class NewtonSolver:
 
         """
         self.problem.solve()
-        reason = self.snes.getConvergedReason()
+        reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
         its = self.snes.getIterationNumber()
         if reason <= 0:
             raise ConvergenceError(
