@@ -58,7 +58,8 @@ class NewtonSolver:
 
     def __init__(self, model: ContactModel, F: ufl.Form, x: Sequence[fem.Function], name: str,
                  options: NewtonOptions | None = None, force_scale: float = 1.0,
-                 precheck: Callable[[PETSc.Vec, PETSc.Vec], None] | None = None) -> None:
+                 precheck: Callable[[PETSc.Vec, PETSc.Vec], None] | None = None,
+                 jacobian_of: ufl.Form | None = None) -> None:
         self.options = o = options or NewtonOptions()
         self.x = list(x)
         petsc_options = {
@@ -74,8 +75,11 @@ class NewtonSolver:
             "pc_factor_mat_solver_type": o.linear_solver,
             "ksp_error_if_not_converged": True,
         }
+        J = None
+        if jacobian_of is not None:
+            J = fem_petsc.derivative_block(ufl.extract_blocks(jacobian_of), self.x)
         self.problem = fem_petsc.NonlinearProblem(
-            ufl.extract_blocks(F), self.x, bcs=model.bcs, entity_maps=model.entity_maps,
+            ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, entity_maps=model.entity_maps,
             petsc_options_prefix=f"breakwater_{name}_{next(_prefixes)}_",
             petsc_options=petsc_options)
         self.snes: PETSc.SNES = self.problem.solver
