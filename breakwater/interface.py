@@ -69,6 +69,7 @@ class InterfaceNodes:
         self._slave = (bs, pos_s[offsets_s:offsets_s + len(bs)])
         self._master = (bm, pos_m[offsets_m:offsets_m + len(bm)])
         self.normal = self._normals(model, pair, comm)
+        self.tangents = _tangent_basis(self.normal)
 
     def _normals(self, model: ContactModel, pair: _PairData, comm: MPI.Comm) -> np.ndarray:
         """Average of the master outward facet normals around each node."""
@@ -142,6 +143,22 @@ class InterfaceNodes:
     def tangential(self, v: np.ndarray) -> np.ndarray:
         """Tangential part (I − n⊗n) v of nodal vectors."""
         return v - np.sum(v * self.normal, axis=1)[:, None] * self.normal
+
+
+def _tangent_basis(normal: np.ndarray) -> np.ndarray:
+    """Orthonormal tangent vectors at each node, shape ``(n, gdim − 1, gdim)``.
+
+    In 2D the tangent is the normal turned clockwise, so that +x is positive on a
+    horizontal interface with an upward master normal.
+    """
+    gdim = normal.shape[1]
+    if gdim == 2:
+        return np.stack([normal[:, 1], -normal[:, 0]], axis=1)[:, None, :]
+    helper = np.where(np.abs(normal[:, [0]]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t1 = np.cross(normal, helper)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    t2 = np.cross(normal, t1)
+    return np.stack([t1, t2], axis=1)
 
 
 def interface_nodes(model: ContactModel) -> Sequence[InterfaceNodes]:
