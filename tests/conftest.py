@@ -5,11 +5,12 @@ from __future__ import annotations
 import gc
 
 import pytest
-
-import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx when present)
 from mpi4py import MPI
 
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx when present)
 
+
+@pytest.hookimpl(trylast=True)
 def pytest_configure(config: pytest.Config) -> None:
     """Only rank 0 reports, so nothing is printed twice under mpiexec."""
     if MPI.COMM_WORLD.rank > 0:
