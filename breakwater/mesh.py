@@ -5,6 +5,7 @@ from __future__ import annotations
 import pathlib
 
 import dolfinx
+import gmsh
 import numpy as np
 from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
@@ -39,10 +40,29 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     elif path.suffix != ".msh":
         raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
+    # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
+    error, started = None, False
+    if comm.rank == 0:
+        started = not gmsh.isInitialized()
+        if started:
+            gmsh.initialize(readConfigFiles=False)
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("breakwater-read")
+        try:
+            gmsh.merge(str(path))
+        except Exception as e:  # gmsh raises bare Exceptions on unreadable files
+            error = f"{path}: cannot read the mesh ({e})"
+    error = comm.bcast(error, root=0)
     try:
-        data = gmshio.read_from_msh(path, comm, 0, gdim=gdim, partitioner=partitioner)
-    except Exception as e:  # gmsh raises bare Exceptions on unreadable files
-        raise MeshError(f"{path}: cannot read the mesh ({e})") from e
+        if error:
+            raise MeshError(error)
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0,
+                                    gdim=gdim, partitioner=partitioner)
+    finally:
+        if comm.rank == 0:
+            gmsh.model.remove()
+            if started:
+                gmsh.finalize()
     if not data.physical_groups:
         raise MeshError(f"{path}: the mesh has no named physical groups")
     return data
@@ -51,10 +71,10 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
 def _mesh_geo(path: pathlib.Path, comm: MPI.Comm, dim: int) -> pathlib.Path:
     """Mesh a ``.geo`` script with gmsh on rank 0 and return the ``.msh`` written."""
     out = path.with_suffix(".msh")
-    error = None
-    if comm.rank == 0:
-        import gmsh
+    import gmsh
 
+    error, started = None, False
+    if comm.rank == 0:
         started = not gmsh.isInitialized()
         if started:
             gmsh.initialize()

@@ -79,7 +79,8 @@ class NewtonSolver:
         if jacobian_of is not None:
             J = fem_petsc.derivative_block(ufl.extract_blocks(jacobian_of), self.x)
         self.problem = fem_petsc.NonlinearProblem(
-            ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, entity_maps=model.entity_maps,
+            ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, kind="mpi",
+            entity_maps=model.entity_maps,
             petsc_options_prefix=f"breakwater_{name}_{next(_prefixes)}_",
             petsc_options=petsc_options)
         self.snes: PETSc.SNES = self.problem.solver

@@ -13,9 +13,8 @@ from __future__ import annotations
 import pathlib
 
 import gmsh
-from mpi4py import MPI
-
 from breakwater.meshes import gmsh_session, run_on_rank0
+from mpi4py import MPI
 
 
 def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, float],

@@ -1,0 +1,309 @@
+"""Command line: ``python -m breakwater {run,mesh,calibrate,show-case} [CASE] ...``.
+
+``CASE`` is a case file (TOML), or the name of a built-in case (``goda``, the
+default). Every command takes ``--set key=value`` overrides (repeatable). Errors
+the user can act on are one line on stderr, without a traceback unless ``--debug``:
+exit status 2 for input errors (case, mesh, usage), 1 for a failed run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import pathlib
+import sys
+import tempfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from . import __version__
+from .errors import BreakwaterError, MeshError
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
+    from .case import Case
+
+EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
+PROG = "python -m breakwater"
+
+
+def _rank() -> int:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD.rank
+
+
+def _say(text: str, quiet: bool = False) -> None:
+    """Print on rank 0 only (unless quiet)."""
+    if not quiet and _rank() == 0:
+        print(text, flush=True)
+
+
+@contextmanager
+def _logging(args: argparse.Namespace) -> Iterator[None]:
+    """Log to stderr on rank 0: warnings with --quiet, debug with --verbose.
+
+    The ``breakwater`` logger is restored on exit (main() may be called in-process).
+    """
+    level = logging.WARNING if args.quiet else logging.DEBUG if args.verbose else logging.INFO
+    logger = logging.getLogger("breakwater")
+    saved = (logger.level, logger.propagate)
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    logger.setLevel(level if _rank() == 0 else logging.CRITICAL)
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(saved[0])
+        logger.propagate = saved[1]
+
+
+def _overrides(args: argparse.Namespace) -> list[str]:
+    out = list(args.set or [])
+    if getattr(args, "command", None) == "run" and args.out is not None:
+        out.append(f"output.directory={json.dumps(str(args.out))}")
+    return out
+
+
+def _load(args: argparse.Namespace) -> Case:
+    from .case import load_case
+
+    return load_case(args.case, _overrides(args))
+
+
+# --- commands ---------------------------------------------------------------------
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from . import simulation
+
+    case = _load(args)
+    _say(f"breakwater {__version__}: case '{case.name}' -> {case.output_directory}",
+         args.quiet)
+    model, time, output, extra = case.build(MPI.COMM_WORLD)
+    if "calibration" in extra:
+        c = extra["calibration"]
+        _say(f"  calibrated {c['body']} shear modulus G = {c['shear_modulus']:.6g} Pa "
+             f"(K_x = {c['stiffness']:.6g} N/m per m, error {c['relative_error']:.1e})",
+             args.quiet)
+    output = replace(output, progress=args.progress)
+    simulation.run(model, time, output, resolved_case=case.resolved(), extra_summary=extra,
+                   report=not args.quiet)
+    return EXIT_OK
+
+
+def _cmd_mesh(args: argparse.Namespace) -> int:
+    import meshio
+    from mpi4py import MPI
+
+    from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
+    from .case import CaseError
+
+    comm = MPI.COMM_WORLD
+    out = pathlib.Path(args.out)
+    if not meshio.extension_to_filetypes.get(out.suffix.lower()):
+        raise CaseError(f"--out {out}: unknown mesh file suffix '{out.suffix}' "
+                        "(use .msh, .xdmf, .vtu or another meshio format)")
+    case = _load(args)
+    folder = tempfile.mkdtemp(prefix="breakwater-mesh-") if comm.rank == 0 else None
+    folder = comm.bcast(folder, root=0)
+    try:
+        if case.mesh.generated:
+            src = case.mesh_file(comm, folder)
+        elif case.mesh.source.endswith(".geo"):
+            src = _mesh_geo(pathlib.Path(case.mesh.source), pathlib.Path(folder), comm)
+        else:
+            src = pathlib.Path(case.mesh.source)
+        meshes.convert(src, out, comm=comm)
+    finally:
+        comm.barrier()
+        if comm.rank == 0:
+            import shutil
+
+            shutil.rmtree(folder, ignore_errors=True)
+    _say(f"wrote {out}", args.quiet)
+    return EXIT_OK
+
+
+def _mesh_geo(path: pathlib.Path, folder: pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
+    """Mesh a gmsh script on rank 0 into ``folder``."""
+    from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
+
+    target = folder / f"{path.stem}.msh"
+
+    def write() -> None:
+        import gmsh
+
+        with meshes.gmsh_session():
+            gmsh.open(str(path))
+            gmsh.model.mesh.generate(2)
+            gmsh.write(str(target))
+
+    try:
+        meshes.run_on_rank0(comm, write, f"meshing {path}")
+    except Exception as e:
+        raise MeshError(f"{path}: gmsh cannot mesh the script ({e})") from e
+    return target
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from .calibrate import HorizontalStiffness
+    from .case import CaseError
+
+    comm = MPI.COMM_WORLD
+    case = _load(args)
+    cal = case.calibration
+    if not cal.body or not cal.structure:
+        raise CaseError("calibration.body/calibration.structure: the case does not say "
+                        "which body to calibrate (set them with --set)")
+    target = args.target if args.target is not None else cal.stiffness
+    if target is None:
+        raise CaseError("calibration.stiffness: no target stiffness (give --target K_x)")
+    L = case.out_of_plane_length
+    folder = tempfile.mkdtemp(prefix="breakwater-cal-") if comm.rank == 0 else None
+    folder = comm.bcast(folder, root=0)
+    try:
+        data = case.read_mesh(comm, folder)
+    finally:
+        comm.barrier()
+        if comm.rank == 0:
+            import shutil
+
+            shutil.rmtree(folder, ignore_errors=True)
+    r = case.calibrate(data, target)
+    # Independent check: a new model built with the calibrated modulus.
+    model = case.build_model(data, {r.body: r.shear_modulus}, dynamic=False)
+    check = HorizontalStiffness(model, r.structure, cal.tangential_penalty)()
+    q = args.quiet
+    _say(f"calibration of the shear modulus of '{r.body}' to the horizontal stiffness of "
+         f"'{r.structure}' (case '{case.name}')", q)
+    _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
+         f"{r.target:.6g} N/m per m", q)
+    _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
+    _say(f"  achieved K_x = {r.stiffness:.6g} N/m per m = {r.stiffness * L:.6g} N/m "
+         f"(relative error {r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
+    _say(f"  check    K_x = {check:.6g} N/m per m from a new model with this G (relative "
+         f"error {abs(check - r.target) / r.target:.2e})", q)
+    if _rank() == 0 and args.quiet:
+        print(f"{r.shear_modulus:.10g}")
+    return EXIT_OK
+
+
+def _cmd_show_case(args: argparse.Namespace) -> int:
+    if args.reference:
+        from .case import case_reference
+
+        _say(case_reference())
+        return EXIT_OK
+    import tomli_w
+
+    case = _load(args)
+    text = tomli_w.dumps(case.resolved())
+    if _rank() == 0:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    return EXIT_OK
+
+
+# --- the parser ---------------------------------------------------------------------
+
+def _parser() -> argparse.ArgumentParser:
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("case", nargs="?", default=None, metavar="CASE",
+                        help="case file (TOML) or built-in case name (default: goda)")
+    common.add_argument("--set", action="append", metavar="KEY=VALUE",
+                        help="override a case field by its dotted path, e.g. "
+                             "time.dt=5e-5 or bodies.mound.density=1800 (repeatable)")
+    noise = common.add_mutually_exclusive_group()
+    noise.add_argument("-q", "--quiet", action="store_true", help="print only warnings "
+                       "and errors")
+    noise.add_argument("-v", "--verbose", action="store_true", help="print debug messages")
+    common.add_argument("--debug", action="store_true",
+                        help="show the traceback of errors")
+
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Dynamic frictional contact of deformable bodies: a "
+        "breakwater caisson on a gravel mound struck by a pendulum (Goda 1994; "
+        "Stickle et al. 2011).")
+    parser.add_argument("--version", action="version", version=f"breakwater {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("run", parents=[common], help="run a case",
+                       description="Static equilibrium, then GN22 time stepping; writes "
+                       "the results to the output folder.")
+    p.add_argument("--out", type=pathlib.Path, default=None, metavar="DIR",
+                   help="output folder (default: the case's output.directory, "
+                        "results/<case name>)")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar (default: only when stderr is a terminal)")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("mesh", parents=[common], help="write the case's mesh",
+                       description="Generate (or convert) the case's mesh; the format "
+                       "follows the suffix: .msh, .xdmf, .vtu, ...")
+    p.add_argument("--out", type=pathlib.Path, required=True, metavar="FILE",
+                   help="output mesh file")
+    p.set_defaults(func=_cmd_mesh)
+
+    p = sub.add_parser("calibrate", parents=[common],
+                       help="calibrate a shear modulus to a horizontal stiffness",
+                       description="Find the shear modulus of calibration.body for which "
+                       "calibration.structure has the horizontal stiffness K_x, and check "
+                       "it with an independent solve.")
+    p.add_argument("--target", type=float, default=None, metavar="K_X",
+                   help="target stiffness of the real structure, N/m (default: "
+                        "calibration.stiffness), divided by out_of_plane_length")
+    p.set_defaults(func=_cmd_calibrate)
+
+    p = sub.add_parser("show-case", parents=[common], help="print the resolved case",
+                       description="Print the fully resolved case (TOML, defaults "
+                       "filled), or the reference of every key.")
+    p.add_argument("--reference", action="store_true",
+                   help="print the table of every case key (type, unit, default)")
+    p.set_defaults(func=_cmd_show_case)
+    return parser
+
+
+def _report(error: BaseException) -> None:
+    if _rank() == 0:
+        line = " ".join(str(error).split()) or type(error).__name__
+        print(f"breakwater: error: {line}", file=sys.stderr, flush=True)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # usage errors (2) and --help/--version (0)
+        return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
+    from .case import CaseError
+
+    try:
+        with _logging(args):
+            return int(args.func(args))
+    except (CaseError, MeshError) as e:
+        if args.debug:
+            raise
+        _report(e)
+        return EXIT_INPUT
+    except BreakwaterError as e:
+        if args.debug:
+            raise
+        _report(e)
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        _report(KeyboardInterrupt("interrupted"))
+        return 130

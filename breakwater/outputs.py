@@ -1,0 +1,373 @@
+"""Writing the results of a run: atomic files, the step history, fields and snapshots.
+
+Everything here is written by rank 0 only, except the ParaView fields (VTX/ADIOS2),
+which every rank writes collectively. Small files (``summary.json``, ``case.toml``,
+``.npz`` snapshots, figures) are written to a temporary file beside the target and
+moved into place with :func:`os.replace`, so a reader never sees half a file. The
+step history ``history.csv`` grows during the run: one whole row per write call,
+flushed every step, so it can be read (or plotted) while the run goes on.
+
+Output files of a run (in the output directory):
+
+- ``case.toml``: the resolved case, when the case layer gives it.
+- ``history.csv``: one row per accepted step, plus the row of the static state at t = 0.
+- ``summary.json``: headline numbers, solver statistics, versions.
+- ``fields_<body>.bp``: displacement, velocity, von Mises and σ_yy stress of each body,
+  as discontinuous P2 fields (exact for P2 displacements), for ParaView.
+- ``static.npz``: the static state (P1 nodal values per body and interface pressures).
+- ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
+  probe.
+- ``figures/``: see :mod:`breakwater.figures`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import pathlib
+from collections.abc import Mapping, Sequence
+from typing import IO, Any
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .model import ContactModel
+
+HISTORY = "history.csv"
+SUMMARY = "summary.json"
+CASE = "case.toml"
+STATIC = "static.npz"
+SNAPSHOT = "snapshot_max_ux.npz"
+FIGURES = "figures"
+
+
+# --- atomic files -----------------------------------------------------------------
+
+def temporary_path(path: pathlib.Path) -> pathlib.Path:
+    """A temporary name beside ``path`` that keeps its suffix (for savefig/np.savez)."""
+    return path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
+
+
+def atomic_write_bytes(path: str | pathlib.Path, data: bytes) -> pathlib.Path:
+    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
+    path = pathlib.Path(path)
+    tmp = temporary_path(path)
+    with open(tmp, "wb") as f:
+        f.write(data)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    return path
+
+
+def atomic_write_text(path: str | pathlib.Path, text: str) -> pathlib.Path:
+    """Write text (UTF-8) atomically."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Plain Python types for JSON: numpy scalars and arrays, paths, non-finite floats.
+
+    Non-finite floats become ``None`` (JSON has no NaN).
+    """
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.bool_ | bool):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating | float):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, pathlib.PurePath):
+        return str(obj)
+    return obj
+
+
+def atomic_write_json(path: str | pathlib.Path, data: Mapping[str, Any]) -> pathlib.Path:
+    """Write a mapping as indented JSON, atomically."""
+    return atomic_write_text(path, json.dumps(to_jsonable(data), indent=2) + "\n")
+
+
+def atomic_write_toml(path: str | pathlib.Path, data: Mapping[str, Any]) -> pathlib.Path:
+    """Write a mapping as TOML (tomli_w), atomically."""
+    import tomli_w
+
+    return atomic_write_text(path, tomli_w.dumps(_tomlable(data)))
+
+
+def _tomlable(obj: Any) -> Any:
+    """Plain types for tomli_w (numpy scalars, tuples, paths; None values dropped)."""
+    if isinstance(obj, Mapping):
+        return {str(k): _tomlable(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, list | tuple):
+        return [_tomlable(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, pathlib.PurePath):
+        return str(obj)
+    return obj
+
+
+def atomic_savez(path: str | pathlib.Path, **arrays: np.ndarray) -> pathlib.Path:
+    """``np.savez_compressed`` atomically."""
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]
+    return atomic_write_bytes(path, buffer.getvalue())
+
+
+# --- step history -----------------------------------------------------------------
+
+class HistoryWriter:
+    """The step history as CSV, written by rank 0 one whole row at a time.
+
+    Args:
+        path: The CSV file (overwritten).
+        columns: Column names, in order.
+        comm: Communicator; only its rank 0 writes.
+
+    """
+
+    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm) -> None:
+        self.path = pathlib.Path(path)
+        self.columns = tuple(columns)
+        self.rows = 0
+        self._file: IO[str] | None = None
+        if comm.rank == 0:
+            self._file = open(self.path, "w", encoding="utf-8", newline="")
+            self._write(",".join(self.columns))
+
+    def _write(self, line: str) -> None:
+        assert self._file is not None
+        self._file.write(line + "\n")  # one call per whole row
+        self._file.flush()
+
+    def append(self, row: Mapping[str, float]) -> None:
+        """Write one row (every column must be present)."""
+        if self._file is not None:
+            self._write(",".join(repr(float(row[c])) for c in self.columns))
+        self.rows += 1
+
+    def close(self) -> None:
+        """Close the file."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+def read_history(path: str | pathlib.Path) -> dict[str, np.ndarray]:
+    """Read a ``history.csv`` into one array per column."""
+    with open(path, encoding="utf-8") as f:
+        header = f.readline().strip().split(",")
+        lines = [line for line in f if line.strip()]
+    data = (np.loadtxt(lines, delimiter=",", ndmin=2) if lines
+            else np.zeros((0, len(header))))
+    return {name: data[:, j] for j, name in enumerate(header)}
+
+
+# --- fields of the bodies ---------------------------------------------------------
+
+def _von_mises(σ: ufl.core.expr.Expr, λ: ufl.core.expr.Expr, ε: ufl.core.expr.Expr,
+               gdim: int) -> ufl.core.expr.Expr:
+    """Von Mises stress; in 2D (plane strain) with σ_zz = λ tr ε."""
+    σσ, trσ = ufl.inner(σ, σ), ufl.tr(σ)
+    if gdim == 2:
+        σ_zz = λ * ufl.tr(ε)
+        σσ, trσ = σσ + σ_zz**2, trσ + σ_zz
+    return ufl.sqrt(ufl.max_value(1.5 * (σσ - trσ**2 / 3.0), 0.0))
+
+
+class BodyFields:
+    """Displacement, velocity and stresses of one body as discontinuous P_k fields.
+
+    The stress of a P_k displacement is a discontinuous P_(k-1) field, so
+    discontinuous P_k holds every field exactly (no projection or averaging).
+
+    Args:
+        model: The contact model.
+        index: Body index.
+
+    """
+
+    def __init__(self, model: ContactModel, index: int) -> None:
+        body = model.bodies[index]
+        self.name = body.spec.name
+        sub = body.submesh
+        gdim = model.gdim
+        degree = body.V.ufl_element().embedded_superdegree
+        self.gdim = gdim
+        self.u = fem.Function(body.V, name="u_out")
+        self.v = fem.Function(body.V, name="v_out")
+        Vd = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (gdim,)))
+        S = fem.functionspace(sub, ("Discontinuous Lagrange", degree))
+        self.displacement = fem.Function(Vd, name="displacement")
+        self.velocity = fem.Function(Vd, name="velocity")
+        self.von_mises = fem.Function(S, name="von_mises")
+        self.stress_yy = fem.Function(S, name="stress_yy")
+        λ0, μ0 = body.spec.material.lame
+        # Constants on the submesh: one compiled kernel serves every body.
+        λ = fem.Constant(sub, dolfinx.default_scalar_type(λ0))
+        μ = fem.Constant(sub, dolfinx.default_scalar_type(μ0))
+        σ = forms.stress(self.u, λ, μ)
+        X = S.element.interpolation_points
+        self._vm = fem.Expression(_von_mises(σ, λ, forms.strain(self.u), gdim), X)
+        self._syy = fem.Expression(σ[1, 1], X)
+        self.functions = [self.displacement, self.velocity, self.von_mises, self.stress_yy]
+        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace] | None = None
+
+    def update(self, u: fem.Function, v: fem.Function | None = None) -> None:
+        """Evaluate the fields of the state ``(u, v)`` of this body."""
+        self.u.x.array[:] = u.x.array
+        self.v.x.array[:] = 0.0 if v is None else v.x.array
+        self.displacement.interpolate(self.u)
+        self.velocity.interpolate(self.v)
+        self.von_mises.interpolate(self._vm)
+        self.stress_yy.interpolate(self._syy)
+
+    def nodal(self) -> dict[str, np.ndarray] | None:
+        """P1 nodal values of the current fields, gathered on rank 0 (None elsewhere).
+
+        The stresses are discontinuous: at a vertex, the value of one of its cells
+        is taken (no averaging), which is enough for contour plots.
+
+        Returns:
+            On rank 0: ``x`` (n, 2) vertex coordinates, ``triangles`` (m, 3),
+            ``ux``, ``uy``, ``von_mises``, ``stress_yy`` (n,).
+        """
+        sub = self.u.function_space.mesh
+        if self._p1 is None:
+            self._p1 = (fem.functionspace(sub, ("Lagrange", 1, (self.gdim,))),
+                        fem.functionspace(sub, ("Lagrange", 1)))
+        V1, S1 = self._p1
+        u1 = fem.Function(V1)
+        u1.interpolate(self.u)
+        scalars = {}
+        for name, f in (("von_mises", self.von_mises), ("stress_yy", self.stress_yy)):
+            s1 = fem.Function(S1)
+            s1.interpolate(f)
+            scalars[name] = s1
+        imap = S1.dofmap.index_map
+        nloc = imap.size_local
+        tdim = sub.topology.dim
+        ncells = sub.topology.index_map(tdim).size_local
+        cells = imap.local_to_global(S1.dofmap.list[:ncells].ravel()).reshape(ncells, -1)
+        local = {
+            "gidx": imap.local_to_global(np.arange(nloc, dtype=np.int32)),
+            "x": S1.tabulate_dof_coordinates()[:nloc, :2],
+            "cells": cells,
+            "ux": u1.x.array.reshape(-1, self.gdim)[:nloc, 0],
+            "uy": u1.x.array.reshape(-1, self.gdim)[:nloc, 1],
+            **{k: f.x.array[:nloc] for k, f in scalars.items()},
+        }
+        parts = sub.comm.gather(local, root=0)
+        if parts is None:
+            return None
+        n = imap.size_global
+        out: dict[str, np.ndarray] = {k: np.zeros(n) for k in ("ux", "uy", *scalars)}
+        out["x"] = np.zeros((n, 2))
+        for part in parts:
+            for k in out:
+                out[k][part["gidx"]] = part[k]
+        cells = np.vstack([part["cells"] for part in parts])
+        if cells.shape[1] == 4:  # quadrilaterals (tensor-product order): two triangles each
+            cells = np.vstack([cells[:, [0, 1, 3]], cells[:, [0, 3, 2]]])
+        out["triangles"] = cells.astype(np.int64)
+        return out
+
+
+class FieldWriter:
+    """ParaView output: one VTX (ADIOS2 ``.bp``) file per body.
+
+    Args:
+        fields: The fields of each body.
+        directory: Output directory; files ``fields_<body>.bp``.
+        comm: The communicator of the mesh.
+
+    """
+
+    def __init__(self, fields: Sequence[BodyFields], directory: pathlib.Path,
+                 comm: MPI.Comm) -> None:
+        self.fields = list(fields)
+        self.paths = [directory / f"fields_{f.name}.bp" for f in self.fields]
+        # The mesh is the reference configuration: written once (warp by displacement).
+        self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
+                                             mesh_policy=dolfinx.io.VTXMeshPolicy.reuse)
+                        for p, f in zip(self.paths, self.fields, strict=True)]
+
+    def write(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
+        """Write the state (one Function per body) at time ``t``."""
+        for f, w, ui, vi in zip(self.fields, self.writers, u, v, strict=True):
+            f.update(ui, vi)
+            w.write(t)
+
+    def close(self) -> None:
+        """Close the files."""
+        for w in self.writers:
+            w.close()
+
+
+def snapshot_arrays(fields: Sequence[BodyFields], u: Sequence[fem.Function],
+                    interface: Mapping[str, np.ndarray], time: float, comm: MPI.Comm,
+                    ) -> dict[str, np.ndarray] | None:
+    """The arrays of a snapshot file, on rank 0 (None elsewhere); collective.
+
+    Keys: ``time``, ``bodies`` (names), ``<body>_<field>`` for the fields of
+    :meth:`BodyFields.nodal`, and the interface arrays as given.
+    """
+    out: dict[str, np.ndarray] = {"time": np.array(time),
+                                  "bodies": np.array([f.name for f in fields])}
+    for f, ui in zip(fields, u, strict=True):
+        f.update(ui)
+        nodal = f.nodal()
+        if nodal is not None:
+            out.update({f"{f.name}_{k}": a for k, a in nodal.items()})
+    if comm.rank != 0:
+        return None
+    out.update(interface)
+    return out
+
+
+# --- on-screen report -------------------------------------------------------------
+
+def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> str:
+    """A short human-readable report of a run summary."""
+    s, d, sol = summary.get("static", {}), summary.get("dynamic", {}), summary.get("solver", {})
+
+    def num(x: Any, fmt: str = ".4g") -> str:
+        return "n/a" if x is None else format(x, fmt)
+
+    lines = [f"breakwater: case '{summary.get('case_name', 'case')}' "
+             + ("finished" if summary.get("finished") else
+                f"FAILED at t = {num(summary.get('time', {}).get('reached'))} s: "
+                f"{summary.get('error')}")]
+    if s:
+        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N/m, "
+                     f"weight {num(s.get('weight'))} N/m, mean pressure "
+                     f"{num(s.get('mean_contact_pressure'))} Pa (edge "
+                     f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
+    for name, peak in d.get("peak_ux", {}).items():
+        lines.append(f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
+                     f"{num(peak.get('time'))} s, residual "
+                     f"{num(d.get('residual_ux', {}).get(name))} m")
+    if d.get("residual_slip") is not None:
+        lines.append(f"  residual slip {num(d.get('residual_slip'))} m, max uplift "
+                     f"{num(d.get('max_uplift'))} m")
+    if sol:
+        lines.append(f"  solver: {sol.get('steps')} steps, {sol.get('newton_iterations')} "
+                     f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
+                     f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
+                     f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time")
+    e = summary.get("energy", {})
+    if e.get("max_balance_error") is not None:
+        lines.append(f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m")
+    lines.append(f"  outputs: {directory}")
+    return "\n".join(lines)

@@ -1,0 +1,139 @@
+"""Calibration of a shear modulus to a horizontal stiffness (breakwater.calibrate)."""
+
+from __future__ import annotations
+
+import gc
+import itertools
+import pathlib
+from collections.abc import Iterator
+
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from blocks import two_rectangles
+
+from breakwater.calibrate import (
+    CalibrationError,
+    HorizontalStiffness,
+    calibrate_shear_modulus,
+)
+from breakwater.case import load_case
+from breakwater.mesh import read_mesh
+from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
+
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_sync() -> Iterator[None]:
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
+    path = tmp_path_factory.mktemp("calibrate") if COMM.rank == 0 else None
+    return pathlib.Path(COMM.bcast(str(path), root=0))
+
+
+# --- an exact reference: a shear layer under a block -----------------------------------
+#
+# Block a (width W, height h_a, shear modulus G_a) bonded on layer b (height H, shear
+# modulus G) whose base is fixed; u_y = 0 on every side, so the fields are 1D: u_x(y).
+# A uniform acceleration of a (body force ρ a per volume) gives the shear τ = ρ a h_a at
+# the interface, constant through the layer, and τ(y) = ρ a (top − y) in the block.
+# Displacement: layer top τ H / G; interface slip τ / k_t; the block's own shear adds
+# ρ a h_a² / (3 G_a) to its mass-weighted mean. So (per metre out of plane)
+#     K = H_force / ū = W / (H/G + 1/k_t + h_a / (3 G_a)),
+# and quadratic u_x is exact in P2 elements: K is exact up to the solver tolerance.
+W, H, H_A = 0.4, 0.2, 0.1
+EPS_N, K_T_FACTOR = 1e9, 10.0
+G_A = 1e9
+
+
+def layer_stiffness(G: float) -> float:
+    return W / (H / G + 1.0 / (K_T_FACTOR * EPS_N) + H_A / (3.0 * G_A))
+
+
+@pytest.fixture(scope="module")
+def layer_model(folder: pathlib.Path) -> ContactModel:
+    path = two_rectangles(folder / "layer.msh", COMM, a=(W, H_A), b=(W, H), h=0.05)
+    data = read_mesh(path, COMM)
+    bodies = [Body("a", Material(2000.0, 0.3, shear_modulus=G_A)),
+              Body("b", Material(1700.0, 0.25, shear_modulus=1e7))]
+    fixed = [Fixed("b_bottom"), *(Fixed(g, (1,)) for g in ("b_left", "b_right", "a_left",
+                                                           "a_right", "a_top"))]
+    return ContactModel(data, bodies, [ContactPair("interface", "a", "b", EPS_N, 0.6)], fixed)
+
+
+def test_stiffness_of_a_shear_layer(layer_model):
+    problem = HorizontalStiffness(layer_model, "a", tangential_penalty=K_T_FACTOR)
+    for G in (1e6, 1e7, 1e8):
+        # Tolerance: the problem is linear and its solution exact in P2, so one LU solve
+        # gives K to round-off (observed 4e-12 with the k_t = 1e10 penalty): 1e-9.
+        assert problem.stiffness("b", G) == pytest.approx(layer_stiffness(G), rel=1e-9)
+
+
+def test_calibration_of_a_shear_layer(layer_model):
+    target = layer_stiffness(3.7e6)
+    r = calibrate_shear_modulus(layer_model, "b", "a", target, tolerance=1e-6,
+                                initial_guess=1e8, tangential_penalty=K_T_FACTOR)
+    assert r.relative_error <= 1e-6
+    # G from the closed form; K ~ G here (the soft layer dominates), so a relative
+    # error 1e-6 on K is about 1e-6 on G (1e-5 with the solver round-off).
+    assert r.shear_modulus == pytest.approx(3.7e6, rel=1e-5)
+    assert r.iterations <= 8
+
+
+def test_unreachable_target(layer_model):
+    # K cannot exceed W / (1/k_t + h_a / (3 G_a)) however stiff the layer.
+    ceiling = W / (1.0 / (K_T_FACTOR * EPS_N) + H_A / (3.0 * G_A))
+    with pytest.raises(CalibrationError, match=r"out of reach|did not converge"):
+        calibrate_shear_modulus(layer_model, "b", "a", 2.0 * ceiling, max_iterations=12,
+                                initial_guess=1e7, tangential_penalty=K_T_FACTOR)
+
+
+# --- the Goda case ------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def goda(folder: pathlib.Path):
+    case = load_case(None, [f'output.directory="{folder / "goda"}"'])
+    return case, case.read_mesh(COMM)
+
+
+def test_goda_calibration_hits_the_target(goda):
+    case, data = goda
+    r = case.calibrate(data)
+    target = 500e3 / 0.205  # Goda's K_x per metre of the 0.205 m block (SPEC §4)
+    assert r.target == pytest.approx(target, rel=1e-14)
+    assert r.relative_error <= case.calibration.tolerance <= 1e-3
+    assert abs(r.stiffness - target) <= 1e-3 * target
+    # The gravel modulus is a low-confinement one: a few MPa, far below the caisson's.
+    assert 1e5 < r.shear_modulus < 1e8
+    # Independent check: a new model built with the calibrated modulus.
+    model = case.build_model(data, {"mound": r.shear_modulus}, dynamic=False)
+    K = HorizontalStiffness(model, "caisson", case.calibration.tangential_penalty)()
+    assert K == pytest.approx(target, rel=1e-3)
+    # Monotone in G, and sublinear (soil in series with the stiffer caisson/interface).
+    problem = HorizontalStiffness(model, "caisson", case.calibration.tangential_penalty)
+    Gs = [0.25 * r.shear_modulus, 0.5 * r.shear_modulus, r.shear_modulus,
+          2 * r.shear_modulus, 20 * r.shear_modulus]
+    Ks = [problem.stiffness("mound", G) for G in Gs]
+    assert all(k1 < k2 for k1, k2 in itertools.pairwise(Ks))
+    assert all(k1 / g1 > k2 / g2
+               for (k1, g1), (k2, g2) in itertools.pairwise(zip(Ks, Gs, strict=True)))
+
+
+def test_build_calibrates_and_resolves(goda, tmp_path):
+    case, _ = goda
+    model, _, _, extra = case.build(COMM)
+    G = extra["calibration"]["shear_modulus"]
+    assert model.body("mound").spec.material.G == G
+    assert extra["calibration"]["relative_error"] <= 1e-3
+    data = case.resolved()
+    assert data["bodies"]["mound"]["shear_modulus"] == G
+    assert data["calibration"]["enabled"] is False

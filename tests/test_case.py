@@ -1,0 +1,401 @@
+"""Case files: the default Goda case, overrides, round trips, bad cases, loads, build."""
+
+from __future__ import annotations
+
+import concurrent.futures
+import gc
+import math
+import pathlib
+import subprocess
+import sys
+import tempfile
+import tomllib
+from collections.abc import Iterator
+
+import pytest
+import tomli_w
+from breakwater.meshes import GodaGeometry, generate
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mpi4py import MPI
+
+from breakwater import cli
+from breakwater.case import (
+    BUILTIN_CASES,
+    Case,
+    CaseError,
+    _schema_keys,
+    case_reference,
+    load_case,
+)
+from breakwater.loads import Pulse, impact_velocity, pendulum_impulse
+
+COMM = MPI.COMM_WORLD
+BAD = pathlib.Path(__file__).parent / "bad_cases"
+BAD_FILES = sorted(BAD.glob("*.toml"))
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_sync() -> Iterator[None]:
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+@pytest.fixture
+def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A temporary folder of rank 0, the same on all ranks."""
+    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
+
+
+def expected(path: pathlib.Path) -> str:
+    """The key phrase of a bad case's error, from its first line ``# expect: ...``."""
+    first = path.read_text().splitlines()[0]
+    assert first.startswith("# expect: "), path
+    return first.removeprefix("# expect: ")
+
+
+def write(path: pathlib.Path, data: dict) -> pathlib.Path:
+    path.write_text(tomli_w.dumps(data))
+    return path
+
+
+# --- the default case -------------------------------------------------------------
+
+def test_default_case_is_the_paper_case():
+    case = load_case()
+    assert case == load_case("goda") == load_case(BUILTIN_CASES / "goda.toml")
+    assert case.name == "goda"
+    caisson, mound = case.body("caisson"), case.body("mound")
+    # Stickle et al. (2011) §5.3 / SPEC §4.
+    assert (caisson.density, caisson.poisson, caisson.shear_modulus) == (2314.0, 0.2, 2e9)
+    assert mound.poisson == 0.25 and mound.shear_modulus is None
+    assert case.calibration.enabled and case.calibration.stiffness == 500e3
+    (pair,) = case.contact
+    assert (pair.name, pair.slave, pair.master) == ("interface", "caisson", "mound")
+    assert (pair.penalty, pair.friction, pair.regularisation) == (5e8, 0.65, 1e-10)
+    assert (case.damping.alpha, case.damping.beta) == (0.023, 0.023)
+    assert (case.time.beta1, case.time.beta2, case.time.dt) == (0.6, 0.605, 1e-4)
+    assert case.time.end_time > 0.032  # the paper's instant of maximum displacement
+    assert [f.name for f in case.fixed] == ["base"]
+    assert case.mesh.generated and case.mesh.goda == GodaGeometry()
+    # Eq. 29: the paper prints I = 2.81 N s and 13.71 N s/m (= 2.81/0.205); the
+    # unrounded I is 2.8056 N s, hence 13.686 N s/m: compare to the printed digits.
+    (load,) = case.loads
+    assert load.group == "impact" and load.direction == (1.0, 0.0)
+    assert round(load.total_impulse, 2) == 2.81
+    assert load.total_impulse / case.out_of_plane_length == pytest.approx(13.71, rel=2e-3)
+    assert {p.name for p in case.output.probes} == {"gauge_top", "gauge_bottom"}
+    assert {p.name for p in case.output.pair_probes} == {"corner_front", "corner_rear"}
+
+
+def test_resolved_round_trip(tmp_path):
+    case = load_case(None, ["time.dt=5e-5", "bodies.mound.density=1800"])
+    data = case.resolved()
+    text = tomli_w.dumps(data)  # TOML-serialisable (no None)
+    assert tomllib.loads(text) == data
+    again = load_case(write(tmp_path / "resolved.toml", data))
+    assert again.resolved() == data
+    assert again.time == case.time and again.bodies == case.bodies
+    assert again.name == "goda"  # the name is written, not taken from the file name
+
+
+def test_resolved_user_mesh_round_trip(tmp_path):
+    msh = generate(tmp_path / "m.msh", comm=MPI.COMM_SELF)
+    case = load_case(None, [f'mesh.source="{msh}"'])
+    data = case.resolved()
+    assert data["mesh"]["source"] == str(msh.resolve()) and "goda" not in data["mesh"]
+    assert load_case(write(tmp_path / "r.toml", data)).resolved() == data
+
+
+# --- overrides --------------------------------------------------------------------
+
+def test_overrides_by_name_index_and_table():
+    case = load_case(None, ["contact.0.friction=0.5", "bodies.caisson.density=2400",
+                            "time={dt=2e-4, end_time=0.01}", "name=variant",
+                            "loads.impact.pendulum.mass=6", "loads.impact.shape=half-sine",
+                            "gravity=[0, -10]"])
+    assert case.contact[0].friction == 0.5
+    assert case.body("caisson").density == 2400.0
+    assert (case.time.dt, case.time.end_time, case.time.beta1) == (2e-4, 0.01, 0.6)
+    assert case.name == "variant" and case.output_directory == pathlib.Path("results/variant")
+    assert case.loads[0].pendulum.mass == 6.0 and case.loads[0].shape == "half-sine"
+    assert case.gravity == (0.0, -10.0)
+
+
+def test_override_replaces_a_load_by_an_impulse():
+    case = load_case(None, ['loads.impact={group="impact", impulse=2.81, duration=1e-3}'])
+    (load,) = case.loads
+    assert load.pendulum is None and load.total_impulse == 2.81 and load.duration == 1e-3
+
+
+def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monkeypatch):
+    generate(tmp_path / "m.msh", comm=MPI.COMM_SELF)
+    monkeypatch.chdir(tmp_path)
+    case = load_case(None, ["mesh.source=m.msh"])
+    assert pathlib.Path(case.mesh.source) == (tmp_path / "m.msh").resolve()
+
+
+@pytest.mark.parametrize(("override", "phrase"), [
+    ("time.dtt=1", "unknown key 'time.dtt' (did you mean 'dt'?)"),
+    ("bodies.mond.density=1", "no entry 'mond' in bodies (did you mean 'mound'?)"),
+    ("contact.7.friction=1", "no entry '7' in contact"),
+    ("time.dt.x=1", "'time.dt' is not a table"),
+    ("time.dt", "expected key=value"),
+    ("time.dt=abc", "--set: time.dt: expected a number, got 'abc'"),
+    ("bodies.mound.poisson=0.5", "--set: bodies.mound.poisson: Poisson's ratio"),
+    ("dt=1e-4", "did you mean 'time.dt'?"),
+])
+def test_bad_overrides(override, phrase):
+    with pytest.raises(CaseError) as info:
+        load_case(None, [override])
+    assert phrase in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+# --- extends ------------------------------------------------------------------------
+
+def test_extends_merges_tables(tmp_path):
+    path = tmp_path / "soft.toml"
+    path.write_text('extends = "goda"\n[contact.interface]\nfriction = 0.3\n')
+    case = load_case(path)
+    assert case.name == "soft" and case.contact[0].friction == 0.3
+    assert case.contact[0].penalty == 5e8  # the rest of the table is goda's
+    assert case.bodies == load_case().bodies
+
+
+# --- bad cases --------------------------------------------------------------------
+
+def test_enough_bad_cases():
+    assert len(BAD_FILES) >= 20
+
+
+@pytest.mark.parametrize("path", BAD_FILES, ids=lambda p: p.stem)
+def test_bad_case_message(path):
+    with pytest.raises(CaseError) as info:
+        load_case(path)
+    message = str(info.value)
+    assert expected(path) in message
+    assert "\n" not in message
+    assert path.name in message.split(": ")[0]  # the file is named first
+
+
+@pytest.mark.parametrize("path", BAD_FILES, ids=lambda p: p.stem)
+def test_bad_case_through_main(path, capsys):
+    assert cli.main(["show-case", str(path)]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and expected(path) in err
+        assert "Traceback" not in err
+
+
+# One bad case of each kind also goes through a real ``python -m breakwater`` process
+# (about 0.5 s each; every file goes through cli.main in test_bad_case_through_main).
+SUBPROCESS_CASES = [BAD / f"{name}.toml" for name in (
+    "01_unknown_top_key", "02_misspelt_body_key", "04_poisson_half", "12_dt_beyond_end",
+    "14_beta1_below_half", "15_unknown_body_group", "16_mesh_file_missing",
+    "18_wrong_type", "26_invalid_toml", "41_circular_extends")]
+
+
+@pytest.mark.serial
+def test_bad_cases_through_the_cli_subprocess():
+    if COMM.size > 1:
+        pytest.skip("subprocess CLI tests run serially")
+
+    def run(path: pathlib.Path) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "breakwater", "show-case", str(path)],
+                              capture_output=True, text=True, timeout=120)
+
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        results = dict(zip(SUBPROCESS_CASES, pool.map(run, SUBPROCESS_CASES), strict=True))
+    for path, r in results.items():
+        assert r.returncode == 2, (path.name, r.stderr)
+        assert expected(path) in r.stderr, (path.name, r.stderr)
+        assert "Traceback" not in r.stderr and r.stderr.count("\n") == 1, r.stderr
+        assert r.stdout == ""
+
+
+def test_unreadable_mesh(tmp_path):
+    bad = tmp_path / "broken.msh"
+    bad.write_text("this is not a mesh\n")
+    with pytest.raises(CaseError, match=r"--set: mesh.source: cannot read the mesh .*broken"):
+        load_case(None, [f'mesh.source="{bad}"'])
+
+
+def test_user_mesh_groups_are_checked(tmp_path):
+    msh = generate(tmp_path / "user.msh", comm=MPI.COMM_SELF)
+    case = load_case(None, [f'mesh.source="{msh}"'])
+    assert case.mesh.source == str(msh.resolve())
+    with pytest.raises(CaseError, match=r"no facet .* 'bottom' in .*user.msh .*it has: base"):
+        load_case(None, [f'mesh.source="{msh}"', "fixed.bottom={components=[1]}"])
+
+
+def test_geo_mesh_groups(tmp_path):
+    geo = tmp_path / "blocks.geo"
+    geo.write_text("""
+Point(1) = {0, 0, 0, 0.1}; Point(2) = {1, 0, 0, 0.1}; Point(3) = {1, 1, 0, 0.1};
+Point(4) = {0, 1, 0, 0.1}; Point(5) = {1, 2, 0, 0.1}; Point(6) = {0, 2, 0, 0.1};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Line(5) = {3, 5}; Line(6) = {5, 6}; Line(7) = {6, 4};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Curve Loop(2) = {-3, 5, 6, 7}; Plane Surface(2) = {2};
+Physical Surface("ground") = {1}; Physical Surface("block") = {2};
+Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
+""")
+    data = {"mesh": {"source": "blocks.geo"},
+            "bodies": {"block": {"density": 2000.0, "poisson": 0.2, "shear_modulus": 1e9},
+                       "ground": {"density": 1800.0, "poisson": 0.3, "shear_modulus": 1e7}},
+            "contact": {"joint": {"slave": "block", "master": "ground", "penalty": 1e9}},
+            "fixed": {"floor": {}},
+            "time": {"dt": 1e-4, "end_time": 1e-2}}
+    case = load_case(write(tmp_path / "blocks.toml", data))
+    assert case.name == "blocks" and case.fixed[0].components == (0, 1)
+    data["fixed"] = {"flor": {}}
+    with pytest.raises(CaseError, match=r"blocks.toml: fixed.flor: .*did you mean 'floor'"):
+        load_case(write(tmp_path / "blocks.toml", data))
+
+
+# --- property-based tests of the parser ----------------------------------------------
+
+# Valid ranges of some numeric fields (all satisfy the physical checks).
+NUMERIC = {
+    "time.dt": st.floats(1e-7, 1e-2),
+    "time.end_time": st.floats(0.02, 10.0),
+    "bodies.mound.density": st.floats(1.0, 1e5),
+    "bodies.caisson.shear_modulus": st.floats(1.0, 1e12),
+    "bodies.caisson.poisson": st.floats(-0.99, 0.49),
+    "contact.interface.friction": st.floats(0.0, 5.0),
+    "contact.interface.penalty": st.floats(1e-3, 1e15),
+    "damping.beta": st.floats(0.0, 1.0),
+    "loads.impact.duration": st.floats(1e-6, 1.0),
+    "output.field_interval": st.integers(0, 10**6),
+    "time.newton_max_it": st.integers(1, 1000),
+}
+
+
+def _get(data: dict, key: str):
+    for part in key.split("."):
+        data = data[part]
+    return data
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(sorted(NUMERIC)).flatmap(lambda k: st.tuples(st.just(k), NUMERIC[k])))
+def test_numeric_overrides_round_trip(item):
+    key, value = item
+    case = load_case(None, [f"{key}={value!r}"])
+    data = case.resolved()
+    assert _get(data, key) == value
+    with tempfile.TemporaryDirectory() as folder:
+        again = load_case(write(pathlib.Path(folder) / "c.toml", data))
+    assert again.resolved() == data
+
+
+SECTIONS = {"": Case, "time.": None, "damping.": None, "bodies.mound.": None,
+            "contact.interface.": None, "output.": None, "mesh.goda.": None}
+KNOWN = {k.rsplit(".", 1)[-1] for k in _schema_keys(Case)} | {"name"}
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from(sorted(SECTIONS)),
+       st.text("abcdefghijklmnopqrstuvwxyz_", min_size=1, max_size=16))
+def test_unknown_keys_are_rejected_with_a_suggestion(section, key):
+    if key in KNOWN or key == "extends":
+        return  # a real key (somewhere in the schema): not unknown
+    with pytest.raises(CaseError) as info:
+        load_case(None, [f"{section}{key}=1"])
+    message = str(info.value)
+    assert "unknown key" in message and "did you mean '" in message
+    # The same key in a file.
+    table: dict = {"extends": "goda"}
+    node = table
+    for part in section.strip(".").split(".") if section else []:
+        node = node.setdefault(part, {})
+    node[key] = 1
+    with tempfile.TemporaryDirectory() as folder, pytest.raises(CaseError) as info:
+        load_case(write(pathlib.Path(folder) / "c.toml", table))
+    assert "unknown key" in str(info.value) and "did you mean '" in str(info.value)
+
+
+# --- loads ---------------------------------------------------------------------------
+
+def test_pendulum_impulse_eq29():
+    # Eq. 29 by hand: ω = s0 sqrt(g/l0), I = M ω (1 + e0).
+    ω = 0.25 * math.sqrt(9.81 / 3.393)
+    assert impact_velocity(3.393, 0.25) == pytest.approx(ω, rel=1e-15)
+    assert pendulum_impulse(5.5, 3.393, 0.25, 0.2) == pytest.approx(5.5 * ω * 1.2, rel=1e-15)
+    with pytest.raises(ValueError, match="restitution"):
+        pendulum_impulse(5.5, 3.393, 0.25, 1.2)
+
+
+@pytest.mark.parametrize("shape", ["triangular", "rectangular", "half-sine"])
+@pytest.mark.parametrize("peak", [0.0, 0.3, 0.5, 1.0])
+def test_pulse_integrates_to_the_impulse(shape, peak):
+    p = Pulse(13.7, 2e-3, shape, start=1e-3, peak=peak)
+    assert p(0.0) == 0.0 and p(3.5e-3) == 0.0
+    assert p.integral(1.0) == pytest.approx(13.7, rel=1e-14)  # exact by construction
+    # Independent check: composite Simpson on a fine grid (the shapes are smooth between
+    # the peak and the ends, which are grid points: error O(h^4) or exact).
+    n = 6000
+    h = p.duration / n
+    ts = [p.start + i * h for i in range(n + 1)]
+    w = [1 if i in (0, n) else 4 if i % 2 else 2 for i in range(n + 1)]
+    simpson = h / 3 * sum(wi * p(t) for wi, t in zip(w, ts, strict=True))
+    assert simpson == pytest.approx(13.7, rel=1e-6)  # rectangle: end jumps cost O(h)
+    assert max(p(t) for t in ts) == pytest.approx(p.maximum, rel=1e-3)
+    # integral() is the running integral of __call__.
+    t = p.start + 0.37 * p.duration
+    m = 2000
+    running = sum(p(p.start + (i + 0.5) * (t - p.start) / m) for i in range(m)) \
+        * (t - p.start) / m
+    assert p.integral(t) == pytest.approx(running, rel=1e-5, abs=1e-9)
+
+
+def test_triangular_trapezoid_is_exact_on_the_step_grid():
+    # The stepper samples the load at step ends: the trapezoidal sum of a triangle whose
+    # start, peak and end are step ends equals its integral (piecewise linear).
+    dt, p = 1e-4, Pulse(13.7, 2e-3)
+    samples = [p(k * dt) for k in range(41)]
+    trapezoid = dt * (sum(samples) - 0.5 * (samples[0] + samples[-1]))
+    assert trapezoid == pytest.approx(13.7, rel=1e-12)
+
+
+def test_reference_lists_every_key():
+    text = case_reference()
+    for key in ("time.dt", "bodies.<name>.density", "contact.<name>.penalty",
+                "loads.<name>.pendulum.restitution", "mesh.goda.bolt_height",
+                "calibration.stiffness", "output.probes.<name>.group"):
+        assert f"`{key}`" in text
+    assert "| `time.dt` | number | s | required |" in text
+    assert "| `bodies.<name>.density` | number | kg/m³ | required |" in text
+
+
+# --- build --------------------------------------------------------------------------
+
+def test_build_without_calibration(shared_dir):
+    case = load_case(None, ["bodies.mound.shear_modulus=2.3e6", "calibration.enabled=false",
+                            f'output.directory="{shared_dir}"', "mesh.refinement=0.6"])
+    model, time, output, extra = case.build(COMM)
+    assert (shared_dir / "mesh" / "goda.msh").is_file()
+    assert [b.spec.name for b in model.bodies] == ["caisson", "mound"]
+    assert model.bodies[1].spec.material.G == 2.3e6
+    assert model.damping.alpha == 0.023 and tuple(model.gravity.value) == (0.0, -9.81)
+    assert time.dt == 1e-4 and time.beta2 == 0.605
+    g = GodaGeometry()
+    probes = {p.name: p for p in output.probes}
+    assert probes["gauge_top"].point == pytest.approx(g.gauge_top, abs=1e-12)
+    assert probes["gauge_bottom"].body == "caisson"
+    pairs = {p.name: p for p in output.pair_probes}
+    assert pairs["corner_front"].pair == 0
+    assert pairs["corner_rear"].point == pytest.approx(g.corner_rear, abs=1e-12)
+    assert output.directory == shared_dir and output.case_name == "goda"
+    # The traction pulse: ∫ traction dt × patch length = I / out-of-plane length.
+    info = extra["loads"]["impact"]
+    assert info["patch_length"] == pytest.approx(g.impact_patch_height, rel=1e-12)
+    (load,) = model.loads
+    assert load.spec.direction == (1.0, 0.0)
+    amplitude = load.spec.amplitude
+    assert amplitude.integral(1.0) * info["patch_length"] == pytest.approx(
+        case.loads[0].total_impulse / 0.205, rel=1e-12)
+    assert extra["mesh"]["cells"]["caisson"] > 0 and "calibration" not in extra
+    assert case.resolved()["calibration"]["enabled"] is False

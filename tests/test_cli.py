@@ -1,0 +1,164 @@
+"""The command line (breakwater.cli): mesh, show-case, calibrate, run, errors."""
+
+from __future__ import annotations
+
+import gc
+import pathlib
+import subprocess
+import sys
+import tomllib
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from breakwater.meshes import PHYSICAL_GROUPS, read
+
+from breakwater import cli, simulation
+from breakwater.case import load_case
+from breakwater.runspec import OutputSpec, TimeSpec
+
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_sync() -> Iterator[None]:
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+@pytest.fixture
+def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A temporary folder of rank 0, the same on all ranks."""
+    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
+
+
+def test_mesh_to_vtu(shared_dir, capsys):
+    out = shared_dir / "goda.vtu"
+    assert cli.main(["mesh", "--out", str(out), "--set", "mesh.refinement=0.8"]) == 0
+    assert out.is_file()
+    if COMM.rank == 0:
+        assert f"wrote {out}" in capsys.readouterr().out
+    mesh = read(out)
+    tags = {int(t) for block in mesh.cell_data["gmsh:physical"] for t in block}
+    assert {PHYSICAL_GROUPS[g][1] for g in ("caisson", "mound", "interface", "impact")} <= tags
+
+
+def test_mesh_bad_suffix(shared_dir, capsys):
+    assert cli.main(["mesh", "--out", str(shared_dir / "goda.xyz")]) == 2
+    if COMM.rank == 0:
+        assert "unknown mesh file suffix" in capsys.readouterr().err
+
+
+def test_show_case_prints_the_resolved_case(capsys):
+    assert cli.main(["show-case", "--set", "time.dt=5e-5"]) == 0
+    if COMM.rank == 0:
+        data = tomllib.loads(capsys.readouterr().out)
+        assert data == load_case(None, ["time.dt=5e-5"]).resolved()
+        assert data["time"]["dt"] == 5e-5
+
+
+def test_show_case_reference(capsys):
+    assert cli.main(["show-case", "--reference"]) == 0
+    if COMM.rank == 0:
+        assert "| `time.dt` | number | s | required |" in capsys.readouterr().out
+
+
+def test_bad_key_exit_2(capsys):
+    assert cli.main(["show-case", "--set", "time.dtt=1e-4"]) == 2
+    if COMM.rank == 0:
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "did you mean 'dt'" in err
+
+
+def test_usage_error_exit_2(capsys):
+    assert cli.main(["frobnicate"]) == 2
+    assert cli.main(["--version"]) == 0
+
+
+def test_calibrate_command(capsys):
+    assert cli.main(["calibrate", "--set", "mesh.refinement=0.6"]) == 0
+    if COMM.rank == 0:
+        out = capsys.readouterr().out
+        assert "G        =" in out and "check    K_x = 2.439" in out
+    # --quiet prints G alone; a doubled target gives a stiffer mound.
+    assert cli.main(["calibrate", "--quiet", "--set", "mesh.refinement=0.6"]) == 0
+    G1 = float(capsys.readouterr().out) if COMM.rank == 0 else 0.0
+    assert cli.main(["calibrate", "--quiet", "--target", "1e6", "--set",
+                     "mesh.refinement=0.6"]) == 0
+    if COMM.rank == 0:
+        G2 = float(capsys.readouterr().out)
+        assert G2 > 2 * G1  # K grows less than linearly with G
+
+
+class FakeRun:
+    """Records the arguments of simulation.run (or raises)."""
+
+    def __init__(self, error: Exception | None = None) -> None:
+        self.calls: list[dict[str, Any]] = []
+        self.error = error
+
+    def __call__(self, model, time, output, resolved_case=None, extra_summary=None):
+        self.calls.append({"model": model, "time": time, "output": output,
+                           "resolved_case": resolved_case, "extra": extra_summary})
+        if self.error is not None:
+            raise self.error
+        return {"finished": True}
+
+
+def test_run_passes_the_case_to_the_run_layer(shared_dir, monkeypatch):
+    fake = FakeRun()
+    monkeypatch.setattr(simulation, "run", fake)
+    out = shared_dir / "run"
+    assert cli.main(["run", "--out", str(out), "--no-progress", "--quiet",
+                     "--set", "mesh.refinement=0.6", "--set", "time.end_time=0.01"]) == 0
+    (call,) = fake.calls
+    assert isinstance(call["time"], TimeSpec) and call["time"].end_time == 0.01
+    output: OutputSpec = call["output"]
+    assert output.directory == out and output.progress is False
+    assert [p.name for p in output.probes] == ["gauge_top", "gauge_bottom"]
+    G = call["extra"]["calibration"]["shear_modulus"]
+    assert call["model"].body("mound").spec.material.G == G
+    case = call["resolved_case"]
+    assert case["bodies"]["mound"]["shear_modulus"] == G
+    assert case["output"]["directory"] == str(out)
+    assert (out / "mesh" / "goda.msh").is_file()
+
+
+def test_failed_run_exit_1(shared_dir, monkeypatch, capsys):
+    monkeypatch.setattr(simulation, "run",
+                        FakeRun(simulation.SimulationFailed("step failed at t = 0.01 s")))
+    args = ["run", "--out", str(shared_dir / "r"), "--set", "mesh.refinement=0.6",
+            "--set", "calibration.enabled=false", "--set", "bodies.mound.shear_modulus=2e6"]
+    assert cli.main(args) == 1
+    if COMM.rank == 0:
+        err = capsys.readouterr().err
+        assert "step failed at t = 0.01 s" in err and "Traceback" not in err
+    with pytest.raises(simulation.SimulationFailed):
+        cli.main([*args, "--debug"])
+
+
+@pytest.mark.serial
+def test_subprocess_errors_and_show_case(tmp_path):
+    if COMM.size > 1:
+        pytest.skip("subprocess CLI tests run serially")
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "breakwater", *args], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=120)
+
+    r = run("show-case", "--set", "contact.interface.frction=0.5")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.count("\n") == 1 and "did you mean 'friction'" in r.stderr
+    assert "Traceback" not in r.stderr
+    r = run("show-case", "--set", "contact.interface.frction=0.5", "--debug")
+    assert r.returncode != 0 and "Traceback" in r.stderr and "CaseError" in r.stderr
+    r = run("show-case", "goda", "--set", "time.dt=2e-4")
+    assert r.returncode == 0 and tomllib.loads(r.stdout)["time"]["dt"] == 2e-4
+    r = run("mesh", "--out", "goda.vtu", "--set", "mesh.refinement=0.6")
+    assert r.returncode == 0 and (tmp_path / "goda.vtu").is_file()

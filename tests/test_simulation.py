@@ -1,0 +1,213 @@
+"""Tests of a whole run (breakwater.simulation.run): outputs, cut-back, failure.
+
+The model: block ``a`` (1 m x 0.5 m) resting on block ``b`` (2 m x 0.5 m, base fixed)
+under gravity, with Coulomb friction μ = 0.6 (χ = 1e-10) on the interface and a short
+triangular horizontal pulse on the left face of ``a``. Serial and under MPI.
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import pathlib
+import tomllib
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+from blocks import two_rectangles
+from mpi4py import MPI
+
+from breakwater import simulation
+from breakwater.errors import BreakwaterError, ConvergenceError
+from breakwater.gn22 import GN22
+from breakwater.ledger import FIELDS
+from breakwater.mesh import read_mesh
+from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs import read_history
+from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+
+COMM = MPI.COMM_WORLD
+WIDTH, HEIGHT = 1.0, 0.5   # block a (m)
+BASE = (2.0, 0.5)          # block b (m)
+RHO, G = 2000.0, 9.81      # density (kg/m³), gravity (m/s²)
+DT = 2e-3                  # nominal step (s)
+PULSE = 0.01               # pulse duration (s)
+
+
+@pytest.fixture(autouse=True)
+def _collect_and_sync() -> Iterator[None]:
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+@pytest.fixture(scope="module")
+def mesh_path(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
+    folder = tmp_path_factory.mktemp("sim") if COMM.rank == 0 else None
+    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
+    return two_rectangles(folder / "stacked.msh", COMM, (WIDTH, HEIGHT), BASE, 0.25)
+
+
+@pytest.fixture
+def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A temporary folder of rank 0, the same on all ranks."""
+    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
+
+
+def _model(path: pathlib.Path, start: float = 0.0, peak: float = 2e4) -> ContactModel:
+    """The block on its base with a triangular pulse of ``peak`` Pa from ``start``."""
+
+    def pulse(t: float) -> float:
+        s = (t - start) / PULSE
+        return peak * max(0.0, 1.0 - abs(2.0 * s - 1.0)) if 0.0 <= s <= 1.0 else 0.0
+
+    material = Material(RHO, 0.2, young_modulus=1e8)
+    return ContactModel(read_mesh(path, COMM), [Body("a", material), Body("b", material)],
+                        [ContactPair("interface", "a", "b", penalty=1e10, friction=0.6,
+                                     regularisation=1e-10)],
+                        [Fixed("b_bottom")], [SurfaceLoad("a_left", (1.0, 0.0), pulse)],
+                        gravity=(0.0, -G))
+
+
+def _output(directory: pathlib.Path, **kwargs) -> OutputSpec:
+    return OutputSpec(directory, probes=(ProbeSpec("top", "a", (-0.5 * WIDTH, 2 * HEIGHT)),),
+                      pair_probes=(PairProbeSpec("corner", 0, (-0.5 * WIDTH, HEIGHT)),),
+                      progress=False, **kwargs)
+
+
+def _columns() -> list[str]:
+    return ["t", "dt", "newton_iterations", "top_ux", "top_uy", "corner_slip",
+            "corner_opening", "contact_length_0", "normal_force_0", "tangential_force_0",
+            *FIELDS]
+
+
+def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
+    steps = 5
+    time = TimeSpec(dt=DT, end_time=steps * DT)
+    resolved = {"case": {"name": "blocks"}, "time": {"dt": DT}}
+    summary = simulation.run(_model(mesh_path), time,
+                             _output(shared_dir, field_interval=2, case_name="blocks"),
+                             resolved_case=resolved, extra_summary={"calibration": {"G": 1.5}})
+    assert summary["finished"] is True
+    for name in ("history.csv", "summary.json", "case.toml", "static.npz",
+                 "snapshot_max_ux.npz", "fields_a.bp", "fields_b.bp"):
+        assert (shared_dir / name).exists(), name
+    figures = ("probes_ux", "pair_probes_ux", "pair_probes_uy", "energy", "contact",
+               "static_uy", "static_syy", "static_pressure", "max_ux_deformed")
+    for name in figures:
+        assert (shared_dir / "figures" / f"{name}.png").is_file(), name
+    assert tomllib.loads((shared_dir / "case.toml").read_text()) == resolved
+
+    # The history: the static row, then one row per step ending exactly at end_time.
+    h = read_history(shared_dir / "history.csv")
+    assert set(_columns()) <= set(h)
+    assert len(h["t"]) == steps + 1 == summary["solver"]["steps"] + 1
+    assert h["t"][0] == 0.0 and h["t"][-1] == time.end_time
+    np.testing.assert_allclose(np.diff(h["t"]), h["dt"][1:], rtol=1e-12)
+    assert np.isfinite(h["balance_error"]).all()
+
+    # The summary written is the one returned; the extra summary is merged in.
+    written = json.loads((shared_dir / "summary.json").read_text())
+    assert written["finished"] is True and written["calibration"] == {"G": 1.5}
+    assert written["solver"]["steps"] == steps
+    assert written["solver"]["cutbacks"] == 0
+    for key in ("newton_iterations", "mean_newton_iterations", "max_newton_iterations",
+                "failed_steps", "flip_corrections", "wall_time"):
+        assert key in written["solver"], key
+    for key in ("dolfinx", "petsc4py", "ufl", "basix", "ffcx", "gmsh", "python", "mpi_size"):
+        assert key in written["versions"], key
+    assert written["versions"]["mpi_size"] == COMM.size
+    assert written["energy"]["max_balance_error"] == pytest.approx(
+        np.abs(h["balance_error"]).max(), rel=1e-12)
+    dyn = written["dynamic"]
+    k = int(np.argmax(np.abs(h["top_ux"])))
+    assert dyn["peak_ux"]["top"] == {"value": pytest.approx(h["top_ux"][k], rel=1e-12),
+                                     "time": pytest.approx(h["t"][k], rel=1e-12)}
+    assert dyn["time_of_max_ux"] == pytest.approx(h["t"][k], rel=1e-12)
+    assert dyn["residual_ux"]["top"] == pytest.approx(h["top_ux"][-1], rel=1e-12)
+    assert dyn["residual_slip"] == pytest.approx(h["corner_slip"][-1], rel=1e-12)
+    assert dyn["max_uplift"] == pytest.approx(h["corner_opening"].max(), rel=1e-12)
+    # The pulse pushes the block towards +x: the top moves and the corner slips that way.
+    assert dyn["peak_ux"]["top"]["value"] > 0
+
+    # Static state: the block's weight rests on the interface. Vertical equilibrium of
+    # block a gives a contact resultant ρ g W H and a mean pressure ρ g H (SPEC §5, the
+    # caisson's 2314 * 9.81 * 0.202 Pa); the static solve converges to rtol 1e-9, so
+    # 1e-6 is a safe relative tolerance.
+    static = written["static"]
+    weight = RHO * G * WIDTH * HEIGHT
+    assert static["weight"] == pytest.approx(weight, rel=1e-9)
+    assert static["contact_resultant"] == pytest.approx(weight, rel=1e-6)
+    assert static["mean_contact_pressure"] == pytest.approx(RHO * G * HEIGHT, rel=1e-6)
+    # Like a rigid footing on an elastic base, the pressure peaks at the edges (Fig. 17).
+    assert static["edge_pressure"] > static["mean_contact_pressure"] > 0
+    assert static["center_pressure"] < static["edge_pressure"]
+    assert h["normal_force_0"][0] == pytest.approx(weight, rel=1e-6)
+    assert h["contact_length_0"][0] == pytest.approx(WIDTH, rel=1e-12)
+
+    with np.load(shared_dir / "static.npz") as data:
+        assert set(data["bodies"]) == {"a", "b"}
+        assert data["a_triangles"].max() < len(data["a_x"])
+        np.testing.assert_allclose(data["a_x"].min(axis=0), [-WIDTH / 2, HEIGHT], atol=1e-12)
+        np.testing.assert_allclose(data["a_x"].max(axis=0), [WIDTH / 2, 2 * HEIGHT],
+                                   atol=1e-12)
+        assert data["pair0_pressure"].shape == (len(data["pair0_x"]),)
+
+
+@pytest.mark.parametrize("failure", ["diverged", "nan"])
+def test_cutback_recovers(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+                          monkeypatch: pytest.MonkeyPatch, failure: str) -> None:
+    # Steps starting in [2Δt, 3Δt) fail unless Δt is at most half the nominal step,
+    # the same on every rank: Newton diverges, or "converges" to a NaN increment.
+    # Expected: one cut-back, GROW_AFTER half steps, then the nominal step again, and
+    # the end time reached exactly.
+    solve = GN22.solve
+
+    def flaky(self: GN22) -> int:
+        t, dt = float(self.t.value), float(self.dt.value)
+        if 2 * DT * (1 - 1e-9) <= t < 3 * DT * (1 - 1e-9) and dt > 0.6 * DT:
+            if failure == "diverged":
+                raise ConvergenceError("injected failure", -5, 3)
+            its = solve(self)
+            self.da[0].x.array[:] = np.nan
+            return its
+        return solve(self)
+
+    monkeypatch.setattr(GN22, "solve", flaky)
+    grow = simulation.GROW_AFTER
+    end = 2 * DT + grow * DT / 2 + 2 * DT
+    summary = simulation.run(_model(mesh_path), TimeSpec(dt=DT, end_time=end),
+                             _output(shared_dir, field_interval=0, figures=False))
+    assert summary["finished"] is True
+    assert summary["solver"]["cutbacks"] == 1
+    assert summary["solver"]["failed_steps"] == 1
+    if failure == "diverged":
+        assert summary["solver"]["failed_newton_iterations"] == 3
+    h = read_history(shared_dir / "history.csv")
+    expected = [0.0, DT, DT, *[DT / 2] * grow, DT, DT]
+    np.testing.assert_allclose(h["dt"], expected, rtol=1e-9)
+    assert h["t"][-1] == end
+    assert summary["solver"]["steps"] == len(expected) - 1
+
+
+def test_failure_keeps_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
+    # At rest a step takes 2 Newton iterations; once the pulse starts (at 3Δt) the
+    # friction law needs 7 or more. With 3 iterations and no cut-back allowed, the run
+    # must stop at the 4th step, keep the 3 converged steps and report it.
+    time = TimeSpec(dt=DT, end_time=10 * DT, max_cutbacks=0, newton_max_it=3)
+    with pytest.raises(simulation.SimulationFailed) as info:
+        simulation.run(_model(mesh_path, start=3 * DT), time,
+                       _output(shared_dir, field_interval=0, figures=False))
+    assert isinstance(info.value, BreakwaterError)
+    written = json.loads((shared_dir / "summary.json").read_text())
+    assert written["finished"] is False
+    assert "did not converge" in written["error"]
+    assert info.value.summary["finished"] is False
+    steps = written["solver"]["steps"]
+    assert steps == 3
+    assert written["solver"]["failed_steps"] == 1
+    h = read_history(shared_dir / "history.csv")
+    assert len(h["t"]) == steps + 1
+    assert h["t"][-1] == pytest.approx(written["time"]["reached"], rel=1e-12)
+    assert np.isfinite(np.column_stack(list(h.values()))).all()
