@@ -103,7 +103,8 @@ class FakeRun:
         self.calls: list[dict[str, Any]] = []
         self.error = error
 
-    def __call__(self, model, time, output, resolved_case=None, extra_summary=None):
+    def __call__(self, model, time, output, resolved_case=None, extra_summary=None,
+                 report=True):
         self.calls.append({"model": model, "time": time, "output": output,
                            "resolved_case": resolved_case, "extra": extra_summary})
         if self.error is not None:

@@ -192,10 +192,11 @@ def test_cutback_recovers(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
 
 
 def test_failure_keeps_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
-    # At rest a step takes 2 Newton iterations; once the pulse starts (at 3Δt) the
-    # friction law needs 7 or more. With 3 iterations and no cut-back allowed, the run
-    # must stop at the 4th step, keep the 3 converged steps and report it.
-    time = TimeSpec(dt=DT, end_time=10 * DT, max_cutbacks=0, newton_max_it=3)
+    # At rest a step takes 3-4 Newton iterations (the static state's residual noise
+    # gives slip velocities of order χ, where the friction law is steep); once the
+    # pulse starts (at 3Δt) it needs 8 or more. With 5 iterations and no cut-back
+    # allowed, the run must stop at the 4th step, keep the 3 converged steps and say so.
+    time = TimeSpec(dt=DT, end_time=10 * DT, max_cutbacks=0, newton_max_it=5)
     with pytest.raises(simulation.SimulationFailed) as info:
         simulation.run(_model(mesh_path, start=3 * DT), time,
                        _output(shared_dir, field_interval=0, figures=False))
