@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import pathlib
 
 import pytest
 from mpi4py import MPI
@@ -25,3 +26,18 @@ def _collect_and_sync():
     yield
     gc.collect()
     MPI.COMM_WORLD.barrier()
+
+
+@pytest.fixture
+def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A temporary folder of rank 0, the same path on every rank (one per test)."""
+    return pathlib.Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0))
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory,
+           request: pytest.FixtureRequest) -> pathlib.Path:
+    """A temporary folder of rank 0, the same path on every rank (one per test module)."""
+    name = request.module.__name__.rsplit(".", 1)[-1]
+    path = str(tmp_path_factory.mktemp(name)) if MPI.COMM_WORLD.rank == 0 else None
+    return pathlib.Path(MPI.COMM_WORLD.bcast(path, root=0))

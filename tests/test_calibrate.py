@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import gc
 import itertools
 import pathlib
-from collections.abc import Iterator
 
 import pytest
 from mpi4py import MPI
@@ -25,19 +23,6 @@ from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
 
 COMM = MPI.COMM_WORLD
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
-    path = tmp_path_factory.mktemp("calibrate") if COMM.rank == 0 else None
-    return pathlib.Path(COMM.bcast(str(path), root=0))
 
 
 # --- an exact reference: a shear layer under a block -----------------------------------

@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 import concurrent.futures
-import gc
 import math
 import pathlib
 import subprocess
 import sys
 import tempfile
 import tomllib
-from collections.abc import Iterator
 
 import pytest
 import tomli_w
@@ -33,19 +31,6 @@ from breakwater.loads import Pulse, impact_velocity, pendulum_impulse
 COMM = MPI.COMM_WORLD
 BAD = pathlib.Path(__file__).parent / "bad_cases"
 BAD_FILES = sorted(BAD.glob("*.toml"))
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture
-def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
-    """A temporary folder of rank 0, the same on all ranks."""
-    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
 
 
 def expected(path: pathlib.Path) -> str:

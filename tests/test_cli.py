@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import gc
-import pathlib
 import subprocess
 import sys
 import tomllib
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -23,19 +20,6 @@ from breakwater.case import load_case
 from breakwater.runspec import OutputSpec, TimeSpec
 
 COMM = MPI.COMM_WORLD
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture
-def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
-    """A temporary folder of rank 0, the same on all ranks."""
-    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
 
 
 def test_mesh_to_vtu(shared_dir, capsys):

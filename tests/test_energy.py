@@ -9,10 +9,8 @@ transitions) and the ledger's quadratures leave.
 
 from __future__ import annotations
 
-import gc
 import pathlib
 import sys
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -37,20 +35,6 @@ from blocks import two_rectangles
 
 COMM = MPI.COMM_WORLD
 TRAPEZOIDAL = GN22Parameters(beta1=0.5, beta2=0.5)
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
-    """A temporary folder of rank 0, the same on all ranks."""
-    path = tmp_path_factory.mktemp("energy") if COMM.rank == 0 else None
-    return pathlib.Path(COMM.bcast(str(path), root=0))
 
 
 def test_frictionless_impact_conserves_energy(folder):

@@ -9,10 +9,9 @@ mean over the interface node pairs of (u_a − u_b)·x, gathered from the GN22 s
 
 from __future__ import annotations
 
-import gc
 import pathlib
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -47,18 +46,9 @@ T_PULSE = 4e-3            # s
 N_PULSE = 40              # GN22 steps per pulse
 
 
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
 @pytest.fixture(scope="module")
-def mesh_path(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
+def mesh_path(folder: pathlib.Path) -> pathlib.Path:
     """Block on base, 8 × 2 structured squares (P2 triangles) per body."""
-    folder = tmp_path_factory.mktemp("friction") if COMM.rank == 0 else None
-    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
     return two_rectangles(folder / "block.msh", COMM, a=(W, H), b=(W, H), h=0.025)
 
 

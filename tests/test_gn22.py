@@ -13,11 +13,9 @@ equations unchanged.
 
 from __future__ import annotations
 
-import gc
 import math
 import pathlib
 import sys
-from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,13 +42,6 @@ COMM = MPI.COMM_WORLD
 LENGTH, DEPTH = 1.0, 0.2
 MATERIAL = Material(density=1000.0, poisson=0.25, shear_modulus=1e6)
 TIP = (0.0, 0.0)  # lower corner of the free end of the cantilever
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
 
 
 def _say(*args: object) -> None:
@@ -105,9 +96,8 @@ def _dense(model: ContactModel, form: ufl.Form, bcs: list[fem.DirichletBC]) -> n
 
 
 @pytest.fixture(scope="module")
-def oscillator(tmp_path_factory: pytest.TempPathFactory) -> Oscillator:
-    folder = str(tmp_path_factory.mktemp("gn22")) if COMM.rank == 0 else None
-    path = two_rectangles(pathlib.Path(COMM.bcast(folder, root=0)) / "cantilever.msh", COMM,
+def oscillator(folder: pathlib.Path) -> Oscillator:
+    path = two_rectangles(folder / "cantilever.msh", COMM,
                           a=(LENGTH, DEPTH), b=(0.1, DEPTH), h=0.1, layout="side")
     data = read_mesh(path, COMM)
     model = ContactModel(data, [Body("a", MATERIAL), Body("b", MATERIAL)],

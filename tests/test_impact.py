@@ -11,10 +11,8 @@ one-dimensional and c = sqrt(E/ρ) (for ν ≠ 0 the lateral faces would make it
 
 from __future__ import annotations
 
-import gc
 import pathlib
 import sys
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -43,18 +41,9 @@ PENALTY = 1e13
 N_STEPS = 80                # GN22 steps per contact duration
 
 
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
 @pytest.fixture(scope="module")
-def history(tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray | float]:
+def history(folder: pathlib.Path) -> dict[str, np.ndarray | float]:
     """Contact-force history and final bar velocities of one impact run."""
-    folder = tmp_path_factory.mktemp("impact") if COMM.rank == 0 else None
-    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
     path = two_rectangles(folder / "bars.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
                           layout="side")
     mat = Material(ρ, 0.0, young_modulus=E)

@@ -47,10 +47,9 @@ def test_guard_3d_tangent_basis():
 
 
 @pytest.fixture(scope="module")
-def stacked(tmp_path_factory):
+def stacked(folder):
     comm = MPI.COMM_WORLD
-    folder = comm.bcast(str(tmp_path_factory.mktemp("itf")) if comm.rank == 0 else None)
-    path = two_rectangles(pathlib.Path(folder) / "narrow.msh", comm, a=(0.2, 0.1), b=(0.6, 0.2),
+    path = two_rectangles(folder / "narrow.msh", comm, a=(0.2, 0.1), b=(0.6, 0.2),
                           h=0.05)
     return read_mesh(path, comm)
 

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import gc
 import math
 import pathlib
 import sys
-from collections.abc import Iterator
 
 import gmsh
 import numpy as np
@@ -33,24 +31,9 @@ MOUND_AREA = 0.5 * (CREST + BASE_WIDTH) * H_MOUND
 PAPER_TRIANGLES = {goda.CAISSON: 156, goda.MOUND: 558}
 
 
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture
-def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
-    """A temporary folder of rank 0, the same on all ranks."""
-    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
-
-
 @pytest.fixture(scope="module")
-def meshes(tmp_path_factory: pytest.TempPathFactory) -> dict[float, pathlib.Path]:
+def meshes(folder: pathlib.Path) -> dict[float, pathlib.Path]:
     """Goda's mesh at refinements 1 and 2 (order 1)."""
-    folder = tmp_path_factory.mktemp("goda") if COMM.rank == 0 else None
-    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
     return {
         r: goda.generate(folder / f"goda_r{r:g}.msh", refinement=r) for r in (1.0, 2.0)
     }

@@ -9,10 +9,9 @@ Serially the tests are skipped.
 
 from __future__ import annotations
 
-import gc
 import pathlib
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -52,20 +51,6 @@ def _pulse(t: float) -> float:
 
 
 Result = dict[str, np.ndarray]
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
-    """A temporary folder of rank 0, the same path on every rank."""
-    path = str(tmp_path_factory.mktemp("mpi")) if COMM.rank == 0 else None
-    return pathlib.Path(COMM.bcast(path, root=0))
 
 
 def _say(*args: object) -> None:

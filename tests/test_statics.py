@@ -6,10 +6,8 @@ come from :class:`breakwater.interface.InterfaceNodes`, which gathers them on ev
 
 from __future__ import annotations
 
-import gc
 import pathlib
 import sys
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -42,20 +40,6 @@ B_CAISSON, H_CAISSON = 0.205, 0.202
 B_BASE, H_BASE = 0.6, 0.19
 PENALTY = 5e8
 G = 9.81
-
-
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
-@pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
-    """A temporary folder of rank 0, the same path on every rank."""
-    path = str(tmp_path_factory.mktemp("statics")) if COMM.rank == 0 else None
-    return pathlib.Path(COMM.bcast(path, root=0))
 
 
 def _say(*args: object) -> None:
