@@ -3,7 +3,9 @@
 ``CASE`` is a case file (TOML), or the name of a built-in case (``goda``, the
 default). Every command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
-exit status 2 for input errors (case, mesh, usage), 1 for a failed run.
+exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
+failed or interrupted (SIGTERM) run. ``run --resume`` continues a killed run in the
+same output folder from its last checkpoint (``output.checkpoint_interval``).
 """
 
 from __future__ import annotations
@@ -83,11 +85,23 @@ def _load(args: argparse.Namespace) -> Case:
 def _cmd_run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from . import simulation
+    from . import checkpoint, simulation
 
     case = _load(args)
-    _say(f"breakwater {__version__}: case '{case.name}' -> {case.output_directory}",
-         args.quiet)
+    if args.resume:
+        # Fail early, before meshing and calibrating, when there is nothing to resume;
+        # run() then checks that the case (case.toml) is the checkpoint's.
+        problem = None
+        if _rank() == 0:
+            try:
+                checkpoint.check(case.output_directory)
+            except checkpoint.CheckpointError as e:
+                problem = str(e)
+        problem = MPI.COMM_WORLD.bcast(problem, root=0)
+        if problem is not None:
+            raise checkpoint.CheckpointError(problem)
+    _say(f"breakwater {__version__}: case '{case.name}' -> {case.output_directory}"
+         + (" (resuming)" if args.resume else ""), args.quiet)
     model, time, output, extra = case.build(MPI.COMM_WORLD)
     if "calibration" in extra:
         c = extra["calibration"]
@@ -96,7 +110,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
              args.quiet)
     output = replace(output, progress=args.progress)
     simulation.run(model, time, output, resolved_case=case.resolved(), extra_summary=extra,
-                   report=not args.quiet)
+                   report=not args.quiet, resume=args.resume)
     return EXIT_OK
 
 
@@ -246,6 +260,10 @@ def _parser() -> argparse.ArgumentParser:
                         "results/<case name>)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar (default: only when stderr is a terminal)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the interrupted run of the output folder from its "
+                        "checkpoint (the case must be the same; see "
+                        "output.checkpoint_interval)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("mesh", parents=[common], help="write the case's mesh",
@@ -288,11 +306,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as e:  # usage errors (2) and --help/--version (0)
         return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
     from .case import CaseError
+    from .checkpoint import CheckpointError
 
     try:
         with _logging(args):
             return int(args.func(args))
-    except (CaseError, MeshError) as e:
+    except (CaseError, MeshError, CheckpointError) as e:
         if args.debug:
             raise
         _report(e)

@@ -15,6 +15,7 @@ the scheme's numerical dissipation.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import dolfinx
 import ufl
@@ -86,6 +87,23 @@ class EnergyLedger:
         self.reference: float | None = None
         self.row = Energies()
         self._t0 = 0.0
+
+    def state(self) -> dict[str, Any]:
+        """The running sums and previous-step data, plain numbers (for checkpoints).
+
+        With the previous state ``u0``, ``v0`` (Functions, saved with the fields) this
+        is everything :meth:`record` needs to continue.
+        """
+        return {"reference": self.reference, "row": self.row.as_dict(), "t0": self._t0,
+                "amp0": [float(a.value) for a in self._amp0]}
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller)."""
+        self.reference = state["reference"]
+        self.row = Energies(**state["row"])
+        self._t0 = state["t0"]
+        for a0, value in zip(self._amp0, state["amp0"], strict=True):
+            a0.value = value
 
     def _value(self, form: fem.Form | None) -> float:
         return 0.0 if form is None else self.stepper.model.assemble(form)

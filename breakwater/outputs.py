@@ -18,6 +18,13 @@ Output files of a run (in the output directory):
 - ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
   probe.
 - ``figures/``: see :mod:`breakwater.figures`.
+- ``checkpoint.npz``: the latest checkpoint, with ``output.checkpoint_interval`` > 0
+  (see :mod:`breakwater.checkpoint`).
+
+``summary.json`` is written when the run starts (``finished: false``, ``status:
+"running"``), again at every checkpoint, and at the end (``status`` ``finished``,
+``failed`` or ``interrupted``), so a folder whose run was killed still says that it
+did not finish.
 """
 
 from __future__ import annotations
@@ -130,21 +137,66 @@ def atomic_savez(path: str | pathlib.Path, **arrays: np.ndarray) -> pathlib.Path
 class HistoryWriter:
     """The step history as CSV, written by rank 0 one whole row at a time.
 
+    Each row is written by one ``write`` call and flushed, so a run killed at any
+    moment leaves whole rows only (the operating system keeps what was written).
+
     Args:
-        path: The CSV file (overwritten).
+        path: The CSV file (overwritten, unless ``keep_rows`` is given).
         columns: Column names, in order.
         comm: Communicator; only its rank 0 writes.
+        keep_rows: Resume: keep the header and the first ``keep_rows`` rows of the
+            existing file (cut atomically; the rest is dropped), read them into
+            :attr:`kept` (on every rank) and append after them.
+
+    Raises:
+        ValueError: (``keep_rows``) The file has other columns or fewer whole rows.
 
     """
 
-    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm) -> None:
+    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm,
+                 keep_rows: int | None = None) -> None:
         self.path = pathlib.Path(path)
         self.columns = tuple(columns)
         self.rows = 0
+        self.kept: list[dict[str, float]] = []
         self._file: IO[str] | None = None
+        if keep_rows is None:
+            if comm.rank == 0:
+                self._file = open(self.path, "w", encoding="utf-8", newline="")
+                self._write(",".join(self.columns))
+            return
+        kept: list[dict[str, float]] | str = []
         if comm.rank == 0:
-            self._file = open(self.path, "w", encoding="utf-8", newline="")
-            self._write(",".join(self.columns))
+            try:
+                kept = self._cut(keep_rows)
+            except ValueError as e:
+                kept = str(e)
+        kept = comm.bcast(kept, root=0)
+        if isinstance(kept, str):
+            raise ValueError(kept)
+        self.kept = kept
+        self.rows = keep_rows
+        if comm.rank == 0:
+            self._file = open(self.path, "a", encoding="utf-8", newline="")
+
+    def _cut(self, keep_rows: int) -> list[dict[str, float]]:
+        """Keep the header and ``keep_rows`` whole rows, atomically; return the rows."""
+        header = ",".join(self.columns) + "\n"
+        lines: list[str] = []
+        with open(self.path, encoding="utf-8", newline="") as f:
+            if f.readline() != header:
+                raise ValueError(f"{self.path}: the columns differ from the run's")
+            for line in f:
+                if len(lines) == keep_rows or not line.endswith("\n"):
+                    break
+                lines.append(line)
+        if len(lines) < keep_rows:
+            raise ValueError(f"{self.path} holds {len(lines)} whole rows, fewer than the "
+                             f"{keep_rows} of the checkpoint")
+        atomic_write_text(self.path, header + "".join(lines))
+        # repr(float) is read back exactly by float().
+        return [dict(zip(self.columns, map(float, line.split(",")), strict=True))
+                for line in lines]
 
     def _write(self, line: str) -> None:
         assert self._file is not None
@@ -156,6 +208,12 @@ class HistoryWriter:
         if self._file is not None:
             self._write(",".join(repr(float(row[c])) for c in self.columns))
         self.rows += 1
+
+    def sync(self) -> None:
+        """Force the rows written so far to disk (before a checkpoint refers to them)."""
+        if self._file is not None:
+            self._file.flush()
+            os.fsync(self._file.fileno())
 
     def close(self) -> None:
         """Close the file."""
@@ -345,10 +403,12 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
     def num(x: Any, fmt: str = ".4g") -> str:
         return "n/a" if x is None else format(x, fmt)
 
+    reached = num(summary.get("time", {}).get("reached"))
     lines = [f"breakwater: case '{summary.get('case_name', 'case')}' "
              + ("finished" if summary.get("finished") else
-                f"FAILED at t = {num(summary.get('time', {}).get('reached'))} s: "
-                f"{summary.get('error')}")]
+                f"INTERRUPTED at t = {reached} s: {summary.get('error')}"
+                if summary.get("status") == "interrupted" else
+                f"FAILED at t = {reached} s: {summary.get('error')}")]
     if s:
         lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N/m, "
                      f"weight {num(s.get('weight'))} N/m, mean pressure "
@@ -366,6 +426,19 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
                      f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
                      f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time")
+    def pct(x: Any) -> str:
+        return "n/a" if x is None else f"{100 * x:.2g}%"
+
+    for name, q in summary.get("contact_quality", {}).items():
+        ratios = q.get("penalty_h_over_E", {})
+        lines.append(f"  contact '{name}': penetration static "
+                     f"{num(q.get('static_penetration'), '.3g')} m "
+                     f"({pct(q.get('static_penetration_over_h'))} of h, "
+                     f"{pct(q.get('static_penetration_over_settlement'))} of the settlement), "
+                     f"max {num(q.get('dynamic_penetration'), '.3g')} m "
+                     f"({pct(q.get('dynamic_penetration_over_h'))} of h); ε_n h/E "
+                     f"{num(ratios.get('slave'), '.3g')} (slave), "
+                     f"{num(ratios.get('master'), '.3g')} (master): {q.get('verdict')}")
     e = summary.get("energy", {})
     if e.get("max_balance_error") is not None:
         lines.append(f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m")

@@ -81,7 +81,8 @@ class OutputSpec:
         figures: Draw the figures at the end of the run.
         progress: Progress bar; ``None``: only when stderr is a TTY.
         case_name: Name of the case, used in reports.
-        checkpoint_interval: Checkpoint every N steps (0: never; not implemented yet).
+        checkpoint_interval: Write a checkpoint every N steps (0: never); see
+            :mod:`breakwater.checkpoint` and ``run(..., resume=True)``.
     """
 
     directory: pathlib.Path

@@ -12,7 +12,20 @@ settings of :mod:`breakwater.runspec`; it never reads TOML. The run
    the last accepted step are written, ``summary.json`` says ``finished: false`` and
    :class:`SimulationFailed` is raised;
 3. writes the outputs described in :mod:`breakwater.outputs` and the figures of
-   :mod:`breakwater.figures`.
+   :mod:`breakwater.figures`, and a contact quality report per pair
+   (:mod:`breakwater.quality`: penetration against the element size and the static
+   settlement, penalty stiffness against E/h; ``contact_quality`` in the summary).
+
+Checkpoints (:mod:`breakwater.checkpoint`): with ``output.checkpoint_interval`` = N >
+0 the state is saved every N steps (``checkpoint.npz``, atomically, the latest only;
+removed when the run finishes), and ``run(..., resume=True)`` continues from it:
+``history.csv`` is cut back to the rows of the checkpoint and the run goes on, giving
+the same history as an uninterrupted run (bit for bit serially). ``summary.json`` exists
+from the start of a run (``status: "running"``) and is rewritten at every checkpoint,
+so a killed run's folder says that it did not finish. On SIGTERM the run stops at the
+next step boundary (all ranks together), writes a checkpoint (when N > 0) and the
+outputs, with ``status: "interrupted"``, and raises :class:`RunInterrupted`; a second
+SIGTERM kills it at once.
 
 Every rank runs the same code (all measurements are collective and give the same
 values on every rank); only rank 0 writes files, logs and prints.
@@ -23,9 +36,12 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import os
 import pathlib
 import platform
+import signal
 import sys
+import threading
 import time as _time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -36,8 +52,10 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from . import __version__, forms  # type: ignore[attr-defined]
+from . import __version__, forms, quality  # type: ignore[attr-defined]
+from . import checkpoint as ckpt
 from . import outputs as out
+from .checkpoint import CheckpointError
 from .errors import BreakwaterError, ConvergenceError
 from .gn22 import GN22, GN22Parameters, solve_static
 from .interface import InterfaceNodes, interface_nodes
@@ -47,7 +65,7 @@ from .probes import PointProbe
 from .runspec import OutputSpec, PairProbeSpec, TimeSpec
 from .solver import NewtonOptions
 
-__all__ = ["GROW_AFTER", "SimulationFailed", "run"]
+__all__ = ["GROW_AFTER", "RunInterrupted", "SimulationFailed", "run"]
 
 GROW_AFTER = 4
 """Accepted steps after a cut-back before the step size doubles again."""
@@ -77,6 +95,44 @@ class SimulationFailed(BreakwaterError):
     def __init__(self, message: str, summary: Mapping[str, Any] | None = None) -> None:
         super().__init__(message)
         self.summary = dict(summary or {})
+
+
+class RunInterrupted(SimulationFailed):
+    """The run stopped on a signal (SIGTERM); ``summary.json`` says ``interrupted``."""
+
+
+class _Stop(BreakwaterError):
+    """Raised inside the time loop when a stop signal was received."""
+
+
+class _StopSignal:
+    """Catches SIGTERM: the run stops at the next step boundary.
+
+    The handler only sets a flag (the time loop polls it collectively, so that every
+    rank stops at the same step) and restores the default action, so a second
+    SIGTERM kills the process at once. Installed only from the main thread.
+    """
+
+    SIGNALS = (signal.SIGTERM,)
+
+    def __init__(self) -> None:
+        self.received = 0
+        self._previous: dict[int, Any] = {}
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.received = signum
+        signal.signal(signum, signal.SIG_DFL)
+
+    def __enter__(self) -> _StopSignal:
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                self._previous[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, previous in self._previous.items():
+            signal.signal(sig, previous)
+        self._previous.clear()
 
 
 # --- measurements -----------------------------------------------------------------
@@ -134,6 +190,12 @@ class _PairProbe:
 class Monitor:
     """Everything measured on the state after each step: one history row.
 
+    Columns: ``t``, ``dt``, ``newton_iterations``; ``<probe>_ux``, ``<probe>_uy``;
+    ``<pair probe>_<key>`` (see :class:`_PairProbe`); per contact pair ``k``:
+    ``contact_length_k`` (length where g_n ≤ 0), ``normal_force_k``,
+    ``tangential_force_k`` (resultants on the slave), ``penetration_k`` (largest
+    nodal ⟨−g_n⟩₊, m); the ledger's :data:`~breakwater.ledger.FIELDS`.
+
     Args:
         model: The contact model.
         stepper: The GN22 stepper (its ``u``, ``v`` are measured).
@@ -145,6 +207,7 @@ class Monitor:
     def __init__(self, model: ContactModel, stepper: GN22, output: OutputSpec,
                  nodes: Sequence[InterfaceNodes]) -> None:
         self.model, self.stepper = model, stepper
+        self.nodes = nodes
         self.probes = [(p.name, PointProbe(model, p.body, p.point, p.name))
                        for p in output.probes]
         self.pair_probes = [_PairProbe(model, p, nodes) for p in output.pair_probes]
@@ -170,7 +233,7 @@ class Monitor:
             self.columns += [f"{pp.name}_{k}" for k in _PairProbe.KEYS]
         for k in range(len(model.pairs)):
             self.columns += [f"contact_length_{k}", f"normal_force_{k}",
-                             f"tangential_force_{k}"]
+                             f"tangential_force_{k}", f"penetration_{k}"]
         self.columns += list(FIELDS)
 
     def row(self, dt: float, iterations: int, energies: Mapping[str, float]) -> dict[str, float]:
@@ -188,6 +251,10 @@ class Monitor:
             r[f"contact_length_{k}"] = length
             r[f"normal_force_{k}"] = normal
             r[f"tangential_force_{k}"] = tangential
+        for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
+            us, um = nd.gather(s.u[p.slave].x.array, s.u[p.master].x.array)
+            gap = np.sum((us - um) * nd.normal, axis=1) + p.spec.gap
+            r[f"penetration_{k}"] = quality.max_penetration(gap)
         r.update({k: float(energies[k]) for k in FIELDS})
         return r
 
@@ -269,19 +336,21 @@ class _Progress:
     ``tqdm.write`` so that they do not break the bar.
     """
 
-    def __init__(self, end_time: float, enabled: bool, name: str) -> None:
+    def __init__(self, end_time: float, enabled: bool, name: str, start: float = 0.0
+                 ) -> None:
         self.bar = None
         self._redirect: contextlib.AbstractContextManager[None] = contextlib.nullcontext()
         if enabled:
             from tqdm import tqdm
             from tqdm.contrib.logging import logging_redirect_tqdm
 
-            self.bar = tqdm(total=end_time, desc=name, unit="s", file=sys.stderr,
+            self.bar = tqdm(total=end_time, initial=start, desc=name, unit="s",
+                            file=sys.stderr,
                             bar_format="{desc}: {percentage:3.0f}%|{bar}| t={n:.4g}/"
                                        "{total:.4g} s [{elapsed}<{remaining}{postfix}]")
             self._redirect = logging_redirect_tqdm(
                 loggers=[logging.getLogger(), logging.getLogger("breakwater")])
-        self._t = 0.0
+        self._t = start
 
     def __enter__(self) -> _Progress:
         self._redirect.__enter__()
@@ -303,10 +372,15 @@ class _Progress:
 class _Run:
     """State and bookkeeping of one run (see :func:`run`)."""
 
-    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec) -> None:
+    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
+                 fingerprint: str, extra_summary: Mapping[str, Any] | None = None) -> None:
         if not (time.dt > 0 and time.end_time >= 0 and time.max_cutbacks >= 0):
             raise ValueError(f"invalid time settings: {time}")
+        if output.checkpoint_interval < 0:
+            raise ValueError(f"invalid checkpoint interval {output.checkpoint_interval}")
         self.model, self.time, self.output = model, time, output
+        self.fingerprint = fingerprint
+        self.extra = dict(extra_summary or {})
         self.comm = comm = model.comm
         self.directory = pathlib.Path(comm.bcast(
             str(pathlib.Path(output.directory).resolve()) if comm.rank == 0 else None, root=0))
@@ -314,6 +388,7 @@ class _Run:
             self.directory.mkdir(parents=True, exist_ok=True)
         comm.barrier()
         self.wall0 = _time.perf_counter()
+        self.wall_before = 0.0  # wall time of the earlier parts of a resumed run
         self.steps = 0
         self.iterations: list[int] = []
         self.failed_steps = 0
@@ -321,54 +396,77 @@ class _Run:
         self.cutbacks = 0
         self.min_dt = time.dt
         self.static: dict[str, Any] = {}
+        self.contact: list[dict[str, Any]] = []  # static inputs of the quality report
         self.static_iterations = 0
         self.rows: list[dict[str, float]] = []
         self.peaks: dict[str, dict[str, float]] = {}
         self.stepper: GN22 | None = None
+        self.ledger: EnergyLedger | None = None
         self.history: out.HistoryWriter | None = None
         self.fields: list[out.BodyFields] = []
         self.writer: out.FieldWriter | None = None
+        self.field_parts: list[str] = []  # VTX files of the earlier parts of a resumed run
         self.snapshot: list[fem.Function] = []
         self.snapshot_time: float | None = None
         self.nodes: Sequence[InterfaceNodes] = ()
         self.monitor: Monitor | None = None
         self.fields_time = 0.0  # time of the last VTX output
+        # Step-size state of the time loop: current Δt, halvings of the nominal Δt in
+        # effect, accepted steps since the last change, accepted step sizes.
+        self.h = time.dt
+        self.halvings = 0
+        self.streak = 0
+        self.accepted: list[float] = [0.0]
+        self.checkpointed: dict[str, Any] | None = None  # the latest checkpoint written
+        self.resumed_from: list[dict[str, Any]] = []
+        self.stop = _StopSignal()
+        self._warned: set[tuple[str, str]] = set()
 
     # --- set-up and static state --------------------------------------------------
 
+    def _stepper(self) -> GN22:
+        time = self.time
+        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
+                               max_it=time.newton_max_it)
+        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
+        return GN22(self.model, time.dt, params, newton=newton)
+
+    def _measures(self, s: GN22) -> None:
+        """The measuring objects of the stepper's state (nodes, ledger, monitor...)."""
+        m = self.model
+        self.nodes = s.nodes or interface_nodes(m)
+        self.ledger = EnergyLedger(s)
+        self.monitor = Monitor(m, s, self.output, self.nodes)
+        self.fields = [out.BodyFields(m, i) for i in range(len(m.bodies))]
+        self.snapshot = m.functions("u_snapshot")
+
     def start(self) -> None:
-        m, time, output = self.model, self.time, self.output
-        if output.checkpoint_interval:
-            log.warning("checkpoint_interval is not implemented yet: no checkpoints")
+        m = self.model
         log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
                  m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
                  len(m.bodies), len(m.pairs))
         m.set_time(0.0)
         u_static, self.static_iterations = solve_static(m)
         log.info("static: %d Newton iterations", self.static_iterations)
-        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
-                               max_it=time.newton_max_it)
-        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
-        self.stepper = s = GN22(m, time.dt, params, newton=newton)
+        self.stepper = s = self._stepper()
         s.initialise(u_static)
-        self.nodes = s.nodes or interface_nodes(m)
-        self.ledger = EnergyLedger(s)
-        self.monitor = Monitor(m, s, output, self.nodes)
+        self._measures(s)
+        assert self.monitor is not None
         self.history = out.HistoryWriter(self.directory / out.HISTORY, self.monitor.columns,
                                          self.comm)
-        self.fields = [out.BodyFields(m, i) for i in range(len(m.bodies))]
-        if output.field_interval > 0:
+        if self.output.field_interval > 0:
             self.writer = out.FieldWriter(self.fields, self.directory, self.comm)
-        self.snapshot = m.functions("u_snapshot")
         self._record(0.0, self.static_iterations)
         self._static_summary()
+        self._log_quality()
         if self.writer is not None:
             self.writer.write(0.0, s.u, s.v)
 
     def _static_summary(self) -> None:
         m, r = self.model, self.rows[0]
         assert self.stepper is not None
-        interface = interface_state(m, self.nodes, self.stepper.u)
+        u = self.stepper.u
+        interface = interface_state(m, self.nodes, u)
         static: dict[str, Any] = {"newton_iterations": self.static_iterations}
         if m.pairs:
             slave = m.pairs[0].slave
@@ -389,15 +487,197 @@ class _Run:
                 "resultant_over_weight": resultant / weight if weight > 0 else None,
             })
         self.static = static
-        arrays = out.snapshot_arrays(self.fields, self.stepper.u, interface, 0.0, self.comm)
+        names = [p.spec.interface for p in m.pairs]
+        self.contact = []
+        for k, (p, nd) in enumerate(zip(m.pairs, self.nodes, strict=True)):
+            us, um = nd.gather(u[p.slave].x.array, u[p.master].x.array)
+            length = m.assemble(m.form(1.0 * p.dS))
+            facets = m.comm.allreduce(len(p.facet_data))
+            self.contact.append({
+                "name": p.spec.interface if names.count(p.spec.interface) == 1 else str(k),
+                "penalty": p.spec.penalty,
+                "element_size": length / facets,
+                "young_moduli": [m.bodies[i].spec.material.E for i in (p.slave, p.master)],
+                "static_penetration": quality.max_penetration(interface[f"pair{k}_gap"]),
+                "settlement": quality.settlement(us, um, nd.normal),
+            })
+        arrays = out.snapshot_arrays(self.fields, u, interface, 0.0, self.comm)
         if arrays is not None:
             out.atomic_savez(self.directory / out.STATIC, **arrays)
+
+    def contact_quality(self, dynamic: bool = True) -> dict[str, quality.ContactQuality]:
+        """The contact quality of each pair (:mod:`breakwater.quality`).
+
+        Args:
+            dynamic: Include the largest penetration over the steps so far.
+        """
+        report = {}
+        steps = self.rows[1:] if dynamic else []
+        for k, c in enumerate(self.contact):
+            δ, when = None, None
+            if steps:
+                j = int(np.argmax([r[f"penetration_{k}"] for r in steps]))
+                δ, when = steps[j][f"penetration_{k}"], steps[j]["t"]
+            report[c["name"]] = quality.assess(
+                c["name"], c["penalty"], c["element_size"], tuple(c["young_moduli"]),
+                c["static_penetration"], c["settlement"], δ, when)
+        return report
+
+    def _log_quality(self, dynamic: bool = False) -> None:
+        """Log (rank 0) the warnings of the contact quality not logged yet."""
+        for name, q in self.contact_quality(dynamic).items():
+            for issue, message in zip(q.issues, q.warnings, strict=True):
+                if (name, issue) not in self._warned:
+                    self._warned.add((name, issue))
+                    log.warning("%s", message)
+
+    # --- checkpoints --------------------------------------------------------------
+
+    def _saved_functions(self) -> list[list[fem.Function]]:
+        s, ledger = self.stepper, self.ledger
+        assert s is not None and ledger is not None
+        return [[s.u[i], s.v[i], s.a[i], ledger.u0[i], ledger.v0[i], self.snapshot[i]]
+                for i in range(len(self.model.bodies))]
+
+    def checkpoint(self) -> None:
+        """Save the state after the last accepted step (collective)."""
+        s, ledger, history = self.stepper, self.ledger, self.history
+        assert s is not None and ledger is not None and history is not None
+        history.sync()  # the rows the checkpoint counts are on disk before it
+        t = float(s.t.value)
+        meta = {
+            "fingerprint": self.fingerprint,
+            "mpi_size": self.comm.size,
+            "bodies": [b.spec.name for b in self.model.bodies],
+            "t": t, "dt_constant": float(s.dt.value),
+            "h": self.h, "halvings": self.halvings, "streak": self.streak,
+            "steps": self.steps, "history_rows": history.rows,
+            "columns": list(history.columns),
+            "iterations": self.iterations, "failed_steps": self.failed_steps,
+            "failed_iterations": self.failed_iterations, "cutbacks": self.cutbacks,
+            "min_dt": self.min_dt, "flips": s.flips, "peaks": self.peaks,
+            "snapshot_time": self.snapshot_time, "fields_time": self.fields_time,
+            "static": self.static, "static_iterations": self.static_iterations,
+            "contact": self.contact,
+            "ledger": ledger.state(),
+            "wall_time": self.wall_time(),
+            "resumed_from": self.resumed_from,
+            "field_parts": self.field_parts,
+        }
+        arrays = ckpt.gather_nodal(self._saved_functions(), self.comm)
+        if arrays is not None:
+            ckpt.write(self.directory / ckpt.CHECKPOINT, meta,
+                       {**arrays, "accepted": np.array(self.accepted)})
+        self.checkpointed = {"file": ckpt.CHECKPOINT, "t": t, "steps": self.steps,
+                             "history_rows": history.rows}
+        self.write_summary(self.summary(False, None, "running"))
+        log.debug("checkpoint at t = %.6g s (step %d)", t, self.steps)
+
+    def discard_checkpoint(self) -> None:
+        """Remove the checkpoint of a finished run (nothing is left to resume)."""
+        if self.comm.rank == 0:
+            (self.directory / ckpt.CHECKPOINT).unlink(missing_ok=True)
+        self.checkpointed = None
+
+    def restore(self) -> None:
+        """Continue from the checkpoint of the output folder (collective).
+
+        Nothing in the folder changes until the checkpoint is known to fit.
+
+        Raises:
+            CheckpointError: No checkpoint, another case, a finished run, or a history
+                that does not reach the checkpoint.
+        """
+        m, comm = self.model, self.comm
+        problem = None
+        if comm.rank == 0:
+            try:
+                ckpt.check(self.directory, self.fingerprint)
+            except CheckpointError as e:
+                problem = str(e)
+        problem = comm.bcast(problem, root=0)
+        if problem is not None:
+            raise CheckpointError(problem)
+        meta, arrays = ckpt.read(self.directory / ckpt.CHECKPOINT, self.fingerprint)
+        if meta["bodies"] != [b.spec.name for b in m.bodies]:
+            raise CheckpointError(f"the checkpoint's bodies {meta['bodies']} are not the "
+                                  "model's")
+        if meta["mpi_size"] != comm.size:
+            log.warning("resuming on %d ranks a checkpoint written on %d: the continuation "
+                        "equals the uninterrupted run to round-off, not bit for bit",
+                        comm.size, meta["mpi_size"])
+        m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
+        self.stepper = s = self._stepper()
+        self._measures(s)
+        assert self.ledger is not None and self.monitor is not None
+        if meta["columns"] != self.monitor.columns:
+            raise CheckpointError("the checkpoint's history columns are not the run's")
+        ckpt.scatter_nodal(arrays, self._saved_functions())
+        s.t.value = meta["t"]
+        s.dt.value = meta["dt_constant"]
+        s.flips = meta["flips"]
+        self.ledger.restore(meta["ledger"])
+        try:
+            self.history = out.HistoryWriter(self.directory / out.HISTORY,
+                                             self.monitor.columns, comm,
+                                             keep_rows=meta["history_rows"])
+        except (ValueError, OSError) as e:
+            raise CheckpointError(f"cannot resume: {e}") from e
+        self.rows = self.history.kept
+        if self.rows[-1]["t"] != meta["t"]:
+            raise CheckpointError(f"cannot resume: the last history row kept (t = "
+                                  f"{self.rows[-1]['t']:.6g} s) is not the checkpoint's "
+                                  f"(t = {meta['t']:.6g} s)")
+        self.h, self.halvings, self.streak = meta["h"], meta["halvings"], meta["streak"]
+        self.accepted = arrays["accepted"].tolist()
+        self.steps, self.iterations = meta["steps"], meta["iterations"]
+        self.failed_steps = meta["failed_steps"]
+        self.failed_iterations = meta["failed_iterations"]
+        self.cutbacks, self.min_dt = meta["cutbacks"], meta["min_dt"]
+        self.peaks, self.snapshot_time = meta["peaks"], meta["snapshot_time"]
+        self.fields_time = meta["fields_time"]
+        self.static, self.static_iterations = meta["static"], meta["static_iterations"]
+        self.contact = meta["contact"]
+        self.wall_before = meta["wall_time"]
+        self.resumed_from = [*meta["resumed_from"],
+                             {"t": meta["t"], "steps": self.steps, "mpi_size": comm.size}]
+        self.field_parts = list(meta["field_parts"])
+        if self.output.field_interval > 0:
+            self._set_aside_fields()
+            self.writer = out.FieldWriter(self.fields, self.directory, self.comm)
+        self.checkpointed = {"file": ckpt.CHECKPOINT, "t": meta["t"], "steps": self.steps,
+                             "history_rows": meta["history_rows"]}
+        if comm.rank == 0:  # temporary files of atomic writes cut short by a kill
+            for tmp in self.directory.glob(".*.tmp[0-9]*"):
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+        log.info("resuming from the checkpoint at t = %.6g s (step %d)", meta["t"],
+                 self.steps)
+        self._log_quality()
+
+    def _set_aside_fields(self) -> None:
+        """Rename the VTX files of the interrupted part: ``fields_<body>.part<k>.bp``.
+
+        A VTX file cannot be appended to, so a resumed run writes new ones from the
+        checkpoint on; the earlier ones are kept beside them.
+        """
+        if self.comm.rank == 0:
+            for f in self.fields:
+                path = self.directory / f"fields_{f.name}.bp"
+                if path.exists():
+                    k = 1
+                    while (target := path.with_name(f"fields_{f.name}.part{k}.bp")).exists():
+                        k += 1
+                    os.replace(path, target)
+                    self.field_parts.append(target.name)
+        self.field_parts = self.comm.bcast(self.field_parts, root=0)
+        self.comm.barrier()
 
     # --- time loop ----------------------------------------------------------------
 
     def _record(self, dt: float, iterations: int) -> dict[str, float]:
         assert self.monitor is not None and self.history is not None
-        assert self.stepper is not None
+        assert self.stepper is not None and self.ledger is not None
         row = self.monitor.row(dt, iterations, self.ledger.record().as_dict())
         self.rows.append(row)
         self.history.append(row)
@@ -418,16 +698,26 @@ class _Run:
         ok = all(np.isfinite(f.x.array).all() for f in functions)
         return bool(self.comm.allreduce(ok, op=MPI.LAND))
 
+    def _check_stop(self) -> None:
+        """Stop (all ranks together) when a rank received a stop signal."""
+        signum = self.comm.allreduce(self.stop.received, op=MPI.MAX)
+        if not signum:
+            return
+        assert self.stepper is not None
+        t = float(self.stepper.t.value)
+        saved = self.output.checkpoint_interval > 0
+        if saved and (self.checkpointed is None or self.checkpointed["steps"] != self.steps):
+            self.checkpoint()
+        raise _Stop(f"interrupted by {signal.Signals(signum).name} at t = {t:.6g} s"
+                    + (" (continue with --resume)" if saved else ""))
+
     def loop(self) -> None:
         s, time, output = self.stepper, self.time, self.output
         assert s is not None
         show = output.progress if output.progress is not None else sys.stderr.isatty()
         progress = _Progress(time.end_time, bool(show) and self.comm.rank == 0,
-                             output.case_name)
-        h = time.dt          # current step size (halved on failure, regrown after)
-        halvings = 0         # halvings of the nominal step in effect
-        streak = 0           # accepted steps since the last change of step size
-        accepted = [float(s.t.value)]
+                             output.case_name, float(s.t.value))
+        interval = output.checkpoint_interval
         log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
         with progress:
             while True:
@@ -435,6 +725,8 @@ class _Run:
                 remaining = time.end_time - t
                 if remaining <= 1e-9 * time.dt:
                     break
+                self._check_stop()
+                h = self.h
                 last = remaining <= h * (1.0 + 1e-6)
                 trial = remaining if last and abs(remaining - h) > 1e-9 * h else h
                 try:
@@ -446,23 +738,23 @@ class _Run:
                     # The state (u, v, a) is untouched until update(): retry from it.
                     self.failed_steps += 1
                     self.failed_iterations += getattr(e, "iterations", 0)
-                    if halvings >= time.max_cutbacks:
+                    if self.halvings >= time.max_cutbacks:
                         raise SimulationFailed(
                             f"step from t = {t:.6g} s with dt = {trial:.3g} s did not "
-                            f"converge after {halvings} cut-backs: {e}") from e
-                    halvings += 1
+                            f"converge after {self.halvings} cut-backs: {e}") from e
+                    self.halvings += 1
                     self.cutbacks += 1
-                    h = 0.5 * trial
-                    self.min_dt = min(self.min_dt, h)
-                    streak = 0
+                    self.h = 0.5 * trial
+                    self.min_dt = min(self.min_dt, self.h)
+                    self.streak = 0
                     log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
-                                t, e, h, halvings, time.max_cutbacks)
+                                t, e, self.h, self.halvings, time.max_cutbacks)
                     continue
                 s.update()
                 # The time is the exactly rounded sum of the steps (no drift), and the
                 # end time exactly on the last step.
-                accepted.append(trial)
-                s.t.value = time.end_time if last else math.fsum(accepted)
+                self.accepted.append(trial)
+                s.t.value = time.end_time if last else math.fsum(self.accepted)
                 if not self._finite(*s.u, *s.v, *s.a):
                     raise SimulationFailed(f"non-finite state after the step to "
                                            f"t = {float(s.t.value):.6g} s")
@@ -474,18 +766,20 @@ class _Run:
                 if self.writer is not None and self.steps % output.field_interval == 0:
                     self.writer.write(row["t"], s.u, s.v)
                     self.fields_time = row["t"]
-                streak += 1
-                if halvings > 0 and streak >= GROW_AFTER:
-                    halvings -= 1
-                    h = min(2.0 * h, time.dt)
-                    streak = 0
-                    log.info("t = %.6g s: step size back to dt = %.3g s", row["t"], h)
+                self.streak += 1
+                if self.halvings > 0 and self.streak >= GROW_AFTER:
+                    self.halvings -= 1
+                    self.h = min(2.0 * self.h, time.dt)
+                    self.streak = 0
+                    log.info("t = %.6g s: step size back to dt = %.3g s", row["t"], self.h)
+                if interval > 0 and self.steps % interval == 0:
+                    self.checkpoint()
                 progress.update(row["t"], its=its, cutbacks=self.cutbacks)
 
     # --- end ----------------------------------------------------------------------
 
-    def finish(self, finished: bool, error: str | None) -> dict[str, Any]:
-        """Write the remaining outputs and the summary (collective)."""
+    def finish(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """Write the remaining outputs and return the summary (collective)."""
         s = self.stepper
         if self.history is not None:
             self.history.close()
@@ -502,9 +796,25 @@ class _Run:
                                          self.snapshot_time, self.comm)
             if arrays is not None:
                 out.atomic_savez(self.directory / out.SNAPSHOT, **arrays)
-        return self.summary(finished, error)
+        return self.summary(finished, error, status)
 
-    def summary(self, finished: bool, error: str | None) -> dict[str, Any]:
+    def wall_time(self) -> float:
+        """Wall time of the run so far, earlier parts of a resumed run included (s)."""
+        return self.wall_before + _time.perf_counter() - self.wall0
+
+    def write_summary(self, summary: Mapping[str, Any]) -> None:
+        """Write ``summary.json`` (rank 0)."""
+        if self.comm.rank == 0:
+            out.atomic_write_json(self.directory / out.SUMMARY, summary)
+
+    def summary(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """The summary of the run so far (the extra summary merged in).
+
+        Args:
+            finished: Whether the end time was reached.
+            error: Why the run stopped early.
+            status: ``running``, ``finished``, ``failed`` or ``interrupted``.
+        """
         rows, its = self.rows, self.iterations
         dynamic: dict[str, Any] = {}
         if rows and self.monitor is not None:
@@ -530,14 +840,19 @@ class _Run:
             dynamic["max_uplift"] = max((p["max_opening"] for p in pairs.values()),
                                         default=None)
         balance = [abs(r["balance_error"]) for r in rows]
+        fields = [*self.field_parts, *(p.name for p in self.writer.paths)] \
+            if self.writer else list(self.field_parts)
         summary: dict[str, Any] = {
             "case_name": self.output.case_name,
             "finished": finished,
+            "status": status,
             "error": error,
             "time": {"end_time": self.time.end_time, "dt": self.time.dt,
                      "reached": rows[-1]["t"] if rows else None},
             "static": self.static,
             "dynamic": dynamic,
+            "contact_quality": {name: q.as_dict()
+                                for name, q in self.contact_quality().items()},
             "solver": {
                 "steps": self.steps,
                 "newton_iterations": int(sum(its)),
@@ -548,32 +863,40 @@ class _Run:
                 "cutbacks": self.cutbacks,
                 "min_dt": self.min_dt,
                 "flip_corrections": self.stepper.flips if self.stepper is not None else 0,
-                "wall_time": _time.perf_counter() - self.wall0,
+                "wall_time": self.wall_time(),
             },
             "energy": {"max_balance_error": max(balance) if balance else None,
                        "final": {k: rows[-1][k] for k in FIELDS} if rows else None},
+            "checkpoint": self.checkpointed,
+            "resumed_from": self.resumed_from,
             "outputs": {"directory": str(self.directory), "history": out.HISTORY,
-                        "fields": [p.name for p in self.writer.paths] if self.writer else [],
+                        "fields": fields,
                         "static": out.STATIC,
                         "snapshot": out.SNAPSHOT if self.snapshot_time is not None else None},
             "versions": versions(self.comm),
         }
-        return summary
+        return _merge(summary, self.extra)
 
 
 def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         resolved_case: Mapping[str, Any] | None = None,
         extra_summary: Mapping[str, Any] | None = None, *, report: bool = True,
-        ) -> dict[str, Any]:
+        resume: bool = False, fingerprint: str | None = None) -> dict[str, Any]:
     """Run a case: static equilibrium, time stepping, outputs (collective).
 
     Args:
         model: The contact model (loads, damping, gravity included).
         time: Time step, end time, GN22 and Newton settings.
-        output: Output directory, probes, output switches.
+        output: Output directory, probes, output switches, checkpoint interval.
         resolved_case: The resolved case, written as ``case.toml`` when given.
         extra_summary: Merged into the summary (e.g. calibration results).
         report: Print a short report of the results at the end (rank 0).
+        resume: Continue the run of ``output.directory`` from its checkpoint.
+        fingerprint: Identifies the case in checkpoints; a checkpoint is resumed only
+            by a run of the same fingerprint. Default: the hash of ``resolved_case``
+            (:func:`~breakwater.checkpoint.case_fingerprint`) when given, else of the
+            model, time and probe settings
+            (:func:`~breakwater.checkpoint.model_fingerprint`).
 
     Returns:
         The summary, also written to ``summary.json`` (the same on every rank).
@@ -581,42 +904,59 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     Raises:
         SimulationFailed: The run stopped before ``time.end_time``; the outputs up to
             the last accepted step are written, with ``finished: false``.
+        RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM.
+        CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
-    r = _Run(model, time, output)
+    if fingerprint is None:
+        fingerprint = (ckpt.case_fingerprint(resolved_case) if resolved_case is not None
+                       else ckpt.model_fingerprint(model, time, output))
+    r = _Run(model, time, output, fingerprint, extra_summary)
     comm = r.comm
-    if resolved_case is not None and comm.rank == 0:
-        out.atomic_write_toml(r.directory / out.CASE, resolved_case)
     error: BaseException | None = None
-    try:
-        r.start()
-        r.loop()
-    except (BreakwaterError, KeyboardInterrupt) as e:
-        error = e
-    message = None if error is None else (str(error) or type(error).__name__)
-    summary = r.finish(error is None, message)
-    if extra_summary:
-        _merge(summary, extra_summary)
-    if comm.rank == 0:
-        out.atomic_write_json(r.directory / out.SUMMARY, summary)
-        if output.figures:
-            from . import figures
+    with r.stop:
+        if resume:
+            r.restore()  # CheckpointError: nothing written yet
+        if resolved_case is not None and comm.rank == 0:
+            out.atomic_write_toml(r.directory / out.CASE, resolved_case)
+        # From now on the folder always says whether the run finished.
+        r.write_summary(r.summary(False, None, "running"))
+        try:
+            if not resume:
+                r.start()
+            r.loop()
+        except (BreakwaterError, KeyboardInterrupt) as e:
+            error = e
+        message = None if error is None else (str(error) or type(error).__name__)
+        stopped = isinstance(error, _Stop | KeyboardInterrupt)
+        status = "finished" if error is None else "interrupted" if stopped else "failed"
+        if error is None:
+            r.discard_checkpoint()
+        summary = r.finish(error is None, message, status)
+        if error is None or not stopped:
+            r._log_quality(dynamic=True)
+        if comm.rank == 0:
+            out.atomic_write_json(r.directory / out.SUMMARY, summary)
+            if output.figures and not stopped:
+                from . import figures
 
-            try:
-                drawn = figures.make_figures(r.directory)
-            except Exception:
-                if error is None:
-                    raise
-                log.exception("the figures of the failed run could not be drawn")
-            else:
-                summary["outputs"]["figures"] = [str(p.relative_to(r.directory))
-                                                 for p in drawn]
-                out.atomic_write_json(r.directory / out.SUMMARY, summary)
-        if report:
-            print(out.format_report(summary, r.directory), flush=True)
-    summary = comm.bcast(summary, root=0)
+                try:
+                    drawn = figures.make_figures(r.directory)
+                except Exception:
+                    if error is None:
+                        raise
+                    log.exception("the figures of the failed run could not be drawn")
+                else:
+                    summary["outputs"]["figures"] = [str(p.relative_to(r.directory))
+                                                     for p in drawn]
+                    out.atomic_write_json(r.directory / out.SUMMARY, summary)
+            if report:
+                print(out.format_report(summary, r.directory), flush=True)
+        summary = comm.bcast(summary, root=0)
     if error is not None:
         if isinstance(error, KeyboardInterrupt):
             raise error
-        log.error("run failed: %s", summary["error"])
+        log.error("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
+        if stopped:
+            raise RunInterrupted(summary["error"], summary) from error
         raise SimulationFailed(summary["error"], summary) from error
     return summary

@@ -88,9 +88,10 @@ class FakeRun:
         self.error = error
 
     def __call__(self, model, time, output, resolved_case=None, extra_summary=None,
-                 report=True):
+                 report=True, resume=False):
         self.calls.append({"model": model, "time": time, "output": output,
-                           "resolved_case": resolved_case, "extra": extra_summary})
+                           "resolved_case": resolved_case, "extra": extra_summary,
+                           "resume": resume})
         if self.error is not None:
             raise self.error
         return {"finished": True}
@@ -113,6 +114,7 @@ def test_run_passes_the_case_to_the_run_layer(shared_dir, monkeypatch):
     assert case["bodies"]["mound"]["shear_modulus"] == G
     assert case["output"]["directory"] == str(out)
     assert (out / "mesh" / "goda.msh").is_file()
+    assert call["resume"] is False
 
 
 def test_failed_run_exit_1(shared_dir, monkeypatch, capsys):

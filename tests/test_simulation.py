@@ -7,11 +7,9 @@ triangular horizontal pulse on the left face of ``a``. Serial and under MPI.
 
 from __future__ import annotations
 
-import gc
 import json
 import pathlib
 import tomllib
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -35,24 +33,9 @@ DT = 2e-3                  # nominal step (s)
 PULSE = 0.01               # pulse duration (s)
 
 
-@pytest.fixture(autouse=True)
-def _collect_and_sync() -> Iterator[None]:
-    yield
-    gc.collect()
-    COMM.barrier()
-
-
 @pytest.fixture(scope="module")
-def mesh_path(tmp_path_factory: pytest.TempPathFactory) -> pathlib.Path:
-    folder = tmp_path_factory.mktemp("sim") if COMM.rank == 0 else None
-    folder = pathlib.Path(COMM.bcast(str(folder), root=0))
+def mesh_path(folder: pathlib.Path) -> pathlib.Path:
     return two_rectangles(folder / "stacked.msh", COMM, (WIDTH, HEIGHT), BASE, 0.25)
-
-
-@pytest.fixture
-def shared_dir(tmp_path: pathlib.Path) -> pathlib.Path:
-    """A temporary folder of rank 0, the same on all ranks."""
-    return pathlib.Path(COMM.bcast(str(tmp_path) if COMM.rank == 0 else None, root=0))
 
 
 def _model(path: pathlib.Path, start: float = 0.0, peak: float = 2e4) -> ContactModel:
@@ -212,3 +195,62 @@ def test_failure_keeps_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path
     assert len(h["t"]) == steps + 1
     assert h["t"][-1] == pytest.approx(written["time"]["reached"], rel=1e-12)
     assert np.isfinite(np.column_stack(list(h.values()))).all()
+
+
+def test_contact_quality(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+                         caplog: pytest.LogCaptureFixture,
+                         capsys: pytest.CaptureFixture[str]) -> None:
+    # The paper-like penalty: penetration far below both thresholds.
+    E, ν = 1e8, 0.2
+    summary = simulation.run(_model(mesh_path), TimeSpec(dt=DT, end_time=3 * DT),
+                             _output(shared_dir / "stiff", field_interval=0, figures=False),
+                             report=False)
+    q = summary["contact_quality"]["interface"]
+    h = read_history(shared_dir / "stiff" / "history.csv")
+    # The interface (1 m) is split into 4 facets of the structured mesh (h = 0.25).
+    assert q["element_size"] == pytest.approx(0.25, rel=1e-12)
+    assert q["penalty_h_over_E"] == {"slave": pytest.approx(1e10 * 0.25 / E, rel=1e-12),
+                                     "master": pytest.approx(1e10 * 0.25 / E, rel=1e-12)}
+    # Penetration is the largest nodal ⟨−g_n⟩₊, the pressure ε_n ⟨−g_n⟩₊ at the same
+    # nodes: the largest static pressure over ε_n (same numbers, round-off only).
+    assert q["static_penetration"] == pytest.approx(
+        summary["static"]["max_pressure"] / 1e10, rel=1e-12)
+    assert h["penetration_0"][0] == pytest.approx(q["static_penetration"], rel=1e-12)
+    k = 1 + int(np.argmax(h["penetration_0"][1:]))
+    assert q["dynamic_penetration"] == pytest.approx(h["penetration_0"][k], rel=1e-12)
+    assert q["time_of_dynamic_penetration"] == pytest.approx(h["t"][k], rel=1e-12)
+    # Settlement: a 1D (oedometric) estimate for base b under the block's pressure
+    # ρ g H plus its own weight, s ≈ (ρ g H H_b + ρ g H_b²/2) / M with
+    # M = E (1 − ν) / ((1 + ν)(1 − 2ν)). The 2D base is neither confined nor loaded
+    # over its whole width (the load spreads, the free sides bulge): 30% is the
+    # accuracy of such an estimate (measured: 10% below it).
+    M = E * (1 - ν) / ((1 + ν) * (1 - 2 * ν))
+    H_b = BASE[1]
+    s_1d = (RHO * G * HEIGHT * H_b + RHO * G * H_b**2 / 2) / M
+    assert q["static_settlement"] == pytest.approx(s_1d, rel=0.3)
+    assert q["static_penetration_over_settlement"] == pytest.approx(
+        q["static_penetration"] / q["static_settlement"], rel=1e-12)
+    assert q["verdict"] == "ok" and q["warnings"] == []
+
+    # A penalty 1e4 times softer: static penetration about ρ g H / ε_n = 1 cm, above
+    # 1% of h (2.5 mm) and above 10% of the settlement: too soft, with a warning
+    # (rank 0) and a line of the report.
+    soft = ContactModel(read_mesh(mesh_path, COMM),
+                        [Body("a", Material(RHO, ν, young_modulus=E)),
+                         Body("b", Material(RHO, ν, young_modulus=E))],
+                        [ContactPair("interface", "a", "b", penalty=1e6, friction=0.6,
+                                     regularisation=1e-10)],
+                        [Fixed("b_bottom")], gravity=(0.0, -G))
+    caplog.set_level("WARNING", logger="breakwater")
+    capsys.readouterr()
+    summary = simulation.run(soft, TimeSpec(dt=DT, end_time=2 * DT),
+                             _output(shared_dir / "soft", field_interval=0, figures=False))
+    q = summary["contact_quality"]["interface"]
+    assert q["static_penetration"] > 0.01 * 0.25
+    assert q["verdict"] == "too soft"
+    assert {"static_penetration_over_h", "penetration_over_settlement"} <= set(q["issues"])
+    assert q["suggested_penalty"][0] > 1e6
+    if COMM.rank == 0:
+        warned = [r.getMessage() for r in caplog.records if "too soft" in r.getMessage()]
+        assert warned and all("suggested ε_n" in w for w in warned)
+        assert "contact 'interface'" in capsys.readouterr().out

@@ -1,0 +1,140 @@
+"""The contact quality report (breakwater.quality): pure functions of numbers.
+
+Reference values are computed here from the definitions in the module docstring:
+penetration δ = max ⟨−g_n⟩₊, settlement s = |mean(½(u_s + u_m)·n)|, stiffness ratio
+ε_n h / E, thresholds δ ≤ 1% h, δ_static ≤ 10% s, ε_n h / E_soft ≤ 1000.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from mpi4py import MPI
+
+from breakwater import quality
+
+COMM = MPI.COMM_WORLD
+
+
+def test_max_penetration() -> None:
+    assert quality.max_penetration(np.array([0.1, -2e-3, -1e-3, 0.0])) == 2e-3
+    assert quality.max_penetration(np.array([0.1, 0.0, 3.0])) == 0.0  # open or touching
+    assert quality.max_penetration(np.array([])) == 0.0
+
+
+def test_settlement() -> None:
+    # Both sides move down by s, the slave δ more (it penetrates): the interface's
+    # mean normal displacement is s + δ/2, whatever the direction of the interface.
+    s, δ = 3e-4, 2e-5
+    n = np.tile([0.0, 1.0], (5, 1))
+    u_m = -s * n
+    u_s = u_m - δ * n
+    assert quality.settlement(u_s, u_m, n) == pytest.approx(s + δ / 2, rel=1e-14)
+    θ = 0.3  # rotate everything: same value (rotation invariance, rel. round-off)
+    R = np.array([[np.cos(θ), -np.sin(θ)], [np.sin(θ), np.cos(θ)]])
+    assert quality.settlement(u_s @ R.T, u_m @ R.T, n @ R.T) == \
+        pytest.approx(s + δ / 2, rel=1e-14)
+    # A tangential motion does not settle.
+    t = np.tile([1.0, 0.0], (5, 1))
+    assert quality.settlement(1e-3 * t, 1e-3 * t, n) == 0.0
+
+
+def test_stiffness_ratio() -> None:
+    assert quality.stiffness_ratio(1e10, 0.25, 1e8) == pytest.approx(25.0, rel=1e-15)
+
+
+def _goda() -> dict:
+    """Goda-like numbers (SPEC §4-5): p = ρ g H = 2314·9.81·0.202 Pa, ε_n = 5e8 N/m³."""
+    p, ε = 2314.0 * 9.81 * 0.202, 5e8
+    E_mound = 2 * 2.3e6 * 1.25          # E = 2G(1 + ν), ν = 0.25
+    E_caisson = 2 * 2e9 * 1.2           # ν = 0.2
+    return {"name": "interface", "penalty": ε, "element_size": 0.0265,
+            "young_moduli": (E_caisson, E_mound), "static_penetration": p / ε,
+            "settlement_": 1.3e-4}
+
+
+def test_assess_ok_on_the_goda_numbers() -> None:
+    args = _goda()
+    q = quality.assess(**args)
+    assert q.verdict == "ok" and q.issues == () and q.warnings == ()
+    d = q.as_dict()
+    h, ε = args["element_size"], args["penalty"]
+    assert d["static_penetration_over_h"] == pytest.approx(2314 * 9.81 * 0.202 / ε / h,
+                                                           rel=1e-14)
+    assert d["penalty_h_over_E"]["master"] == pytest.approx(ε * h / (2 * 2.3e6 * 1.25),
+                                                            rel=1e-14)
+    assert d["dynamic_penetration"] is None and d["dynamic_penetration_over_h"] is None
+    low, high = d["suggested_penalty"]
+    assert low < ε < high
+    assert high == pytest.approx(1e3 * 2 * 2.3e6 * 1.25 / h, rel=1e-14)
+
+
+def test_assess_too_soft_by_element_size() -> None:
+    # A dynamic penetration of 2% h: too soft, with the time in the message.
+    args = _goda()
+    h = args["element_size"]
+    q = quality.assess(**args, dynamic_penetration=0.02 * h, time_of_dynamic_penetration=0.032)
+    assert q.issues == ("dynamic_penetration_over_h",)
+    assert q.verdict == "too soft"
+    assert "t = 0.032 s" in q.warnings[0] and "too soft" in q.warnings[0]
+    # Penetration ∝ 1/ε_n: twice the penalty brings it to 1% h, the lower end.
+    low, _ = q.suggested_penalty
+    assert low == pytest.approx(2 * args["penalty"], rel=1e-12)
+
+
+def test_assess_too_soft_by_settlement() -> None:
+    # δ = 20% of s (s includes δ/2): the bodies' own settlement is s_b = s − δ/2 and
+    # the lower end makes δ' = 10% (s_b + δ'/2): δ' = 0.1 s_b / 0.95.
+    args = {**_goda(), "static_penetration": 2.6e-5, "settlement_": 1.3e-4}
+    q = quality.assess(**args)
+    assert q.issues == ("penetration_over_settlement",)
+    low, _ = q.suggested_penalty
+    s_b = 1.3e-4 - 1.3e-5
+    δ_new = 0.1 * s_b / 0.95
+    assert low == pytest.approx(args["penalty"] * 2.6e-5 / δ_new, rel=1e-12)
+
+
+def test_assess_too_stiff() -> None:
+    # ε_n h / E_soft = 2000 > 1000.
+    args = _goda()
+    E_soft = min(args["young_moduli"])
+    ε = 2000 * E_soft / args["element_size"]
+    q = quality.assess(**{**args, "penalty": ε,
+                          "static_penetration": args["static_penetration"] * 5e8 / ε})
+    assert q.issues == ("stiff",) and q.verdict == "too stiff"
+    assert "conditioning" in q.warnings[0]
+    assert q.suggested_penalty[1] == pytest.approx(ε / 2, rel=1e-12)
+
+
+def test_assess_both() -> None:
+    # A tiny settlement (rigid bodies) and a stiff penalty: both criteria fail, and no
+    # penalty meets both (the advice says to refine the mesh).
+    q = quality.assess("p", 1e14, 0.01, (1e8, 1e8), 1e-7, 2e-7)
+    assert set(q.issues) == {"penetration_over_settlement", "stiff"}
+    assert q.verdict == "too soft and too stiff"
+    assert "refine the mesh" in q.warnings[0]
+
+
+@settings(max_examples=200, deadline=None)
+@given(ε=st.floats(1e5, 1e14), h=st.floats(1e-3, 1.0), E=st.floats(1e5, 1e11),
+       p=st.floats(1.0, 1e6), s_b=st.floats(1e-7, 1e-2), dyn=st.floats(1.0, 20.0))
+def test_range_matches_verdict(ε: float, h: float, E: float, p: float, s_b: float,
+                               dyn: float) -> None:
+    # Whatever the numbers, a penalty inside the suggested range (computed at another
+    # penalty) passes, and outside fails: penetrations scale as 1/ε_n at fixed
+    # forces (static pressure p, dynamic pressure dyn·p) and bodies' settlement s_b.
+    def at(penalty: float) -> quality.ContactQuality:
+        δ = p / penalty
+        return quality.assess("p", penalty, h, (E, 3 * E), δ, s_b + δ / 2, dyn * δ, 0.0)
+
+    # Margins of 1e-6: s_b is recovered as s − δ/2, which loses up to 1e-16 δ/s_b ≤
+    # 1e-8 (δ ≤ 10 m, s_b ≥ 1e-7 m here) to cancellation.
+    low, high = at(ε).suggested_penalty
+    if low < high * (1 - 1e-5):
+        assert at(np.sqrt(low * high)).verdict == "ok"
+        assert at(low * (1 + 1e-6)).verdict == "ok"
+        assert at(high * (1 - 1e-6)).verdict == "ok"
+    assert "soft" in at(low * (1 - 1e-6)).verdict
+    assert "stiff" in at(high * (1 + 1e-6)).verdict
