@@ -32,7 +32,7 @@ test-mpi: $(STAMP)
 	timeout 1800 $(BIN)/mpiexec -n $(NP) $(BIN)/python -m pytest -q -m "not serial" tests
 
 lint: $(STAMP)
-	$(BIN)/ruff check breakwater forms meshes tests
+	$(BIN)/ruff check breakwater forms meshes tests notebooks/make_notebooks.py
 	$(BIN)/mypy breakwater forms meshes
 
 clean:

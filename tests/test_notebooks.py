@@ -1,0 +1,164 @@
+"""The notebooks (notebooks/*.ipynb): stored clean, and executed with short end times.
+
+Each notebook runs in a Jupyter kernel of this interpreter (nbclient), in a temporary
+working folder, with a run of a few milliseconds on a coarse mesh; the test checks that
+no cell failed, that figures were displayed, and that the runs wrote their outputs.
+Serial only: a kernel is a subprocess of one rank.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import pathlib
+import time
+from typing import Any
+
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+NOTEBOOKS = pathlib.Path(__file__).resolve().parents[1] / "notebooks"
+GODA = "01_goda_paper_figures.ipynb"
+VARIANT = "02_user_variant.ipynb"
+
+# 30 steps of the default Δt = 0.1 ms (the pulse lasts 2 ms: the impact is inside the
+# run), on the mesh of refinement 0.7 (72 + 272 triangles): a few seconds per run.
+END_TIME = 0.003
+SHORT = {"BREAKWATER_NOTEBOOK_END_TIME": str(END_TIME),
+         "BREAKWATER_NOTEBOOK_REFINEMENT": "0.7"}
+
+serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
+                                 reason="notebooks run in a serial kernel")
+
+
+def _generator() -> Any:
+    spec = importlib.util.spec_from_file_location("make_notebooks",
+                                                  NOTEBOOKS / "make_notebooks.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("name", [GODA, VARIANT])
+def test_stored_without_outputs_and_generated(name: str) -> None:
+    import nbformat
+
+    text = (NOTEBOOKS / name).read_text(encoding="utf-8")
+    nb = nbformat.reads(text, as_version=4)
+    nbformat.validate(nb)
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    assert code
+    for cell in code:
+        assert cell.outputs == [] and cell.execution_count is None, cell.id
+    # The stored file is what notebooks/make_notebooks.py writes (edit the cells there).
+    assert text == _generator().render(name), \
+        f"{name} differs from notebooks/make_notebooks.py: run it to regenerate"
+
+
+@pytest.fixture
+def kernel(tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> pathlib.Path:
+    """A working folder, short-run settings, and a kernel of this interpreter.
+
+    The kernelspec ``python3`` is written with ``sys.executable`` into a folder put first
+    on ``JUPYTER_PATH``, so a user-wide ``python3`` kernelspec pointing to another Python
+    cannot be picked up.
+    """
+    from ipykernel.kernelspec import write_kernel_spec
+
+    jupyter = tmp_path / "jupyter"
+    write_kernel_spec(jupyter / "kernels" / "python3")
+    monkeypatch.setenv("JUPYTER_PATH", str(jupyter))
+    monkeypatch.setenv("JUPYTER_RUNTIME_DIR", str(tmp_path / "runtime"))
+    monkeypatch.setenv("IPYTHONDIR", str(tmp_path / "ipython"))
+    monkeypatch.setenv("MPLBACKEND", "module://matplotlib_inline.backend_inline")
+    for key, value in SHORT.items():
+        monkeypatch.setenv(key, value)
+    work = tmp_path / "work"
+    work.mkdir()
+    return work
+
+
+def _execute(name: str, work: pathlib.Path, output: str,
+             monkeypatch: pytest.MonkeyPatch) -> tuple[Any, pathlib.Path, float]:
+    """Execute a notebook in ``work``; (executed notebook, output folder, seconds)."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    monkeypatch.setenv("BREAKWATER_NOTEBOOK_OUTPUT", output)
+    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    client = NotebookClient(nb, kernel_name="python3", timeout=300,
+                            resources={"metadata": {"path": str(work)}})
+    start = time.perf_counter()
+    client.execute()  # raises CellExecutionError when a cell fails
+    seconds = time.perf_counter() - start
+    nbformat.write(nb, work / name)  # kept for inspection of a failure
+    return nb, work / output, seconds
+
+
+def _outputs(nb: Any, kind: str) -> list[dict[str, Any]]:
+    return [o for c in nb.cells if c.cell_type == "code" for o in c.outputs
+            if o.output_type == kind or kind in o.get("data", {})]
+
+
+def _check_run(folder: pathlib.Path, figures: bool) -> dict[str, Any]:
+    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    assert summary["finished"] and summary["error"] is None
+    assert summary["time"]["reached"] == pytest.approx(END_TIME, rel=1e-12)
+    for name in ("history.csv", "case.toml", "static.npz", "snapshot_max_ux.npz"):
+        assert (folder / name).is_file(), name
+    if figures:
+        drawn = {p.name for p in (folder / "figures").glob("*.png")}
+        assert {"static_uy.png", "static_syy.png", "probes_ux.png", "pair_probes_ux.png",
+                "pair_probes_uy.png", "max_ux_deformed.png"} <= drawn
+    return summary
+
+
+@pytest.mark.serial
+@serial_only
+def test_goda_paper_figures(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    nb, out, _ = _execute(GODA, kernel, "goda_out", monkeypatch)
+    assert not _outputs(nb, "error")
+    summary = _check_run(out, figures=True)
+    # The mound was calibrated to Goda's K_x = 500 kN/m (tolerance 1e-4 of the case).
+    cal = summary["calibration"]
+    assert cal["relative_error"] <= 1e-4 and cal["target"] * 0.205 == pytest.approx(500e3)
+    # The notebook's own figures, and the paper's figures displayed inline.
+    for name in ("notebook_static_pressure.png", "notebook_gauges.png",
+                 "notebook_gap_at_max_ux.png"):
+        assert (out / "figures" / name).is_file(), name
+    assert len(_outputs(nb, "image/png")) >= 10
+    # The comparison table with the paper's numbers.
+    tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
+    assert any("4586 Pa" in t and "about 0.4 mm" in t for t in tables)
+
+
+@pytest.mark.serial
+@serial_only
+def test_user_variant(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import tomllib
+
+    nb, out, _ = _execute(VARIANT, kernel, "variant_out", monkeypatch)
+    assert not _outputs(nb, "error")
+    reference = _check_run(out / "goda", figures=False)
+    variant = _check_run(out / "slope3_bolt34", figures=False)
+    berm = _check_run(out / "berm", figures=True)
+    # The variant is what the notebook says: 1:3 slopes, the 34 mm bolt on its 3.527 m
+    # cord, and the reference's calibrated gravel (not re-calibrated).
+    G = reference["calibration"]["shear_modulus"]
+    case = tomllib.loads((out / "slope3_bolt34" / "case.toml").read_text(encoding="utf-8"))
+    assert case["mesh"]["goda"]["slope"] == 3.0
+    assert case["mesh"]["goda"]["bolt_height"] == 0.034
+    assert case["loads"]["impact"]["pendulum"]["cord_length"] == 3.527
+    assert case["bodies"]["mound"]["shear_modulus"] == G
+    assert "calibration" not in variant
+    # The user's gmsh mesh was used, with the same gravel.
+    case = tomllib.loads((out / "berm" / "case.toml").read_text(encoding="utf-8"))
+    assert pathlib.Path(case["mesh"]["source"]).name == "berm.msh"
+    assert case["bodies"]["mound"]["shear_modulus"] == G
+    assert berm["mesh"]["source"].endswith("berm.msh")
+    for name in ("comparison.png", "meshes.png", "berm/berm_mesh.png", "berm/berm.msh"):
+        assert (out / name).is_file(), name
+    assert len(_outputs(nb, "image/png")) >= 5
