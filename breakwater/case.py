@@ -430,7 +430,7 @@ class OutputCase:
                         '("": results/<name>)')
     field_interval: int = _f(10, doc="write the fields every N steps (0: never)")
     figures: bool = _f(True, doc="draw the figures at the end of the run")
-    checkpoint_interval: int = _f(0, doc="checkpoint every N steps (0: never)")
+    checkpoint_interval: int = _f(0, doc="checkpoint every N steps for run --resume (0: never)")
     probes: tuple[ProbeCase, ...] = _f((), doc="point displacement probes")
     pair_probes: tuple[PairProbeCase, ...] = _f((), doc="interface slip/opening probes")
 
