@@ -426,6 +426,9 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
                      f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
                      f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time")
+        if sol.get("round_off_accepts"):
+            lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
+                         "stalled at round-off (NewtonOptions.floor_atol)")
     def pct(x: Any) -> str:
         return "n/a" if x is None else f"{100 * x:.2g}%"
 

@@ -555,7 +555,8 @@ class _Run:
             "columns": list(history.columns),
             "iterations": self.iterations, "failed_steps": self.failed_steps,
             "failed_iterations": self.failed_iterations, "cutbacks": self.cutbacks,
-            "min_dt": self.min_dt, "flips": s.flips, "peaks": self.peaks,
+            "min_dt": self.min_dt, "flips": s.flips,
+            "floor_accepts": s.solver.floor_accepts, "peaks": self.peaks,
             "snapshot_time": self.snapshot_time, "fields_time": self.fields_time,
             "static": self.static, "static_iterations": self.static_iterations,
             "contact": self.contact,
@@ -616,6 +617,7 @@ class _Run:
         s.t.value = meta["t"]
         s.dt.value = meta["dt_constant"]
         s.flips = meta["flips"]
+        s.solver.floor_accepts = meta["floor_accepts"]
         self.ledger.restore(meta["ledger"])
         try:
             self.history = out.HistoryWriter(self.directory / out.HISTORY,
@@ -863,6 +865,8 @@ class _Run:
                 "cutbacks": self.cutbacks,
                 "min_dt": self.min_dt,
                 "flip_corrections": self.stepper.flips if self.stepper is not None else 0,
+                "round_off_accepts": (self.stepper.solver.floor_accepts
+                                      if self.stepper is not None else 0),
                 "wall_time": self.wall_time(),
             },
             "energy": {"max_balance_error": max(balance) if balance else None,

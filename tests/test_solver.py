@@ -1,0 +1,104 @@
+"""The SNES convergence test of :class:`breakwater.solver.NewtonSolver`.
+
+PETSc's default tests plus one: a residual that has stalled at its round-off floor
+(below ``floor_atol`` of the load norm, not halved over ``stall_its`` iterations) is
+converged. The pure function is checked on residual histories written out here; a real
+solve whose tolerances are all zero shows that the stall test, and only it, ends Newton
+once the residual has reached round-off.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from petsc4py import PETSc
+
+from breakwater.errors import ConvergenceError
+from breakwater.gn22 import solve_static
+from breakwater.mesh import read_mesh
+from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.solver import NewtonOptions, convergence_reason
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from blocks import two_rectangles
+
+COMM = MPI.COMM_WORLD
+R = PETSc.SNES.ConvergedReason
+TOL = {"rtol": 1e-9, "atol": 1e-7, "stol": 1e-12, "max_it": 40, "floor": 1e-4, "stall_its": 3}
+
+
+def _reason(norms: list[float], ynorm: float = 1.0, **changes: float) -> tuple[int, bool]:
+    return convergence_reason(norms, 1.0, ynorm, **{**TOL, **changes})  # type: ignore[arg-type]
+
+
+def test_petsc_default_tests() -> None:
+    assert _reason([1.0]) == (R.CONVERGED_ITERATING, False)
+    assert _reason([1.0, 1e-3]) == (R.CONVERGED_ITERATING, False)
+    assert _reason([1.0, 1e-3, 5e-8]) == (R.CONVERGED_FNORM_ABS, False)
+    assert _reason([1e3, 1e-7]) == (R.CONVERGED_FNORM_RELATIVE, False)  # 1e-10 relative
+    assert _reason([1.0, 1e-3], ynorm=1e-13) == (R.CONVERGED_SNORM_RELATIVE, False)
+    assert _reason([1.0, math.nan]) == (R.DIVERGED_FUNCTION_NANORINF, False)
+    assert _reason([1.0, math.inf]) == (R.DIVERGED_FUNCTION_NANORINF, False)
+    assert _reason([1.0] * 41) == (R.DIVERGED_MAX_IT, False)
+
+
+def test_stall_below_the_floor_converges() -> None:
+    # Quadratic convergence down to a round-off floor of ~1.3e-5 (above atol = 1e-7).
+    norms = [1.0, 1e-2, 2e-5, 1.5e-5, 1.2e-5]
+    assert _reason(norms[:4]) == (R.CONVERGED_ITERATING, False)  # 1.5e-5 < ½ × 1.0
+    assert _reason(norms) == (R.CONVERGED_ITERATING, False)      # 1.2e-5 < ½ × 1e-2
+    assert _reason([*norms, 1.3e-5]) == (R.CONVERGED_FNORM_ABS, True)  # > ½ × 2e-5
+    # The same stall above the floor is not accepted.
+    assert _reason([*norms, 1.3e-5], floor=1e-5) == (R.CONVERGED_ITERATING, False)
+
+
+def test_no_stall_accepted_above_the_floor_or_while_decreasing() -> None:
+    # A stick/slip 2-cycle at 1e-3 is above the floor (1e-4): never accepted.
+    cycle = [1.0] + [1e-3, 2e-3] * 20
+    assert all(_reason(cycle[:k])[0] == R.CONVERGED_ITERATING for k in range(1, 41))
+    assert _reason(cycle) == (R.DIVERGED_MAX_IT, False)
+    # Halving every iteration is 1/8 over three: still converging, not a stall.
+    halving = [1e-5 * 0.5**k for k in range(7)]  # down to 1.6e-7 > atol
+    assert all(_reason(halving[:k])[0] == R.CONVERGED_ITERATING for k in range(1, 8))
+    # floor = 0 turns the test off.
+    assert _reason([1.0, 1e-5, 1e-5, 1e-5, 1e-5], floor=0.0) == (R.CONVERGED_ITERATING, False)
+
+
+def test_real_solve_ends_at_its_round_off_floor(folder: pathlib.Path) -> None:
+    """Static solve of a block on a base with every PETSc tolerance set to zero.
+
+    Newton then cannot converge by PETSc's tests; its residual falls to round-off
+    (the static iteration converges linearly, see :func:`breakwater.gn22.solve_static`)
+    and stays there, where the stall test accepts it. With the stall test off the
+    same solve runs out of iterations. The accepted state equals the one of the
+    default tolerances to 1e-8 of its largest displacement: the default solve stops
+    at ‖F‖ < 1e-9 ‖f‖, so the two differ by that order (times the compliance), far
+    below 1e-8.
+    """
+    path = two_rectangles(folder / "floor.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    zero = NewtonOptions(rtol=0.0, atol=0.0, stol=0.0, max_it=40)
+    u_floor, its = solve_static(model, options=zero)
+    assert its < zero.max_it
+    with pytest.raises(ConvergenceError):
+        solve_static(model, options=NewtonOptions(rtol=0.0, atol=0.0, stol=0.0, max_it=40,
+                                                  floor_atol=0.0))
+    u_ref, its_ref = solve_static(model)
+    assert its > its_ref
+    for a, b in zip(u_floor, u_ref, strict=True):
+        scale = COMM.allreduce(np.abs(b.x.array).max(), op=MPI.MAX)
+        err = COMM.allreduce(np.abs(a.x.array - b.x.array).max(), op=MPI.MAX)
+        assert err <= 1e-8 * scale
