@@ -144,6 +144,41 @@ class InterfaceNodes:
         """Tangential part (I − n⊗n) v of nodal vectors."""
         return v - np.sum(v * self.normal, axis=1)[:, None] * self.normal
 
+    def contact_state(self, u_s: np.ndarray, u_m: np.ndarray, v_s: np.ndarray | None = None,
+                      v_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The contact law of :mod:`breakwater.forms` at the nodes (collective).
+
+        The nodes are the interface's quadrature points (Gauss–Lobatto), so these are
+        the values the residual uses.
+
+        Args:
+            u_s: Local array of the slave displacement (``f.x.array``).
+            u_m: Local array of the master displacement.
+            v_s: Local array of the slave velocity (None: at rest).
+            v_m: Local array of the master velocity.
+
+        Returns:
+            Arrays in the order of :attr:`x`, the same on every rank: ``gap``
+            g_n = (u_s − u_m)·n + g₀ (m), ``pressure`` ε_n ⟨−g_n⟩₊ (Pa), ``slip``
+            (I − n⊗n)(u_s − u_m) (m), ``slip_velocity`` v_T = (I − n⊗n)(v_s − v_m)
+            (m/s) and ``friction_traction`` −μ p v_T / sqrt(|v_T|² + χ²) on the slave
+            (Pa); the last three of shape ``(n, gdim)``.
+        """
+        spec = self.pair.spec
+        us, um = self.gather(u_s, u_m)
+        jump = us - um
+        gap = np.sum(jump * self.normal, axis=1) + spec.gap
+        pressure = spec.penalty * np.maximum(-gap, 0.0)
+        if v_s is None or v_m is None:
+            v_T = np.zeros_like(jump)
+        else:
+            vs, vm = self.gather(v_s, v_m)
+            v_T = self.tangential(vs - vm)
+        speed = np.sqrt(np.sum(v_T**2, axis=1) + spec.regularisation**2)
+        return {"gap": gap, "pressure": pressure, "slip": self.tangential(jump),
+                "slip_velocity": v_T,
+                "friction_traction": -spec.friction * (pressure / speed)[:, None] * v_T}
+
 
 def _tangent_basis(normal: np.ndarray) -> np.ndarray:
     """Orthonormal tangent vectors at each node, shape ``(n, gdim − 1, gdim)``.

@@ -12,8 +12,10 @@ Output files of a run (in the output directory):
 - ``case.toml``: the resolved case, when the case layer gives it.
 - ``history.csv``: one row per accepted step, plus the row of the static state at t = 0.
 - ``summary.json``: headline numbers, solver statistics, versions.
-- ``fields_<body>.bp``: displacement, velocity, von Mises and σ_yy stress of each body,
-  as discontinuous P2 fields (exact for P2 displacements), for ParaView.
+- ``fields_<body>.bp``: displacement, velocity, stress tensor, von Mises and σ_yy stress
+  of each body, as discontinuous P2 fields (exact for P2 displacements), for ParaView.
+- ``contact_<pair>.bp``: contact pressure, normal gap, slip, slip velocity and
+  friction traction of each contact pair, as P2 fields on the interface.
 - ``static.npz``: the static state (P1 nodal values per body and interface pressures).
 - ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
   probe.
@@ -39,11 +41,13 @@ from typing import IO, Any
 
 import dolfinx
 import numpy as np
-import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .checkpoint import match_nodes
+from .interface import InterfaceNodes
+from .mesh import group_tag
 from .model import ContactModel
 
 HISTORY = "history.csv"
@@ -234,18 +238,11 @@ def read_history(path: str | pathlib.Path) -> dict[str, np.ndarray]:
 
 # --- fields of the bodies ---------------------------------------------------------
 
-def _von_mises(σ: ufl.core.expr.Expr, λ: ufl.core.expr.Expr, ε: ufl.core.expr.Expr,
-               gdim: int) -> ufl.core.expr.Expr:
-    """Von Mises stress; in 2D (plane strain) with σ_zz = λ tr ε."""
-    σσ, trσ = ufl.inner(σ, σ), ufl.tr(σ)
-    if gdim == 2:
-        σ_zz = λ * ufl.tr(ε)
-        σσ, trσ = σσ + σ_zz**2, trσ + σ_zz
-    return ufl.sqrt(ufl.max_value(1.5 * (σσ - trσ**2 / 3.0), 0.0))
-
-
 class BodyFields:
     """Displacement, velocity and stresses of one body as discontinuous P_k fields.
+
+    ``stress`` is the full 3 × 3 tensor (in 2D plane strain with σ_zz = λ tr ε), with
+    ``von_mises`` and ``stress_yy`` (the paper's Figs. 17 and 22) beside it.
 
     The stress of a P_k displacement is a discontinuous P_(k-1) field, so
     discontinuous P_k holds every field exactly (no projection or averaging).
@@ -259,6 +256,7 @@ class BodyFields:
     def __init__(self, model: ContactModel, index: int) -> None:
         body = model.bodies[index]
         self.name = body.spec.name
+        self.filename = f"fields_{self.name}.bp"
         sub = body.submesh
         gdim = model.gdim
         degree = body.V.ufl_element().embedded_superdegree
@@ -269,17 +267,21 @@ class BodyFields:
         S = fem.functionspace(sub, ("Discontinuous Lagrange", degree))
         self.displacement = fem.Function(Vd, name="displacement")
         self.velocity = fem.Function(Vd, name="velocity")
+        T = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (3, 3)))
+        self.stress = fem.Function(T, name="stress")
         self.von_mises = fem.Function(S, name="von_mises")
         self.stress_yy = fem.Function(S, name="stress_yy")
         λ0, μ0 = body.spec.material.lame
         # Constants on the submesh: one compiled kernel serves every body.
         λ = fem.Constant(sub, dolfinx.default_scalar_type(λ0))
         μ = fem.Constant(sub, dolfinx.default_scalar_type(μ0))
-        σ = forms.stress(self.u, λ, μ)
+        σ3 = forms.stress_3d(self.u, λ, μ)
         X = S.element.interpolation_points
-        self._vm = fem.Expression(_von_mises(σ, λ, forms.strain(self.u), gdim), X)
-        self._syy = fem.Expression(σ[1, 1], X)
-        self.functions = [self.displacement, self.velocity, self.von_mises, self.stress_yy]
+        self._σ = fem.Expression(σ3, X)
+        self._vm = fem.Expression(forms.von_mises(σ3), X)
+        self._syy = fem.Expression(σ3[1, 1], X)
+        self.functions = [self.displacement, self.velocity, self.stress, self.von_mises,
+                          self.stress_yy]
         self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace] | None = None
 
     def update(self, u: fem.Function, v: fem.Function | None = None) -> None:
@@ -288,6 +290,7 @@ class BodyFields:
         self.v.x.array[:] = 0.0 if v is None else v.x.array
         self.displacement.interpolate(self.u)
         self.velocity.interpolate(self.v)
+        self.stress.interpolate(self._σ)
         self.von_mises.interpolate(self._vm)
         self.stress_yy.interpolate(self._syy)
 
@@ -342,29 +345,88 @@ class BodyFields:
         return out
 
 
-class FieldWriter:
-    """ParaView output: one VTX (ADIOS2 ``.bp``) file per body.
+class InterfaceFields:
+    """The contact state of one pair as P_k fields on its interface, for ParaView.
+
+    The interface facets form a mesh of their own (a submesh of dimension one less);
+    its P_k nodes are the interface nodes, where the contact law acts (the
+    Gauss–Lobatto points of the interface measure), so nodal values are exact. Fields:
+    ``pressure`` and ``gap`` (scalars), ``slip``, ``slip_velocity`` and
+    ``friction_traction`` (vectors), as in :meth:`InterfaceNodes.contact_state`.
 
     Args:
-        fields: The fields of each body.
-        directory: Output directory; files ``fields_<body>.bp``.
+        model: The contact model.
+        nodes: The node pairs of the contact pair.
+        name: The pair's name: the fields go to ``contact_<name>.bp``.
+
+    """
+
+    SCALARS = ("pressure", "gap")
+    VECTORS = ("slip", "slip_velocity", "friction_traction")
+
+    def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
+        self.name = name
+        self.filename = f"contact_{name}.bp"
+        self.nodes = pair = nodes
+        self.slave, self.master = pair.pair.slave, pair.pair.master
+        msh, gdim = model.mesh, model.gdim
+        fdim = msh.topology.dim - 1
+        assert model.mesh_data.facet_tags is not None
+        facets = model.mesh_data.facet_tags.find(
+            group_tag(model.mesh_data, pair.pair.spec.interface, fdim))
+        sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
+        degree = model.bodies[self.slave].V.ufl_element().embedded_superdegree
+        S = fem.functionspace(sub, ("Lagrange", degree))
+        V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
+        self.values = {k: fem.Function(S, name=k) for k in self.SCALARS}
+        self.values.update({k: fem.Function(V, name=k) for k in self.VECTORS})
+        self.functions = list(self.values.values())
+        # The blocked space has the scalar space's dof layout: one index per node.
+        x = S.tabulate_dof_coordinates()[:, :gdim]
+        extent = max(float(np.ptp(nodes.x, axis=0).max()), 1e-300)
+        self._index = match_nodes(nodes.x, x, 1e-8 * extent)
+
+    def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
+               ) -> None:
+        """Evaluate the fields of the state ``(u, v)`` (one Function per body; collective)."""
+        s, m = self.slave, self.master
+        state = self.nodes.contact_state(u[s].x.array, u[m].x.array,
+                                         None if v is None else v[s].x.array,
+                                         None if v is None else v[m].x.array)
+        for k, f in self.values.items():
+            f.x.array.reshape(len(self._index), -1)[:] = \
+                state[k][self._index].reshape(len(self._index), -1)
+
+
+class FieldWriter:
+    """ParaView output: one VTX (ADIOS2 ``.bp``) file per body and per contact pair.
+
+    Args:
+        fields: The fields of each body (``fields_<body>.bp``).
+        interfaces: The fields of each contact pair (``contact_<pair>.bp``).
+        directory: Output directory.
         comm: The communicator of the mesh.
 
     """
 
-    def __init__(self, fields: Sequence[BodyFields], directory: pathlib.Path,
-                 comm: MPI.Comm) -> None:
+    def __init__(self, fields: Sequence[BodyFields], interfaces: Sequence[InterfaceFields],
+                 directory: pathlib.Path, comm: MPI.Comm) -> None:
         self.fields = list(fields)
-        self.paths = [directory / f"fields_{f.name}.bp" for f in self.fields]
+        self.interfaces = list(interfaces)
+        files: list[BodyFields | InterfaceFields] = [*self.fields, *self.interfaces]
+        self.paths = [directory / f.filename for f in files]
         # The mesh is the reference configuration: written once (warp by displacement).
         self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
                                              mesh_policy=dolfinx.io.VTXMeshPolicy.reuse)
-                        for p, f in zip(self.paths, self.fields, strict=True)]
+                        for p, f in zip(self.paths, files, strict=True)]
 
     def write(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
         """Write the state (one Function per body) at time ``t``."""
-        for f, w, ui, vi in zip(self.fields, self.writers, u, v, strict=True):
+        for f, ui, vi in zip(self.fields, u, v, strict=True):
             f.update(ui, vi)
+        for i in self.interfaces:
+            i.update(u, v)
+        for w in self.writers:
             w.write(t)
 
     def close(self) -> None:

@@ -252,8 +252,7 @@ class Monitor:
             r[f"normal_force_{k}"] = normal
             r[f"tangential_force_{k}"] = tangential
         for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
-            us, um = nd.gather(s.u[p.slave].x.array, s.u[p.master].x.array)
-            gap = np.sum((us - um) * nd.normal, axis=1) + p.spec.gap
+            gap = nd.contact_state(s.u[p.slave].x.array, s.u[p.master].x.array)["gap"]
             r[f"penetration_{k}"] = quality.max_penetration(gap)
         r.update({k: float(energies[k]) for k in FIELDS})
         return r
@@ -270,17 +269,20 @@ def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
     """
     data: dict[str, np.ndarray] = {}
     for k, (p, nd) in enumerate(zip(model.pairs, nodes, strict=True)):
-        us, um = nd.gather(u[p.slave].x.array, u[p.master].x.array)
-        jump = us - um
-        gap = np.sum(jump * nd.normal, axis=1) + p.spec.gap
+        state = nd.contact_state(u[p.slave].x.array, u[p.master].x.array)
         data[f"pair{k}_x"] = nd.x
         data[f"pair{k}_normal"] = nd.normal
-        data[f"pair{k}_gap"] = gap
+        data[f"pair{k}_gap"] = state["gap"]
         if model.gdim == 2:
-            t = np.column_stack([nd.normal[:, 1], -nd.normal[:, 0]])
-            data[f"pair{k}_slip"] = np.sum(jump * t, axis=1)
-        data[f"pair{k}_pressure"] = p.spec.penalty * np.maximum(-gap, 0.0)
+            data[f"pair{k}_slip"] = np.sum(state["slip"] * nd.tangents[:, 0], axis=1)
+        data[f"pair{k}_pressure"] = state["pressure"]
     return data
+
+
+def pair_names(model: ContactModel) -> list[str]:
+    """Names of the contact pairs: the interface group, or the index where it repeats."""
+    names = [p.spec.interface for p in model.pairs]
+    return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]
 
 
 def _edge_centre(x: np.ndarray) -> tuple[int, int, int]:
@@ -404,6 +406,7 @@ class _Run:
         self.ledger: EnergyLedger | None = None
         self.history: out.HistoryWriter | None = None
         self.fields: list[out.BodyFields] = []
+        self.interfaces: list[out.InterfaceFields] = []
         self.writer: out.FieldWriter | None = None
         self.field_parts: list[str] = []  # VTX files of the earlier parts of a resumed run
         self.snapshot: list[fem.Function] = []
@@ -438,6 +441,8 @@ class _Run:
         self.ledger = EnergyLedger(s)
         self.monitor = Monitor(m, s, self.output, self.nodes)
         self.fields = [out.BodyFields(m, i) for i in range(len(m.bodies))]
+        self.interfaces = [out.InterfaceFields(m, nd, name)
+                           for nd, name in zip(self.nodes, pair_names(m), strict=True)]
         self.snapshot = m.functions("u_snapshot")
 
     def start(self) -> None:
@@ -455,7 +460,8 @@ class _Run:
         self.history = out.HistoryWriter(self.directory / out.HISTORY, self.monitor.columns,
                                          self.comm)
         if self.output.field_interval > 0:
-            self.writer = out.FieldWriter(self.fields, self.directory, self.comm)
+            self.writer = out.FieldWriter(self.fields, self.interfaces, self.directory,
+                                         self.comm)
         self._record(0.0, self.static_iterations)
         self._static_summary()
         self._log_quality()
@@ -487,14 +493,14 @@ class _Run:
                 "resultant_over_weight": resultant / weight if weight > 0 else None,
             })
         self.static = static
-        names = [p.spec.interface for p in m.pairs]
         self.contact = []
-        for k, (p, nd) in enumerate(zip(m.pairs, self.nodes, strict=True)):
+        for k, (p, nd, name) in enumerate(zip(m.pairs, self.nodes, pair_names(m),
+                                              strict=True)):
             us, um = nd.gather(u[p.slave].x.array, u[p.master].x.array)
             length = m.assemble(m.form(1.0 * p.dS))
             facets = m.comm.allreduce(len(p.facet_data))
             self.contact.append({
-                "name": p.spec.interface if names.count(p.spec.interface) == 1 else str(k),
+                "name": name,
                 "penalty": p.spec.penalty,
                 "element_size": length / facets,
                 "young_moduli": [m.bodies[i].spec.material.E for i in (p.slave, p.master)],
@@ -646,7 +652,8 @@ class _Run:
         self.field_parts = list(meta["field_parts"])
         if self.output.field_interval > 0:
             self._set_aside_fields()
-            self.writer = out.FieldWriter(self.fields, self.directory, self.comm)
+            self.writer = out.FieldWriter(self.fields, self.interfaces, self.directory,
+                                         self.comm)
         self.checkpointed = {"file": ckpt.CHECKPOINT, "t": meta["t"], "steps": self.steps,
                              "history_rows": meta["history_rows"]}
         if comm.rank == 0:  # temporary files of atomic writes cut short by a kill
@@ -658,17 +665,19 @@ class _Run:
         self._log_quality()
 
     def _set_aside_fields(self) -> None:
-        """Rename the VTX files of the interrupted part: ``fields_<body>.part<k>.bp``.
+        """Rename the VTX files of the interrupted part: ``<file>.part<k>.bp``.
 
         A VTX file cannot be appended to, so a resumed run writes new ones from the
         checkpoint on; the earlier ones are kept beside them.
         """
         if self.comm.rank == 0:
-            for f in self.fields:
-                path = self.directory / f"fields_{f.name}.bp"
+            files: list[out.BodyFields | out.InterfaceFields] = [*self.fields,
+                                                                 *self.interfaces]
+            for f in files:
+                path = self.directory / f.filename
                 if path.exists():
                     k = 1
-                    while (target := path.with_name(f"fields_{f.name}.part{k}.bp")).exists():
+                    while (target := path.with_suffix(f".part{k}.bp")).exists():
                         k += 1
                     os.replace(path, target)
                     self.field_parts.append(target.name)

@@ -25,7 +25,9 @@ from .elasticity import (
     rayleigh_damping,
     strain,
     stress,
+    stress_3d,
     surface_traction,
+    von_mises,
 )
 from .energy import (
     external_power,
@@ -57,6 +59,8 @@ __all__ = [
     "strain",
     "strain_energy",
     "stress",
+    "stress_3d",
     "surface_traction",
     "tangential_part",
+    "von_mises",
 ]

@@ -52,6 +52,23 @@ def stress(u: ufl.core.expr.Expr, λ: ufl.core.expr.Expr | float,
     return 2.0 * μ * ε + λ * ufl.tr(ε) * ufl.Identity(len(u))
 
 
+def stress_3d(u: ufl.core.expr.Expr, λ: ufl.core.expr.Expr | float,
+              μ: ufl.core.expr.Expr | float) -> ufl.core.expr.Expr:
+    """The 3 × 3 stress tensor; in 2D plane strain, with σ_zz = λ tr ε (ε_zz = 0)."""
+    σ = stress(u, λ, μ)
+    if len(u) == 3:
+        return σ
+    return ufl.as_matrix([[σ[0, 0], σ[0, 1], 0.0],
+                          [σ[1, 0], σ[1, 1], 0.0],
+                          [0.0, 0.0, λ * ufl.tr(strain(u))]])
+
+
+def von_mises(σ3: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """Von Mises stress sqrt(3/2 s:s) of a 3 × 3 stress tensor, s its deviator."""
+    s = ufl.dev(σ3)
+    return ufl.sqrt(1.5 * ufl.inner(s, s))
+
+
 def elastic_residual(u, w, λ, μ, dx: ufl.Measure) -> ufl.Form:
     """Internal virtual work ∫ σ(u) : ε(w) dx (the ``K u`` term)."""
     return ufl.inner(stress(u, λ, μ), strain(w)) * dx

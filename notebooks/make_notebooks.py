@@ -332,8 +332,9 @@ GODA: list[Cell] = [
         `history.csv` (one row per step: probes, interface slip and opening, contact
         resultants, energies), `summary.json` (the headline numbers), `static.npz` and
         `snapshot_max_ux.npz` (the fields at rest and at the largest horizontal
-        displacement), `fields_<body>.bp` (ParaView) and `case.toml`, the resolved case,
-        which `python -m breakwater run case.toml` runs again.
+        displacement), `fields_<body>.bp` and `contact_<pair>.bp` (ParaView) and
+        `case.toml`, the resolved case, which `python -m breakwater run case.toml` runs
+        again.
         """),
     code(r"""
         output_spec = dataclasses.replace(output_spec, progress=False)

@@ -137,6 +137,48 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
                                    atol=1e-12)
         assert data["pair0_pressure"].shape == (len(data["pair0_x"]),)
 
+    # The contact fields for ParaView, read back (serially: a file written on several
+    # ranks holds one block per rank).
+    assert (shared_dir / "contact_interface.bp").exists()
+    if COMM.size == 1:
+        _check_contact_fields(shared_dir / "contact_interface.bp", h, weight)
+
+
+def _check_contact_fields(path: pathlib.Path, h: dict[str, np.ndarray], weight: float) -> None:
+    """At every written time, the interface integrals of the contact fields are the
+    history's resultants: Simpson's rule on each P2 facet is the Gauss–Lobatto rule of
+    the interface measure, so both are the same sum of the same nodal values, equal to
+    round-off (1e-10 relative, of the weight where the resultant is zero at rest).
+    """
+    adios2 = pytest.importorskip("adios2")
+    with adios2.FileReader(str(path)) as r:
+        x = r.read("geometry")[:, :2]
+        ends, mid = r.read("connectivity")[:, 1:3], r.read("connectivity")[:, 3]
+        length = np.linalg.norm(x[ends[:, 1]] - x[ends[:, 0]], axis=1)
+
+        def simpson(f: np.ndarray) -> float:
+            return float(np.sum(length / 6 * (f[ends[:, 0]] + 4 * f[mid] + f[ends[:, 1]])))
+
+        assert r.num_steps() == 4  # t = 0, every 2 steps of 5, and the last step
+        slid = False
+        for k in range(r.num_steps()):
+            t = float(r.read("step", step_selection=[k, 1])[0])
+            j = int(np.argmin(np.abs(h["t"] - t)))
+            assert h["t"][j] == pytest.approx(t, rel=1e-12)
+            p = r.read("pressure", step_selection=[k, 1])[:, 0]
+            traction = r.read("friction_traction", step_selection=[k, 1])[:, 0]
+            v = r.read("slip_velocity", step_selection=[k, 1])[:, 0]
+            assert simpson(p) == pytest.approx(h["normal_force_0"][j], rel=1e-10)
+            assert simpson(traction) == pytest.approx(h["tangential_force_0"][j], rel=1e-10,
+                                                      abs=1e-10 * weight)
+            # Coulomb: where a node slides (|v_T| ≥ 1e6 χ, so that the regularised
+            # sign differs from ±1 by χ²/2v_T² ≤ 5e-13) the traction is μp against v_T.
+            sliding = np.abs(v) >= 1e6 * 1e-10
+            slid |= bool(sliding.any())
+            np.testing.assert_allclose(traction[sliding], -0.6 * p[sliding] * np.sign(v[sliding]),
+                                       rtol=1e-9)
+        assert slid  # the pulse (twice μN) makes the block slide
+
 
 @pytest.mark.parametrize("failure", ["diverged", "nan"])
 def test_cutback_recovers(mesh_path: pathlib.Path, shared_dir: pathlib.Path,

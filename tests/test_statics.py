@@ -145,21 +145,29 @@ def test_contact_patch(folder: pathlib.Path, structured: bool) -> None:
                          [SurfaceLoad("a_top", (0.0, -p0), lambda t: 1.0)])
     u, its = solve_static(model)
 
+    # The output stress (forms.stress_3d): plane strain adds σ_zz = λ tr ε = ν(σ_xx + σ_yy)
+    # = −ν p0, so the von Mises stress is p0 sqrt(1 − ν + ν²).
     λ, μ = CAISSON.lame
-    exact = np.array([[0.0, 0.0], [0.0, -p0]])
+    ν = CAISSON.poisson
+    exact = np.diag([0.0, -p0, -ν * p0])
+    exact_vm = p0 * np.sqrt(1.0 - ν + ν**2)
     errors = {}
     midpoint = np.array([[1.0 / 3.0, 1.0 / 3.0]])
     for body in model.bodies:
-        expr = fem.Expression(forms.stress(u[body.index], λ, μ), midpoint)
+        σ3 = forms.stress_3d(u[body.index], λ, μ)
+        components = [σ3[i, j] for i in range(3) for j in range(3)]
+        expr = fem.Expression(ufl.as_vector([*components, forms.von_mises(σ3)]), midpoint)
         ncells = body.submesh.topology.index_map(body.submesh.topology.dim).size_local
-        σ = expr.eval(body.submesh, np.arange(ncells, dtype=np.int32)).reshape(-1, 2, 2)
-        local = float(np.abs(σ - exact).max()) / p0 if ncells else 0.0
+        values = expr.eval(body.submesh, np.arange(ncells, dtype=np.int32)).reshape(-1, 10)
+        σ, vm = values[:, :9].reshape(-1, 3, 3), values[:, 9]
+        local = max(float(np.abs(σ - exact).max()), float(np.abs(vm - exact_vm).max())) / p0 \
+            if ncells else 0.0
         errors[body.spec.name] = COMM.allreduce(local, op=MPI.MAX)
 
     _, p = _nodal_pressure(model, u)
     err_p = float(np.abs(p - p0).max()) / p0
     _say(f"\npatch ({'structured' if structured else 'unstructured'}): Newton its {its}; max "
-         f"|σ − σ_exact|/p0 at cell midpoints: a {errors['a']:.2e}, b {errors['b']:.2e}; "
+         f"|σ − σ_exact|/p0 (3 × 3 and von Mises) at cell midpoints: a {errors['a']:.2e}, b {errors['b']:.2e}; "
          f"max |p − p0|/p0 over {len(p)} interface nodes {err_p:.2e}")
     # Tolerance 1e-8 relative: the exact solution is in the discrete space, so only the
     # Newton stop (residual 1e-9 of the force scale; the problem is linear once every node
