@@ -367,13 +367,13 @@ class InterfaceFields:
     def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
         self.name = name
         self.filename = f"contact_{name}.bp"
-        self.nodes = pair = nodes
-        self.slave, self.master = pair.pair.slave, pair.pair.master
+        self.nodes = nodes
+        self.slave, self.master = nodes.pair.slave, nodes.pair.master
         msh, gdim = model.mesh, model.gdim
         fdim = msh.topology.dim - 1
         assert model.mesh_data.facet_tags is not None
         facets = model.mesh_data.facet_tags.find(
-            group_tag(model.mesh_data, pair.pair.spec.interface, fdim))
+            group_tag(model.mesh_data, nodes.pair.spec.interface, fdim))
         sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
         degree = model.bodies[self.slave].V.ufl_element().embedded_superdegree
         S = fem.functionspace(sub, ("Lagrange", degree))

@@ -441,8 +441,9 @@ class _Run:
         self.ledger = EnergyLedger(s)
         self.monitor = Monitor(m, s, self.output, self.nodes)
         self.fields = [out.BodyFields(m, i) for i in range(len(m.bodies))]
-        self.interfaces = [out.InterfaceFields(m, nd, name)
-                           for nd, name in zip(self.nodes, pair_names(m), strict=True)]
+        if self.output.field_interval > 0:
+            self.interfaces = [out.InterfaceFields(m, nd, name)
+                               for nd, name in zip(self.nodes, pair_names(m), strict=True)]
         self.snapshot = m.functions("u_snapshot")
 
     def start(self) -> None:
@@ -671,10 +672,9 @@ class _Run:
         checkpoint on; the earlier ones are kept beside them.
         """
         if self.comm.rank == 0:
-            files: list[out.BodyFields | out.InterfaceFields] = [*self.fields,
-                                                                 *self.interfaces]
-            for f in files:
-                path = self.directory / f.filename
+            for filename in [f.filename for f in self.fields] + \
+                    [f.filename for f in self.interfaces]:
+                path = self.directory / filename
                 if path.exists():
                     k = 1
                     while (target := path.with_suffix(f".part{k}.bp")).exists():

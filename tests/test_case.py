@@ -240,6 +240,38 @@ Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
         load_case(write(tmp_path / "blocks.toml", data))
 
 
+def test_non_conforming_interface_is_an_input_error(shared_dir, capsys):
+    # The joint is meshed twice (lines 3 and 8 over the same points): the two bodies
+    # share no facet. The groups all exist, so the case loads; building the model finds
+    # it, and `run` reports it as an input error naming the mesh file (exit 2).
+    geo, toml = shared_dir / "split.geo", shared_dir / "split.toml"
+    if COMM.rank == 0:
+        geo.write_text("""
+Point(1) = {0, 0, 0, 0.25}; Point(2) = {1, 0, 0, 0.25}; Point(3) = {1, 1, 0, 0.25};
+Point(4) = {0, 1, 0, 0.25}; Point(5) = {1, 2, 0, 0.25}; Point(6) = {0, 2, 0, 0.25};
+Point(7) = {1, 1, 0, 0.25}; Point(8) = {0, 1, 0, 0.25};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Line(5) = {7, 5}; Line(6) = {5, 6}; Line(7) = {6, 8}; Line(8) = {8, 7};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Curve Loop(2) = {8, 5, 6, 7}; Plane Surface(2) = {2};
+Physical Surface("ground") = {1}; Physical Surface("block") = {2};
+Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
+""")
+        write(toml, {
+            "mesh": {"source": "split.geo"},
+            "bodies": {"block": {"density": 2000.0, "poisson": 0.2, "shear_modulus": 1e9},
+                       "ground": {"density": 1800.0, "poisson": 0.3, "shear_modulus": 1e7}},
+            "contact": {"joint": {"slave": "block", "master": "ground", "penalty": 1e9}},
+            "fixed": {"floor": {}},
+            "time": {"dt": 1e-3, "end_time": 1e-2}})
+    COMM.barrier()
+    assert cli.main(["run", str(toml), "--out", str(shared_dir / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and "Traceback" not in err, err
+        assert "split.geo: interface 'joint' has no facet shared by two cells" in err, err
+
+
 # --- property-based tests of the parser ----------------------------------------------
 
 # Valid ranges of some numeric fields (all satisfy the physical checks).

@@ -167,7 +167,8 @@ def test_contact_patch(folder: pathlib.Path, structured: bool) -> None:
     _, p = _nodal_pressure(model, u)
     err_p = float(np.abs(p - p0).max()) / p0
     _say(f"\npatch ({'structured' if structured else 'unstructured'}): Newton its {its}; max "
-         f"|σ − σ_exact|/p0 (3 × 3 and von Mises) at cell midpoints: a {errors['a']:.2e}, b {errors['b']:.2e}; "
+         f"|σ − σ_exact|/p0 (3 × 3 and von Mises) at cell midpoints: a {errors['a']:.2e}, "
+         f"b {errors['b']:.2e}; "
          f"max |p − p0|/p0 over {len(p)} interface nodes {err_p:.2e}")
     # Tolerance 1e-8 relative: the exact solution is in the discrete space, so only the
     # Newton stop (residual 1e-9 of the force scale; the problem is linear once every node
