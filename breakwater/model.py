@@ -282,6 +282,9 @@ class ContactModel:
         self.α = fem.Constant(msh, dolfinx.default_scalar_type(d.alpha))
         self.β = fem.Constant(msh, dolfinx.default_scalar_type(d.beta))
 
+        # The integration data of every pair, in one list: dolfinx compiles a form only
+        # if all its integrals of a type share one subdomain_data object.
+        self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
@@ -318,7 +321,8 @@ class ContactModel:
         # Nodal (Gauss-Lobatto) quadrature: the points are the facet's P2 nodes, i.e. the
         # paper's node-to-node contact; it also decouples the friction law node by node.
         tag = 1000 + k
-        dS = ufl.Measure("dS", domain=msh, subdomain_data=[(tag, d.ravel())],
+        self._interface_data.append((tag, d.ravel()))
+        dS = ufl.Measure("dS", domain=msh, subdomain_data=self._interface_data,
                          metadata={"quadrature_rule": "GLL", "quadrature_degree": 3})(tag)
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731

@@ -320,7 +320,9 @@ class BodyFields:
         nloc = imap.size_local
         tdim = sub.topology.dim
         ncells = sub.topology.index_map(tdim).size_local
-        cells = imap.local_to_global(S1.dofmap.list[:ncells].ravel()).reshape(ncells, -1)
+        # (A rank may hold no cell of a body: keep the shape of its empty block.)
+        dofs = S1.dofmap.list[:ncells]
+        cells = imap.local_to_global(dofs.ravel()).reshape(dofs.shape)
         local = {
             "gidx": imap.local_to_global(np.arange(nloc, dtype=np.int32)),
             "x": S1.tabulate_dof_coordinates()[:nloc, :2],
@@ -394,8 +396,8 @@ class InterfaceFields:
                                          None if v is None else v[s].x.array,
                                          None if v is None else v[m].x.array)
         for k, f in self.values.items():
-            f.x.array.reshape(len(self._index), -1)[:] = \
-                state[k][self._index].reshape(len(self._index), -1)
+            shape = (len(self._index), f.function_space.dofmap.index_map_bs)
+            f.x.array.reshape(shape)[:] = state[k][self._index].reshape(shape)
 
 
 class FieldWriter:

@@ -279,6 +279,17 @@ def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
     return data
 
 
+def _resting_on(model: ContactModel, body: int) -> set[int]:
+    """A body and every body resting on it: the slaves of pairs whose master is one of them.
+
+    Under gravity their weight is what the body's contacts below it carry.
+    """
+    found = {body}
+    while new := {p.slave for p in model.pairs if p.master in found} - found:
+        found |= new
+    return found
+
+
 def pair_names(model: ContactModel) -> list[str]:
     """Names of the contact pairs: the interface group, or the index where it repeats."""
     names = [p.spec.interface for p in model.pairs]
@@ -477,7 +488,8 @@ class _Run:
         static: dict[str, Any] = {"newton_iterations": self.static_iterations}
         if m.pairs:
             slave = m.pairs[0].slave
-            weight = m.weight()[slave]
+            weights = m.weight()
+            weight = sum(weights[i] for i in _resting_on(m, slave))
             length, resultant = r["contact_length_0"], r["normal_force_0"]
             pressure = interface["pair0_pressure"]
             first, last, centre = _edge_centre(interface["pair0_x"])

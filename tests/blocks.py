@@ -105,3 +105,49 @@ def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, flo
 
     run_on_rank0(comm, build, f"writing {path}")
     return pathlib.Path(comm.bcast(str(path), root=0))
+
+
+def stacked_blocks(path: str | pathlib.Path, comm: MPI.Comm, width: float,
+                   heights: tuple[float, ...], h: float) -> pathlib.Path:
+    """Write a mesh of rectangles of one width stacked bottom up, with structured triangles.
+
+    Physical names: ``block<k>`` (cells, ``block0`` at the bottom), ``joint<k>`` (the
+    interface between blocks k and k + 1), ``base`` (the bottom of ``block0``),
+    ``left<k>`` (the left side of block k).
+    """
+    path = pathlib.Path(path)
+
+    def build() -> None:
+        with gmsh_session():
+            geo = gmsh.model.geo
+            ys = [0.0]
+            for height in heights:
+                ys.append(ys[-1] + height)
+            left = [geo.addPoint(-width / 2, y, 0, h) for y in ys]
+            right = [geo.addPoint(width / 2, y, 0, h) for y in ys]
+            levels = [geo.addLine(p, q) for p, q in zip(left, right, strict=True)]
+            sides = [(geo.addLine(left[k + 1], left[k]), geo.addLine(right[k], right[k + 1]))
+                     for k in range(len(heights))]
+            surfaces = [geo.addPlaneSurface([geo.addCurveLoop(
+                [levels[k], sides[k][1], -levels[k + 1], sides[k][0]])])
+                for k in range(len(heights))]
+            geo.synchronize()
+            nx = max(1, round(width / h)) + 1
+            for c in levels:
+                gmsh.model.mesh.setTransfiniteCurve(c, nx)
+            for (sl, sr), height in zip(sides, heights, strict=True):
+                for c in (sl, sr):
+                    gmsh.model.mesh.setTransfiniteCurve(c, max(1, round(height / h)) + 1)
+            for s in surfaces:
+                gmsh.model.mesh.setTransfiniteSurface(s)
+            for k, s in enumerate(surfaces):
+                gmsh.model.addPhysicalGroup(2, [s], name=f"block{k}")
+                gmsh.model.addPhysicalGroup(1, [sides[k][0]], name=f"left{k}")
+            for k in range(1, len(heights)):
+                gmsh.model.addPhysicalGroup(1, [levels[k]], name=f"joint{k - 1}")
+            gmsh.model.addPhysicalGroup(1, [levels[0]], name="base")
+            gmsh.model.mesh.generate(2)
+            gmsh.write(str(path))
+
+    run_on_rank0(comm, build, f"writing {path}")
+    return pathlib.Path(comm.bcast(str(path), root=0))
