@@ -367,7 +367,6 @@ class InterfaceFields:
     VECTORS = ("slip", "slip_velocity", "friction_traction")
 
     def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
-        self.name = name
         self.filename = f"contact_{name}.bp"
         self.nodes = nodes
         self.slave, self.master = nodes.pair.slave, nodes.pair.master

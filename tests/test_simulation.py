@@ -153,7 +153,8 @@ def _check_contact_fields(path: pathlib.Path, h: dict[str, np.ndarray], weight: 
     adios2 = pytest.importorskip("adios2")
     with adios2.FileReader(str(path)) as r:
         x = r.read("geometry")[:, :2]
-        ends, mid = r.read("connectivity")[:, 1:3], r.read("connectivity")[:, 3]
+        cells = r.read("connectivity")  # VTK Lagrange curves: count, two ends, midpoint
+        ends, mid = cells[:, 1:3], cells[:, 3]
         length = np.linalg.norm(x[ends[:, 1]] - x[ends[:, 0]], axis=1)
 
         def simpson(f: np.ndarray) -> float:
