@@ -1,15 +1,18 @@
-# breakwater: `make run` runs the default Goda case, `make test` runs the test suite.
-# Both create the virtual environment (.venv) and install breakwater into it when missing.
+# breakwater: `make run` runs the default Goda case, `make test` runs the test suite,
+# `make docs` builds the documentation (docs/_build/html). Each creates the virtual
+# environment (.venv) and installs breakwater into it when missing (`make docs` adds the
+# `docs` extra).
 
 PYTHON ?= $(shell command -v python3.12 2>/dev/null || ls $(HOME)/.pyenv/versions/3.12*/bin/python3.12 2>/dev/null | tail -n 1)
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+DOCS_STAMP := $(VENV)/.docs-installed
 NP ?= 2
 CASE ?=
 ARGS ?=
 
-.PHONY: install run test test-serial test-mpi lint clean
+.PHONY: install run test test-serial test-mpi lint docs clean
 
 $(STAMP): pyproject.toml
 	@test -n "$(PYTHON)" || { echo "python3.12 not found (set PYTHON=/path/to/python3.12)"; exit 1; }
@@ -17,6 +20,10 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[fenicsx,viz,test,dev]'
 	touch $(STAMP)
+
+$(DOCS_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[docs]'
+	touch $(DOCS_STAMP)
 
 install: $(STAMP)
 
@@ -32,8 +39,12 @@ test-mpi: $(STAMP)
 	timeout 1800 $(BIN)/mpiexec -n $(NP) $(BIN)/python -m pytest -q -m "not serial" tests
 
 lint: $(STAMP)
-	$(BIN)/ruff check breakwater forms meshes tests notebooks/make_notebooks.py
+	$(BIN)/ruff check breakwater forms meshes tests docs/conf.py
 	$(BIN)/mypy breakwater forms meshes
 
+# Warnings are errors; the notebooks are executed (short end time: docs/conf.py).
+docs: $(DOCS_STAMP)
+	$(BIN)/sphinx-build -W --keep-going -b html docs docs/_build/html
+
 clean:
-	rm -rf $(VENV) results
+	rm -rf $(VENV) results docs/_build docs/_generated

@@ -1,16 +1,19 @@
-"""The notebooks (notebooks/*.ipynb): stored clean, and executed with short end times.
+"""The notebooks (notebooks/*.py, jupytext percent format), executed with short end times.
 
-Each notebook runs in a Jupyter kernel of this interpreter (nbclient), in a temporary
-working folder, with a run of a few milliseconds on a coarse mesh; the test checks that
-no cell failed, that figures were displayed, and that the runs wrote their outputs.
-Serial only: a kernel is a subprocess of one rank.
+The ``.py`` files are the notebooks' only sources (no ``.ipynb`` is committed): jupytext
+reads them into notebooks, JupyterLab opens them with jupytext (the ``notebook`` extra) and
+the documentation executes them (``make docs``). Each notebook runs here in a Jupyter
+kernel of this interpreter (nbclient), in a temporary working folder, with a run of a few
+milliseconds on a coarse mesh; the test checks that no cell failed, that figures were
+displayed, and that the runs wrote their outputs. Serial only: a kernel is a subprocess
+of one rank.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import pathlib
+import re
 import time
 from typing import Any
 
@@ -20,8 +23,8 @@ from mpi4py import MPI
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 NOTEBOOKS = pathlib.Path(__file__).resolve().parents[1] / "notebooks"
-GODA = "01_goda_paper_figures.ipynb"
-VARIANT = "02_user_variant.ipynb"
+GODA = "01_goda_paper_figures.py"
+VARIANT = "02_user_variant.py"
 
 # 30 steps of the default Δt = 0.1 ms (the pulse lasts 2 ms: the impact is inside the
 # run), on the mesh of refinement 0.7 (72 + 272 triangles): a few seconds per run.
@@ -33,29 +36,37 @@ serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
                                  reason="notebooks run in a serial kernel")
 
 
-def _generator() -> Any:
-    spec = importlib.util.spec_from_file_location("make_notebooks",
-                                                  NOTEBOOKS / "make_notebooks.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def test_sources_are_the_notebooks() -> None:
+    """Every notebook of the folder is a ``NN_name.py`` source; no generator, no .ipynb."""
+    assert sorted(p.name for p in NOTEBOOKS.glob("[0-9]*.py")) == [GODA, VARIANT]
+    assert not (NOTEBOOKS / "make_notebooks.py").exists()
+
+
+def _canonical(text: str) -> str:
+    """The text without the jupytext version of its header."""
+    return re.sub(r"(?m)^#\s+jupytext_version: .*\n", "", text)
 
 
 @pytest.mark.parametrize("name", [GODA, VARIANT])
-def test_stored_without_outputs_and_generated(name: str) -> None:
+def test_source_is_a_percent_notebook(name: str) -> None:
+    import jupytext
     import nbformat
 
     text = (NOTEBOOKS / name).read_text(encoding="utf-8")
-    nb = nbformat.reads(text, as_version=4)
+    nb = jupytext.reads(text, fmt="py:percent")
     nbformat.validate(nb)
-    code = [c for c in nb.cells if c.cell_type == "code"]
-    assert code
-    for cell in code:
-        assert cell.outputs == [] and cell.execution_count is None, cell.id
-    # The stored file is what notebooks/make_notebooks.py writes (edit the cells there).
-    assert text == _generator().render(name), \
-        f"{name} differs from notebooks/make_notebooks.py: run it to regenerate"
+    assert nb.metadata["jupytext"]["text_representation"]["format_name"] == "percent"
+    assert nb.metadata["kernelspec"]["name"] == "python3"
+    kinds = [c.cell_type for c in nb.cells]
+    assert kinds[0] == "markdown" and kinds.count("code") >= 10
+    assert nb.cells[0].source.startswith("# ")  # the title
+    # The settings cell reads the short-run variables (the tests and the docs set them).
+    settings = next(c.source for c in nb.cells if c.cell_type == "code")
+    for key in (*SHORT, "BREAKWATER_NOTEBOOK_OUTPUT"):
+        assert f'os.environ.get("{key}"' in settings, key
+    # Stored as jupytext writes it (opening and saving it in Jupyter changes nothing).
+    assert _canonical(jupytext.writes(nb, fmt="py:percent")) == _canonical(text), \
+        f"{name} is not in jupytext's percent format: `jupytext --to py:percent {name}`"
 
 
 @pytest.fixture
@@ -84,17 +95,18 @@ def kernel(tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> pathlib.P
 def _execute(name: str, work: pathlib.Path, output: str,
              monkeypatch: pytest.MonkeyPatch) -> tuple[Any, pathlib.Path, float]:
     """Execute a notebook in ``work``; (executed notebook, output folder, seconds)."""
+    import jupytext
     import nbformat
     from nbclient import NotebookClient
 
     monkeypatch.setenv("BREAKWATER_NOTEBOOK_OUTPUT", output)
-    nb = nbformat.read(NOTEBOOKS / name, as_version=4)
+    nb = jupytext.read(NOTEBOOKS / name)
     client = NotebookClient(nb, kernel_name="python3", timeout=300,
                             resources={"metadata": {"path": str(work)}})
     start = time.perf_counter()
     client.execute()  # raises CellExecutionError when a cell fails
     seconds = time.perf_counter() - start
-    nbformat.write(nb, work / name)  # kept for inspection of a failure
+    nbformat.write(nb, work / f"{pathlib.Path(name).stem}.ipynb")  # for inspection
     return nb, work / output, seconds
 
 
