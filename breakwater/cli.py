@@ -21,7 +21,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from . import __version__
-from .errors import BreakwaterError, MeshError
+from .errors import BreakwaterError, CaseError, MeshError
 from .parallel import on_rank_zero, shared_tempdir
 
 if TYPE_CHECKING:
@@ -84,7 +84,6 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from . import checkpoint, simulation
-    from .case import CaseError
 
     comm = MPI.COMM_WORLD
     case = _load(args)
@@ -115,7 +114,6 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
-    from .case import CaseError
 
     comm = MPI.COMM_WORLD
     out = pathlib.Path(args.out)
@@ -133,7 +131,6 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from .calibrate import HorizontalStiffness
-    from .case import CaseError
 
     comm = MPI.COMM_WORLD
     case = _load(args)
@@ -258,7 +255,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:  # usage errors (2) and --help/--version (0)
         return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
-    from .case import CaseError
     from .checkpoint import CheckpointError
 
     try:

@@ -271,6 +271,7 @@ def test_geo_is_meshed_into_the_output_folder(shared_dir):
     assert (shared_dir / "elsewhere" / "mesh" / "blocks.msh").is_file()
     assert mine.read_text() == "the user's own file\n"
     # The library reader meshes a script into a temporary folder, also not beside it.
+    COMM.barrier()  # every rank has read the file
     if COMM.rank == 0:
         mine.unlink()
     COMM.barrier()
