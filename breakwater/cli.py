@@ -15,18 +15,16 @@ import json
 import logging
 import pathlib
 import sys
-import tempfile
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from . import __version__
-from .errors import BreakwaterError, MeshError
+from .errors import BreakwaterError, CaseError, MeshError
+from .parallel import on_rank_zero, shared_tempdir
 
 if TYPE_CHECKING:
-    from mpi4py import MPI
-
     from .case import Case
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
@@ -87,30 +85,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     from . import checkpoint, simulation
 
+    comm = MPI.COMM_WORLD
     case = _load(args)
+    folder = case.output_directory
+    if folder.exists() and not folder.is_dir():
+        where = "--out" if args.out is not None else "output.directory"
+        raise CaseError(f"{where} {folder}: not a folder (a file of that name exists)")
     if args.resume:
         # Fail early, before meshing and calibrating, when there is nothing to resume;
         # run() then checks that the case (case.toml) is the checkpoint's.
-        problem = None
-        if _rank() == 0:
-            try:
-                checkpoint.check(case.output_directory)
-            except checkpoint.CheckpointError as e:
-                problem = str(e)
-        problem = MPI.COMM_WORLD.bcast(problem, root=0)
-        if problem is not None:
-            raise checkpoint.CheckpointError(problem)
-    _say(f"breakwater {__version__}: case '{case.name}' -> {case.output_directory}"
+        on_rank_zero(comm, lambda: checkpoint.check(folder))
+    _say(f"breakwater {__version__}: case '{case.name}' -> {folder}"
          + (" (resuming)" if args.resume else ""), args.quiet)
-    model, time, output, extra = case.build(MPI.COMM_WORLD)
-    if "calibration" in extra:
-        c = extra["calibration"]
+    built = case.build(comm)
+    if "calibration" in built.extra:
+        c = built.extra["calibration"]
         _say(f"  calibrated {c['body']} shear modulus G = {c['shear_modulus']:.6g} Pa "
              f"(K_x = {c['stiffness']:.6g} N/m per m, error {c['relative_error']:.1e})",
              args.quiet)
-    output = replace(output, progress=args.progress)
-    simulation.run(model, time, output, resolved_case=case.resolved(), extra_summary=extra,
-                   report=not args.quiet, resume=args.resume)
+    output = replace(built.output, progress=args.progress)
+    simulation.run(built.model, built.time, output, resolved_case=built.case.resolved(),
+                   extra_summary=built.extra, report=not args.quiet, resume=args.resume)
     return EXIT_OK
 
 
@@ -119,7 +114,6 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
-    from .case import CaseError
 
     comm = MPI.COMM_WORLD
     out = pathlib.Path(args.out)
@@ -127,52 +121,16 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
         raise CaseError(f"--out {out}: unknown mesh file suffix '{out.suffix}' "
                         "(use .msh, .xdmf, .vtu or another meshio format)")
     case = _load(args)
-    folder = tempfile.mkdtemp(prefix="breakwater-mesh-") if comm.rank == 0 else None
-    folder = comm.bcast(folder, root=0)
-    try:
-        if case.mesh.generated:
-            src = case.mesh_file(comm, folder)
-        elif case.mesh.source.endswith(".geo"):
-            src = _mesh_geo(pathlib.Path(case.mesh.source), pathlib.Path(folder), comm)
-        else:
-            src = pathlib.Path(case.mesh.source)
-        meshes.convert(src, out, comm=comm)
-    finally:
-        comm.barrier()
-        if comm.rank == 0:
-            import shutil
-
-            shutil.rmtree(folder, ignore_errors=True)
+    with shared_tempdir(comm, "breakwater-mesh-") as folder:
+        meshes.convert(case.mesh_file(comm, folder), out, comm=comm)
     _say(f"wrote {out}", args.quiet)
     return EXIT_OK
-
-
-def _mesh_geo(path: pathlib.Path, folder: pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
-    """Mesh a gmsh script on rank 0 into ``folder``."""
-    from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
-
-    target = folder / f"{path.stem}.msh"
-
-    def write() -> None:
-        import gmsh
-
-        with meshes.gmsh_session():
-            gmsh.open(str(path))
-            gmsh.model.mesh.generate(2)
-            gmsh.write(str(target))
-
-    try:
-        meshes.run_on_rank0(comm, write, f"meshing {path}")
-    except Exception as e:
-        raise MeshError(f"{path}: gmsh cannot mesh the script ({e})") from e
-    return target
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from .calibrate import HorizontalStiffness
-    from .case import CaseError
 
     comm = MPI.COMM_WORLD
     case = _load(args)
@@ -184,16 +142,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if target is None:
         raise CaseError("calibration.stiffness: no target stiffness (give --target K_x)")
     L = case.out_of_plane_length
-    folder = tempfile.mkdtemp(prefix="breakwater-cal-") if comm.rank == 0 else None
-    folder = comm.bcast(folder, root=0)
-    try:
+    with shared_tempdir(comm, "breakwater-cal-") as folder:
         data = case.read_mesh(comm, folder)
-    finally:
-        comm.barrier()
-        if comm.rank == 0:
-            import shutil
-
-            shutil.rmtree(folder, ignore_errors=True)
     r = case.calibrate(data, target)
     # Independent check: a new model built with the calibrated modulus.
     model = case.build_model(data, {r.body: r.shear_modulus}, dynamic=False)
@@ -305,7 +255,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:  # usage errors (2) and --help/--version (0)
         return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
-    from .case import CaseError
     from .checkpoint import CheckpointError
 
     try:

@@ -7,6 +7,10 @@ class BreakwaterError(Exception):
     """Base class: a problem the user can act on (bad input, failed solve)."""
 
 
+class CaseError(BreakwaterError):
+    """A case file (or an override) is invalid: one line, naming the field."""
+
+
 class MeshError(BreakwaterError):
     """A mesh is unreadable or inconsistent with what the case asks of it."""
 

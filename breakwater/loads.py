@@ -18,7 +18,6 @@ other shapes are integrated to O(Δt²) (or O(Δt) at the jumps of the rectangle
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -128,24 +127,3 @@ class Pulse:
         else:
             rise = 1.0
         return self.maximum * rise
-
-    def integral(self, t: float) -> float:
-        """∫ from −∞ to t of the amplitude (exact): the impulse delivered by ``t``."""
-        s = min(max((t - self.start) / self.duration, 0.0), 1.0)
-        if self.shape == "rectangular":
-            fraction = s
-        elif self.shape == "half-sine":
-            fraction = 0.5 * (1.0 - math.cos(math.pi * s))
-        else:
-            p = self.peak
-            if s <= p:
-                fraction = s * s / p if p > 0 else 0.0
-            else:
-                fraction = 1.0 - (1.0 - s) ** 2 / (1.0 - p)
-        return self.impulse * fraction
-
-
-def pulse(impulse: float, duration: float, shape: PulseShape = "triangular",
-          start: float = 0.0, peak: float = 0.5) -> Callable[[float], float]:
-    """An amplitude ``t ↦ f(t)`` with ∫ f dt = ``impulse`` (see :class:`Pulse`)."""
-    return Pulse(impulse, duration, shape, start, peak)

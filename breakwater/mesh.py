@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pathlib
+from contextlib import nullcontext
 
 import dolfinx
 import gmsh
@@ -11,6 +12,8 @@ from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
 
 from .errors import MeshError
+from .gmshtools import gmsh_session
+from .parallel import on_rank_zero, shared_tempdir
 
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
@@ -21,7 +24,8 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     integrals need in parallel.
 
     Args:
-        path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first.
+        path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
+            temporary folder: nothing is written beside the script).
         comm: Communicator to distribute the mesh over.
         gdim: Geometric dimension of the model (2 for plane strain).
 
@@ -36,62 +40,54 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     if not path.is_file():
         raise MeshError(f"mesh file not found: {path}")
     if path.suffix == ".geo":
-        path = _mesh_geo(path, comm, gdim)
-    elif path.suffix != ".msh":
+        with shared_tempdir(comm, "breakwater-geo-") as folder:
+            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim),
+                             comm, gdim)
+    if path.suffix != ".msh":
         raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
     # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
-    error, started = None, False
-    if comm.rank == 0:
-        started = not gmsh.isInitialized()
-        if started:
-            gmsh.initialize(readConfigFiles=False)
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add("breakwater-read")
+    with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
         try:
-            gmsh.merge(str(path))
+            on_rank_zero(comm, lambda: gmsh.merge(str(path)))
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
-            error = f"{path}: cannot read the mesh ({e})"
-    error = comm.bcast(error, root=0)
-    try:
-        if error:
-            raise MeshError(error)
-        data = gmshio.model_to_mesh(gmsh.model, comm, 0,
-                                    gdim=gdim, partitioner=partitioner)
-    finally:
-        if comm.rank == 0:
-            gmsh.model.remove()
-            if started:
-                gmsh.finalize()
+            raise MeshError(f"{path}: cannot read the mesh ({e})") from e
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
     if not data.physical_groups:
         raise MeshError(f"{path}: the mesh has no named physical groups")
     return data
 
 
-def _mesh_geo(path: pathlib.Path, comm: MPI.Comm, dim: int) -> pathlib.Path:
-    """Mesh a ``.geo`` script with gmsh on rank 0 and return the ``.msh`` written."""
-    out = path.with_suffix(".msh")
-    import gmsh
+def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2
+             ) -> pathlib.Path:
+    """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
 
-    error, started = None, False
-    if comm.rank == 0:
-        started = not gmsh.isInitialized()
-        if started:
-            gmsh.initialize()
-        try:
-            gmsh.option.setNumber("General.Terminal", 0)
-            gmsh.open(str(path))
+    Args:
+        path: The script.
+        target: The ``.msh`` file written (its folder is created); the same path on
+            every rank.
+        comm: Communicator (rank 0 meshes, every rank returns once the file exists).
+        dim: Dimension of the mesh.
+
+    Returns:
+        ``target``.
+
+    Raises:
+        MeshError: gmsh cannot mesh the script (on every rank).
+
+    """
+    def write() -> None:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with gmsh_session():
+            gmsh.merge(str(path))  # into the session's model
             gmsh.model.mesh.generate(dim)
-            gmsh.write(str(out))
-        except Exception as e:
-            error = f"{path}: gmsh cannot mesh the script ({e})"
-        finally:
-            if started:
-                gmsh.finalize()
-    error = comm.bcast(error, root=0)
-    if error:
-        raise MeshError(error)
-    return out
+            gmsh.write(str(target))
+
+    try:
+        on_rank_zero(comm, write)
+    except Exception as e:
+        raise MeshError(f"{path}: gmsh cannot mesh the script ({e})") from e
+    return target
 
 
 def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:

@@ -2,12 +2,15 @@
 
 The run layer (:mod:`breakwater.simulation`) never reads TOML: it receives
 these frozen dataclasses, built by the case layer (:mod:`breakwater.case`).
+:class:`TimeSpec` is also the case's ``[time]`` table, documented and checked once.
 """
 
 from __future__ import annotations
 
 import pathlib
 from dataclasses import dataclass
+
+from .schema import InvalidField, positive, setting
 
 __all__ = ["OutputSpec", "PairProbeSpec", "ProbeSpec", "TimeSpec"]
 
@@ -44,29 +47,53 @@ class PairProbeSpec:
 
 @dataclass(frozen=True)
 class TimeSpec:
-    """Time integration and nonlinear solver settings.
+    """``[time]``: GN22 time integration and Newton settings.
 
-    Attributes:
-        dt: Nominal time step (s).
-        end_time: Final time (s).
-        beta1: GN22 parameter β1.
-        beta2: GN22 parameter β2.
-        allow_conditional: Allow conditionally stable (β1, β2).
-        max_cutbacks: A failing step is retried with dt/2, up to this many halvings.
-        newton_rtol: Newton relative residual tolerance.
-        newton_atol: Newton absolute tolerance, as a fraction of the load-vector norm.
-        newton_max_it: Maximum number of Newton iterations per step.
+    The case's ``[time]`` table is this class (``breakwater.case.TimeCase``): each
+    field carries its unit and meaning (:func:`breakwater.case.case_reference`), and
+    the values are checked here, once, whether they come from a case file or from
+    Python.
+
+    Raises:
+        InvalidField: A value out of range (a :class:`~breakwater.errors.CaseError`
+            naming the field).
+
     """
 
-    dt: float
-    end_time: float
-    beta1: float = 0.6
-    beta2: float = 0.605
-    allow_conditional: bool = False
-    max_cutbacks: int = 4
-    newton_rtol: float = 1e-9
-    newton_atol: float = 1e-9
-    newton_max_it: int = 40
+    dt: float = setting(unit="s", doc="time step Δt")
+    end_time: float = setting(unit="s", doc="final time")
+    beta1: float = setting(0.6, doc="GN22 β₁ (Newmark γ)")
+    beta2: float = setting(0.605, doc="GN22 β₂ (2 × Newmark β)")
+    allow_conditional: bool = setting(False, doc="accept β₁ < ½ or β₂ < β₁ (not "
+                                      "unconditionally stable)")
+    max_cutbacks: int = setting(4, doc="a failing step is retried with Δt/2, up to this "
+                                "many times")
+    newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance")
+    newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
+                                 "the load-vector norm")
+    newton_max_it: int = setting(40, doc="Newton iterations per step")
+
+    def __post_init__(self) -> None:
+        positive(self.dt, "dt")
+        positive(self.end_time, "end_time")
+        if self.dt >= self.end_time:
+            raise InvalidField("dt", f"must be smaller than end_time ({self.dt:g} >= "
+                               f"{self.end_time:g})")
+        positive(self.beta1, "beta1")
+        positive(self.beta2, "beta2")
+        if not self.allow_conditional:
+            if self.beta1 < 0.5:
+                raise InvalidField("beta1", f"beta1 = {self.beta1:g} < 0.5 is not "
+                                   "unconditionally stable (set time.allow_conditional = "
+                                   "true to insist)")
+            if self.beta2 < self.beta1:
+                raise InvalidField("beta2", f"beta2 = {self.beta2:g} < beta1 = "
+                                   f"{self.beta1:g} is not unconditionally stable (set "
+                                   "time.allow_conditional = true to insist)")
+        positive(self.max_cutbacks, "max_cutbacks", strict=False)
+        positive(self.newton_rtol, "newton_rtol")
+        positive(self.newton_atol, "newton_atol")
+        positive(self.newton_max_it, "newton_max_it")
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,6 @@ from .goda import (
     build_model,
     generate,
     gmsh_session,
-    run_on_rank0,
 )
 
 __all__ = [
@@ -44,5 +43,4 @@ __all__ = [
     "generate",
     "gmsh_session",
     "read",
-    "run_on_rank0",
 ]

@@ -28,7 +28,7 @@ import meshio  # type: ignore[import-untyped]
 import numpy as np
 from mpi4py import MPI
 
-from .goda import run_on_rank0
+from breakwater.parallel import on_rank_zero
 
 _XDMF_SUFFIXES = (".xdmf", ".xmf")
 _TAGS = ("gmsh:physical", "gmsh:geometrical")
@@ -123,13 +123,14 @@ def convert(
 
     Raises:
         ValueError: For an unknown suffix (checked on all ranks before any work).
-        RuntimeError: On ranks other than 0 if the conversion failed on rank 0.
+        Exception: What the conversion raised on rank 0, on every rank (see
+            :func:`breakwater.parallel.on_rank_zero`).
 
     """
     file_format = _file_format(pathlib.Path(out_path))
     comm = MPI.COMM_WORLD if comm is None else comm
-    paths = (str(msh_path), str(out_path)) if comm.rank == 0 else None
-    src, out = (pathlib.Path(p) for p in comm.bcast(paths, root=0))
+    paths = on_rank_zero(comm, lambda: (str(msh_path), str(out_path)))  # rank 0's paths
+    src, out = (pathlib.Path(p) for p in paths)
 
     def write() -> None:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -149,5 +150,5 @@ def convert(
         else:
             meshio.write(out, _by_cell_type(mesh), file_format)
 
-    run_on_rank0(comm, write, "mesh conversion")
+    on_rank_zero(comm, write)
     return out

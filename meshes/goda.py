@@ -17,13 +17,16 @@ from __future__ import annotations
 import itertools
 import math
 import pathlib
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from contextlib import AbstractContextManager
+from dataclasses import dataclass, field, fields
 from types import MappingProxyType
 
 import gmsh  # type: ignore[import-untyped]
 from mpi4py import MPI
+
+from breakwater.gmshtools import gmsh_session as _session
+from breakwater.parallel import on_rank_zero
 
 # Surfaces (dim 2).
 CAISSON = "caisson"
@@ -108,7 +111,7 @@ class GodaGeometry:
 
     mound_height: float = 0.190
     crest_width: float = 0.400
-    slope: float = 2.0
+    slope: float = field(default=2.0, metadata={"unit": "-"})  # the others are lengths (m)
     caisson_width: float = 0.205
     caisson_height: float = 0.202
     bolt_height: float = 0.168
@@ -236,32 +239,13 @@ def _check_mesh_args(refinement: float, order: int) -> None:
         raise ValueError(f"order must be 1 or 2, got {order!r}")
 
 
-@contextmanager
-def gmsh_session() -> Iterator[None]:
-    """Work in a fresh gmsh model with this module's (quiet) options.
+def gmsh_session() -> AbstractContextManager[None]:
+    """A quiet gmsh session with this module's meshing options.
 
-    Initialises gmsh if needed and finalises it only in that case; otherwise the
-    caller's session is left as found (options restored, current model reset).
+    See :func:`breakwater.gmshtools.gmsh_session`: nested in the caller's session,
+    the caller's model and options are restored on exit.
     """
-    owner = not gmsh.isInitialized()
-    if owner:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
-    previous = None if owner else gmsh.model.getCurrent()
-    saved = {name: gmsh.option.getNumber(name) for name in _OPTIONS}
-    for name, value in _OPTIONS.items():
-        gmsh.option.setNumber(name, value)
-    gmsh.model.add(_MODEL_NAME)
-    try:
-        yield
-    finally:
-        if owner:
-            gmsh.finalize()
-        else:
-            gmsh.model.remove()
-            for name, value in saved.items():
-                gmsh.option.setNumber(name, value)
-            if previous is not None:
-                gmsh.model.setCurrent(previous)
+    return _session(_OPTIONS, _MODEL_NAME)
 
 
 def build_model(
@@ -384,15 +368,15 @@ def generate(
 
     Raises:
         ValueError: For invalid geometry, refinement or order (on all ranks).
-        RuntimeError: On ranks other than 0 if gmsh failed on rank 0 (rank 0
-            re-raises the original error).
+        Exception: What gmsh raised on rank 0, on every rank (see
+            :func:`breakwater.parallel.on_rank_zero`).
 
     """
     g = GodaGeometry() if geometry is None else geometry
     g.validate()
     _check_mesh_args(refinement, order)
     comm = MPI.COMM_WORLD if comm is None else comm
-    out = pathlib.Path(comm.bcast(str(path) if comm.rank == 0 else None, root=0))
+    out = pathlib.Path(on_rank_zero(comm, lambda: str(path)))  # rank 0's path
 
     def write() -> None:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -400,29 +384,5 @@ def generate(
             build_model(g, refinement, order)
             gmsh.write(str(out))
 
-    run_on_rank0(comm, write, "mesh generation")
+    on_rank_zero(comm, write)
     return out
-
-
-def run_on_rank0(comm: MPI.Comm, action: Callable[[], None], task: str) -> None:
-    """Run ``action`` on rank 0 only; all ranks return, or raise, together.
-
-    Args:
-        comm: MPI communicator.
-        action: Work to do (file output) on rank 0.
-        task: Name of the work, for the error message.
-
-    Raises:
-        RuntimeError: On ranks other than 0 if ``action`` failed on rank 0
-            (rank 0 re-raises the original error).
-
-    """
-    if comm.rank == 0:
-        try:
-            action()
-        except BaseException as exc:
-            comm.bcast(repr(exc), root=0)
-            raise
-        comm.bcast(None, root=0)  # also the barrier: rank 0 has finished
-    elif (message := comm.bcast(None, root=0)) is not None:
-        raise RuntimeError(f"{task} failed on rank 0: {message}")

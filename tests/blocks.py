@@ -13,8 +13,10 @@ from __future__ import annotations
 import pathlib
 
 import gmsh
-from breakwater.meshes import gmsh_session, run_on_rank0
+from breakwater.meshes import gmsh_session
 from mpi4py import MPI
+
+from breakwater.parallel import on_rank_zero
 
 
 def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, float],
@@ -103,7 +105,7 @@ def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, flo
             gmsh.model.mesh.generate(2)
             gmsh.write(str(path))
 
-    run_on_rank0(comm, build, f"writing {path}")
+    on_rank_zero(comm, build)
     return pathlib.Path(comm.bcast(str(path), root=0))
 
 
@@ -149,5 +151,5 @@ def stacked_blocks(path: str | pathlib.Path, comm: MPI.Comm, width: float,
             gmsh.model.mesh.generate(2)
             gmsh.write(str(path))
 
-    run_on_rank0(comm, build, f"writing {path}")
+    on_rank_zero(comm, build)
     return pathlib.Path(comm.bcast(str(path), root=0))

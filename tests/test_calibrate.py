@@ -115,10 +115,15 @@ def test_goda_calibration_hits_the_target(goda):
 
 def test_build_calibrates_and_resolves(goda, tmp_path):
     case, _ = goda
-    model, _, _, extra = case.build(COMM)
+    before = case.resolved()
+    built = case.build(COMM)
+    model, _, _, extra = built
     G = extra["calibration"]["shear_modulus"]
     assert model.body("mound").spec.material.G == G
     assert extra["calibration"]["relative_error"] <= 1e-3
-    data = case.resolved()
+    # The case as run carries the calibrated modulus; the case itself is unchanged.
+    data = built.case.resolved()
     assert data["bodies"]["mound"]["shear_modulus"] == G
     assert data["calibration"]["enabled"] is False
+    assert case.resolved() == before and case.body("mound").shear_modulus is None
+    assert {**data, "bodies": before["bodies"], "calibration": before["calibration"]} == before

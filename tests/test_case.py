@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import concurrent.futures
+import itertools
 import math
 import pathlib
 import subprocess
@@ -18,15 +19,10 @@ from hypothesis import strategies as st
 from mpi4py import MPI
 
 from breakwater import cli
-from breakwater.case import (
-    BUILTIN_CASES,
-    Case,
-    CaseError,
-    _schema_keys,
-    case_reference,
-    load_case,
-)
+from breakwater.case import BUILTIN_CASES, Case, CaseError, case_reference, load_case
 from breakwater.loads import Pulse, impact_velocity, pendulum_impulse
+from breakwater.mesh import read_mesh
+from breakwater.schema import schema_keys
 
 COMM = MPI.COMM_WORLD
 BAD = pathlib.Path(__file__).parent / "bad_cases"
@@ -240,6 +236,50 @@ Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
         load_case(write(tmp_path / "blocks.toml", data))
 
 
+BLOCKS_GEO = """
+Point(1) = {0, 0, 0, 0.25}; Point(2) = {1, 0, 0, 0.25}; Point(3) = {1, 1, 0, 0.25};
+Point(4) = {0, 1, 0, 0.25}; Point(5) = {1, 2, 0, 0.25}; Point(6) = {0, 2, 0, 0.25};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Line(5) = {3, 5}; Line(6) = {5, 6}; Line(7) = {6, 4};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Curve Loop(2) = {-3, 5, 6, 7}; Plane Surface(2) = {2};
+Physical Surface("ground") = {1}; Physical Surface("block") = {2};
+Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
+"""
+
+
+def test_geo_is_meshed_into_the_output_folder(shared_dir):
+    # A .msh of the script's name beside the user's .geo is the user's file: meshing the
+    # script writes into the output folder (mesh/) and leaves it alone.
+    geo, toml, mine = (shared_dir / n for n in ("blocks.geo", "blocks.toml", "blocks.msh"))
+    if COMM.rank == 0:
+        geo.write_text(BLOCKS_GEO)
+        mine.write_text("the user's own file\n")
+        write(toml, {
+            "mesh": {"source": "blocks.geo"},
+            "bodies": {"block": {"density": 2000.0, "poisson": 0.2, "shear_modulus": 1e9},
+                       "ground": {"density": 1800.0, "poisson": 0.3, "shear_modulus": 1e7}},
+            "contact": {"joint": {"slave": "block", "master": "ground", "penalty": 1e9}},
+            "fixed": {"floor": {}},
+            "time": {"dt": 1e-3, "end_time": 1e-2},
+            "output": {"directory": str(shared_dir / "out")}})
+    COMM.barrier()
+    case = load_case(toml)
+    assert case.mesh_file(COMM) == shared_dir / "out" / "mesh" / "blocks.msh"
+    data = case.read_mesh(COMM, shared_dir / "elsewhere")
+    assert {"block", "ground", "joint", "floor"} <= set(data.physical_groups)
+    assert (shared_dir / "elsewhere" / "mesh" / "blocks.msh").is_file()
+    assert mine.read_text() == "the user's own file\n"
+    # The library reader meshes a script into a temporary folder, also not beside it.
+    COMM.barrier()  # every rank has read the file
+    if COMM.rank == 0:
+        mine.unlink()
+    COMM.barrier()
+    assert read_mesh(geo, COMM).physical_groups.keys() == data.physical_groups.keys()
+    COMM.barrier()
+    assert not mine.exists()
+
+
 def test_non_conforming_interface_is_an_input_error(shared_dir, capsys):
     # The joint is meshed twice (lines 3 and 8 over the same points): the two bodies
     # share no facet. The groups all exist, so the case loads; building the model finds
@@ -310,7 +350,7 @@ def test_numeric_overrides_round_trip(item):
 
 SECTIONS = {"": Case, "time.": None, "damping.": None, "bodies.mound.": None,
             "contact.interface.": None, "output.": None, "mesh.goda.": None}
-KNOWN = {k.rsplit(".", 1)[-1] for k in _schema_keys(Case)} | {"name"}
+KNOWN = {k.rsplit(".", 1)[-1] for k in schema_keys(Case)} | {"name"}
 
 
 @settings(max_examples=60, deadline=None)
@@ -345,12 +385,26 @@ def test_pendulum_impulse_eq29():
         pendulum_impulse(5.5, 3.393, 0.25, 1.2)
 
 
+def running_impulse(p: Pulse, t: float) -> float:
+    """∫ from −∞ to t of the pulse, from the formulas of its shapes (areas)."""
+    s = min(max((t - p.start) / p.duration, 0.0), 1.0)  # position in the pulse
+    if p.shape == "rectangular":
+        fraction = s
+    elif p.shape == "half-sine":  # ∫₀ˢ (π/2) sin(πσ) dσ
+        fraction = 0.5 * (1.0 - math.cos(math.pi * s))
+    elif s <= p.peak:  # the rising triangle: (s/peak) × s × the peak value 2, halved
+        fraction = s * s / p.peak if p.peak > 0 else 0.0
+    else:  # one minus the falling triangle still to come
+        fraction = 1.0 - (1.0 - s) ** 2 / (1.0 - p.peak)
+    return p.impulse * fraction
+
+
 @pytest.mark.parametrize("shape", ["triangular", "rectangular", "half-sine"])
 @pytest.mark.parametrize("peak", [0.0, 0.3, 0.5, 1.0])
 def test_pulse_integrates_to_the_impulse(shape, peak):
     p = Pulse(13.7, 2e-3, shape, start=1e-3, peak=peak)
     assert p(0.0) == 0.0 and p(3.5e-3) == 0.0
-    assert p.integral(1.0) == pytest.approx(13.7, rel=1e-14)  # exact by construction
+    assert running_impulse(p, 1.0) == pytest.approx(13.7, rel=1e-14)
     # Independent check: composite Simpson on a fine grid (the shapes are smooth between
     # the peak and the ends, which are grid points: error O(h^4) or exact).
     n = 6000
@@ -360,12 +414,12 @@ def test_pulse_integrates_to_the_impulse(shape, peak):
     simpson = h / 3 * sum(wi * p(t) for wi, t in zip(w, ts, strict=True))
     assert simpson == pytest.approx(13.7, rel=1e-6)  # rectangle: end jumps cost O(h)
     assert max(p(t) for t in ts) == pytest.approx(p.maximum, rel=1e-3)
-    # integral() is the running integral of __call__.
+    # The pulse is the derivative of the running integral of its formulas.
     t = p.start + 0.37 * p.duration
     m = 2000
     running = sum(p(p.start + (i + 0.5) * (t - p.start) / m) for i in range(m)) \
         * (t - p.start) / m
-    assert p.integral(t) == pytest.approx(running, rel=1e-5, abs=1e-9)
+    assert running_impulse(p, t) == pytest.approx(running, rel=1e-5, abs=1e-9)
 
 
 def test_triangular_trapezoid_is_exact_on_the_step_grid():
@@ -412,7 +466,12 @@ def test_build_without_calibration(shared_dir):
     (load,) = model.loads
     assert load.spec.direction == (1.0, 0.0)
     amplitude = load.spec.amplitude
-    assert amplitude.integral(1.0) * info["patch_length"] == pytest.approx(
+    # The triangle is linear between its start, peak and end: trapezoids are exact.
+    knots = [amplitude.start, amplitude.start + amplitude.peak * amplitude.duration,
+             amplitude.end]
+    integral = sum(0.5 * (b - a) * (amplitude(a) + amplitude(b))
+                   for a, b in itertools.pairwise(knots))
+    assert integral * info["patch_length"] == pytest.approx(
         case.loads[0].total_impulse / 0.205, rel=1e-12)
     assert extra["mesh"]["cells"]["caisson"] > 0 and "calibration" not in extra
     assert case.resolved()["calibration"]["enabled"] is False

@@ -130,6 +130,19 @@ def test_failed_run_exit_1(shared_dir, monkeypatch, capsys):
         cli.main([*args, "--debug"])
 
 
+def test_run_out_is_a_file_exit_2(shared_dir, capsys):
+    taken = shared_dir / "results.txt"
+    if COMM.rank == 0:
+        taken.write_text("not a folder\n")
+    COMM.barrier()
+    assert cli.main(["run", "--out", str(taken), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err == f"breakwater: error: --out {taken}: not a folder (a file of that " \
+            "name exists)\n"
+    assert taken.read_text() == "not a folder\n"
+
+
 @pytest.mark.serial
 def test_subprocess_errors_and_show_case(tmp_path):
     if COMM.size > 1:

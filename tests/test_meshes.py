@@ -256,3 +256,14 @@ def test_existing_gmsh_session_is_left_alone(shared_dir):
     finally:
         gmsh.finalize()
     assert (shared_dir / "inside.msh").exists()
+
+
+def test_gmsh_session_finalises_on_errors():
+    from breakwater.gmshtools import gmsh_session
+
+    assert not gmsh.isInitialized()
+    with pytest.raises(ZeroDivisionError), gmsh_session({"Mesh.Algorithm": 5}):
+        assert gmsh.isInitialized() and gmsh.option.getNumber("Mesh.Algorithm") == 5
+        assert gmsh.option.getNumber("General.Terminal") == 0  # the default: quiet
+        1 / 0  # noqa: B018
+    assert not gmsh.isInitialized()

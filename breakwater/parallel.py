@@ -1,0 +1,91 @@
+"""Work that one rank does for all: rank 0 acts, every rank gets its result or its error.
+
+Files (meshes, temporary folders, checks of an output folder) are written or read
+by rank 0 alone; the other ranks must then go on with the same result, or stop with
+the same error, or an MPI run hangs or prints a different message per rank.
+:func:`on_rank_zero` is that pattern, once; :func:`shared_tempdir` is a scratch folder
+made by rank 0 and seen by every rank.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import pickle
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
+__all__ = ["on_rank_zero", "shared_tempdir"]
+
+
+def on_rank_zero[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
+    """Run ``action`` on rank 0 of ``comm``; every rank returns its result or raises its error.
+
+    Collective: every rank calls it, and returns only once rank 0 has finished (the
+    broadcast is also a barrier). ``action`` itself must not be collective.
+
+    Args:
+        comm: MPI communicator.
+        action: The work of rank 0 (e.g. writing a file); its result must pickle.
+
+    Returns:
+        The result of ``action``, on every rank.
+
+    Raises:
+        BaseException: What ``action`` raised, on every rank: rank 0 re-raises the
+            original (with its traceback), the others a copy of the same type and
+            message (a ``RuntimeError`` naming the type, when the exception does not
+            pickle).
+
+    """
+    if comm.rank == 0:
+        try:
+            result = action()
+        except BaseException as exc:
+            comm.bcast((False, _portable(exc)), root=0)
+            raise
+        comm.bcast((True, result), root=0)
+        return result
+    ok, payload = comm.bcast(None, root=0)
+    if ok:
+        return payload  # type: ignore[no-any-return]
+    raise _restore(payload)
+
+
+def _portable(exc: BaseException) -> tuple[bytes | None, str]:
+    """The exception pickled (when it survives a round trip) and its one-line text."""
+    text = f"{type(exc).__name__}: {exc}"
+    try:
+        data = pickle.dumps(exc)
+        pickle.loads(data)
+    except Exception:  # e.g. an __init__ with more arguments than args holds
+        return None, text
+    return data, text
+
+
+def _restore(payload: tuple[bytes | None, str]) -> BaseException:
+    data, text = payload
+    if data is None:
+        return RuntimeError(f"failed on rank 0: {text}")
+    exc: BaseException = pickle.loads(data)
+    return exc
+
+
+@contextmanager
+def shared_tempdir(comm: MPI.Comm, prefix: str = "breakwater-") -> Iterator[pathlib.Path]:
+    """A temporary folder made by rank 0, the same path on every rank; removed on exit.
+
+    Collective on entry and exit (the folder is removed once every rank is done).
+    """
+    folder = pathlib.Path(on_rank_zero(comm, lambda: tempfile.mkdtemp(prefix=prefix)))
+    try:
+        yield folder
+    finally:
+        comm.barrier()
+        if comm.rank == 0:
+            shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,58 @@
+"""The rank-0 helpers (breakwater.parallel), serially and on several ranks."""
+
+from __future__ import annotations
+
+import pathlib
+
+import pytest
+from mpi4py import MPI
+
+from breakwater.checkpoint import CheckpointError
+from breakwater.errors import ConvergenceError
+from breakwater.parallel import on_rank_zero, shared_tempdir
+
+COMM = MPI.COMM_WORLD
+
+
+def test_result_of_rank_zero_on_every_rank():
+    ranks = []
+
+    def action() -> tuple[int, str]:
+        ranks.append(COMM.rank)
+        return COMM.rank, "done"
+
+    assert on_rank_zero(COMM, action) == (0, "done")
+    assert ranks == ([0] if COMM.rank == 0 else [])
+
+
+@pytest.mark.parametrize("error", [CheckpointError("no checkpoint in x"),
+                                   ValueError("bad value"), Exception("gmsh: no file")])
+def test_error_of_rank_zero_on_every_rank(error):
+    def action() -> None:
+        raise error
+
+    with pytest.raises(type(error)) as info:
+        on_rank_zero(COMM, action)
+    assert type(info.value) is type(error) and str(info.value) == str(error)
+    assert (info.value is error) == (COMM.rank == 0)  # rank 0: the original
+
+
+def test_error_that_does_not_pickle():
+    # ConvergenceError needs three arguments: a copy cannot be made from its args.
+    def action() -> None:
+        raise ConvergenceError("Newton diverged", -3, 12)
+
+    expected = ConvergenceError if COMM.rank == 0 else RuntimeError
+    with pytest.raises(expected, match="Newton diverged"):
+        on_rank_zero(COMM, action)
+
+
+def test_shared_tempdir():
+    with shared_tempdir(COMM, "breakwater-test-") as folder:
+        assert COMM.allgather(str(folder)) == [str(folder)] * COMM.size
+        assert folder.is_dir() and folder.name.startswith("breakwater-test-")
+        if COMM.rank == 0:
+            (folder / "f.txt").write_text("x")
+        COMM.barrier()
+        assert (folder / "f.txt").read_text() == "x"
+    assert not pathlib.Path(folder).exists()
