@@ -259,7 +259,8 @@ plt.show()
 
 # %%
 comm = MPI.COMM_WORLD
-model, time_spec, output_spec, extra = case.build(comm)
+built = case.build(comm)  # built.case is the case as run, the calibrated G written in
+model, time_spec, output_spec, extra = built
 cal = extra["calibration"]
 G = cal["shear_modulus"]
 print(f"mesh: {extra['mesh']['cells']} six-node triangles (paper: caisson 156, mound 558)")
@@ -301,7 +302,7 @@ print(f"caisson mass {m:.2f} kg: sway period T = {2 * math.pi / ω * 1e3:.1f} ms
 
 # %%
 output_spec = dataclasses.replace(output_spec, progress=False)
-summary = simulation.run(model, time_spec, output_spec, resolved_case=case.resolved(),
+summary = simulation.run(model, time_spec, output_spec, resolved_case=built.case.resolved(),
                          extra_summary=extra)
 print(sorted(p.name for p in OUT.iterdir()))
 

@@ -60,6 +60,7 @@ from mpi4py import MPI
 from breakwater import meshes, simulation
 from breakwater.calibrate import HorizontalStiffness
 from breakwater.case import load_case
+from breakwater.gmshtools import gmsh_session
 from breakwater.meshes import GodaGeometry
 from breakwater.outputs import read_history
 
@@ -75,10 +76,11 @@ def common(folder, figures=False):
 
 def run(case):
     # Build and run a case; its summary (also in <output>/summary.json).
-    model, time_spec, output_spec, extra = case.build(comm)
+    built = case.build(comm)  # built.case: the case as run (calibrated modulus written in)
+    model, time_spec, output_spec, extra = built
     output_spec = dataclasses.replace(output_spec, progress=False)
     return simulation.run(model, time_spec, output_spec,
-                          resolved_case=case.resolved(), extra_summary=extra)
+                          resolved_case=built.case.resolved(), extra_summary=extra)
 
 
 def sway_stiffness(case, shear_modulus):
@@ -263,10 +265,7 @@ def berm_mesh(path, size=0.029 / REFINEMENT):
     H, crest, slope = 0.190, 0.400, 2.0     # mound height, crest, slopes (H per V)
     berm_y, berm_w = 0.080, 0.150           # berm level and width (seaward side)
     w, h, bolt, patch, gauge = 0.205, 0.202, 0.168, 0.010, 0.041  # caisson
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        gmsh.model.add("berm")
+    with gmsh_session(model="berm"):
         geo = gmsh.model.geo
 
         def point(x, y):
@@ -314,8 +313,6 @@ def berm_mesh(path, size=0.029 / REFINEMENT):
             gmsh.model.addPhysicalGroup(dim, entities, name=name)
         gmsh.model.mesh.generate(2)
         gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return path
 
 
