@@ -1,4 +1,4 @@
-"""Interface node pairs and the Newton slip guard."""
+"""Interface node pairs, the nodal contact law and the Newton slip guard."""
 
 from __future__ import annotations
 
@@ -9,6 +9,13 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+import ufl
+from dolfinx import fem, la
+
+from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.errors import MeshError
 from breakwater.gn22 import _guard_slip
 from breakwater.interface import InterfaceNodes
@@ -79,3 +86,85 @@ def test_interface_between_wrong_bodies(stacked):
     with pytest.raises(MeshError, match="physical group 'nope' is not in the mesh"):
         ContactModel(stacked, [Body("a", m), Body("b", m)],
                      [ContactPair("nope", "a", "b", penalty=1e10)])
+
+
+def _interface_values(model: ContactModel, nodes: InterfaceNodes, expr) -> np.ndarray:
+    """Nodal values of a UFL vector on the interface, from the residual's quadrature.
+
+    The interface measure's Gauss–Lobatto points are the slave's P2 nodes, so
+    ``∫ expr·φ_i dS = W_i expr(x_i)`` with ``W_i = ∫ φ_i dS`` for each basis
+    function φ_i of the slave: the ratio is the value the residual uses at node i.
+    """
+    pair = model.pairs[0]
+    w = model.w[pair.slave]("+")
+    ones = ufl.as_vector([1.0] * model.gdim)
+    master = fem.Function(model.bodies[pair.master].V).x.array  # zeros
+    out = []
+    for f in (ufl.dot(expr, w), ufl.dot(ones, w)):
+        b = fem.assemble_vector(model.form(f * pair.dS))
+        b.scatter_reverse(la.InsertMode.add)
+        out.append(nodes.gather(b.array, master)[0])
+    return out[0] / out[1]
+
+
+def test_nodal_law_is_the_residuals_law(stacked):
+    """The nodal contact state (outputs, ledger checks) is the law the residual integrates.
+
+    The same :class:`forms.ContactLaw` evaluated on UFL (assembled with the interface's
+    nodal quadrature) and on the gathered nodal arrays, on a state with closed and
+    open nodes and slip velocities inside and outside the stick band |v_T| < χ.
+    Tolerance 1e-12 of the largest traction: round-off only.
+    """
+    m = Material(2000.0, 0.25, shear_modulus=1e8)
+    χ = 1e-3
+    model = ContactModel(stacked, [Body("a", m), Body("b", m)],
+                         [ContactPair("interface", "a", "b", penalty=1e10, friction=0.4,
+                                      regularisation=χ, gap=2e-8)])
+    nodes = InterfaceNodes(model, model.pairs[0])
+    pair = model.pairs[0]
+    u, v = model.functions("u"), model.functions("v")
+    # Slave a above master b at y = 0.2, x in [-0.1, 0.1]: g_n = 1e-6 x + 2e-8 is
+    # closed for x < -0.02 and open beyond; v_T = 30χ x - 0.2χ runs through the band.
+    u[0].interpolate(lambda x: np.vstack([3e-7 * x[0], 1e-6 * x[0]]))
+    v[0].interpolate(lambda x: np.vstack([30 * χ * x[0], 0.5 + 0 * x[0]]))
+    v[1].interpolate(lambda x: np.vstack([0.2 * χ + 0 * x[0], 0.3 + 0 * x[0]]))
+    state = nodes.contact_state(*(f.x.array for f in u), *(f.x.array for f in v))
+    closed = state["gap"] <= 0
+    speed = np.linalg.norm(state["slip_velocity"], axis=1)
+    assert closed.any() and (~closed).any()
+    assert (closed & (speed < χ)).any() and (closed & (speed > χ)).any()
+    assert np.all(state["pressure"][~closed] == 0)
+    for velocity in (v, None):
+        t_ufl = _interface_values(model, nodes, model.traction(pair, u, velocity))
+        t_nodal = state["pressure"][:, None] * nodes.normal
+        if velocity is not None:
+            t_nodal = t_nodal + state["friction_traction"]
+        scale = np.abs(t_nodal).max()
+        assert scale > 0
+        assert np.allclose(t_ufl, t_nodal, rtol=0, atol=1e-12 * scale)
+    # The ledger's friction power density is the law's −t_T·v_T = μ p |v_T|²/sqrt(|v_T|² + χ²).
+    law = pair.law.values()
+    power = law.friction.power(state["pressure"], state["slip_velocity"])
+    expected = 0.4 * state["pressure"] * speed**2 / np.sqrt(speed**2 + χ**2)
+    assert np.allclose(power, expected, rtol=1e-14, atol=0)
+
+
+def test_law_on_sample_values():
+    """The law's formulas on nodal arrays (SPEC eqs. 7, 12, 14-15), including g_n = 0."""
+    law = forms.ContactLaw(forms.PenaltyContact(2.0, 0.5), forms.RegularisedCoulomb(0.3, 1e-3))
+    n = np.array([[0.0, 1.0]] * 3)
+    u_s = np.array([[0.0, -1.0], [0.0, -0.5], [0.0, 0.25]])
+    gap = law.gap(u_s, np.zeros_like(u_s), n)
+    assert np.array_equal(gap, [-0.5, 0.0, 0.75])
+    p = law.normal.pressure(gap)
+    assert np.array_equal(p, [1.0, 0.0, 0.0])
+    assert np.array_equal(law.normal.closed(gap), [1.0, 1.0, 0.0])
+    assert np.array_equal(law.normal.energy(gap), [0.25, 0.0, 0.0])
+    v_T = np.array([[4e-3, 0.0], [3e-3, 4e-3], [0.0, 0.0]])
+    t_T = law.friction.traction(np.array([1.0, 2.0, 3.0]), v_T)
+    assert np.allclose(t_T, [[-0.3 * 4 / np.sqrt(17), 0.0], [-0.6 * 3 / np.sqrt(26),
+                                                             -0.6 * 4 / np.sqrt(26)], [0, 0]],
+                       rtol=1e-15, atol=0)
+    # the same law with fem.Constant-like parameters reads their values
+    assert forms.ContactLaw.of(ContactPair("i", "a", "b", 2.0, 0.3, 1e-3, 0.5)).values() == law
+
