@@ -17,10 +17,10 @@ from dolfinx import fem, la
 
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.errors import MeshError
-from breakwater.gn22 import _guard_slip
 from breakwater.interface import InterfaceNodes
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, ContactPair, Material
+from breakwater.slipguard import SlipGuard, guard_slip
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -32,7 +32,7 @@ T2 = np.array([[[1.0, 0.0]]])  # tangent of a horizontal interface, master norma
 def test_guard_lands_reversals_at_zero():
     w0 = np.array([[1e-3, 5.0]])  # the normal component (y) must be left alone
     w1 = np.array([[-2e-3, 7.0]])
-    assert np.array_equal(_guard_slip(w0, w1, T2, χ), [[0.0, 7.0]])
+    assert np.array_equal(guard_slip(w0, w1, T2, χ), [[0.0, 7.0]])
 
 
 @pytest.mark.parametrize(("w0", "w1"), [
@@ -43,13 +43,13 @@ def test_guard_lands_reversals_at_zero():
 ])
 def test_guard_keeps_other_steps(w0, w1):
     a, b = np.array([[w0, 0.0]]), np.array([[w1, 0.0]])
-    assert _guard_slip(a, b, T2, χ) is b
+    assert guard_slip(a, b, T2, χ) is b
 
 
 def test_guard_3d_tangent_basis():
     # 3D: master normal +z; tangents x and y. Only the reversing component is zeroed.
     t = np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
-    out = _guard_slip(np.array([[1e-3, 1e-3, 0.0]]), np.array([[-1e-3, 2e-3, 3.0]]), t, χ)
+    out = guard_slip(np.array([[1e-3, 1e-3, 0.0]]), np.array([[-1e-3, 2e-3, 3.0]]), t, χ)
     assert np.allclose(out, [[0.0, 2e-3, 3.0]], rtol=0, atol=1e-15)
 
 
@@ -168,3 +168,27 @@ def test_law_on_sample_values():
     # the same law with fem.Constant-like parameters reads their values
     assert forms.ContactLaw.of(ContactPair("i", "a", "b", 2.0, 0.3, 1e-3, 0.5)).values() == law
 
+
+def test_slip_guard_cuts_the_reversing_slave_step(stacked):
+    """SlipGuard on a model: a Newton step reversing the slip velocity lands it at zero."""
+    m = Material(2000.0, 0.25, shear_modulus=1e8)
+    model = ContactModel(stacked, [Body("a", m), Body("b", m)],
+                         [ContactPair("interface", "a", "b", penalty=1e10, friction=0.5)])
+    nodes = InterfaceNodes(model, model.pairs[0])
+    v, step = model.functions("v"), model.functions("y")
+    v[0].x.array.reshape(-1, 2)[:] = [1e-3, 0.0]       # slave slides at +1 mm/s
+    step[0].x.array.reshape(-1, 2)[:] = [2.0, 7.0]     # v − 1e-3·y: −1 mm/s, a reversal
+    step[1].x.array.reshape(-1, 2)[:] = [0.0, 3.0]
+    before = [f.x.array.copy() for f in step]
+    guard = SlipGuard([nodes])
+    assert guard([f.x.array for f in v], [f.x.array for f in step], 1e-3) == nodes.size
+    ys, ym = nodes.gather(step[0].x.array, step[1].x.array)
+    assert np.allclose(ys, [[1.0, 7.0]] * nodes.size, rtol=0, atol=1e-12)  # lands at v_T = 0
+    assert np.array_equal(ym, np.tile([0.0, 3.0], (nodes.size, 1)))
+    # off the interface the step is untouched
+    interface = np.zeros(before[0].size // 2, bool)
+    interface[nodes._slave[0]] = True
+    assert np.array_equal(step[0].x.array.reshape(-1, 2)[~interface],
+                          before[0].reshape(-1, 2)[~interface])
+    # a second pass finds nothing to cut
+    assert guard([f.x.array for f in v], [f.x.array for f in step], 1e-3) == 0
