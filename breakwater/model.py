@@ -298,6 +298,7 @@ class ContactModel:
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
+        self._solvers = 0  # solvers built on this model (see options_prefix)
 
     # --- set-up -------------------------------------------------------------------
 
@@ -439,6 +440,16 @@ class ContactModel:
     def functions(self, name: str) -> list[fem.Function]:
         """One new zero Function per body, named ``{name}_{body}``."""
         return [fem.Function(b.V, name=f"{name}_{b.spec.name}") for b in self.bodies]
+
+    def options_prefix(self, name: str) -> str:
+        """A new PETSc options prefix ``breakwater_<name>_<k>_`` for a solver of this model.
+
+        ``k`` counts the solvers built on this model, so that each problem has its own
+        prefix, the same on every rank and in every run.
+        """
+        prefix = f"breakwater_{name}_{self._solvers}_"
+        self._solvers += 1
+        return prefix
 
     def form(self, expr: ufl.Form) -> fem.Form:
         """Compile a form over the parent mesh with the bodies' entity maps."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -14,8 +13,6 @@ from petsc4py import PETSc
 
 from .errors import ConvergenceError
 from .model import ContactModel
-
-_prefixes = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -112,7 +109,9 @@ class NewtonSolver:
         model: The contact model (for the entity maps and the boundary conditions).
         F: The residual (a single form with the model's test functions).
         x: The unknowns, one Function per body.
-        name: Options prefix root; each solver gets its own ``petsc_options_prefix``.
+        name: Options prefix root; each solver gets its own ``petsc_options_prefix``,
+            ``breakwater_<name>_<k>_`` with k counted per model
+            (:meth:`~breakwater.model.ContactModel.options_prefix`).
         options: Convergence settings.
         force_scale: Force norm that scales ``options.atol``.
         precheck: Optional line-search pre-check ``(x, y) -> None`` modifying the step.
@@ -144,7 +143,7 @@ class NewtonSolver:
         self.problem = fem_petsc.NonlinearProblem(
             ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, kind="mpi",
             entity_maps=model.entity_maps,
-            petsc_options_prefix=f"breakwater_{name}_{next(_prefixes)}_",
+            petsc_options_prefix=model.options_prefix(name),
             petsc_options=petsc_options)
         self.snes: PETSc.SNES = self.problem.solver
         # The friction law makes the residual jump by orders of magnitude while the
