@@ -143,7 +143,10 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
             δw = forms.tangential_part(model.w[p.slave]("+") - model.w[p.master]("-"), p.n)
             F_t += k_t * ufl.dot(jump, δw) * p.dS
     solver = NewtonSolver(model, F, u, "static", options, _scale(model), jacobian_of=F_t)
-    return u, solver.solve()
+    try:
+        return u, solver.solve()
+    finally:
+        solver.destroy()
 
 
 def _tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
@@ -262,6 +265,13 @@ class GN22:
                 u.x.array, v.x.array, a.x.array, d.x.array, Δt, self.params.beta1,
                 self.params.beta2)
         self.t.value += Δt
+
+    def destroy(self) -> None:
+        """Free the PETSc objects of the Newton solver (collective).
+
+        See :meth:`NewtonSolver.destroy`; the stepper cannot solve afterwards.
+        """
+        self.solver.destroy()
 
     def step(self, dt: float | None = None) -> int:
         """Stage, solve and update one step; returns the Newton iterations."""

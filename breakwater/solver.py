@@ -170,6 +170,21 @@ class NewtonSolver:
         self.floor_accepts += stalled
         return reason
 
+    def destroy(self) -> None:
+        """Free the solver's PETSc objects now (collective: on every rank at once).
+
+        PETSc holds the SNES callbacks, bound to this solver, out of sight of Python's
+        garbage collector, so a solver never destroyed keeps its PETSc objects, and
+        their MPI communicators (MPICH has 2048 per process), until the process ends.
+        Leaving them to the garbage collector instead would destroy them at a
+        different moment on each rank, while the destruction of a parallel matrix and
+        its MUMPS factorisation is collective: the ranks would deadlock.
+        """
+        p = self.problem
+        for obj in (p.solver, p.A, p.b, p.x, p.P_mat):
+            if obj is not None:
+                obj.destroy()
+
     def solve(self) -> int:
         """Solve from the current values of ``x``; return the Newton iterations.
 

@@ -296,3 +296,4 @@ def test_kinematics_written_once(oscillator: Oscillator) -> None:
         assert np.array_equal(stepper.v[i].x.array, v + (dt * a + p.beta1 * dt * d))
         assert np.array_equal(stepper.a[i].x.array, a + d)
     assert float(stepper.t.value) == dt
+    stepper.destroy()

@@ -9,9 +9,11 @@ once the residual has reached round-off.
 
 from __future__ import annotations
 
+import gc
 import math
 import pathlib
 import sys
+import weakref
 
 import numpy as np
 import pytest
@@ -115,8 +117,36 @@ def test_each_solver_has_its_own_options_prefix(folder: pathlib.Path) -> None:
         model = ContactModel(data, bodies, [ContactPair("interface", "a", "b", 5e8)],
                              [Fixed("b_bottom")], gravity=(0.0, -9.81))
         u = model.functions("u")
-        prefixes.append([NewtonSolver(model, model.residual(u), u, name).snes.getOptionsPrefix()
-                         for name in ("static", "static", "gn22")])
+        solvers = [NewtonSolver(model, model.residual(u), u, name)
+                   for name in ("static", "static", "gn22")]
+        prefixes.append([solver.snes.getOptionsPrefix() for solver in solvers])
+        for solver in solvers:
+            solver.destroy()
     assert prefixes[0] == ["breakwater_static_0_", "breakwater_static_1_", "breakwater_gn22_2_"]
     assert prefixes[1] == prefixes[0]
     assert prefixes[0] == COMM.bcast(prefixes[0], root=0)  # the same on every rank
+
+
+def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
+    """destroy() frees a solver's PETSc objects, and then Python can free the solver.
+
+    Without it the SNES keeps the solver's bound callbacks where the garbage collector
+    cannot see them: the solver, its PETSc objects and their MPI communicators live
+    until the process ends.
+    """
+    path = two_rectangles(folder / "freed.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    u = model.functions("u")
+    kept, freed = (NewtonSolver(model, model.residual(u), u, "static") for _ in range(2))
+    refs = [weakref.ref(kept), weakref.ref(freed)]
+    freed.destroy()
+    assert freed.snes.handle == 0 and kept.snes.handle != 0
+    del kept, freed
+    gc.collect()
+    assert refs[1]() is None
+    assert refs[0]() is not None  # the leak destroy() exists for
+    refs[0]().destroy()  # type: ignore[union-attr]
