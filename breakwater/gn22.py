@@ -6,7 +6,8 @@ The unknown of each step is the acceleration increment ``Δa``::
     v₁ = v₀ + Δt a₀ + β₁ Δt Δa
     u₁ = u₀ + Δt v₀ + ½Δt² a₀ + ½β₂ Δt² Δa
 
-and ``M a₁ + C v₁ + K u₁ + f_c(u₁, v₁) = f(t₁)`` is solved for ``Δa`` by Newton. The
+(:func:`gn22_kinematics`, the one place these are written) and
+``M a₁ + C v₁ + K u₁ + f_c(u₁, v₁) = f(t₁)`` is solved for ``Δa`` by Newton. The
 scheme is unconditionally stable for β₂ ≥ β₁ ≥ ½; β₁ = ½ is second-order accurate,
 β₁ > ½ adds numerical damping. Like dolfiny's ``odeint``, the integrator is an object
 (stage, solve, update) whose ``t`` and ``Δt`` are ``fem.Constant`` s, so the forms
@@ -28,6 +29,7 @@ from petsc4py import PETSc
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .interface import InterfaceNodes, interface_nodes
 from .model import ContactModel, _PairData
+from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
 
@@ -54,6 +56,37 @@ class GN22Parameters:
                 f"beta1={self.beta1}, beta2={self.beta2}); set allow_conditional to insist")
         if self.beta1 <= 0 or self.beta2 <= 0:
             raise ValueError("GN22 needs beta1 > 0 and beta2 > 0")
+
+
+def gn22_kinematics(u, v, a, Δa, Δt, β1, β2):
+    """The GN22 update of one step (SPEC eqs. 24-26): ``(u₁, v₁, a₁)`` from Δa.
+
+    ::
+
+        u₁ = u₀ + (Δt v₀ + ½Δt² a₀ + ½β₂ Δt² Δa)
+        v₁ = v₀ + (Δt a₀ + β₁ Δt Δa)
+        a₁ = a₀ + Δa
+
+    Works on UFL expressions (``Δt`` may be a ``fem.Constant``), where it gives the
+    unknowns of the step's residual, and on NumPy arrays (``f.x.array``, ``Δt`` a
+    float), where it gives the accepted state; the increments are added last, so that
+    ``u₀ + Δu`` is the same in-place ``u += Δu`` on arrays.
+
+    Args:
+        u: Displacement u₀.
+        v: Velocity v₀.
+        a: Acceleration a₀.
+        Δa: Acceleration increment (the unknown of the step).
+        Δt: Time step.
+        β1: β₁.
+        β2: β₂.
+
+    Returns:
+        ``(u₁, v₁, a₁)``.
+    """
+    du = Δt * v + 0.5 * Δt**2 * a + 0.5 * β2 * Δt**2 * Δa
+    dv = Δt * a + β1 * Δt * Δa
+    return u + du, v + dv, a + Δa
 
 
 def _scale(model: ContactModel) -> float:
@@ -110,7 +143,10 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
             δw = forms.tangential_part(model.w[p.slave]("+") - model.w[p.master]("-"), p.n)
             F_t += k_t * ufl.dot(jump, δw) * p.dS
     solver = NewtonSolver(model, F, u, "static", options, _scale(model), jacobian_of=F_t)
-    return u, solver.solve()
+    try:
+        return u, solver.solve()
+    finally:
+        solver.destroy()
 
 
 def _tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
@@ -131,7 +167,7 @@ class GN22:
         t0: Initial time (s).
         newton: Newton settings.
         flip_guard: Stop nodal slip velocities from reversing within one Newton step
-            (see :meth:`_precheck`); needed for small χ.
+            (:mod:`breakwater.slipguard`); needed for small χ.
 
     """
 
@@ -145,19 +181,17 @@ class GN22:
         self.dt = fem.Constant(msh, dolfinx.default_scalar_type(dt))
         self.u, self.v, self.a = model.functions("u"), model.functions("v"), model.functions("a")
         self.da = model.functions("da")
-        Δt, β1, β2 = self.dt, p.beta1, p.beta2
-        self.u1 = [u + Δt * v + 0.5 * Δt**2 * a + 0.5 * β2 * Δt**2 * d
-                   for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)]
-        self.v1 = [v + Δt * a + β1 * Δt * d
-                   for v, a, d in zip(self.v, self.a, self.da, strict=True)]
-        self.a1 = [a + d for a, d in zip(self.a, self.da, strict=True)]
+        self.u1, self.v1, self.a1 = (list(x) for x in zip(*(
+            gn22_kinematics(u, v, a, d, self.dt, p.beta1, p.beta2)
+            for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)), strict=True))
         self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
+        self.guard = SlipGuard(self.nodes) if self.nodes else None
         self._y = model.functions("step")
         F = model.residual(self.u1, self.v1, self.a1)
         self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
                                    force_scale=_scale(model),
-                                   precheck=self._precheck if self.nodes else None)
-        self.flips = 0
+                                   precheck=self._precheck if self.guard else None)
+        self.flips = 0  # nodes whose slip reversal the guard cut, over the run
 
     # --- initial state ------------------------------------------------------------
 
@@ -225,12 +259,19 @@ class GN22:
 
     def update(self) -> None:
         """Accept the step: (u, v, a) ← (u₁, v₁, a₁), t ← t + Δt."""
-        Δt, β1, β2 = float(self.dt.value), self.params.beta1, self.params.beta2
+        Δt = float(self.dt.value)
         for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True):
-            u.x.array[:] += Δt * v.x.array + 0.5 * Δt**2 * a.x.array + 0.5 * β2 * Δt**2 * d.x.array
-            v.x.array[:] += Δt * a.x.array + β1 * Δt * d.x.array
-            a.x.array[:] += d.x.array
+            u.x.array[:], v.x.array[:], a.x.array[:] = gn22_kinematics(
+                u.x.array, v.x.array, a.x.array, d.x.array, Δt, self.params.beta1,
+                self.params.beta2)
         self.t.value += Δt
+
+    def destroy(self) -> None:
+        """Free the PETSc objects of the Newton solver (collective).
+
+        See :meth:`NewtonSolver.destroy`; the stepper cannot solve afterwards.
+        """
+        self.solver.destroy()
 
     def step(self, dt: float | None = None) -> int:
         """Stage, solve and update one step; returns the Newton iterations."""
@@ -242,67 +283,21 @@ class GN22:
     # --- Newton safeguard for the regularised friction law ------------------------
 
     def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        """Keep nodal slip velocities from reversing within one Newton step.
+        """SNES line-search pre-check: the slip guard (:mod:`breakwater.slipguard`).
 
-        With χ = 1e-10 the friction law is a step function of the slip velocity: a
-        Newton step that reverses the relative tangential velocity of a node jumps
-        from one branch ``±μp`` to the other, and Newton 2-cycles between stick and
-        slip. For each node whose slip velocity would reverse (and is not already
-        inside the regularisation band, ``|v_T| > χ``), the slave's tangential step
-        is cut so that the node lands at zero slip velocity, where the tangent
-        ``μp/χ`` is exact; Newton then converges to stick or leaves zero on the side
-        the residual asks for. Normal components are untouched. The decision is
-        taken from values gathered on every rank, so it is the same for any
-        partition.
-
-        (Also tried: taking growing slip velocities in ``s = asinh(v/χ)``, where
-        ``φ = tanh s``, to leave the band faster: no fewer iterations on the Goda
-        case, so not kept.)
+        The guard gets the velocities v₁ of the iterate ``x`` and β₁Δt, the change of
+        v₁ per unit Δa, and may cut the step ``y``; its corrections count in
+        :attr:`flips`.
         """
+        assert self.guard is not None
         y.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         fem_petsc.assign(y, self._y)
         fem_petsc.assign(x, self.da)
-        Δt, β1 = float(self.dt.value), self.params.beta1
-        changed = False
-        for nodes in self.nodes:
-            p = nodes.pair
-            s, mm = p.slave, p.master
-            vel = [self.v[i].x.array + Δt * self.a[i].x.array + β1 * Δt * self.da[i].x.array
-                   for i in (s, mm)]
-            vs, vm = nodes.gather(vel[0], vel[1])
-            ys, ym = nodes.gather(self._y[s].x.array, self._y[mm].x.array)
-            w0 = nodes.tangential(vs - vm)
-            w1 = w0 - β1 * Δt * nodes.tangential(ys - ym)  # x_new = x − y
-            w1_new = _guard_slip(w0, w1, nodes.tangents, p.spec.regularisation)
-            fix = np.any(w1_new != w1, axis=1)
-            if not fix.any():
-                continue
-            changed = True
-            self.flips += int(fix.sum())
-            # Slave step with the normal part kept and the tangential part giving w1_new.
-            ys_new = ys - nodes.tangential(ys) + nodes.tangential(ym) + (w0 - w1_new) / (β1 * Δt)
-            nodes.scatter_slave(ys_new, self._y[s].x.array, fix)
-        if changed:
+        Δt, β1, β2 = float(self.dt.value), self.params.beta1, self.params.beta2
+        v1 = [gn22_kinematics(u.x.array, v.x.array, a.x.array, d.x.array, Δt, β1, β2)[1]
+              for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)]
+        corrected = self.guard(v1, [f.x.array for f in self._y], β1 * Δt)
+        if corrected:
+            self.flips += corrected
             fem_petsc.assign(self._y, y)
-
-
-def _guard_slip(w0: np.ndarray, w1: np.ndarray, tangents: np.ndarray, χ: float) -> np.ndarray:
-    """Newton's proposal for nodal slip velocities with reversals landed at zero.
-
-    Args:
-        w0: Current relative tangential velocities, shape (n, gdim).
-        w1: Newton's proposal, shape (n, gdim).
-        tangents: Orthonormal tangent vectors per node, shape (n, gdim - 1, gdim).
-        χ: Regularisation velocity.
-
-    Returns:
-        The corrected proposal: ``w1`` but for the components (in the tangent basis)
-        that change sign from outside the band ``|w| ≤ χ``, which are set to zero.
-    """
-    c0 = np.einsum("nkd,nd->nk", tangents, w0)
-    c1 = np.einsum("nkd,nd->nk", tangents, w1)
-    reverse = (c0 * c1 < 0) & (np.abs(c0) > χ)
-    if not reverse.any():
-        return w1
-    return w1 - np.einsum("nkd,nk->nd", tangents, np.where(reverse, c1, 0.0))

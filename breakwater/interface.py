@@ -15,6 +15,7 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import MeshError
 from .mesh import group_tag
 from .model import ContactModel, _PairData
@@ -142,14 +143,15 @@ class InterfaceNodes:
 
     def tangential(self, v: np.ndarray) -> np.ndarray:
         """Tangential part (I − n⊗n) v of nodal vectors."""
-        return v - np.sum(v * self.normal, axis=1)[:, None] * self.normal
+        return forms.tangential_part(v, self.normal)
 
     def contact_state(self, u_s: np.ndarray, u_m: np.ndarray, v_s: np.ndarray | None = None,
                       v_m: np.ndarray | None = None) -> dict[str, np.ndarray]:
-        """The contact law of :mod:`breakwater.forms` at the nodes (collective).
+        """The pair's contact law (:class:`forms.ContactLaw`) at the nodes (collective).
 
         The nodes are the interface's quadrature points (Gauss–Lobatto), so these are
-        the values the residual uses.
+        the values the residual uses: the same law object, evaluated on the nodal
+        arrays with the current values of its parameters.
 
         Args:
             u_s: Local array of the slave displacement (``f.x.array``).
@@ -164,20 +166,17 @@ class InterfaceNodes:
             (m/s) and ``friction_traction`` −μ p v_T / sqrt(|v_T|² + χ²) on the slave
             (Pa); the last three of shape ``(n, gdim)``.
         """
-        spec = self.pair.spec
+        law = self.pair.law.values()
         us, um = self.gather(u_s, u_m)
-        jump = us - um
-        gap = np.sum(jump * self.normal, axis=1) + spec.gap
-        pressure = spec.penalty * np.maximum(-gap, 0.0)
+        gap = law.gap(us, um, self.normal)
+        pressure = law.normal.pressure(gap)
         if v_s is None or v_m is None:
-            v_T = np.zeros_like(jump)
+            v_T = np.zeros_like(us)
         else:
             vs, vm = self.gather(v_s, v_m)
             v_T = self.tangential(vs - vm)
-        speed = np.sqrt(np.sum(v_T**2, axis=1) + spec.regularisation**2)
-        return {"gap": gap, "pressure": pressure, "slip": self.tangential(jump),
-                "slip_velocity": v_T,
-                "friction_traction": -spec.friction * (pressure / speed)[:, None] * v_T}
+        return {"gap": gap, "pressure": pressure, "slip": self.tangential(us - um),
+                "slip_velocity": v_T, "friction_traction": law.friction.traction(pressure, v_T)}
 
 
 def _tangent_basis(normal: np.ndarray) -> np.ndarray:

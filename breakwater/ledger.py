@@ -66,8 +66,8 @@ class EnergyLedger:
         self._stored = [
             m.form(sum(forms.kinetic_energy(b.ρ, s.v[i], b.dx) for i, b in bodies)),
             m.form(sum(forms.strain_energy(s.u[i], b.λ, b.μ, b.dx) for i, b in bodies)),
-            m.form(sum(forms.penalty_energy(s.u[p.slave]("+"), s.u[p.master]("-"), p.n, p.ε_n,
-                                            p.dS, p.g0) for p in m.pairs))
+            m.form(sum(forms.penalty_energy(p.law, s.u[p.slave]("+"), s.u[p.master]("-"), p.n,
+                                            p.dS) for p in m.pairs))
             if m.pairs else None,
         ]
         self._rayleigh = m.form(sum(forms.rayleigh_power(m.α, m.β, b.ρ, v̄[i], b.λ, b.μ, b.dx)
@@ -79,8 +79,8 @@ class EnergyLedger:
             work += forms.surface_traction(t̄, Δu[ld.body], ld.ds)
         self._work = m.form(work)
         self._friction = [
-            m.form(sum(forms.friction_power(u[p.slave]("+"), u[p.master]("-"), v[p.slave]("+"),
-                                            v[p.master]("-"), p.n, p.ε_n, p.μ, p.χ, p.dS, p.g0)
+            m.form(sum(forms.friction_power(p.law, u[p.slave]("+"), u[p.master]("-"),
+                                            v[p.slave]("+"), v[p.master]("-"), p.n, p.dS)
                        for p in m.pairs))
             if m.pairs else None
             for u, v in ((s.u, s.v), (self.u0, self.v0))]

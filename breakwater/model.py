@@ -112,6 +112,8 @@ class ContactPair:
         regularisation: Regularisation velocity χ (m/s).
         gap: Initial normal gap g_0 (m).
 
+    The law itself is :class:`forms.ContactLaw` (in ``forms/contact.py``), built from
+    these fields by :meth:`forms.ContactLaw.of`.
     """
 
     interface: str
@@ -189,7 +191,13 @@ class _BodyData:
 
 @dataclass
 class _PairData:
-    """What the model builds for one contact pair."""
+    """What the model builds for one contact pair.
+
+    Attributes:
+        law: The contact law (:class:`forms.ContactLaw`) with ``fem.Constant``
+            parameters; ``law.values()`` evaluates it on nodal arrays.
+
+    """
 
     spec: ContactPair
     slave: int
@@ -197,10 +205,12 @@ class _PairData:
     facet_data: np.ndarray
     dS: ufl.Measure
     n: ufl.core.expr.Expr
-    ε_n: fem.Constant
-    μ: fem.Constant
-    χ: fem.Constant
-    g0: fem.Constant
+    law: forms.ContactLaw
+
+    @property
+    def ε_n(self) -> fem.Constant:
+        """The normal penalty (N/m³)."""
+        return self.law.normal.ε_n
 
 
 @dataclass
@@ -288,6 +298,7 @@ class ContactModel:
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
+        self._solvers = 0  # solvers built on this model (see options_prefix)
 
     # --- set-up -------------------------------------------------------------------
 
@@ -326,8 +337,7 @@ class ContactModel:
                          metadata={"quadrature_rule": "GLL", "quadrature_degree": 3})(tag)
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
-        return _PairData(pair, s, m, d, dS, n, c(pair.penalty), c(pair.friction),
-                         c(pair.regularisation), c(pair.gap))
+        return _PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
 
     def _locate(self, group: str) -> tuple[_BodyData, np.ndarray]:
         """The body whose boundary holds a facet group, and its facets in the submesh."""
@@ -403,13 +413,14 @@ class ContactModel:
         return F
 
     def traction(self, pair: _PairData, u: Sequence, v: Sequence | None):
-        """Contact traction on the slave of a pair; frictionless when ``v`` is None."""
+        """Contact traction on the slave of a pair (eq. 23); frictionless when ``v`` is None.
+
+        The law is the pair's :class:`forms.ContactLaw` (see :mod:`forms.contact`).
+        """
         us, um = u[pair.slave]("+"), u[pair.master]("-")
         if v is None:
-            p = forms.penalty_pressure(forms.normal_gap(us, um, pair.n, pair.g0), pair.ε_n)
-            return p * pair.n
-        return forms.contact_traction(us, um, v[pair.slave]("+"), v[pair.master]("-"), pair.n,
-                                      pair.ε_n, pair.μ, pair.χ, pair.g0)
+            return pair.law.traction(us, um, pair.n)
+        return pair.law.traction(us, um, pair.n, v[pair.slave]("+"), v[pair.master]("-"))
 
     def interface_residual(self, u: Sequence, v: Sequence | None = None) -> ufl.Form:
         """Contact terms of every pair; frictionless when ``v`` is None (statics)."""
@@ -429,6 +440,16 @@ class ContactModel:
     def functions(self, name: str) -> list[fem.Function]:
         """One new zero Function per body, named ``{name}_{body}``."""
         return [fem.Function(b.V, name=f"{name}_{b.spec.name}") for b in self.bodies]
+
+    def options_prefix(self, name: str) -> str:
+        """A new PETSc options prefix ``breakwater_<name>_<k>_`` for a solver of this model.
+
+        ``k`` counts the solvers built on this model, so that each problem has its own
+        prefix, the same on every rank and in every run.
+        """
+        prefix = f"breakwater_{name}_{self._solvers}_"
+        self._solvers += 1
+        return prefix
 
     def form(self, expr: ufl.Form) -> fem.Form:
         """Compile a form over the parent mesh with the bodies' entity maps."""

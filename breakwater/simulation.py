@@ -215,8 +215,8 @@ class Monitor:
         self._contact = []
         for p in model.pairs:
             us, um = u[p.slave]("+"), u[p.master]("-")
-            g_n = forms.normal_gap(us, um, p.n, p.g0)
-            pressure = forms.penalty_pressure(g_n, p.ε_n)
+            g_n = p.law.gap(us, um, p.n)
+            pressure = p.law.normal.pressure(g_n)
             traction = model.traction(p, u, v)
             if model.gdim == 2:
                 t = ufl.as_vector((p.n[1], -p.n[0]))
@@ -225,7 +225,7 @@ class Monitor:
                 tangential = ufl.sqrt(ufl.dot(forms.tangential_part(traction, p.n),
                                               forms.tangential_part(traction, p.n)))
             self._contact.append(tuple(model.form(f * p.dS) for f in (
-                ufl.conditional(ufl.le(g_n, 0.0), 1.0, 0.0), pressure, tangential)))
+                p.law.normal.closed(g_n), pressure, tangential)))
         self.columns = ["t", "dt", "newton_iterations"]
         for name, _ in self.probes:
             self.columns += [f"{name}_ux", f"{name}_uy"]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -14,8 +13,6 @@ from petsc4py import PETSc
 
 from .errors import ConvergenceError
 from .model import ContactModel
-
-_prefixes = itertools.count()
 
 
 @dataclass(frozen=True)
@@ -112,7 +109,9 @@ class NewtonSolver:
         model: The contact model (for the entity maps and the boundary conditions).
         F: The residual (a single form with the model's test functions).
         x: The unknowns, one Function per body.
-        name: Options prefix root; each solver gets its own ``petsc_options_prefix``.
+        name: Options prefix root; each solver gets its own ``petsc_options_prefix``,
+            ``breakwater_<name>_<k>_`` with k counted per model
+            (:meth:`~breakwater.model.ContactModel.options_prefix`).
         options: Convergence settings.
         force_scale: Force norm that scales ``options.atol``.
         precheck: Optional line-search pre-check ``(x, y) -> None`` modifying the step.
@@ -144,7 +143,7 @@ class NewtonSolver:
         self.problem = fem_petsc.NonlinearProblem(
             ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, kind="mpi",
             entity_maps=model.entity_maps,
-            petsc_options_prefix=f"breakwater_{name}_{next(_prefixes)}_",
+            petsc_options_prefix=model.options_prefix(name),
             petsc_options=petsc_options)
         self.snes: PETSc.SNES = self.problem.solver
         # The friction law makes the residual jump by orders of magnitude while the
@@ -170,6 +169,21 @@ class NewtonSolver:
             floor=self.floor, stall_its=self.options.stall_its)
         self.floor_accepts += stalled
         return reason
+
+    def destroy(self) -> None:
+        """Free the solver's PETSc objects now (collective: on every rank at once).
+
+        PETSc holds the SNES callbacks, bound to this solver, out of sight of Python's
+        garbage collector, so a solver never destroyed keeps its PETSc objects, and
+        their MPI communicators (MPICH has 2048 per process), until the process ends.
+        Leaving them to the garbage collector instead would destroy them at a
+        different moment on each rank, while the destruction of a parallel matrix and
+        its MUMPS factorisation is collective: the ranks would deadlock.
+        """
+        p = self.problem
+        for obj in (p.solver, p.A, p.b, p.x, p.P_mat):
+            if obj is not None:
+                obj.destroy()
 
     def solve(self) -> int:
         """Solve from the current values of ``x``; return the Newton iterations.

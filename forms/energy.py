@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import ufl
 
-from .contact import friction_traction, normal_gap, penalty_pressure, tangential_part
+from .contact import ContactLaw, tangential_part
 from .elasticity import strain, stress
 
 
@@ -25,10 +25,9 @@ def strain_energy(u, λ, μ, dx: ufl.Measure) -> ufl.Form:
     return 0.5 * ufl.inner(stress(u, λ, μ), strain(u)) * dx
 
 
-def penalty_energy(u_s, u_m, n, ε_n, dS: ufl.Measure, g0=0.0) -> ufl.Form:
+def penalty_energy(law: ContactLaw, u_s, u_m, n, dS: ufl.Measure) -> ufl.Form:
     """Energy stored in the normal penalty, ½ ∫ ε_n ⟨−g_n⟩₊² dS = ½ ∫ p²/ε_n dS."""
-    p = penalty_pressure(normal_gap(u_s, u_m, n, g0), ε_n)
-    return 0.5 * p**2 / ε_n * dS
+    return law.normal.energy(law.gap(u_s, u_m, n)) * dS
 
 
 def rayleigh_power(α, β, ρ, v, λ, μ, dx: ufl.Measure) -> ufl.Form:
@@ -36,11 +35,9 @@ def rayleigh_power(α, β, ρ, v, λ, μ, dx: ufl.Measure) -> ufl.Form:
     return (α * ρ * ufl.dot(v, v) + β * ufl.inner(stress(v, λ, μ), strain(v))) * dx
 
 
-def friction_power(u_s, u_m, v_s, v_m, n, ε_n, μ, χ, dS: ufl.Measure, g0=0.0) -> ufl.Form:
-    """Power dissipated by friction, ∫ μ p |v_T|² / sqrt(|v_T|² + χ²) dS ≥ 0."""
-    p = penalty_pressure(normal_gap(u_s, u_m, n, g0), ε_n)
-    v_T = tangential_part(v_s - v_m, n)
-    return -ufl.dot(friction_traction(p, v_T, μ, χ), v_T) * dS
+def friction_power(law: ContactLaw, u_s, u_m, v_s, v_m, n, dS: ufl.Measure) -> ufl.Form:
+    """Power dissipated by friction, ∫ −t_T·v_T dS ≥ 0 (∫ μ p |v_T|² / sqrt(|v_T|² + χ²) dS)."""
+    return law.friction.power(law.pressure(u_s, u_m, n), tangential_part(v_s - v_m, n)) * dS
 
 
 def external_power(ρ, b, v, dx: ufl.Measure) -> ufl.Form:

@@ -30,7 +30,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.gn22 import GN22, GN22Parameters, solve_static
+from breakwater.gn22 import GN22, GN22Parameters, gn22_kinematics, solve_static
 from breakwater.mesh import group_tag, read_mesh
 from breakwater.model import Body, ContactModel, Fixed, Material
 from breakwater.probes import PointProbe
@@ -259,3 +259,41 @@ def test_single_body_model_steps(oscillator: Oscillator) -> None:
     stepper.initialise()  # from rest and undeformed: a0 = g, then it falls
     assert stepper.step() >= 1
     assert COMM.allreduce(stepper.u[0].x.array[1::2].min(), op=MPI.MIN) < 0
+
+
+def test_kinematics_written_once(oscillator: Oscillator) -> None:
+    """The residual's UFL u₁, v₁, a₁ and the accepted state come from gn22_kinematics.
+
+    On random states: the UFL expressions of the stepper equal the function on arrays
+    to 1e-14 of their L2 norm (round-off of the compiled form), and ``update`` keeps
+    the operation order u₀ + (Δt v₀ + ½Δt² a₀ + ½β₂Δt² Δa) bit for bit (checkpoints
+    resume bit for bit).
+    """
+    model = oscillator.model
+    p = GN22Parameters(0.6, 0.7)
+    dt = 1e-2
+    stepper = GN22(model, dt, p)
+    rng = np.random.default_rng(1 + COMM.rank)
+    for f in (*stepper.u, *stepper.v, *stepper.a, *stepper.da):
+        f.x.array[:] = rng.standard_normal(f.x.array.size)
+        f.x.scatter_forward()
+    arrays = [[f.x.array.copy() for f in fs]
+              for fs in (stepper.u, stepper.v, stepper.a, stepper.da)]
+    expected = [gn22_kinematics(u, v, a, d, dt, p.beta1, p.beta2)
+                for u, v, a, d in zip(*arrays, strict=True)]
+    for k, ufl_values in enumerate((stepper.u1, stepper.v1, stepper.a1)):
+        for i, body in enumerate(model.bodies):
+            ref = fem.Function(body.V)
+            ref.x.array[:] = expected[i][k]
+            err = model.assemble(model.form(ufl.dot(ufl_values[i] - ref, ufl_values[i] - ref)
+                                            * body.dx))
+            norm = model.assemble(model.form(ufl.dot(ref, ref) * body.dx))
+            assert norm > 0 and math.sqrt(err) <= 1e-14 * math.sqrt(norm)
+    stepper.update()
+    for i, (u, v, a, d) in enumerate(zip(*arrays, strict=True)):
+        assert np.array_equal(stepper.u[i].x.array,
+                              u + (dt * v + 0.5 * dt**2 * a + 0.5 * p.beta2 * dt**2 * d))
+        assert np.array_equal(stepper.v[i].x.array, v + (dt * a + p.beta1 * dt * d))
+        assert np.array_equal(stepper.a[i].x.array, a + d)
+    assert float(stepper.t.value) == dt
+    stepper.destroy()

@@ -9,9 +9,11 @@ once the residual has reached round-off.
 
 from __future__ import annotations
 
+import gc
 import math
 import pathlib
 import sys
+import weakref
 
 import numpy as np
 import pytest
@@ -26,7 +28,7 @@ from breakwater.errors import ConvergenceError
 from breakwater.gn22 import solve_static
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
-from breakwater.solver import NewtonOptions, convergence_reason
+from breakwater.solver import NewtonOptions, NewtonSolver, convergence_reason
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -102,3 +104,49 @@ def test_real_solve_ends_at_its_round_off_floor(folder: pathlib.Path) -> None:
         scale = COMM.allreduce(np.abs(b.x.array).max(), op=MPI.MAX)
         err = COMM.allreduce(np.abs(a.x.array - b.x.array).max(), op=MPI.MAX)
         assert err <= 1e-8 * scale
+
+
+def test_each_solver_has_its_own_options_prefix(folder: pathlib.Path) -> None:
+    """Solver prefixes are counted per model: distinct within a model, the same in every run."""
+    path = two_rectangles(folder / "prefix.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    data = read_mesh(path, COMM)
+    bodies = [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+              Body("b", Material(2000.0, 0.25, shear_modulus=3e6))]
+    prefixes = []
+    for _ in range(2):
+        model = ContactModel(data, bodies, [ContactPair("interface", "a", "b", 5e8)],
+                             [Fixed("b_bottom")], gravity=(0.0, -9.81))
+        u = model.functions("u")
+        solvers = [NewtonSolver(model, model.residual(u), u, name)
+                   for name in ("static", "static", "gn22")]
+        prefixes.append([solver.snes.getOptionsPrefix() for solver in solvers])
+        for solver in solvers:
+            solver.destroy()
+    assert prefixes[0] == ["breakwater_static_0_", "breakwater_static_1_", "breakwater_gn22_2_"]
+    assert prefixes[1] == prefixes[0]
+    assert prefixes[0] == COMM.bcast(prefixes[0], root=0)  # the same on every rank
+
+
+def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
+    """destroy() frees a solver's PETSc objects, and then Python can free the solver.
+
+    Without it the SNES keeps the solver's bound callbacks where the garbage collector
+    cannot see them: the solver, its PETSc objects and their MPI communicators live
+    until the process ends.
+    """
+    path = two_rectangles(folder / "freed.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    u = model.functions("u")
+    kept, freed = (NewtonSolver(model, model.residual(u), u, "static") for _ in range(2))
+    refs = [weakref.ref(kept), weakref.ref(freed)]
+    freed.destroy()
+    assert freed.snes.handle == 0 and kept.snes.handle != 0
+    del kept, freed
+    gc.collect()
+    assert refs[1]() is None
+    assert refs[0]() is not None  # the leak destroy() exists for
+    refs[0]().destroy()  # type: ignore[union-attr]
