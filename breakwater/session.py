@@ -1,0 +1,270 @@
+"""The objects of one run and its bookkeeping, between the steps of the time loop.
+
+:class:`Session` builds the GN22 stepper and the objects that measure and write its
+state: from the static equilibrium (:meth:`Session.start`) or from a checkpoint
+(:meth:`Session.restore`). The time loop (:mod:`breakwater.simulation`) steps the
+stepper and calls :meth:`Session.record` after each accepted step (one history row,
+measured by the :class:`~breakwater.monitor.Monitor`), :meth:`Session.checkpoint`,
+and at the end :meth:`Session.finish`. The bookkeeping a checkpoint saves is
+:attr:`Session.state` (:class:`~breakwater.runstate.RunState`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import pathlib
+import time as _time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from dolfinx import fem
+
+from . import files, quality, runstate
+from . import summary as sm
+from .checkpoint import CheckpointError
+from .gn22 import GN22, GN22Parameters, solve_static
+from .interface import InterfaceNodes, interface_nodes
+from .ledger import EnergyLedger
+from .model import ContactModel
+from .monitor import Monitor, interface_state, pair_names
+from .outputs import RunFiles
+from .runspec import OutputSpec, TimeSpec
+from .runstate import RunState
+from .solver import NewtonOptions
+
+__all__ = ["Session"]
+
+log = logging.getLogger("breakwater.simulation")
+
+
+class Session:
+    """One run's stepper, measuring and writing objects, and bookkeeping.
+
+    Args:
+        model: The contact model.
+        time: The time settings.
+        output: The output settings.
+        fingerprint: Identifies the case in checkpoints.
+        extra_summary: Merged into the summary.
+
+    Attributes:
+        state: The bookkeeping a checkpoint saves.
+        rows: The history rows so far (the static state's first).
+        checkpointed: The latest checkpoint written (``summary.json``'s ``checkpoint``).
+
+    """
+
+    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
+                 fingerprint: str, extra_summary: Mapping[str, Any] | None = None) -> None:
+        if not (time.dt > 0 and time.end_time >= 0 and time.max_cutbacks >= 0):
+            raise ValueError(f"invalid time settings: {time}")
+        if output.checkpoint_interval < 0:
+            raise ValueError(f"invalid checkpoint interval {output.checkpoint_interval}")
+        self.model, self.time, self.output = model, time, output
+        self.fingerprint = fingerprint
+        self.extra = dict(extra_summary or {})
+        self.comm = comm = model.comm
+        self.directory = pathlib.Path(comm.bcast(
+            str(pathlib.Path(output.directory).resolve()) if comm.rank == 0 else None, root=0))
+        if comm.rank == 0:
+            self.directory.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        self.wall0 = _time.perf_counter()
+        self.state = RunState.start(time)
+        self.rows: list[dict[str, float]] = []
+        self.checkpointed: dict[str, Any] | None = None
+        self._warned: set[tuple[str, str]] = set()
+        # Built by start() or restore():
+        self.stepper: GN22 | None = None
+        self.nodes: Sequence[InterfaceNodes] = ()
+        self.ledger: EnergyLedger | None = None
+        self.monitor: Monitor | None = None
+        self.peak: sm.PeakSnapshot | None = None
+        self.files: RunFiles | None = None
+
+    def _build(self) -> tuple[GN22, EnergyLedger, Monitor, RunFiles]:
+        """The stepper and the objects measuring and writing its state."""
+        m, time = self.model, self.time
+        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
+                               max_it=time.newton_max_it)
+        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
+        self.stepper = s = GN22(m, time.dt, params, newton=newton)
+        self.nodes = s.nodes or interface_nodes(m)
+        self.ledger = EnergyLedger(s)
+        self.monitor = Monitor(m, s, self.output, self.nodes)
+        self.peak = sm.PeakSnapshot(m, self.monitor.probes.names)
+        self.files = RunFiles(m, self.nodes, pair_names(m), self.directory,
+                              self.output.field_interval)
+        return s, self.ledger, self.monitor, self.files
+
+    def start(self) -> None:
+        """Solve the static equilibrium, start the stepper from it at rest (collective)."""
+        m, st = self.model, self.state
+        log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
+                 m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
+                 len(m.bodies), len(m.pairs))
+        m.set_time(0.0)
+        u_static, st.static_iterations = solve_static(m)
+        log.info("static: %d Newton iterations", st.static_iterations)
+        s, _, monitor, out = self._build()
+        s.initialise(u_static)
+        out.open_history(monitor.columns)
+        out.open_fields()
+        row = self.record(0.0, st.static_iterations)
+        interface = interface_state(m, self.nodes, s.u)
+        st.static = sm.static_summary(m, row, interface, st.static_iterations)
+        st.contact = sm.quality_inputs(m, self.nodes, pair_names(m), s.u, interface)
+        out.write_snapshot(files.STATIC, s.u, interface, 0.0)
+        self.log_quality()
+        out.write_fields(0.0, s.u, s.v)
+
+    def restore(self) -> None:
+        """Continue from the checkpoint of the output folder (collective).
+
+        Nothing in the folder changes until the checkpoint is known to fit.
+
+        Raises:
+            CheckpointError: No checkpoint, another case, a finished run, or a history
+                that does not reach the checkpoint.
+        """
+        m, comm = self.model, self.comm
+        saved = runstate.load(self.directory, self.fingerprint,
+                              [b.spec.name for b in m.bodies], self.time, comm)
+        if saved.mpi_size != comm.size:
+            log.warning("resuming on %d ranks a checkpoint written on %d: the continuation "
+                        "equals the uninterrupted run to round-off, not bit for bit",
+                        comm.size, saved.mpi_size)
+        m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
+        s, ledger, monitor, out = self._build()
+        if saved.columns != monitor.columns:
+            raise CheckpointError("the checkpoint's history columns are not the run's")
+        saved.restore_fields(self.saved_functions())
+        st = self.state = saved.state
+        t = st.step.t
+        s.t.value, s.dt.value = t, st.stepper["dt"]
+        s.flips, s.solver.floor_accepts = st.stepper["flips"], st.stepper["floor_accepts"]
+        ledger.restore(st.ledger)
+        assert self.peak is not None
+        self.peak.time, self.peak.value = st.snapshot["time"], st.snapshot["value"]
+        try:
+            self.rows = out.open_history(monitor.columns, keep_rows=st.history_rows)
+        except (ValueError, OSError) as e:
+            raise CheckpointError(f"cannot resume: {e}") from e
+        if self.rows[-1]["t"] != t:
+            raise CheckpointError(f"cannot resume: the last history row kept (t = "
+                                  f"{self.rows[-1]['t']:.6g} s) is not the checkpoint's "
+                                  f"(t = {t:.6g} s)")
+        st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
+        st.field_parts += out.open_fields(resume=True)
+        self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
+                             "history_rows": st.history_rows}
+        if comm.rank == 0:
+            files.remove_temporaries(self.directory)
+        log.info("resuming from the checkpoint at t = %.6g s (step %d)", t, st.steps)
+        self.log_quality()
+
+    def saved_functions(self) -> list[list[fem.Function]]:
+        """The Functions of each body that a checkpoint saves."""
+        s, ledger, peak = self.stepper, self.ledger, self.peak
+        assert s is not None and ledger is not None and peak is not None
+        return [[s.u[i], s.v[i], s.a[i], ledger.u0[i], ledger.v0[i], peak.u[i]]
+                for i in range(len(self.model.bodies))]
+
+    def checkpoint(self) -> None:
+        """Save the state after the last accepted step (collective)."""
+        s, ledger, peak = self.stepper, self.ledger, self.peak
+        history = self.files.history if self.files is not None else None
+        assert s is not None and ledger is not None and peak is not None
+        assert history is not None
+        history.sync()  # the rows the checkpoint counts are on disk before it
+        saved = dataclasses.replace(
+            self.state, history_rows=history.rows, wall_before=self.wall_time(),
+            stepper={"dt": float(s.dt.value), "flips": s.flips,
+                     "floor_accepts": s.solver.floor_accepts},
+            ledger=ledger.state(), snapshot={"time": peak.time, "value": peak.value})
+        runstate.save(self.directory, self.fingerprint, [b.spec.name for b in self.model.bodies],
+                      history.columns, saved, self.saved_functions(), self.comm)
+        t, steps = self.state.step.t, self.state.steps
+        self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": steps,
+                             "history_rows": history.rows}
+        self.write_summary(self.summary(False, None, "running"))
+        log.debug("checkpoint at t = %.6g s (step %d)", t, steps)
+
+    def discard_checkpoint(self) -> None:
+        """Remove the checkpoint of a finished run (nothing is left to resume)."""
+        if self.comm.rank == 0:
+            (self.directory / files.CHECKPOINT).unlink(missing_ok=True)
+        self.checkpointed = None
+
+    def record(self, dt: float, iterations: int) -> dict[str, float]:
+        """Measure the stepper's state: one history row, written (collective)."""
+        s, ledger, monitor, peak = self.stepper, self.ledger, self.monitor, self.peak
+        assert s is not None and ledger is not None and monitor is not None
+        assert peak is not None and self.files is not None and self.files.history is not None
+        row = monitor.row(dt, iterations, ledger.record().as_dict())
+        self.rows.append(row)
+        self.files.history.append(row)
+        peak.update(row, s.u)
+        return row
+
+    def finish(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """Write the remaining outputs and return the summary (collective)."""
+        s, peak, out = self.stepper, self.peak, self.files
+        if s is not None and out is not None:
+            # The last accepted state, unless already written (or the state is not
+            # the accepted one: a non-finite step is not written).
+            t = self.rows[-1]["t"] if self.rows else None
+            if t is not None and float(s.t.value) == t and self.state.fields_time != t:
+                out.write_fields(t, s.u, s.v)
+            out.close()
+            if peak is not None and peak.time is not None:
+                interface = interface_state(self.model, self.nodes, peak.u)
+                out.write_snapshot(files.SNAPSHOT, peak.u, interface, peak.time)
+        return self.summary(finished, error, status)
+
+    def wall_time(self) -> float:
+        """Wall time of the run so far, earlier parts of a resumed run included (s)."""
+        return self.state.wall_before + _time.perf_counter() - self.wall0
+
+    def write_summary(self, summary: Mapping[str, Any]) -> None:
+        """Write ``summary.json`` (rank 0)."""
+        if self.comm.rank == 0:
+            files.atomic_write_json(self.directory / files.SUMMARY, summary)
+
+    def contact_quality(self, dynamic: bool = True) -> dict[str, quality.ContactQuality]:
+        """The contact quality of each pair; ``dynamic``: with the steps so far."""
+        return sm.contact_quality(self.state.contact, self.rows[1:] if dynamic else [])
+
+    def log_quality(self, dynamic: bool = False) -> None:
+        """Log (rank 0) the warnings of the contact quality not logged yet."""
+        for name, q in self.contact_quality(dynamic).items():
+            for issue, message in zip(q.issues, q.warnings, strict=True):
+                if (name, issue) not in self._warned:
+                    self._warned.add((name, issue))
+                    log.warning("%s", message)
+
+    def summary(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """The summary of the run so far (:func:`~breakwater.summary.run_summary`).
+
+        Args:
+            finished: Whether the end time was reached.
+            error: Why the run stopped early.
+            status: ``running``, ``finished``, ``failed`` or ``interrupted``.
+        """
+        st, s, peak = self.state, self.stepper, self.peak
+        solver = sm.solver_summary(
+            st.steps, st.iterations, st.failed_steps, st.failed_iterations,
+            st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
+            s.solver.floor_accepts if s is not None else 0, self.wall_time())
+        outputs = {"directory": str(self.directory), "history": files.HISTORY,
+                   "fields": [*st.field_parts, *(self.files.field_files if self.files else [])],
+                   "static": files.STATIC,
+                   "snapshot": (files.SNAPSHOT if peak is not None and peak.time is not None
+                                else None)}
+        return sm.run_summary(
+            case_name=self.output.case_name, finished=finished, status=status, error=error,
+            time=self.time, state=st, rows=self.rows,
+            probes=self.monitor.probes if self.monitor is not None else None,
+            contact_quality=self.contact_quality(), solver=solver,
+            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra)
