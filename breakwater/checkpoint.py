@@ -6,10 +6,10 @@ only the latest is kept. It holds
 
 - ``meta``: a JSON document (floats are written with ``repr``, so they read back
   exactly): format version, the fingerprint of the case, the number of MPI ranks,
-  the time, the step-size state (current Δt, halvings, accepted steps since the last
-  change), the summary accumulators, the ledger's cumulative sums, the static
-  summary, and the number of ``history.csv`` rows written at the checkpoint;
-- ``accepted``: the accepted step sizes (the time is their exactly rounded sum);
+  the bodies' names, the history columns, and ``state``, the run's bookkeeping
+  (:class:`~breakwater.runstate.RunState`: the step-size controller with the accepted
+  step sizes, the solver statistics, the static summary, the ledger's cumulative
+  sums, the number of ``history.csv`` rows written at the checkpoint...);
 - per body ``i``: ``x<i>``, the coordinates of the body's nodes (unique within a
   body), and ``state<i>``, the nodal values of every saved Function of that body
   (shape ``(functions, nodes, block size)``), gathered on rank 0.

@@ -35,7 +35,7 @@ from .solver import NewtonOptions
 
 __all__ = ["Session"]
 
-log = logging.getLogger("breakwater.simulation")
+log = logging.getLogger("breakwater.simulation")  # the run's logger: rank 0 only in run()
 
 
 class Session:

@@ -28,7 +28,21 @@ outputs, with ``status: "interrupted"``, and raises :class:`RunInterrupted`; a s
 SIGTERM kills it at once.
 
 Every rank runs the same code (all measurements are collective and give the same
-values on every rank); only rank 0 writes files, logs and prints.
+values on every rank); only rank 0 writes files, logs and prints (the run's logger,
+``breakwater.simulation``, lets only rank 0 log while :func:`run` goes:
+:func:`~breakwater.console.rank_zero_logging`).
+
+This module holds :func:`run` and its time loop; the parts it uses:
+
+- :mod:`breakwater.stepsize`: the step-size control (:class:`~breakwater.stepsize.StepSize`);
+- :mod:`breakwater.session`: the stepper and the objects measuring and writing its
+  state, set up from the static state or from a checkpoint;
+- :mod:`breakwater.monitor`: one history row per step
+  (:class:`~breakwater.monitor.Monitor`, with the probes of :mod:`breakwater.probes`);
+- :mod:`breakwater.runstate`: the bookkeeping a checkpoint saves and restores whole;
+- :mod:`breakwater.summary`: ``summary.json`` and the report, from what the run produced;
+- :mod:`breakwater.outputs` and :mod:`breakwater.files`: the files written;
+- :mod:`breakwater.console`: the progress bar, rank-0 logging, SIGTERM.
 """
 
 from __future__ import annotations

@@ -8,7 +8,9 @@ triangular horizontal pulse on the left face of ``a``. Serial and under MPI.
 from __future__ import annotations
 
 import json
+import logging
 import pathlib
+import re
 import tomllib
 
 import numpy as np
@@ -16,7 +18,7 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater import simulation
+from breakwater import cli, simulation
 from breakwater.errors import BreakwaterError, ConvergenceError
 from breakwater.gn22 import GN22
 from breakwater.ledger import FIELDS
@@ -297,3 +299,66 @@ def test_contact_quality(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
         warned = [r.getMessage() for r in caplog.records if "too soft" in r.getMessage()]
         assert warned and all("suggested ε_n" in w for w in warned)
         assert "contact 'interface'" in capsys.readouterr().out
+
+
+CASE = """\
+name = "blocks"
+[mesh]
+source = "{mesh}"
+[bodies.a]
+density = 2000.0
+poisson = 0.2
+young_modulus = 1e8
+[bodies.b]
+density = 2000.0
+poisson = 0.2
+young_modulus = 1e8
+[contact.interface]
+slave = "a"
+master = "b"
+penalty = 1e10
+friction = 0.6
+[fixed.b_bottom]
+components = [0, 1]
+[loads.push]
+group = "a_left"
+impulse = 100.0
+duration = 0.01
+[time]
+dt = 2e-3
+end_time = 6e-3
+[output]
+figures = false
+field_interval = 0
+"""
+
+
+def test_progress_bar_after_the_log_line(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    # With the bar forced on, "time stepping to ..." is written whole before the bar
+    # is drawn, and the log lines written while it is shown (--verbose: one per step)
+    # go through tqdm.write, each whole on its own line. The bar redraws itself with
+    # carriage returns: the pieces between line ends and carriage returns are checked.
+    case = shared_dir / "blocks.toml"
+    if COMM.rank == 0:
+        case.write_text(CASE.format(mesh=mesh_path))
+    COMM.barrier()
+    capsys.readouterr()
+    assert cli.main(["run", str(case), "--out", str(shared_dir / "out"), "--progress",
+                     "--verbose"]) == 0
+    err = capsys.readouterr().err
+    assert not logging.getLogger("breakwater.simulation").filters  # removed after the run
+    if COMM.rank > 0:
+        assert err == ""  # rank 0 alone logs and draws
+        return
+    pieces = [p for p in re.split(r"[\r\n]", err) if p.strip()]
+    start = [k for k, p in enumerate(pieces) if "time stepping" in p]
+    bar = [k for k, p in enumerate(pieces) if p.startswith("blocks:") and "%|" in p]
+    assert len(start) == 1 and bar, err
+    assert re.fullmatch(r"time stepping to t = 0\.006 s with dt = 0\.002 s", pieces[start[0]])
+    assert start[0] < bar[0]
+    steps = [p for p in pieces if "Newton iterations" in p and "static" not in p]
+    assert len(steps) == 3, err
+    for p in steps:
+        assert re.fullmatch(r"t = \S+ s, dt = 0\.002 s, \d+ Newton iterations", p), p
+    assert bar[-1] > max(k for k, p in enumerate(pieces) if p in steps)
