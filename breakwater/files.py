@@ -14,15 +14,18 @@ import json
 import math
 import os
 import pathlib
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints import this
+    from mpi4py import MPI
+
 __all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "SNAPSHOT", "STATIC", "SUMMARY",
            "atomic_savez", "atomic_write_bytes", "atomic_write_json", "atomic_write_text",
-           "atomic_write_toml", "read_history", "remove_temporaries", "temporary_path",
-           "to_jsonable"]
+           "atomic_write_toml", "make_directory", "outputs_entry", "read_history",
+           "remove_temporaries", "temporary_path", "to_jsonable"]
 
 HISTORY = "history.csv"
 SUMMARY = "summary.json"
@@ -31,6 +34,29 @@ STATIC = "static.npz"
 SNAPSHOT = "snapshot_max_ux.npz"
 FIGURES = "figures"
 CHECKPOINT = "checkpoint.npz"
+
+
+def make_directory(path: str | pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
+    """Create the output folder (rank 0); its absolute path, the same on every rank."""
+    directory = pathlib.Path(comm.bcast(
+        str(pathlib.Path(path).resolve()) if comm.rank == 0 else None, root=0))
+    if comm.rank == 0:
+        directory.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    return directory
+
+
+def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool
+                  ) -> dict[str, Any]:
+    """The ``outputs`` entry of ``summary.json``: the folder and the files of a run.
+
+    Args:
+        directory: The output folder.
+        fields: The ParaView files.
+        snapshot: Whether ``snapshot_max_ux.npz`` is written.
+    """
+    return {"directory": str(directory), "history": HISTORY, "fields": list(fields),
+            "static": STATIC, "snapshot": SNAPSHOT if snapshot else None}
 
 
 def temporary_path(path: pathlib.Path) -> pathlib.Path:

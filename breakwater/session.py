@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import pathlib
 import time as _time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from dolfinx import fem
 
-from . import files, quality, runstate
+from . import files, runstate
 from . import summary as sm
 from .checkpoint import CheckpointError
 from .gn22 import GN22, GN22Parameters, solve_static
@@ -64,12 +63,8 @@ class Session:
         self.model, self.time, self.output = model, time, output
         self.fingerprint = fingerprint
         self.extra = dict(extra_summary or {})
-        self.comm = comm = model.comm
-        self.directory = pathlib.Path(comm.bcast(
-            str(pathlib.Path(output.directory).resolve()) if comm.rank == 0 else None, root=0))
-        if comm.rank == 0:
-            self.directory.mkdir(parents=True, exist_ok=True)
-        comm.barrier()
+        self.comm = model.comm
+        self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
         self.state = RunState.start(time)
         self.rows: list[dict[str, float]] = []
@@ -232,13 +227,14 @@ class Session:
         if self.comm.rank == 0:
             files.atomic_write_json(self.directory / files.SUMMARY, summary)
 
-    def contact_quality(self, dynamic: bool = True) -> dict[str, quality.ContactQuality]:
-        """The contact quality of each pair; ``dynamic``: with the steps so far."""
-        return sm.contact_quality(self.state.contact, self.rows[1:] if dynamic else [])
-
     def log_quality(self, dynamic: bool = False) -> None:
-        """Log (rank 0) the warnings of the contact quality not logged yet."""
-        for name, q in self.contact_quality(dynamic).items():
+        """Log (rank 0) the warnings of the contact quality not logged yet.
+
+        Args:
+            dynamic: Include the largest penetration over the steps so far.
+        """
+        steps = self.rows[1:] if dynamic else []
+        for name, q in sm.contact_quality(self.state.contact, steps).items():
             for issue, message in zip(q.issues, q.warnings, strict=True):
                 if (name, issue) not in self._warned:
                     self._warned.add((name, issue))
@@ -257,14 +253,12 @@ class Session:
             st.steps, st.iterations, st.failed_steps, st.failed_iterations,
             st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
             s.solver.floor_accepts if s is not None else 0, self.wall_time())
-        outputs = {"directory": str(self.directory), "history": files.HISTORY,
-                   "fields": [*st.field_parts, *(self.files.field_files if self.files else [])],
-                   "static": files.STATIC,
-                   "snapshot": (files.SNAPSHOT if peak is not None and peak.time is not None
-                                else None)}
+        outputs = files.outputs_entry(
+            self.directory, [*st.field_parts, *(self.files.field_files if self.files else [])],
+            snapshot=peak is not None and peak.time is not None)
         return sm.run_summary(
             case_name=self.output.case_name, finished=finished, status=status, error=error,
             time=self.time, state=st, rows=self.rows,
             probes=self.monitor.probes if self.monitor is not None else None,
-            contact_quality=self.contact_quality(), solver=solver,
+            contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
             checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra)
