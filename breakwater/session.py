@@ -1,7 +1,8 @@
 """The objects of one run and its bookkeeping, between the steps of the time loop.
 
-:class:`Session` builds the GN22 stepper and the objects that measure and write its
-state: from the static equilibrium (:meth:`Session.start`) or from a checkpoint
+:class:`Stepped` is the GN22 stepper with the objects bound to its state (energy
+ledger, history monitor, peak snapshot, the run's files). :class:`Session` builds it
+from the static equilibrium (:meth:`Session.start`) or from a checkpoint
 (:meth:`Session.restore`). The time loop (:mod:`breakwater.simulation`) steps the
 stepper and calls :meth:`Session.record` after each accepted step (one history row,
 measured by the :class:`~breakwater.monitor.Monitor`), :meth:`Session.checkpoint`,
@@ -13,8 +14,9 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import pathlib
 import time as _time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 from dolfinx import fem
@@ -23,7 +25,7 @@ from . import files, runstate
 from . import summary as sm
 from .checkpoint import CheckpointError
 from .gn22 import GN22, GN22Parameters, solve_static
-from .interface import InterfaceNodes, interface_nodes
+from .interface import interface_nodes
 from .ledger import EnergyLedger
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
@@ -32,13 +34,79 @@ from .runspec import OutputSpec, TimeSpec
 from .runstate import RunState
 from .solver import NewtonOptions
 
-__all__ = ["Session"]
+__all__ = ["Session", "Stepped"]
 
 log = logging.getLogger("breakwater.simulation")  # the run's logger: rank 0 only in run()
 
 
+class Stepped:
+    """The GN22 stepper and the objects bound to its state.
+
+    Args:
+        model: The contact model.
+        time: The time settings (step, GN22 and Newton parameters).
+        output: The probes and the field output interval.
+        directory: The output folder.
+
+    Attributes:
+        stepper: The GN22 stepper.
+        nodes: Interface nodes of every pair.
+        ledger: The energy ledger.
+        monitor: Measures one history row per step.
+        peak: The state at the largest |u_x| of the first probe.
+        files: The files written as the run steps.
+
+    """
+
+    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
+                 directory: pathlib.Path) -> None:
+        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
+                               max_it=time.newton_max_it)
+        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
+        self.stepper = s = GN22(model, time.dt, params, newton=newton)
+        self.nodes = s.nodes or interface_nodes(model)
+        self.ledger = EnergyLedger(s)
+        self.monitor = Monitor(model, s, output, self.nodes)
+        self.peak = sm.PeakSnapshot(model, self.monitor.probes.names)
+        self.files = RunFiles(model, self.nodes, pair_names(model), directory,
+                              output.field_interval)
+
+    def functions(self) -> list[list[fem.Function]]:
+        """The Functions of each body that a checkpoint saves."""
+        s, ledger = self.stepper, self.ledger
+        return [[s.u[i], s.v[i], s.a[i], ledger.u0[i], ledger.v0[i], self.peak.u[i]]
+                for i in range(len(s.u))]
+
+    def record(self, dt: float, iterations: int) -> dict[str, float]:
+        """Measure the stepper's state: one history row, written (collective)."""
+        assert self.files.history is not None
+        row = self.monitor.row(dt, iterations, self.ledger.record().as_dict())
+        self.files.history.append(row)
+        self.peak.update(row, self.stepper.u)
+        return row
+
+    def saved(self, state: RunState, wall_time: float) -> RunState:
+        """A copy of ``state`` with these objects' state, to save in a checkpoint."""
+        s, history = self.stepper, self.files.history
+        assert history is not None
+        return dataclasses.replace(
+            state, history_rows=history.rows, wall_before=wall_time,
+            stepper={"dt": float(s.dt.value), "flips": s.flips,
+                     "floor_accepts": s.solver.floor_accepts},
+            ledger=self.ledger.state(), snapshot={"time": self.peak.time,
+                                                  "value": self.peak.value})
+
+    def resume(self, state: RunState) -> None:
+        """Set these objects' state from a checkpoint's (the nodal values set already)."""
+        s = self.stepper
+        s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
+        s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
+        self.ledger.restore(state.ledger)
+        self.peak.time, self.peak.value = state.snapshot["time"], state.snapshot["value"]
+
+
 class Session:
-    """One run's stepper, measuring and writing objects, and bookkeeping.
+    """One run: its stepped objects and bookkeeping, from set-up to the summary.
 
     Args:
         model: The contact model.
@@ -50,6 +118,7 @@ class Session:
     Attributes:
         state: The bookkeeping a checkpoint saves.
         rows: The history rows so far (the static state's first).
+        stepped: The stepper and its objects (built by :meth:`start` or :meth:`restore`).
         checkpointed: The latest checkpoint written (``summary.json``'s ``checkpoint``).
 
     """
@@ -68,30 +137,9 @@ class Session:
         self.wall0 = _time.perf_counter()
         self.state = RunState.start(time)
         self.rows: list[dict[str, float]] = []
+        self.stepped: Stepped | None = None
         self.checkpointed: dict[str, Any] | None = None
         self._warned: set[tuple[str, str]] = set()
-        # Built by start() or restore():
-        self.stepper: GN22 | None = None
-        self.nodes: Sequence[InterfaceNodes] = ()
-        self.ledger: EnergyLedger | None = None
-        self.monitor: Monitor | None = None
-        self.peak: sm.PeakSnapshot | None = None
-        self.files: RunFiles | None = None
-
-    def _build(self) -> tuple[GN22, EnergyLedger, Monitor, RunFiles]:
-        """The stepper and the objects measuring and writing its state."""
-        m, time = self.model, self.time
-        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
-                               max_it=time.newton_max_it)
-        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
-        self.stepper = s = GN22(m, time.dt, params, newton=newton)
-        self.nodes = s.nodes or interface_nodes(m)
-        self.ledger = EnergyLedger(s)
-        self.monitor = Monitor(m, s, self.output, self.nodes)
-        self.peak = sm.PeakSnapshot(m, self.monitor.probes.names)
-        self.files = RunFiles(m, self.nodes, pair_names(m), self.directory,
-                              self.output.field_interval)
-        return s, self.ledger, self.monitor, self.files
 
     def start(self) -> None:
         """Solve the static equilibrium, start the stepper from it at rest (collective)."""
@@ -102,14 +150,15 @@ class Session:
         m.set_time(0.0)
         u_static, st.static_iterations = solve_static(m)
         log.info("static: %d Newton iterations", st.static_iterations)
-        s, _, monitor, out = self._build()
+        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
+        s, out = x.stepper, x.files
         s.initialise(u_static)
-        out.open_history(monitor.columns)
+        out.open_history(x.monitor.columns)
         out.open_fields()
         row = self.record(0.0, st.static_iterations)
-        interface = interface_state(m, self.nodes, s.u)
+        interface = interface_state(m, x.nodes, s.u)
         st.static = sm.static_summary(m, row, interface, st.static_iterations)
-        st.contact = sm.quality_inputs(m, self.nodes, pair_names(m), s.u, interface)
+        st.contact = sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface)
         out.write_snapshot(files.STATIC, s.u, interface, 0.0)
         self.log_quality()
         out.write_fields(0.0, s.u, s.v)
@@ -131,19 +180,15 @@ class Session:
                         "equals the uninterrupted run to round-off, not bit for bit",
                         comm.size, saved.mpi_size)
         m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
-        s, ledger, monitor, out = self._build()
-        if saved.columns != monitor.columns:
+        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
+        if saved.columns != x.monitor.columns:
             raise CheckpointError("the checkpoint's history columns are not the run's")
-        saved.restore_fields(self.saved_functions())
+        saved.restore_fields(x.functions())
         st = self.state = saved.state
+        x.resume(st)
         t = st.step.t
-        s.t.value, s.dt.value = t, st.stepper["dt"]
-        s.flips, s.solver.floor_accepts = st.stepper["flips"], st.stepper["floor_accepts"]
-        ledger.restore(st.ledger)
-        assert self.peak is not None
-        self.peak.time, self.peak.value = st.snapshot["time"], st.snapshot["value"]
         try:
-            self.rows = out.open_history(monitor.columns, keep_rows=st.history_rows)
+            self.rows = x.files.open_history(x.monitor.columns, keep_rows=st.history_rows)
         except (ValueError, OSError) as e:
             raise CheckpointError(f"cannot resume: {e}") from e
         if self.rows[-1]["t"] != t:
@@ -151,7 +196,7 @@ class Session:
                                   f"{self.rows[-1]['t']:.6g} s) is not the checkpoint's "
                                   f"(t = {t:.6g} s)")
         st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
-        st.field_parts += out.open_fields(resume=True)
+        st.field_parts += x.files.open_fields(resume=True)
         self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
                              "history_rows": st.history_rows}
         if comm.rank == 0:
@@ -159,27 +204,22 @@ class Session:
         log.info("resuming from the checkpoint at t = %.6g s (step %d)", t, st.steps)
         self.log_quality()
 
-    def saved_functions(self) -> list[list[fem.Function]]:
-        """The Functions of each body that a checkpoint saves."""
-        s, ledger, peak = self.stepper, self.ledger, self.peak
-        assert s is not None and ledger is not None and peak is not None
-        return [[s.u[i], s.v[i], s.a[i], ledger.u0[i], ledger.v0[i], peak.u[i]]
-                for i in range(len(self.model.bodies))]
+    def record(self, dt: float, iterations: int) -> dict[str, float]:
+        """Measure the stepper's state: one history row, written (collective)."""
+        assert self.stepped is not None
+        row = self.stepped.record(dt, iterations)
+        self.rows.append(row)
+        return row
 
     def checkpoint(self) -> None:
         """Save the state after the last accepted step (collective)."""
-        s, ledger, peak = self.stepper, self.ledger, self.peak
-        history = self.files.history if self.files is not None else None
-        assert s is not None and ledger is not None and peak is not None
-        assert history is not None
+        x = self.stepped
+        assert x is not None and x.files.history is not None
+        history = x.files.history
         history.sync()  # the rows the checkpoint counts are on disk before it
-        saved = dataclasses.replace(
-            self.state, history_rows=history.rows, wall_before=self.wall_time(),
-            stepper={"dt": float(s.dt.value), "flips": s.flips,
-                     "floor_accepts": s.solver.floor_accepts},
-            ledger=ledger.state(), snapshot={"time": peak.time, "value": peak.value})
         runstate.save(self.directory, self.fingerprint, [b.spec.name for b in self.model.bodies],
-                      history.columns, saved, self.saved_functions(), self.comm)
+                      history.columns, x.saved(self.state, self.wall_time()), x.functions(),
+                      self.comm)
         t, steps = self.state.step.t, self.state.steps
         self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": steps,
                              "history_rows": history.rows}
@@ -192,30 +232,19 @@ class Session:
             (self.directory / files.CHECKPOINT).unlink(missing_ok=True)
         self.checkpointed = None
 
-    def record(self, dt: float, iterations: int) -> dict[str, float]:
-        """Measure the stepper's state: one history row, written (collective)."""
-        s, ledger, monitor, peak = self.stepper, self.ledger, self.monitor, self.peak
-        assert s is not None and ledger is not None and monitor is not None
-        assert peak is not None and self.files is not None and self.files.history is not None
-        row = monitor.row(dt, iterations, ledger.record().as_dict())
-        self.rows.append(row)
-        self.files.history.append(row)
-        peak.update(row, s.u)
-        return row
-
     def finish(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
         """Write the remaining outputs and return the summary (collective)."""
-        s, peak, out = self.stepper, self.peak, self.files
-        if s is not None and out is not None:
+        x = self.stepped
+        if x is not None:
             # The last accepted state, unless already written (or the state is not
             # the accepted one: a non-finite step is not written).
-            t = self.rows[-1]["t"] if self.rows else None
+            s, t = x.stepper, self.rows[-1]["t"] if self.rows else None
             if t is not None and float(s.t.value) == t and self.state.fields_time != t:
-                out.write_fields(t, s.u, s.v)
-            out.close()
-            if peak is not None and peak.time is not None:
-                interface = interface_state(self.model, self.nodes, peak.u)
-                out.write_snapshot(files.SNAPSHOT, peak.u, interface, peak.time)
+                x.files.write_fields(t, s.u, s.v)
+            x.files.close()
+            if x.peak.time is not None:
+                interface = interface_state(self.model, x.nodes, x.peak.u)
+                x.files.write_snapshot(files.SNAPSHOT, x.peak.u, interface, x.peak.time)
         return self.summary(finished, error, status)
 
     def wall_time(self) -> float:
@@ -248,17 +277,18 @@ class Session:
             error: Why the run stopped early.
             status: ``running``, ``finished``, ``failed`` or ``interrupted``.
         """
-        st, s, peak = self.state, self.stepper, self.peak
+        st, x = self.state, self.stepped
+        s = x.stepper if x is not None else None
         solver = sm.solver_summary(
             st.steps, st.iterations, st.failed_steps, st.failed_iterations,
             st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
             s.solver.floor_accepts if s is not None else 0, self.wall_time())
         outputs = files.outputs_entry(
-            self.directory, [*st.field_parts, *(self.files.field_files if self.files else [])],
-            snapshot=peak is not None and peak.time is not None)
+            self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
+            snapshot=x is not None and x.peak.time is not None)
         return sm.run_summary(
             case_name=self.output.case_name, finished=finished, status=status, error=error,
             time=self.time, state=st, rows=self.rows,
-            probes=self.monitor.probes if self.monitor is not None else None,
+            probes=x.monitor.probes if x is not None else None,
             contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
             checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra)

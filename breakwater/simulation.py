@@ -118,8 +118,9 @@ def _check_stop(r: Session, stop: StopSignal) -> None:
 
 def _loop(r: Session, stop: StopSignal) -> None:
     """Step from the state reached to the end time (collective)."""
-    s, st, time, output = r.stepper, r.state, r.time, r.output
-    assert s is not None and r.files is not None
+    x, st, time, output = r.stepped, r.state, r.time, r.output
+    assert x is not None
+    s = x.stepper
     step, interval = st.step, output.checkpoint_interval
     show = output.progress if output.progress is not None else sys.stderr.isatty()
     log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
@@ -155,7 +156,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
             row = r.record(trial, its)
             log.debug("t = %.6g s, dt = %.3g s, %d Newton iterations", row["t"], trial, its)
             if output.field_interval > 0 and st.steps % output.field_interval == 0:
-                r.files.write_fields(row["t"], s.u, s.v)
+                x.files.write_fields(row["t"], s.u, s.v)
                 st.fields_time = row["t"]
             if grew:
                 log.info("t = %.6g s: step size back to dt = %.3g s", row["t"], step.h)
