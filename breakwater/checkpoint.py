@@ -6,10 +6,10 @@ only the latest is kept. It holds
 
 - ``meta``: a JSON document (floats are written with ``repr``, so they read back
   exactly): format version, the fingerprint of the case, the number of MPI ranks,
-  the time, the step-size state (current Δt, halvings, accepted steps since the last
-  change), the summary accumulators, the ledger's cumulative sums, the static
-  summary, and the number of ``history.csv`` rows written at the checkpoint;
-- ``accepted``: the accepted step sizes (the time is their exactly rounded sum);
+  the bodies' names, the history columns, and ``state``, the run's bookkeeping
+  (:class:`~breakwater.runstate.RunState`: the step-size controller with the accepted
+  step sizes, the solver statistics, the static summary, the ledger's cumulative
+  sums, the number of ``history.csv`` rows written at the checkpoint...);
 - per body ``i``: ``x<i>``, the coordinates of the body's nodes (unique within a
   body), and ``state<i>``, the nodal values of every saved Function of that body
   (shape ``(functions, nodes, block size)``), gathered on rank 0.
@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import BreakwaterError
+from .files import CHECKPOINT, SUMMARY, atomic_write_bytes
 
 if TYPE_CHECKING:  # light at import: the command line catches CheckpointError early
     from dolfinx import fem
@@ -47,8 +48,7 @@ __all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_fingerprint", "check
            "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
-CHECKPOINT = "checkpoint.npz"
-FORMAT = 1
+FORMAT = 2
 """Version of the checkpoint layout; a checkpoint of another version is refused."""
 
 _MATCH_TOL = 1e-9
@@ -259,8 +259,6 @@ def write(path: str | pathlib.Path, meta: Mapping[str, Any],
 
     Uncompressed: a checkpoint is written often and read once.
     """
-    from .outputs import atomic_write_bytes
-
     buffer = io.BytesIO()
     np.savez(buffer, meta=np.array(json.dumps({"format": FORMAT, **meta},
                                                default=_json_default)),
@@ -281,8 +279,6 @@ def check(directory: str | pathlib.Path, fingerprint: str | None = None) -> dict
         CheckpointError: No checkpoint, an unreadable one, another format, another
             case, or a run that finished.
     """
-    from .outputs import SUMMARY
-
     directory = pathlib.Path(directory)
     status = None
     with contextlib.suppress(OSError, ValueError, AttributeError):

@@ -31,15 +31,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
-from .outputs import (
-    FIGURES,
-    HISTORY,
-    SNAPSHOT,
-    STATIC,
-    SUMMARY,
-    read_history,
-    temporary_path,
-)
+from .files import FIGURES, HISTORY, SNAPSHOT, STATIC, SUMMARY, read_history, temporary_path
 
 __all__ = ["make_figures"]
 

@@ -1,11 +1,11 @@
-"""Writing the results of a run: atomic files, the step history, fields and snapshots.
+"""Writing the results of a run: the step history, fields and snapshots.
 
 Everything here is written by rank 0 only, except the ParaView fields (VTX/ADIOS2),
 which every rank writes collectively. Small files (``summary.json``, ``case.toml``,
-``.npz`` snapshots, figures) are written to a temporary file beside the target and
-moved into place with :func:`os.replace`, so a reader never sees half a file. The
-step history ``history.csv`` grows during the run: one whole row per write call,
-flushed every step, so it can be read (or plotted) while the run goes on.
+``.npz`` snapshots, figures) are written atomically (:mod:`breakwater.files`, which
+also names the files), so a reader never sees half a file. The step history
+``history.csv`` grows during the run: one whole row per write call, flushed every
+step, so it can be read (or plotted) while the run goes on.
 
 Output files of a run (in the output directory):
 
@@ -31,13 +31,10 @@ did not finish.
 
 from __future__ import annotations
 
-import io
-import json
-import math
 import os
 import pathlib
 from collections.abc import Mapping, Sequence
-from typing import IO, Any
+from typing import IO
 
 import dolfinx
 import numpy as np
@@ -46,95 +43,13 @@ from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .checkpoint import match_nodes
+from .files import HISTORY, atomic_savez, atomic_write_text, read_history
 from .interface import InterfaceNodes
 from .mesh import group_tag
 from .model import ContactModel
 
-HISTORY = "history.csv"
-SUMMARY = "summary.json"
-CASE = "case.toml"
-STATIC = "static.npz"
-SNAPSHOT = "snapshot_max_ux.npz"
-FIGURES = "figures"
-
-
-# --- atomic files -----------------------------------------------------------------
-
-def temporary_path(path: pathlib.Path) -> pathlib.Path:
-    """A temporary name beside ``path`` that keeps its suffix (for savefig/np.savez)."""
-    return path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
-
-
-def atomic_write_bytes(path: str | pathlib.Path, data: bytes) -> pathlib.Path:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
-    path = pathlib.Path(path)
-    tmp = temporary_path(path)
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
-    return path
-
-
-def atomic_write_text(path: str | pathlib.Path, text: str) -> pathlib.Path:
-    """Write text (UTF-8) atomically."""
-    return atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Plain Python types for JSON: numpy scalars and arrays, paths, non-finite floats.
-
-    Non-finite floats become ``None`` (JSON has no NaN).
-    """
-    if isinstance(obj, Mapping):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, np.bool_ | bool):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.floating | float):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, pathlib.PurePath):
-        return str(obj)
-    return obj
-
-
-def atomic_write_json(path: str | pathlib.Path, data: Mapping[str, Any]) -> pathlib.Path:
-    """Write a mapping as indented JSON, atomically."""
-    return atomic_write_text(path, json.dumps(to_jsonable(data), indent=2) + "\n")
-
-
-def atomic_write_toml(path: str | pathlib.Path, data: Mapping[str, Any]) -> pathlib.Path:
-    """Write a mapping as TOML (tomli_w), atomically."""
-    import tomli_w
-
-    return atomic_write_text(path, tomli_w.dumps(_tomlable(data)))
-
-
-def _tomlable(obj: Any) -> Any:
-    """Plain types for tomli_w (numpy scalars, tuples, paths; None values dropped)."""
-    if isinstance(obj, Mapping):
-        return {str(k): _tomlable(v) for k, v in obj.items() if v is not None}
-    if isinstance(obj, list | tuple):
-        return [_tomlable(v) for v in obj]
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, pathlib.PurePath):
-        return str(obj)
-    return obj
-
-
-def atomic_savez(path: str | pathlib.Path, **arrays: np.ndarray) -> pathlib.Path:
-    """``np.savez_compressed`` atomically."""
-    buffer = io.BytesIO()
-    np.savez_compressed(buffer, **arrays)  # type: ignore[arg-type]
-    return atomic_write_bytes(path, buffer.getvalue())
-
+__all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
+           "read_history", "snapshot_arrays"]
 
 # --- step history -----------------------------------------------------------------
 
@@ -224,16 +139,6 @@ class HistoryWriter:
         if self._file is not None:
             self._file.close()
             self._file = None
-
-
-def read_history(path: str | pathlib.Path) -> dict[str, np.ndarray]:
-    """Read a ``history.csv`` into one array per column."""
-    with open(path, encoding="utf-8") as f:
-        header = f.readline().strip().split(",")
-        lines = [line for line in f if line.strip()]
-    data = (np.loadtxt(lines, delimiter=",", ndmin=2) if lines
-            else np.zeros((0, len(header))))
-    return {name: data[:, j] for j, name in enumerate(header)}
 
 
 # --- fields of the bodies ---------------------------------------------------------
@@ -457,56 +362,90 @@ def snapshot_arrays(fields: Sequence[BodyFields], u: Sequence[fem.Function],
     return out
 
 
-# --- on-screen report -------------------------------------------------------------
+class RunFiles:
+    """The files a run writes as it steps: history, ParaView fields, nodal snapshots.
 
-def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> str:
-    """A short human-readable report of a run summary."""
-    s, d, sol = summary.get("static", {}), summary.get("dynamic", {}), summary.get("solver", {})
+    ``history.csv`` gets one row per call, the ParaView files the states given (every
+    ``field_interval`` steps; none when 0), the ``.npz`` snapshots a state each.
 
-    def num(x: Any, fmt: str = ".4g") -> str:
-        return "n/a" if x is None else format(x, fmt)
+    Args:
+        model: The contact model.
+        nodes: Interface nodes of every pair.
+        names: The pairs' names (``contact_<name>.bp``).
+        directory: The output folder.
+        field_interval: Steps between ParaView outputs (0: none).
 
-    reached = num(summary.get("time", {}).get("reached"))
-    lines = [f"breakwater: case '{summary.get('case_name', 'case')}' "
-             + ("finished" if summary.get("finished") else
-                f"INTERRUPTED at t = {reached} s: {summary.get('error')}"
-                if summary.get("status") == "interrupted" else
-                f"FAILED at t = {reached} s: {summary.get('error')}")]
-    if s:
-        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N/m, "
-                     f"weight {num(s.get('weight'))} N/m, mean pressure "
-                     f"{num(s.get('mean_contact_pressure'))} Pa (edge "
-                     f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
-    for name, peak in d.get("peak_ux", {}).items():
-        lines.append(f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
-                     f"{num(peak.get('time'))} s, residual "
-                     f"{num(d.get('residual_ux', {}).get(name))} m")
-    if d.get("residual_slip") is not None:
-        lines.append(f"  residual slip {num(d.get('residual_slip'))} m, max uplift "
-                     f"{num(d.get('max_uplift'))} m")
-    if sol:
-        lines.append(f"  solver: {sol.get('steps')} steps, {sol.get('newton_iterations')} "
-                     f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
-                     f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
-                     f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time")
-        if sol.get("round_off_accepts"):
-            lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
-                         "stalled at round-off (NewtonOptions.floor_atol)")
-    def pct(x: Any) -> str:
-        return "n/a" if x is None else f"{100 * x:.2g}%"
+    """
 
-    for name, q in summary.get("contact_quality", {}).items():
-        ratios = q.get("penalty_h_over_E", {})
-        lines.append(f"  contact '{name}': penetration static "
-                     f"{num(q.get('static_penetration'), '.3g')} m "
-                     f"({pct(q.get('static_penetration_over_h'))} of h, "
-                     f"{pct(q.get('static_penetration_over_settlement'))} of the settlement), "
-                     f"max {num(q.get('dynamic_penetration'), '.3g')} m "
-                     f"({pct(q.get('dynamic_penetration_over_h'))} of h); ε_n h/E "
-                     f"{num(ratios.get('slave'), '.3g')} (slave), "
-                     f"{num(ratios.get('master'), '.3g')} (master): {q.get('verdict')}")
-    e = summary.get("energy", {})
-    if e.get("max_balance_error") is not None:
-        lines.append(f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m")
-    lines.append(f"  outputs: {directory}")
-    return "\n".join(lines)
+    def __init__(self, model: ContactModel, nodes: Sequence[InterfaceNodes],
+                 names: Sequence[str], directory: pathlib.Path, field_interval: int) -> None:
+        self.directory, self.comm, self.interval = directory, model.comm, field_interval
+        self.bodies = [BodyFields(model, i) for i in range(len(model.bodies))]
+        self.interfaces = ([InterfaceFields(model, nd, name)
+                            for nd, name in zip(nodes, names, strict=True)]
+                           if field_interval > 0 else [])
+        self.history: HistoryWriter | None = None
+        self.writer: FieldWriter | None = None
+
+    def open_history(self, columns: Sequence[str], keep_rows: int | None = None
+                     ) -> list[dict[str, float]]:
+        """Start ``history.csv``, or (resume) keep its first ``keep_rows`` rows.
+
+        Returns:
+            The rows kept (see :class:`HistoryWriter`).
+        """
+        self.history = HistoryWriter(self.directory / HISTORY, columns, self.comm, keep_rows)
+        return self.history.kept
+
+    def open_fields(self, resume: bool = False) -> list[str]:
+        """Start the ParaView files (when fields are written); collective.
+
+        Args:
+            resume: Rename the files of the interrupted part first:
+                ``<file>.part<k>.bp`` (a VTX file cannot be appended to).
+
+        Returns:
+            The names of the files set aside.
+        """
+        if self.interval <= 0:
+            return []
+        parts: list[str] = []
+        if resume and self.comm.rank == 0:
+            for filename in [f.filename for f in self.bodies] + \
+                    [f.filename for f in self.interfaces]:
+                path = self.directory / filename
+                if path.exists():
+                    k = 1
+                    while (target := path.with_suffix(f".part{k}.bp")).exists():
+                        k += 1
+                    os.replace(path, target)
+                    parts.append(target.name)
+        parts = self.comm.bcast(parts, root=0)
+        self.comm.barrier()
+        self.writer = FieldWriter(self.bodies, self.interfaces, self.directory, self.comm)
+        return parts
+
+    @property
+    def field_files(self) -> list[str]:
+        """Names of the ParaView files being written."""
+        return [p.name for p in self.writer.paths] if self.writer else []
+
+    def write_fields(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]
+                     ) -> None:
+        """Write the state at ``t`` to the ParaView files, if any (collective)."""
+        if self.writer is not None:
+            self.writer.write(t, u, v)
+
+    def write_snapshot(self, filename: str, u: Sequence[fem.Function],
+                       interface: Mapping[str, np.ndarray], time: float) -> None:
+        """Write the nodal snapshot of the state ``u`` (collective; rank 0 writes)."""
+        arrays = snapshot_arrays(self.bodies, u, interface, time, self.comm)
+        if arrays is not None:
+            atomic_savez(self.directory / filename, **arrays)
+
+    def close(self) -> None:
+        """Close the history and the ParaView files."""
+        if self.history is not None:
+            self.history.close()
+        if self.writer is not None:
+            self.writer.close()

@@ -1,4 +1,10 @@
-"""Point probes: a field of one body evaluated at a point, the same on every rank."""
+"""Probes: fields evaluated at points, the same on every rank.
+
+:class:`PointProbe` evaluates one body's field at a point; :class:`PairProbe` gives
+the slip and opening of a contact interface at a point; :class:`Probes` holds the
+probes of a run (``output.probes`` and ``output.pair_probes``) and gives their history
+columns.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +16,11 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from .errors import MeshError
+from .interface import InterfaceNodes
 from .model import ContactModel
+from .runspec import OutputSpec, PairProbeSpec
+
+__all__ = ["PairProbe", "PointProbe", "Probes"]
 
 
 class PointProbe:
@@ -57,3 +67,103 @@ class PointProbe:
         if comm.rank == self.owner:
             out = f.eval(self.point.reshape(1, 3), np.array([self._cell], np.int32)).ravel()
         return comm.bcast(out, root=self.owner)
+
+
+def _tangent(n: np.ndarray) -> np.ndarray:
+    """2D unit tangent t = (n_y, −n_x): +x on a horizontal interface with n = +y."""
+    return np.array([n[1], -n[0]])
+
+
+class PairProbe:
+    """Slip and opening (slave minus master) at an interface point.
+
+    The normal is the master's outward normal at the nearest interface node;
+    slip is along ``t = (n_y, −n_x)`` in 2D (the tangential magnitude in 3D).
+
+    Args:
+        model: The contact model.
+        spec: The probe's name, contact pair (index) and point.
+        nodes: Interface nodes of every pair.
+
+    """
+
+    KEYS = ("slip", "opening", "slave_ux", "slave_uy", "master_ux", "master_uy")
+
+    def __init__(self, model: ContactModel, spec: PairProbeSpec,
+                 nodes: Sequence[InterfaceNodes]) -> None:
+        if not 0 <= spec.pair < len(model.pairs):
+            raise ValueError(f"pair probe '{spec.name}': no contact pair {spec.pair} "
+                             f"(the model has {len(model.pairs)})")
+        self.name = spec.name
+        pair = model.pairs[spec.pair]
+        self.slave = PointProbe(model, model.bodies[pair.slave].spec.name, spec.point,
+                                f"{spec.name}_slave")
+        self.master = PointProbe(model, model.bodies[pair.master].spec.name, spec.point,
+                                 f"{spec.name}_master")
+        nd = nodes[spec.pair]
+        x = np.zeros(model.gdim)
+        x[:] = np.asarray(spec.point, dtype=float)[: model.gdim]
+        self.normal = nd.normal[np.argmin(np.linalg.norm(nd.x - x, axis=1))]
+        self.gdim = model.gdim
+
+    def value(self, u: Sequence[fem.Function]) -> dict[str, float]:
+        """Slip, opening and both sides' displacements for the state ``u``.
+
+        Returns:
+            Keys ``slip``, ``opening``, ``slave_ux``, ``slave_uy``, ``master_ux``,
+            ``master_uy``.
+        """
+        us, um = self.slave.value(u), self.master.value(u)
+        jump = us - um
+        opening = float(jump @ self.normal)
+        if self.gdim == 2:
+            slip = float(jump @ _tangent(self.normal))
+        else:
+            slip = float(np.linalg.norm(jump - opening * self.normal))
+        return {"slip": slip, "opening": opening,
+                "slave_ux": float(us[0]), "slave_uy": float(us[1]),
+                "master_ux": float(um[0]), "master_uy": float(um[1])}
+
+
+class Probes:
+    """The probes of a run: point probes and interface (pair) probes.
+
+    Columns: ``<probe>_ux``, ``<probe>_uy`` per point probe, then
+    ``<pair probe>_<key>`` per pair probe (keys of :attr:`PairProbe.KEYS`).
+
+    Args:
+        model: The contact model.
+        output: The probes' specifications.
+        nodes: Interface nodes of every pair.
+
+    """
+
+    def __init__(self, model: ContactModel, output: OutputSpec,
+                 nodes: Sequence[InterfaceNodes]) -> None:
+        self.points = [PointProbe(model, p.body, p.point, p.name) for p in output.probes]
+        self.pairs = [PairProbe(model, p, nodes) for p in output.pair_probes]
+        self.columns: list[str] = []
+        for p in self.points:
+            self.columns += [f"{p.name}_ux", f"{p.name}_uy"]
+        for pp in self.pairs:
+            self.columns += [f"{pp.name}_{k}" for k in PairProbe.KEYS]
+
+    @property
+    def names(self) -> list[str]:
+        """Names of the point probes."""
+        return [p.name for p in self.points]
+
+    @property
+    def pair_names(self) -> list[str]:
+        """Names of the pair probes."""
+        return [pp.name for pp in self.pairs]
+
+    def values(self, u: Sequence[fem.Function]) -> dict[str, float]:
+        """The probes' columns for the state ``u`` (collective)."""
+        r: dict[str, float] = {}
+        for p in self.points:
+            value = p.value(u)
+            r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
+        for pp in self.pairs:
+            r.update({f"{pp.name}_{k}": x for k, x in pp.value(u).items()})
+        return r

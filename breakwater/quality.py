@@ -40,7 +40,7 @@ current ε_n is inside the range exactly when the verdict is ``ok``. When the lo
 above the upper one the criteria cannot both hold: refine the mesh at the interface.
 
 Everything here is a pure function of numbers (no dolfinx): the run layer measures
-the inputs (:mod:`breakwater.simulation`).
+the inputs (:class:`PairInputs`, in :mod:`breakwater.summary`).
 """
 
 from __future__ import annotations
@@ -54,6 +54,7 @@ __all__ = [
     "MAX_PENETRATION_OVER_SETTLEMENT",
     "MAX_STIFFNESS_RATIO",
     "ContactQuality",
+    "PairInputs",
     "assess",
     "max_penetration",
     "settlement",
@@ -250,3 +251,37 @@ def assess(name: str, penalty: float, element_size: float,
     return ContactQuality(penalty, h, s, static_penetration, dynamic_penetration,
                           time_of_dynamic_penetration, ratios, tuple(issues), (low, high),
                           tuple(warnings))
+
+
+@dataclass(frozen=True)
+class PairInputs:
+    """The static measures of one contact pair that its quality is assessed from.
+
+    Plain numbers, measured once on the static state and saved with a checkpoint.
+
+    Attributes:
+        name: Pair name, for the messages.
+        penalty: ε_n (N/m³).
+        element_size: Mean interface facet length h (m).
+        young_moduli: Young's moduli (slave, master) (Pa).
+        static_penetration: Largest static penetration (m).
+        settlement: Static settlement (m), see :func:`settlement`.
+    """
+
+    name: str
+    penalty: float
+    element_size: float
+    young_moduli: tuple[float, float]
+    static_penetration: float
+    settlement: float
+
+    def __post_init__(self) -> None:
+        a, b = self.young_moduli  # (a list when read back from JSON)
+        object.__setattr__(self, "young_moduli", (a, b))
+
+    def assess(self, dynamic_penetration: float | None = None,
+               time_of_dynamic_penetration: float | None = None) -> ContactQuality:
+        """The quality of the pair (:func:`assess`), with the dynamic penetration if known."""
+        return assess(self.name, self.penalty, self.element_size, self.young_moduli,
+                      self.static_penetration, self.settlement, dynamic_penetration,
+                      time_of_dynamic_penetration)

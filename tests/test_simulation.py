@@ -7,9 +7,14 @@ triangular horizontal pulse on the left face of ``a``. Serial and under MPI.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import pathlib
+import re
+import sys
 import tomllib
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -56,7 +61,7 @@ def _model(path: pathlib.Path, start: float = 0.0, peak: float = 2e4) -> Contact
 def _output(directory: pathlib.Path, **kwargs) -> OutputSpec:
     return OutputSpec(directory, probes=(ProbeSpec("top", "a", (-0.5 * WIDTH, 2 * HEIGHT)),),
                       pair_probes=(PairProbeSpec("corner", 0, (-0.5 * WIDTH, HEIGHT)),),
-                      progress=False, **kwargs)
+                      **{"progress": False, **kwargs})
 
 
 def _columns() -> list[str]:
@@ -181,13 +186,63 @@ def _check_contact_fields(path: pathlib.Path, h: dict[str, np.ndarray], weight: 
         assert slid  # the pulse (twice μN) makes the block slide
 
 
+@contextlib.contextmanager
+def _log_to_stderr() -> Iterator[None]:
+    """The ``breakwater`` log on stderr, debug level, as the command line's --verbose."""
+    logger = logging.getLogger("breakwater")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    saved = (logger.level, logger.propagate)
+    logger.setLevel(logging.DEBUG)
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(saved[0])
+        logger.propagate = saved[1]
+
+
+def _check_log_and_bar(err: str, steps: int) -> None:
+    """The log lines are whole, and the bar is drawn after "time stepping to ...".
+
+    The line "time stepping to ..." is written before the bar is drawn, and the log
+    lines written while it is shown (a debug line per step, the cut-back warning, the
+    step growing back) go through tqdm.write, each whole on its own line. The bar
+    redraws itself with carriage returns: the pieces between line ends and carriage
+    returns are checked. Only rank 0 logs and draws.
+    """
+    if COMM.rank > 0:
+        assert err == ""
+        return
+    pieces = [p for p in re.split(r"[\r\n]", err) if p.strip()]
+    start = [k for k, p in enumerate(pieces) if "time stepping" in p]
+    bar = [k for k, p in enumerate(pieces) if p.startswith("blocks:") and "%|" in p]
+    assert len(start) == 1 and bar, err
+    assert re.fullmatch(r"time stepping to t = \S+ s with dt = 0\.002 s", pieces[start[0]])
+    assert start[0] < bar[0]
+    during = [k for k, p in enumerate(pieces) if p.startswith("t = ")]
+    patterns = (r"t = \S+ s, dt = \S+ s, \d+ Newton iterations",
+                r"t = \S+ s: .+; retrying with dt = 0\.001 s \(cut-back 1/4\)",
+                r"t = \S+ s: step size back to dt = 0\.002 s")
+    for k in during:
+        assert any(re.fullmatch(p, pieces[k]) for p in patterns), pieces[k]
+    assert [sum(bool(re.fullmatch(p, pieces[k])) for k in during) for p in patterns] == \
+        [steps, 1, 1]
+    assert bar[0] < during[0] and bar[-1] > during[-1]
+    assert not logging.getLogger("breakwater.simulation").filters  # set up by run() only
+
+
 @pytest.mark.parametrize("failure", ["diverged", "nan"])
 def test_cutback_recovers(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
-                          monkeypatch: pytest.MonkeyPatch, failure: str) -> None:
+                          monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+                          failure: str) -> None:
     # Steps starting in [2Δt, 3Δt) fail unless Δt is at most half the nominal step,
     # the same on every rank: Newton diverges, or "converges" to a NaN increment.
     # Expected: one cut-back, GROW_AFTER half steps, then the nominal step again, and
-    # the end time reached exactly.
+    # the end time reached exactly. The progress bar is on, with the log on stderr:
+    # see _check_log_and_bar.
     solve = GN22.solve
 
     def flaky(self: GN22) -> int:
@@ -203,8 +258,12 @@ def test_cutback_recovers(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
     monkeypatch.setattr(GN22, "solve", flaky)
     grow = simulation.GROW_AFTER
     end = 2 * DT + grow * DT / 2 + 2 * DT
-    summary = simulation.run(_model(mesh_path), TimeSpec(dt=DT, end_time=end),
-                             _output(shared_dir, field_interval=0, figures=False))
+    capsys.readouterr()
+    with _log_to_stderr():
+        summary = simulation.run(_model(mesh_path), TimeSpec(dt=DT, end_time=end),
+                                 _output(shared_dir, field_interval=0, figures=False,
+                                         progress=True, case_name="blocks"))
+    _check_log_and_bar(capsys.readouterr().err, steps=2 + grow + 2)
     assert summary["finished"] is True
     assert summary["solver"]["cutbacks"] == 1
     assert summary["solver"]["failed_steps"] == 1

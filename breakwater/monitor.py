@@ -1,0 +1,114 @@
+"""What a run measures after each step: one row of ``history.csv``.
+
+:class:`Monitor` is the one object whose :meth:`Monitor.row` the time loop calls per
+accepted step (and once for the static state); everything the history records is
+measured there. :func:`interface_state` gives the nodal interface data of every
+pair (for the static and peak snapshots).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from . import forms, quality  # type: ignore[attr-defined]
+from .gn22 import GN22
+from .interface import InterfaceNodes
+from .ledger import FIELDS
+from .model import ContactModel
+from .probes import Probes
+from .runspec import OutputSpec
+
+__all__ = ["Monitor", "interface_state", "pair_names"]
+
+
+class Monitor:
+    """Everything measured on the state after each step: one history row.
+
+    Columns: ``t``, ``dt``, ``newton_iterations``; the probes' columns
+    (:class:`~breakwater.probes.Probes`: ``<probe>_ux``, ``<probe>_uy``,
+    ``<pair probe>_<key>``); per contact pair ``k``: ``contact_length_k`` (length
+    where g_n ≤ 0), ``normal_force_k``, ``tangential_force_k`` (resultants on the
+    slave), ``penetration_k`` (largest nodal ⟨−g_n⟩₊, m); the ledger's
+    :data:`~breakwater.ledger.FIELDS`.
+
+    Args:
+        model: The contact model.
+        stepper: The GN22 stepper (its ``u``, ``v`` are measured).
+        output: The probes.
+        nodes: Interface nodes of every pair.
+
+    """
+
+    def __init__(self, model: ContactModel, stepper: GN22, output: OutputSpec,
+                 nodes: Sequence[InterfaceNodes]) -> None:
+        self.model, self.stepper = model, stepper
+        self.nodes = nodes
+        self.probes = Probes(model, output, nodes)
+        u, v = stepper.u, stepper.v
+        self._contact = []
+        for p in model.pairs:
+            us, um = u[p.slave]("+"), u[p.master]("-")
+            g_n = p.law.gap(us, um, p.n)
+            pressure = p.law.normal.pressure(g_n)
+            traction = model.traction(p, u, v)
+            if model.gdim == 2:
+                t = ufl.as_vector((p.n[1], -p.n[0]))
+                tangential = ufl.dot(traction, t)
+            else:
+                tangential = ufl.sqrt(ufl.dot(forms.tangential_part(traction, p.n),
+                                              forms.tangential_part(traction, p.n)))
+            self._contact.append(tuple(model.form(f * p.dS) for f in (
+                p.law.normal.closed(g_n), pressure, tangential)))
+        self.columns = ["t", "dt", "newton_iterations", *self.probes.columns]
+        for k in range(len(model.pairs)):
+            self.columns += [f"contact_length_{k}", f"normal_force_{k}",
+                             f"tangential_force_{k}", f"penetration_{k}"]
+        self.columns += list(FIELDS)
+
+    def row(self, dt: float, iterations: int, energies: Mapping[str, float]) -> dict[str, float]:
+        """The history row of the stepper's current state (collective)."""
+        s = self.stepper
+        r: dict[str, float] = {"t": float(s.t.value), "dt": dt,
+                               "newton_iterations": float(iterations)}
+        r.update(self.probes.values(s.u))
+        for k, compiled in enumerate(self._contact):
+            length, normal, tangential = (self.model.assemble(c) for c in compiled)
+            r[f"contact_length_{k}"] = length
+            r[f"normal_force_{k}"] = normal
+            r[f"tangential_force_{k}"] = tangential
+        for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
+            gap = nd.contact_state(s.u[p.slave].x.array, s.u[p.master].x.array)["gap"]
+            r[f"penetration_{k}"] = quality.max_penetration(gap)
+        r.update({k: float(energies[k]) for k in FIELDS})
+        return r
+
+
+def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
+                    u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+    """Nodal interface data of every pair (same on all ranks; collective).
+
+    Returns:
+        ``pair<k>_x`` node coordinates (sorted), ``pair<k>_normal``, ``pair<k>_gap``
+        (normal gap g_n), ``pair<k>_slip`` (2D: along t = (n_y, −n_x)) and
+        ``pair<k>_pressure`` (ε_n ⟨−g_n⟩₊).
+    """
+    data: dict[str, np.ndarray] = {}
+    for k, (p, nd) in enumerate(zip(model.pairs, nodes, strict=True)):
+        state = nd.contact_state(u[p.slave].x.array, u[p.master].x.array)
+        data[f"pair{k}_x"] = nd.x
+        data[f"pair{k}_normal"] = nd.normal
+        data[f"pair{k}_gap"] = state["gap"]
+        if model.gdim == 2:
+            data[f"pair{k}_slip"] = np.sum(state["slip"] * nd.tangents[:, 0], axis=1)
+        data[f"pair{k}_pressure"] = state["pressure"]
+    return data
+
+
+def pair_names(model: ContactModel) -> list[str]:
+    """Names of the contact pairs: the interface group, or the index where it repeats."""
+    names = [p.spec.interface for p in model.pairs]
+    return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]

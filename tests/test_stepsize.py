@@ -1,0 +1,126 @@
+"""The step-size controller of the time loop (breakwater.stepsize.StepSize).
+
+Sequences of propose / reject / accept with the expected step sizes written out:
+halving on a failed step (of the step tried, also when it was the short last one),
+doubling back after GROW_AFTER accepted steps (never above the nominal Δt), the
+time as the exactly rounded sum of the accepted steps, and the last step landing
+exactly on the end time. Plain numbers: exact comparisons.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import pytest
+
+from breakwater.quality import PairInputs
+from breakwater.runspec import TimeSpec
+from breakwater.runstate import RunState
+from breakwater.stepsize import GROW_AFTER, StepSize
+
+
+def _steps(step: StepSize) -> list[float]:
+    """Accept proposals to the end; the steps taken."""
+    taken = []
+    while not step.finished:
+        taken.append(step.propose())
+        step.accept()
+    return taken
+
+
+def test_lands_exactly_on_the_end() -> None:
+    # 0.35 = 3 × 0.1 + what remains: the last step is the remainder, t the end time.
+    step = StepSize(dt=0.1, end_time=0.35, max_cutbacks=3)
+    taken = _steps(step)
+    assert taken[:3] == [0.1, 0.1, 0.1]
+    assert taken[3] == 0.35 - math.fsum([0.1, 0.1, 0.1])
+    assert step.t == 0.35 and step.accepted == [0.0, *taken]
+    # 0.3 - fsum(0.1, 0.1) is 0.1 less 2 ulp: within 1e-9 Δt of Δt, so the last step is
+    # Δt itself (no sliver step), and t is the end time, not the sum 0.30000000000000004.
+    step = StepSize(dt=0.1, end_time=0.3, max_cutbacks=3)
+    assert _steps(step) == [0.1, 0.1, 0.1]
+    assert step.t == 0.3 and math.fsum(step.accepted) != 0.3
+    # Zero duration: nothing to do.
+    assert StepSize(dt=0.1, end_time=0.0, max_cutbacks=0).finished
+
+
+def test_time_is_the_rounded_sum_of_the_steps() -> None:
+    step = StepSize(dt=0.1, end_time=100.0, max_cutbacks=0)
+    running = 0.0
+    for k in range(1, 500):
+        step.accept()
+        running += 0.1
+        assert step.t == math.fsum([0.1] * k)
+    assert running != step.t  # adding the steps one by one drifts
+
+
+def test_reject_halves_until_no_cutback_is_left() -> None:
+    step = StepSize(dt=1.0, end_time=100.0, max_cutbacks=2)
+    assert step.propose() == 1.0
+    assert step.reject() is True
+    assert (step.h, step.halvings, step.cutbacks, step.min_dt, step.streak) == (0.5, 1, 1, 0.5, 0)
+    assert step.reject() is True
+    assert (step.h, step.halvings, step.cutbacks, step.min_dt) == (0.25, 2, 2, 0.25)
+    before = dataclasses.asdict(step)
+    assert step.reject() is False  # max_cutbacks halvings in effect: nothing changes
+    assert dataclasses.asdict(step) == before
+    assert step.t == 0.0 and step.accepted == [0.0]
+
+
+def test_grows_back_after_grow_after_steps() -> None:
+    step = StepSize(dt=1.0, end_time=100.0, max_cutbacks=3)
+    step.reject()
+    step.reject()  # h = 1/4
+    grown = [step.accept() for _ in range(2 * GROW_AFTER + 3)]
+    # GROW_AFTER steps of 1/4, GROW_AFTER of 1/2, then Δt, never more.
+    expected = [0.25] * GROW_AFTER + [0.5] * GROW_AFTER + [1.0] * 3
+    assert step.accepted[1:] == expected
+    assert grown == ([False] * (GROW_AFTER - 1) + [True]) * 2 + [False] * 3
+    assert (step.h, step.halvings, step.cutbacks, step.min_dt) == (1.0, 0, 2, 0.25)
+    assert step.t == math.fsum(expected)
+    # A failure during the regrowth restarts the count.
+    step.reject()
+    step.accept()
+    step.reject()  # h = 1/4: 2 halvings
+    assert [step.accept() for _ in range(GROW_AFTER)] == [False] * (GROW_AFTER - 1) + [True]
+    assert (step.h, step.halvings, step.streak) == (0.5, 1, 0)
+
+
+def test_cutback_of_the_last_step() -> None:
+    # The short last step (0.5 of Δt = 1) fails: the retry halves the step tried, not
+    # Δt, and the run still ends exactly on the end time.
+    step = StepSize(dt=1.0, end_time=2.5, max_cutbacks=1)
+    step.accept()
+    step.accept()
+    assert step.propose() == 0.5
+    assert step.reject() is True and step.h == 0.25
+    assert _steps(step) == [0.25, 0.25]
+    assert step.t == 2.5 and step.min_dt == 0.25
+
+
+def test_saved_and_restored() -> None:
+    # The controller is plain data: through JSON (as a checkpoint holds it) it goes on
+    # with the same steps, bit for bit.
+    step = StepSize(dt=0.1, end_time=1.234, max_cutbacks=4)
+    step.accept()
+    step.reject()
+    step.accept()
+    copy = StepSize(**json.loads(json.dumps(dataclasses.asdict(step))))
+    assert copy == step
+    assert _steps(copy) == _steps(step) and copy == step and copy.t == 1.234
+
+    # The run state round-trips as a whole; the time settings are the run's own.
+    state = RunState.start(TimeSpec(dt=0.1, end_time=1.234, max_cutbacks=4))
+    state.step = step
+    state.iterations = [3, 4]
+    state.contact = [PairInputs("interface", 1e10, 0.25, (1e8, 2e8), 1e-6, 1e-5)]
+    data = json.loads(json.dumps(state.as_dict()))
+    assert RunState.from_dict(data, TimeSpec(dt=0.1, end_time=1.234, max_cutbacks=4)) == state
+
+
+def test_invalid_settings() -> None:
+    for dt, end, cutbacks in [(0.0, 1.0, 1), (-1.0, 1.0, 1), (0.1, -1.0, 1), (0.1, 1.0, -1)]:
+        with pytest.raises(ValueError, match="invalid time settings"):
+            StepSize(dt=dt, end_time=end, max_cutbacks=cutbacks)
