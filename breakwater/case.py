@@ -34,6 +34,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
+from . import casebuild
 from .errors import CaseError
 from .gmshtools import physical_groups
 from .loads import STANDARD_GRAVITY, Pulse, PulseShape, impact_velocity, pendulum_impulse
@@ -46,7 +47,6 @@ if TYPE_CHECKING:
     from mpi4py import MPI
 
     from .calibrate import CalibrationResult
-    from .casebuild import BuiltCase
     from .model import ContactModel, Material
 
 __all__ = [
@@ -492,33 +492,25 @@ class Case:
     def mesh_file(self, comm: MPI.Comm, directory: str | pathlib.Path | None = None
                   ) -> pathlib.Path:
         """The gmsh ``.msh`` file of the case (see :func:`.casebuild.mesh_file`)."""
-        from .casebuild import mesh_file
-
-        return mesh_file(self, comm, directory)
+        return casebuild.mesh_file(self, comm, directory)
 
     def read_mesh(self, comm: MPI.Comm, directory: str | pathlib.Path | None = None
                   ) -> gmshio.MeshData:
         """Generate (or find) and read the mesh (see :func:`.casebuild.read_mesh`)."""
-        from .casebuild import read_mesh
-
-        return read_mesh(self, comm, directory)
+        return casebuild.read_mesh(self, comm, directory)
 
     def build_model(self, data: gmshio.MeshData,
                     shear_moduli: Mapping[str, float] | None = None,
                     dynamic: bool = True) -> ContactModel:
         """The contact model of the case on a mesh (see :func:`.casebuild.build_model`)."""
-        from .casebuild import build_model
-
-        return build_model(self, data, shear_moduli, dynamic)
+        return casebuild.build_model(self, data, shear_moduli, dynamic)
 
     def calibrate(self, data: gmshio.MeshData, target: float | None = None
                   ) -> CalibrationResult:
         """Calibrate a shear modulus (see :func:`.casebuild.calibrate`)."""
-        from .casebuild import calibrate
+        return casebuild.calibrate(self, data, target)
 
-        return calibrate(self, data, target)
-
-    def build(self, comm: MPI.Comm | None = None) -> BuiltCase:
+    def build(self, comm: MPI.Comm | None = None) -> casebuild.BuiltCase:
         """Mesh, calibrate and build the run's inputs (see :func:`.casebuild.build`).
 
         Returns:
@@ -526,9 +518,7 @@ class Case:
             ``model, time, output, extra``; its ``case`` is the case as run.
 
         """
-        from .casebuild import build
-
-        return build(self, comm)
+        return casebuild.build(self, comm)
 
 
 # --- reading files ------------------------------------------------------------------

@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .parallel import on_rank_zero
+
 if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints import this
     from mpi4py import MPI
 
@@ -38,12 +40,12 @@ CHECKPOINT = "checkpoint.npz"
 
 def make_directory(path: str | pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
     """Create the output folder (rank 0); its absolute path, the same on every rank."""
-    directory = pathlib.Path(comm.bcast(
-        str(pathlib.Path(path).resolve()) if comm.rank == 0 else None, root=0))
-    if comm.rank == 0:
+    def make() -> pathlib.Path:
+        directory = pathlib.Path(path).resolve()
         directory.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
-    return directory
+        return directory
+
+    return on_rank_zero(comm, make)
 
 
 def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool

@@ -47,6 +47,7 @@ from .files import HISTORY, atomic_savez, atomic_write_text, read_history
 from .interface import InterfaceNodes
 from .mesh import group_tag
 from .model import ContactModel
+from .parallel import on_rank_zero
 
 __all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
            "read_history", "snapshot_arrays"]
@@ -84,16 +85,7 @@ class HistoryWriter:
                 self._file = open(self.path, "w", encoding="utf-8", newline="")
                 self._write(",".join(self.columns))
             return
-        kept: list[dict[str, float]] | str = []
-        if comm.rank == 0:
-            try:
-                kept = self._cut(keep_rows)
-            except ValueError as e:
-                kept = str(e)
-        kept = comm.bcast(kept, root=0)
-        if isinstance(kept, str):
-            raise ValueError(kept)
-        self.kept = kept
+        self.kept = on_rank_zero(comm, lambda: self._cut(keep_rows))
         self.rows = keep_rows
         if comm.rank == 0:
             self._file = open(self.path, "a", encoding="utf-8", newline="")
@@ -409,19 +401,20 @@ class RunFiles:
         """
         if self.interval <= 0:
             return []
-        parts: list[str] = []
-        if resume and self.comm.rank == 0:
+        def set_aside() -> list[str]:
+            parts: list[str] = []
             for filename in [f.filename for f in self.bodies] + \
                     [f.filename for f in self.interfaces]:
                 path = self.directory / filename
-                if path.exists():
+                if resume and path.exists():
                     k = 1
                     while (target := path.with_suffix(f".part{k}.bp")).exists():
                         k += 1
                     os.replace(path, target)
                     parts.append(target.name)
-        parts = self.comm.bcast(parts, root=0)
-        self.comm.barrier()
+            return parts
+
+        parts = on_rank_zero(self.comm, set_aside)
         self.writer = FieldWriter(self.bodies, self.interfaces, self.directory, self.comm)
         return parts
 

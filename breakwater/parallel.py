@@ -80,7 +80,8 @@ def _restore(payload: tuple[bytes | None, str]) -> BaseException:
 def shared_tempdir(comm: MPI.Comm, prefix: str = "breakwater-") -> Iterator[pathlib.Path]:
     """A temporary folder made by rank 0, the same path on every rank; removed on exit.
 
-    Collective on entry and exit (the folder is removed once every rank is done).
+    Collective on entry and exit: the folder is removed once every rank is done, and
+    it is gone on every rank when the block is left.
     """
     folder = pathlib.Path(on_rank_zero(comm, lambda: tempfile.mkdtemp(prefix=prefix)))
     try:
@@ -89,3 +90,4 @@ def shared_tempdir(comm: MPI.Comm, prefix: str = "breakwater-") -> Iterator[path
         comm.barrier()
         if comm.rank == 0:
             shutil.rmtree(folder, ignore_errors=True)
+        comm.barrier()

@@ -23,6 +23,7 @@ from mpi4py import MPI
 
 from . import checkpoint as ckpt
 from .checkpoint import CheckpointError
+from .parallel import on_rank_zero
 from .quality import PairInputs
 from .runspec import TimeSpec
 from .stepsize import StepSize
@@ -141,15 +142,7 @@ def load(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str], time:
     Raises:
         CheckpointError: No checkpoint, another case, a finished run, or other bodies.
     """
-    problem = None
-    if comm.rank == 0:
-        try:
-            ckpt.check(directory, fingerprint)
-        except CheckpointError as e:
-            problem = str(e)
-    problem = comm.bcast(problem, root=0)
-    if problem is not None:
-        raise CheckpointError(problem)
+    on_rank_zero(comm, lambda: ckpt.check(directory, fingerprint))
     meta, arrays = ckpt.read(directory / ckpt.CHECKPOINT, fingerprint)
     if meta["bodies"] != list(bodies):
         raise CheckpointError(f"the checkpoint's bodies {meta['bodies']} are not the "

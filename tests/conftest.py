@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import pathlib
+import sys
 
 import pytest
 from mpi4py import MPI
@@ -18,6 +19,13 @@ def pytest_configure(config: pytest.Config) -> None:
         reporter = config.pluginmanager.getplugin("terminalreporter")
         if reporter is not None:
             config.pluginmanager.unregister(reporter)
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """A failure on a rank other than 0 (whose report is silenced) is shown all the same."""
+    if MPI.COMM_WORLD.rank > 0 and report.failed:
+        sys.stderr.write(f"\n[rank {MPI.COMM_WORLD.rank}] FAILED {report.nodeid} "
+                         f"({report.when})\n{report.longreprtext}\n")
 
 
 @pytest.fixture(autouse=True)
