@@ -54,7 +54,6 @@ __all__ = [
     "BodyCase",
     "CalibrationCase",
     "Case",
-    "CaseError",
     "ContactCase",
     "DampingCase",
     "FixedCase",
