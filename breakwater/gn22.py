@@ -27,6 +27,7 @@ from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .condensed import CondensedNewton
 from .interface import InterfaceNodes, interface_nodes
 from .model import ContactModel, _PairData
 from .slipguard import SlipGuard
@@ -168,12 +169,19 @@ class GN22:
         newton: Newton settings.
         flip_guard: Stop nodal slip velocities from reversing within one Newton step
             (:mod:`breakwater.slipguard`); needed for small χ.
+        solver: ``"fast"``: the bulk factorised once per Δt and Newton on the contact
+            surfaces only (:mod:`breakwater.condensed`); ``"reference"``: Newton on the
+            whole residual, assembled and factorised at every iteration.
 
     """
 
+    SOLVERS = ("fast", "reference")
+
     def __init__(self, model: ContactModel, dt: float, parameters: GN22Parameters | None = None,
                  t0: float = 0.0, newton: NewtonOptions | None = None,
-                 flip_guard: bool = True) -> None:
+                 flip_guard: bool = True, solver: str = "fast") -> None:
+        if solver not in self.SOLVERS:
+            raise ValueError(f"solver must be one of {', '.join(self.SOLVERS)} (got {solver!r})")
         self.model = model
         self.params = p = parameters or GN22Parameters()
         msh = model.mesh
@@ -186,12 +194,20 @@ class GN22:
             for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)), strict=True))
         self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
         self.guard = SlipGuard(self.nodes) if self.nodes else None
-        self._y = model.functions("step")
-        F = model.residual(self.u1, self.v1, self.a1)
-        self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
-                                   force_scale=_scale(model),
-                                   precheck=self._precheck if self.guard else None)
         self.flips = 0  # nodes whose slip reversal the guard cut, over the run
+        self.solver: NewtonSolver | CondensedNewton
+        if solver == "fast":
+            self.solver = CondensedNewton(
+                model, (self.u, self.v, self.a, self.da), self.dt, p.beta1, p.beta2,
+                model.interface_residual(self.u1, self.v1) if model.pairs else None,
+                newton, force_scale=_scale(model),
+                guard=self._guard_counted if self.guard else None)
+        else:
+            self._y = model.functions("step")
+            F = model.residual(self.u1, self.v1, self.a1)
+            self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
+                                       force_scale=_scale(model),
+                                       precheck=self._precheck if self.guard else None)
 
     # --- initial state ------------------------------------------------------------
 
@@ -281,6 +297,14 @@ class GN22:
         return its
 
     # --- Newton safeguard for the regularised friction law ------------------------
+
+    def _guard_counted(self, v: Sequence[np.ndarray], step: Sequence[np.ndarray],
+                       dv_dx: float) -> int:
+        """The slip guard, its corrections counted in :attr:`flips`."""
+        assert self.guard is not None
+        corrected = self.guard(v, step, dv_dx)
+        self.flips += corrected
+        return corrected
 
     def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
         """SNES line-search pre-check: the slip guard (:mod:`breakwater.slipguard`).

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import pathlib
 from dataclasses import dataclass
+from typing import Literal
 
 from .schema import InvalidField, positive, setting
 
@@ -45,6 +46,10 @@ class PairProbeSpec:
     point: tuple[float, ...]
 
 
+Solver = Literal["fast", "reference"]
+"""The GN22 step solvers (:class:`breakwater.gn22.GN22`'s ``solver``)."""
+
+
 @dataclass(frozen=True)
 class TimeSpec:
     """``[time]``: GN22 time integration and Newton settings.
@@ -72,6 +77,10 @@ class TimeSpec:
     newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
                                  "the load-vector norm")
     newton_max_it: int = setting(40, doc="Newton iterations per step")
+    solver: Solver = setting("fast", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
+                             'on the contact surfaces only; "reference": Newton on the whole '
+                             "residual, refactorised every iteration (the same results to "
+                             "round-off, ≈10× slower)")
 
     def __post_init__(self) -> None:
         positive(self.dt, "dt")

@@ -54,6 +54,9 @@ class RunState:
         ledger: (Saved copy) The energy ledger's state
             (:meth:`~breakwater.ledger.EnergyLedger.state`).
         snapshot: (Saved copy) ``time`` and ``value`` of the peak snapshot.
+        time_loop: Wall time of the time loop (``wall``, s) and of its parts: ``outputs``
+            (history rows, ledger, fields, checkpoints) and, for the fast solver, the
+            parts of :class:`~breakwater.condensed.Timings`; summed over resumed parts.
 
     """
 
@@ -73,6 +76,7 @@ class RunState:
     stepper: dict[str, Any] = field(default_factory=dict)
     ledger: dict[str, Any] = field(default_factory=dict)
     snapshot: dict[str, Any] = field(default_factory=dict)
+    time_loop: dict[str, float] = field(default_factory=dict)
 
     @classmethod
     def start(cls, time: TimeSpec) -> RunState:

@@ -63,7 +63,7 @@ class Stepped:
         newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
                                max_it=time.newton_max_it)
         params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
-        self.stepper = s = GN22(model, time.dt, params, newton=newton)
+        self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=time.solver)
         self.nodes = s.nodes or interface_nodes(model)
         self.ledger = EnergyLedger(s)
         self.monitor = Monitor(model, s, output, self.nodes)
@@ -287,7 +287,8 @@ class Session:
         solver = sm.solver_summary(
             st.steps, st.iterations, st.failed_steps, st.failed_iterations,
             st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
-            s.solver.floor_accepts if s is not None else 0, self.wall_time())
+            s.solver.floor_accepts if s is not None else 0, self.wall_time(),
+            kind=self.time.solver, time_loop=st.time_loop)
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None)

@@ -50,6 +50,7 @@ from __future__ import annotations
 import logging
 import signal
 import sys
+import time as _time
 from collections.abc import Mapping
 from typing import Any
 
@@ -116,6 +117,37 @@ def _check_stop(r: Session, stop: StopSignal) -> None:
                 + (" (continue with --resume)" if saved else ""))
 
 
+class _LoopClock:
+    """Wall time of the time loop and of its parts, kept in the run state.
+
+    The solver's own parts (:class:`~breakwater.condensed.Timings`) are folded in at
+    checkpoints and at the end, so that a resumed run sums them over its parts.
+    """
+
+    def __init__(self, times: dict[str, float], solver_timings: Any) -> None:
+        self.times, self.solver = times, solver_timings
+        self._mark = 0.0
+
+    def add(self, key: str, seconds: float) -> None:
+        self.times[key] = self.times.get(key, 0.0) + seconds
+
+    def fold(self) -> None:
+        now = _time.perf_counter()
+        self.add("wall", now - self._mark)
+        self._mark = now
+        if self.solver is not None:
+            for key, seconds in self.solver.seconds.items():
+                self.add(key, seconds)
+                self.solver.seconds[key] = 0.0
+
+    def __enter__(self) -> _LoopClock:
+        self._mark = _time.perf_counter()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.fold()
+
+
 def _loop(r: Session, stop: StopSignal) -> None:
     """Step from the state reached to the end time (collective)."""
     x, st, time, output = r.stepped, r.state, r.time, r.output
@@ -124,8 +156,9 @@ def _loop(r: Session, stop: StopSignal) -> None:
     step, interval = st.step, output.checkpoint_interval
     show = output.progress if output.progress is not None else sys.stderr.isatty()
     log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
+    clock = _LoopClock(st.time_loop, getattr(s.solver, "timings", None))
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
-                  step.t) as progress:
+                  step.t) as progress, clock:
         while not step.finished:
             _check_stop(r, stop)
             t, trial = step.t, step.propose()
@@ -153,6 +186,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
                                        f"t = {step.t:.6g} s")
             st.steps += 1
             st.iterations.append(its)
+            outputs = _time.perf_counter()
             row = r.record(trial, its)
             log.debug("t = %.6g s, dt = %.3g s, %d Newton iterations", row["t"], trial, its)
             if output.field_interval > 0 and st.steps % output.field_interval == 0:
@@ -161,7 +195,9 @@ def _loop(r: Session, stop: StopSignal) -> None:
             if grew:
                 log.info("t = %.6g s: step size back to dt = %.3g s", row["t"], step.h)
             if interval > 0 and st.steps % interval == 0:
+                clock.fold()
                 r.checkpoint()
+            clock.add("outputs", _time.perf_counter() - outputs)
             progress.update(row["t"], its=its, cutbacks=step.cutbacks)
 
 

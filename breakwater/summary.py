@@ -221,10 +221,17 @@ def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
 
 def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
                    failed_iterations: int, cutbacks: int, min_dt: float, flips: int,
-                   round_off_accepts: int, wall_time: float) -> dict[str, Any]:
-    """The ``solver`` entry of the summary."""
+                   round_off_accepts: int, wall_time: float, kind: str = "fast",
+                   time_loop: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """The ``solver`` entry of the summary.
+
+    ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``
+    and, for the fast solver, ``factorisation``, ``back_solves``, ``bulk_products``,
+    ``interface_assembly`` and ``newton`` (:class:`~breakwater.condensed.Timings`).
+    """
     its = iterations
     return {
+        "kind": kind,
         "steps": steps,
         "newton_iterations": int(sum(its)),
         "mean_newton_iterations": float(np.mean(its)) if its else None,
@@ -236,6 +243,7 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
         "flip_corrections": flips,
         "round_off_accepts": round_off_accepts,
         "wall_time": wall_time,
+        "time_loop": dict(time_loop or {}),
     }
 
 
@@ -356,7 +364,9 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
         lines.append(f"  solver: {sol.get('steps')} steps, {sol.get('newton_iterations')} "
                      f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
                      f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
-                     f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time")
+                     f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time (time loop "
+                     f"{num(sol.get('time_loop', {}).get('wall'), '.1f')} s, "
+                     f"{sol.get('kind')} solver)")
         if sol.get("round_off_accepts"):
             lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
                          "stalled at round-off (NewtonOptions.floor_atol)")

@@ -104,8 +104,8 @@ def _flaky(monkeypatch: pytest.MonkeyPatch, kill_at: float | None = None,
 
 def _run(path: pathlib.Path, directory: pathlib.Path, **kwargs: Any) -> dict[str, Any]:
     model = _model(path, kwargs.pop("penalty", 1e10), kwargs.pop("comm", COMM))
-    return simulation.run(model, TimeSpec(dt=DT, end_time=END), _output(directory),
-                          report=False, **kwargs)
+    time = TimeSpec(dt=DT, end_time=END, solver=kwargs.pop("solver", "fast"))
+    return simulation.run(model, time, _output(directory), report=False, **kwargs)
 
 
 @pytest.fixture(scope="module")
@@ -121,12 +121,12 @@ def reference(mesh_path: pathlib.Path, folder: pathlib.Path) -> tuple[pathlib.Pa
 
 
 def _crashed(mesh_path: pathlib.Path, directory: pathlib.Path,
-             monkeypatch: pytest.MonkeyPatch) -> None:
+             monkeypatch: pytest.MonkeyPatch, **kwargs: Any) -> None:
     """A run killed at the start of the step from KILL_AT (after 7 steps)."""
     with monkeypatch.context() as mp:
         _flaky(mp, KILL_AT)
         with pytest.raises(_Killed):
-            _run(mesh_path, directory)
+            _run(mesh_path, directory, **kwargs)
 
 
 def _close(a: Any, b: Any, path: str = "") -> None:
@@ -183,8 +183,9 @@ def _same_run(reference: tuple[pathlib.Path, dict], directory: pathlib.Path,
                      read_history(directory / "history.csv"))
     for key in PHYSICS:
         _close(ref[key], summary[key], key)
-    solver = {k: v for k, v in summary["solver"].items() if k != "wall_time"}
-    _close({k: v for k, v in ref["solver"].items() if k != "wall_time"}, solver, "solver")
+    timing = ("wall_time", "time_loop")  # wall-clock times differ from run to run
+    solver = {k: v for k, v in summary["solver"].items() if k not in timing}
+    _close({k: v for k, v in ref["solver"].items() if k not in timing}, solver, "solver")
     return worst
 
 
@@ -272,15 +273,21 @@ def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
 
 
 @pytest.mark.skipif(COMM.size < 2, reason="resumes a parallel checkpoint serially")
+@pytest.mark.parametrize("solver", ["reference", "fast"])
 def test_resume_on_another_number_of_ranks(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
-                                          reference: tuple[pathlib.Path, dict],
-                                          monkeypatch: pytest.MonkeyPatch) -> None:
+                                          monkeypatch: pytest.MonkeyPatch, solver: str) -> None:
     # A checkpoint written on COMM.size ranks, resumed by rank 0 alone: the nodal
     # values find their dofs by coordinates in the other partition. Another partition
     # adds in another order: equal to round-off, amplified in the tangential force as
-    # in _tolerance (measured: 1.2e-14 of the column scale, 8e-9 for the tangential
-    # force), so the bounds of _tolerance under MPI.
-    _crashed(mesh_path, shared_dir / "parallel", monkeypatch)
+    # in _tolerance (measured with the reference solver: 1.2e-14 of the column scale,
+    # 8e-9 for the tangential force). The fast solver amplifies round-off more (its
+    # interface Schur complement is an inverse; see RTOL_FAST in test_mpi.py): bounds
+    # 1e-8 on the kinematics (the fast-vs-reference tolerance of test_fastpath.py) and
+    # 1e-6 on the other columns.
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        _run(mesh_path, shared_dir / "uninterrupted", solver=solver)
+    _crashed(mesh_path, shared_dir / "parallel", monkeypatch, solver=solver)
     result: Any = None
     if COMM.rank == 0:
         serial = shared_dir / "serial"
@@ -288,12 +295,15 @@ def test_resume_on_another_number_of_ranks(mesh_path: pathlib.Path, shared_dir: 
         try:
             with monkeypatch.context() as mp:
                 _flaky(mp)
-                summary = _run(mesh_path, serial, resume=True, comm=MPI.COMM_SELF)
-            a = read_history(reference[0] / "history.csv")
+                summary = _run(mesh_path, serial, resume=True, comm=MPI.COMM_SELF,
+                               solver=solver)
+            a = read_history(shared_dir / "uninterrupted" / "history.csv")
             b = read_history(serial / "history.csv")
             assert summary["resumed_from"][0]["mpi_size"] == 1
             for k in a:
-                tol = 1e-6 if k.startswith("tangential_force") else 1e-12
+                tol = 1e-6 if k.startswith("tangential_force") else \
+                    1e-12 if solver == "reference" else \
+                    1e-8 if k.endswith(("_ux", "_uy", "_slip", "_opening")) else 1e-6
                 np.testing.assert_allclose(b[k], a[k], rtol=0,
                                            atol=tol * np.abs(a[k]).max(), err_msg=k)
         except Exception as e:  # reported on every rank, so that none waits forever

@@ -1,0 +1,225 @@
+"""Benchmark of the time loop: the fast path against the reference, side by side.
+
+Run on purpose, never in CI::
+
+    .venv/bin/python benchmarks/timeloop.py                       # default Goda case + refinements
+    .venv/bin/python benchmarks/timeloop.py --refinements 1 3     # a subset
+    .venv/bin/mpiexec -n 2 .venv/bin/python benchmarks/timeloop.py --refinements 9
+
+For each mesh refinement of the built-in Goda case, both solvers (``time.solver =
+"fast"`` and ``"reference"``) run the same case in this one process, one after the other,
+through :func:`breakwater.simulation.run` with every output of the case file (history,
+ledger, probes, fields at their interval). The reference path may be given a shorter end
+time on big meshes (``--reference-end-time``); its figures are then per step and the
+speed-up is the ratio of the times per step. Printed and recorded for each run: DOFs,
+contact-surface DOFs, steps, Newton iterations, wall time of the time loop and its split
+(factorisation, back-solves, interface assembly, bulk products, Newton, outputs, the rest),
+peak memory and its growth over the run, the speed-up over the reference and the ratio of
+the time loop to the linear-algebra floor: one factorisation of A = M + β₁Δt C + ½β₂Δt² K
+plus one back-solve per step, both timed in this process on the same model.
+
+The record is written to ``benchmarks/records/<date>-<ranks>.json`` and ``.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import pathlib
+import platform
+import statistics
+import tempfile
+import threading
+import time
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
+from breakwater.case import load_case
+from breakwater.condensed import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.simulation import run
+
+HERE = pathlib.Path(__file__).resolve().parent
+PAGE = os.sysconf("SC_PAGE_SIZE")
+
+
+class MemorySampler:
+    """Resident memory of this process, sampled every ``interval`` seconds in a thread."""
+
+    def __init__(self, interval: float = 0.02) -> None:
+        self.interval = interval
+        self.samples: list[tuple[float, int]] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+
+    @staticmethod
+    def rss() -> int:
+        """Resident memory now (bytes)."""
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * PAGE
+
+    def _sample(self) -> None:
+        while not self._stop.is_set():
+            self.samples.append((time.perf_counter(), self.rss()))
+            self._stop.wait(self.interval)
+
+    def __enter__(self) -> MemorySampler:
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.samples.append((time.perf_counter(), self.rss()))
+
+    def peak(self) -> int:
+        """The largest sample (bytes)."""
+        return max(s for _, s in self.samples)
+
+    def growth(self, since: float) -> float:
+        """Growth of the resident memory after ``since`` (bytes), from a linear fit."""
+        t = np.array([a for a, _ in self.samples if a >= since])
+        m = np.array([b for a, b in self.samples if a >= since], dtype=float)
+        if len(t) < 3 or np.ptp(t) == 0:
+            return 0.0
+        slope = np.polyfit(t - t[0], m, 1)[0]
+        return float(slope * np.ptp(t))
+
+
+def floor(case_overrides: list[str], comm: MPI.Comm, backsolves: int = 20) -> dict[str, float]:
+    """One factorisation of A and the mean of ``backsolves`` back-solves (s), this process."""
+    case = load_case(None, case_overrides)
+    model, spec, _, _ = case.build(comm)
+    layout = MonolithicLayout(model)
+    bulk = BulkOperators(model, layout, interface_dofs(model, layout), spec.beta1, spec.beta2,
+                         interface_solves=False)
+    comm.barrier()
+    t0 = time.perf_counter()
+    fact = bulk.factorisation(spec.dt)
+    comm.barrier()
+    t_fact = time.perf_counter() - t0
+    rhs, x = layout.vec.duplicate(), layout.vec.duplicate()
+    rhs.setRandom()
+    times = []
+    for _ in range(backsolves):
+        comm.barrier()
+        t0 = time.perf_counter()
+        fact.ksp.solve(rhs, x)
+        comm.barrier()
+        times.append(time.perf_counter() - t0)
+    bulk.destroy()
+    return {"factorisation": comm.allreduce(t_fact, op=MPI.MAX),
+            "back_solve": comm.allreduce(statistics.median(times), op=MPI.MAX)}
+
+
+def one_run(overrides: list[str], solver: str, comm: MPI.Comm) -> dict[str, Any]:
+    """Run the case with one solver; the figures of the benchmark table."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = comm.bcast(tmp, root=0)
+        case = load_case(None, [*overrides, f"time.solver={solver}", "output.figures=false",
+                                f"output.directory={out}"])
+        model, spec, output, extra = case.build(comm)
+        dofs = sum(b.V.dofmap.index_map.size_global * b.V.dofmap.index_map_bs
+                   for b in model.bodies)
+        layout = MonolithicLayout(model)
+        n_i = len(interface_dofs(model, layout))
+        with MemorySampler() as memory:
+            summary = run(model, spec, output, resolved_case=case.resolved(),
+                          extra_summary=extra, report=False)
+        loop = summary["solver"]["time_loop"]
+        started = memory.samples[0][0] + (summary["solver"]["wall_time"] - loop["wall"])
+        peak = comm.allreduce(memory.peak(), op=MPI.SUM)
+        growth = comm.allreduce(memory.growth(started), op=MPI.SUM)
+    return {"solver": solver, "dofs": dofs, "interface_dofs": n_i,
+            "steps": summary["solver"]["steps"],
+            "newton_iterations": summary["solver"]["newton_iterations"],
+            "end_time": spec.end_time, "loop": loop,
+            "peak_memory_mb": peak / 2**20, "memory_growth_mb": growth / 2**20}
+
+
+def table(records: list[dict[str, Any]]) -> str:
+    """The Markdown table of a benchmark record."""
+    head = ("| refinement | solver | DOFs | interface DOFs | steps | Newton its | time loop (s) | "
+            "per step (ms) | factorisation | back-solves | interface assembly | bulk products | "
+            "Newton | outputs | rest | peak memory (MB) | growth (MB) | speed-up | loop / floor |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for r in records:
+        loop = r["loop"]
+        parts = ("factorisation", "back_solves", "interface_assembly", "bulk_products",
+                 "newton", "outputs")
+        rest = loop["wall"] - sum(loop.get(k, 0.0) for k in parts)
+        split = [f"{loop.get(k, 0.0):.2f}" for k in parts] + [f"{rest:.2f}"]
+        lines.append(
+            f"| {r['refinement']} | {r['solver']} | {r['dofs']} | {r['interface_dofs']} | "
+            f"{r['steps']} | {r['newton_iterations']} | {loop['wall']:.2f} | "
+            f"{1e3 * r['per_step']:.2f} | " + " | ".join(split) +
+            f" | {r['peak_memory_mb']:.0f} | {r['memory_growth_mb']:+.1f} | "
+            f"{r['speed_up']:.1f}× | {r['over_floor']:.1f}× |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    """Run the benchmark and write its record."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--refinements", type=float, nargs="+", default=[1.0, 3.0, 9.0])
+    parser.add_argument("--end-time", type=float, default=0.15,
+                        help="end time of the fast runs (s); default the case's 0.15 s")
+    parser.add_argument("--reference-end-time", type=float, default=None,
+                        help="end time of the reference runs on refinements > 1 (s)")
+    parser.add_argument("--no-reference", action="store_true")
+    parser.add_argument("--out", type=pathlib.Path, default=HERE / "records")
+    args = parser.parse_args()
+    comm = MPI.COMM_WORLD
+    say = print if comm.rank == 0 else (lambda *a, **k: None)
+    records = []
+    for r in args.refinements:
+        base = [f"mesh.refinement={r}"]
+        fl = floor(base, comm)
+        runs = {}
+        for solver in ("fast", "reference"):
+            if solver == "reference" and args.no_reference:
+                continue
+            end = args.end_time
+            if solver == "reference" and r > 1 and args.reference_end_time is not None:
+                end = min(end, args.reference_end_time)
+            say(f"refinement {r:g}, {solver}: running to t = {end:g} s ...", flush=True)
+            rec = one_run([*base, f"time.end_time={end}"], solver, comm)
+            rec["refinement"] = r
+            rec["per_step"] = rec["loop"]["wall"] / rec["steps"]
+            rec["floor"] = fl["factorisation"] + rec["steps"] * fl["back_solve"]
+            rec["floor_parts"] = fl
+            rec["over_floor"] = rec["loop"]["wall"] / rec["floor"]
+            runs[solver] = rec
+            say(f"  {rec['steps']} steps, {rec['newton_iterations']} Newton iterations, "
+                f"time loop {rec['loop']['wall']:.2f} s ({1e3 * rec['per_step']:.2f} ms per "
+                f"step), {rec['over_floor']:.1f}× the floor", flush=True)
+        for rec in runs.values():
+            ref = runs.get("reference")
+            rec["speed_up"] = ref["per_step"] / rec["per_step"] if ref else float("nan")
+            records.append(rec)
+    md = table(records)
+    say("\n" + md)
+    if comm.rank == 0:
+        args.out.mkdir(parents=True, exist_ok=True)
+        stem = (f"{datetime.date.today().isoformat()}-np{comm.size}-r"
+                + "-".join(f"{r:g}" for r in args.refinements))
+        meta = {"date": datetime.date.today().isoformat(), "ranks": comm.size,
+                "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+                "python": platform.python_version()}
+        (args.out / f"{stem}.json").write_text(json.dumps({**meta, "runs": records}, indent=1))
+        (args.out / f"{stem}.md").write_text(
+            f"# Time-loop benchmark, {meta['date']}, {comm.size} rank(s)\n\n"
+            f"Machine: {meta['machine']}. Times in seconds unless stated; the reference path's "
+            "split has only the outputs, and its solve (assembly, factorisation and Newton at "
+            "every iteration) is the rest.\n"
+            "The floor is one factorisation of A plus one back-solve per step, timed in the "
+            "same process.\n\n" + md + "\n")
+        say(f"\nwritten {args.out / stem}.json and .md")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,236 @@
+"""The fast GN22 solver (``time.solver = "fast"``) against the reference Newton.
+
+The fast path (:mod:`breakwater.condensed`) factorises A = M + β₁Δt C + ½β₂Δt² K once
+per Δt and runs Newton on the contact-surface unknowns of the interface Schur
+complement; the reference path runs Newton on the whole residual. Both solve the same
+equations to the same tolerances, so their histories agree to the Newton tolerance
+(1e-9 of the load norm): the issue asks for 1e-8 relative on the kinematics. Checked
+on the Goda case through the impact and on three stacked blocks with two frictional
+pairs (one sliding), serially and on 2 ranks; plus the Schur complement itself against
+a dense elimination, and a model without contact (a linear step).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+import pytest
+import ufl
+from blocks import stacked_blocks, two_rectangles
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+
+from breakwater import simulation
+from breakwater.case import CaseError, load_case
+from breakwater.condensed import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.files import read_history
+from breakwater.gn22 import GN22, solve_static
+from breakwater.mesh import read_mesh
+from breakwater.model import (
+    Body,
+    ContactModel,
+    ContactPair,
+    Damping,
+    Fixed,
+    Material,
+    SurfaceLoad,
+)
+from breakwater.runspec import OutputSpec, PairProbeSpec, TimeSpec
+
+COMM = MPI.COMM_WORLD
+KINEMATICS = ("_ux", "_uy", "_slip", "_opening")
+RTOL = 1e-8  # relative to the displacements' scale
+
+
+def _same_kinematics(a: pathlib.Path, b: pathlib.Path) -> list[str]:
+    """The kinematic columns compared (every one agrees to RTOL of its scale).
+
+    The scale of a displacement column is its largest |value|; that of a slip or an
+    opening (a difference of the two sides' displacements, 1e-10 m where a stiff penalty
+    holds the interface closed) is the largest displacement of the two sides there.
+    """
+    ha, hb = read_history(a / "history.csv"), read_history(b / "history.csv")
+    np.testing.assert_array_equal(ha["t"], hb["t"])
+    compared = []
+    for name in ha:
+        if name.endswith(KINEMATICS):
+            probe, kind = name.rsplit("_", 1)
+            sides = [f"{probe}_{side}_u{c}" for side in ("slave", "master") for c in "xy"] \
+                if kind in ("slip", "opening") else [name]
+            scale = max(np.abs(hb[c]).max() for c in sides)
+            assert scale > 0, name
+            np.testing.assert_allclose(ha[name], hb[name], rtol=0, atol=RTOL * scale,
+                                       err_msg=name)
+            compared.append(name)
+    return compared
+
+
+def _same_forces(a: pathlib.Path, b: pathlib.Path) -> None:
+    """The interface resultants agree too: 1e-7 of each column's scale.
+
+    The tangential resultant is the friction law evaluated at the step's slip
+    velocities, which in stick are of order χ = 1e-10 m/s: it is as sensitive as the
+    law's stick tangent μp/χ makes it (measured 2.4e-8 on the Goda run, 5e-10 on the
+    blocks).
+    """
+    ha, hb = read_history(a / "history.csv"), read_history(b / "history.csv")
+    for name in ha:
+        if name.startswith(("normal_force", "tangential_force")):
+            np.testing.assert_allclose(ha[name], hb[name], rtol=0,
+                                       atol=1e-7 * np.abs(hb[name]).max(), err_msg=name)
+
+
+def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
+    # 60 steps of 0.1 ms on a coarse mesh: the 2 ms pendulum pulse, the front corner
+    # lifting and the interface sliding (the flip guard acts), frictional contact at
+    # the paper's χ = 1e-10.
+    summaries = {}
+    for solver in ("fast", "reference"):
+        case = load_case(None, ["mesh.refinement=0.7", "time.end_time=0.006",
+                                f"time.solver={solver}", "output.figures=false",
+                                "output.field_interval=0", "output.checkpoint_interval=0",
+                                f"output.directory={(shared_dir / solver).as_posix()}"])
+        built = case.build(COMM)
+        model, spec, output, extra = built
+        summaries[solver] = simulation.run(model, spec, output, extra_summary=extra,
+                                           report=False)
+    fast, ref = summaries["fast"], summaries["reference"]
+    assert fast["solver"]["kind"] == "fast" and ref["solver"]["kind"] == "reference"
+    compared = _same_kinematics(shared_dir / "fast", shared_dir / "reference")
+    assert {"gauge_top_ux", "corner_front_slip", "corner_front_opening"} <= set(compared)
+    _same_forces(shared_dir / "fast", shared_dir / "reference")
+    # The fast path's split of the time loop is recorded.
+    loop = fast["solver"]["time_loop"]
+    assert {"wall", "outputs", "factorisation", "back_solves", "interface_assembly"} <= \
+        set(loop)
+    assert loop["factorisation"] > 0 and loop["wall"] >= loop["back_solves"]
+
+
+def test_blocks_fast_equals_reference(folder: pathlib.Path, shared_dir: pathlib.Path) -> None:
+    # The three blocks of test_bodies.py, with Rayleigh damping: two pairs, the top
+    # block sliding on joint1 under a pulse of 1.5 μ₁ W₂, joint0 sticking.
+    widths, heights, g = 0.4, (0.2, 0.15, 0.1), 9.81
+    densities = (1800.0, 2300.0, 2500.0)
+    w2 = densities[2] * g * widths * heights[2]
+    path = stacked_blocks(folder / "three.msh", COMM, widths, heights, h=0.05)
+
+    def pulse(t: float) -> float:
+        s = t / 4e-3
+        return 1.5 * 0.6 * w2 / heights[2] * max(0.0, 1.0 - abs(2.0 * s - 1.0)) \
+            if 0 <= s <= 1 else 0.0
+
+    histories = {}
+    for solver in ("fast", "reference"):
+        bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=1e11))
+                  for k, ρ in enumerate(densities)]
+        model = ContactModel(read_mesh(path, COMM), bodies,
+                             [ContactPair("joint0", "block1", "block0", 1e13, friction=0.3),
+                              ContactPair("joint1", "block2", "block1", 1e13, friction=0.6)],
+                             [Fixed("base")], [SurfaceLoad("left2", (1.0, 0.0), pulse)],
+                             gravity=(0.0, -g), damping=Damping(alpha=5.0, beta=1e-6))
+        y0, y1 = heights[0], heights[0] + heights[1]
+        output = OutputSpec(shared_dir / solver, field_interval=0, figures=False,
+                            progress=False,
+                            pair_probes=(PairProbeSpec("corner0", 0, (-widths / 2, y0)),
+                                         PairProbeSpec("corner1", 1, (-widths / 2, y1))))
+        summary = simulation.run(model, TimeSpec(dt=1e-4, end_time=6e-3, solver=solver),
+                                 output, report=False)
+        assert summary["finished"]
+        histories[solver] = summary
+    assert histories["fast"]["solver"]["flip_corrections"] > 0  # the slip guard acted
+    compared = _same_kinematics(shared_dir / "fast", shared_dir / "reference")
+    assert {"corner0_slip", "corner1_slip", "corner1_opening"} <= set(compared)
+    _same_forces(shared_dir / "fast", shared_dir / "reference")
+    h = read_history(shared_dir / "fast" / "history.csv")
+    assert abs(h["corner1_slip"][-1] - h["corner1_slip"][0]) > 1e-6  # it slid
+
+
+def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
+    # S = (X_II)⁻¹ with X = A⁻¹ E is the Schur complement A_II − A_IB A_BB⁻¹ A_BI of
+    # A: checked against a dense elimination of A (assembled by dolfinx, gathered).
+    path = two_rectangles(folder / "two.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
+                          Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
+                         [ContactPair("interface", "a", "b", 1e10, friction=0.5)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81),
+                         damping=Damping(alpha=2.0, beta=1e-4))
+    layout = MonolithicLayout(model)
+    interface = interface_dofs(model, layout)
+    dt, β1, β2 = 1e-3, 0.6, 0.605
+    bulk = BulkOperators(model, layout, interface, β1, β2)
+    fact = bulk.factorisation(dt)
+    # The whole A, dense, on every rank (the model is small).
+    n = layout.vec.getSize()
+    A = np.zeros((n, n))
+    lo, hi = layout.vec.getOwnershipRange()
+    rows = np.arange(lo, hi, dtype=np.int32)
+    A[lo:hi] = fact.A.getValues(rows, np.arange(n, dtype=np.int32))
+    COMM.Allreduce(MPI.IN_PLACE, A, op=MPI.SUM)
+    # Against A assembled from the UFL bulk residual's derivative (the reference path's
+    # operator): M + β₁Δt C + ½β₂Δt² K.
+    trial = ufl.TrialFunctions(model.W)
+    α, β = model.damping.alpha, model.damping.beta
+    form = (1 + β1 * dt * α) * model.mass(trial) + (0.5 * β2 * dt**2 + β1 * dt * β) \
+        * model.stiffness(trial)
+    ref = fem_petsc.assemble_matrix(model.form(ufl.extract_blocks(form)), bcs=model.bcs,
+                                    kind="mpi")
+    ref.assemble()
+    A_ref = np.zeros((n, n))
+    A_ref[lo:hi] = ref.getValues(rows, np.arange(n, dtype=np.int32))
+    COMM.Allreduce(MPI.IN_PLACE, A_ref, op=MPI.SUM)
+    np.testing.assert_allclose(A, A_ref, rtol=0, atol=1e-12 * np.abs(A_ref).max())
+    ref.destroy()
+    B = np.setdiff1d(np.arange(n), interface)
+    S = A[np.ix_(interface, interface)] - A[np.ix_(interface, B)] @ np.linalg.solve(
+        A[np.ix_(B, B)], A[np.ix_(B, interface)])
+    # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
+    np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
+    bulk.destroy()
+
+    # Without contact pairs a step is linear: the fast path is one back-solve and
+    # gives the reference's state to round-off.
+    linear = ContactModel(read_mesh(path, COMM),
+                          [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
+                           Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
+                          [], [Fixed("b_bottom"), Fixed("a_top")], gravity=(0.0, -9.81))
+    with pytest.raises(ValueError, match="solver must be one of fast, reference"):
+        GN22(linear, dt, solver="slow")
+    states = {}
+    for solver in ("fast", "reference"):
+        s = GN22(linear, dt, solver=solver)
+        s.initialise()
+        its = [s.step() for _ in range(5)]
+        states[solver] = np.concatenate([f.x.array for f in s.u])
+        if solver == "fast":
+            assert its == [1] * 5
+        s.destroy()
+    scale = np.abs(states["reference"]).max()
+    assert scale > 0
+    np.testing.assert_allclose(states["fast"], states["reference"], rtol=0,
+                               atol=1e-10 * scale)
+
+
+def test_unknown_solver_is_refused() -> None:
+    with pytest.raises(CaseError, match=r"time\.solver: must be one of"):
+        load_case(None, ["time.solver=slow"])
+
+
+def test_static_then_fast_step_is_at_rest(folder: pathlib.Path) -> None:
+    # From the static equilibrium the first fast step stays at rest (no load change):
+    # the condensed residual vanishes at Newton's start.
+    path = two_rectangles(folder / "rest.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
+                          Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
+                         [ContactPair("interface", "a", "b", 1e10, friction=0.5)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    u0, _ = solve_static(model)
+    s = GN22(model, 1e-3)
+    s.initialise(u0)
+    s.step()
+    moved = max(np.abs(f.x.array - g.x.array).max() for f, g in zip(s.u, u0, strict=True))
+    scale = max(np.abs(g.x.array).max() for g in u0)
+    assert COMM.allreduce(moved, op=MPI.MAX) < 1e-6 * COMM.allreduce(scale, op=MPI.MAX)
+    s.destroy()
