@@ -123,7 +123,8 @@ class _Factorisation:
     ksp: PETSc.KSP
     A: PETSc.Mat
     X: np.ndarray  # owned rows of A⁻¹ E, shape (n_owned, n_I)
-    S: np.ndarray  # (X_II)⁻¹, shape (n_I, n_I), the same on every rank
+    X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
+    S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
 
 
 class BulkOperators:
@@ -253,11 +254,12 @@ class BulkOperators:
         ksp.setUp()
         if self._interface_solves_on and len(self.interface):
             X = self._interface_solves(ksp, A)
-            S = np.linalg.inv(self._gather_rows(X))
+            X_II = self._gather_rows(X)
+            S = np.linalg.inv(X_II)
         else:
             X = np.zeros((self.layout.offsets[-1], len(self.interface)))
-            S = np.zeros((len(self.interface), len(self.interface)))
-        fact = _Factorisation(ksp, A, X, S)
+            X_II = S = np.zeros((len(self.interface), len(self.interface)))
+        fact = _Factorisation(ksp, A, X, X_II, S)
         self.factorisations += 1
         self._cache[dt] = fact
         if len(self._cache) > self._cache_size:

@@ -301,6 +301,10 @@ def test_resume_on_another_number_of_ranks(mesh_path: pathlib.Path, shared_dir: 
             b = read_history(serial / "history.csv")
             assert summary["resumed_from"][0]["mpi_size"] == 1
             for k in a:
+                if k == "newton_iterations" and solver == "fast":
+                    # its iterates pass through the χ band: a count may differ by one
+                    assert np.abs(b[k] - a[k]).max() <= 1, k
+                    continue
                 tol = 1e-6 if k.startswith("tangential_force") else \
                     1e-12 if solver == "reference" else \
                     1e-8 if k.endswith(("_ux", "_uy", "_slip", "_opening")) else 1e-6

@@ -138,11 +138,11 @@ def _relative(parallel: np.ndarray, serial: np.ndarray) -> float:
 # tangent μp/χ ~ 1e13 and magnifies round-off.
 RTOL = 1e-10
 # The fast solver (time.solver = "fast") eliminates the bulk through the interface
-# Schur complement S = (X_II)⁻¹, an inverse whose round-off (cond(S) · 1e-16) the
-# χ = 1e-10 stick tangent μp/χ magnifies: measured 1.9e-10 (history), 2e-10 on the
-# displacements, 5.3e-10 on the velocities; a tighter Newton tolerance does not reduce it
-# (it is the conditioning, not the stopping test). The 1e-10 is missed by 2×;
-# bounds 1e-9 on the displacements and 1e-8 on the velocities.
+# compliance X_II = (A⁻¹)_II and its inverse S, whose round-off the χ = 1e-10 stick
+# tangent μp/χ magnifies: measured 4.6e-11 (history), 5e-11 / 1.3e-10 on the slave /
+# master displacements, 8e-10 / 1.2e-9 on the velocities; a tighter Newton tolerance does
+# not reduce it (it is the conditioning, not the stopping test). Bounds 1e-9 on the
+# displacements and 1e-8 on the velocities.
 RTOL_FAST = {"history": 1e-9, "u_slave": 1e-9, "u_master": 1e-9, "v_slave": 1e-8,
              "v_master": 1e-8}
 
