@@ -15,7 +15,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections import OrderedDict
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,7 +103,6 @@ class Timings:
 
     def __init__(self) -> None:
         self.seconds = dict.fromkeys(self.KEYS, 0.0)
-        self.counts = dict.fromkeys(self.KEYS, 0)
 
     @contextlib.contextmanager
     def __call__(self, key: str) -> Iterator[None]:
@@ -113,7 +112,6 @@ class Timings:
             yield
         finally:
             self.seconds[key] += time.perf_counter() - t0
-            self.counts[key] += 1
 
 
 @dataclass
@@ -303,24 +301,6 @@ class BulkOperators:
         """Out = A⁻¹ rhs."""
         with self.timings("back_solves"):
             fact.ksp.solve(rhs, out)
-
-    # --- energies from the cached matrices (the ledger of the fast path) -------------
-
-    def stacked(self, functions: Sequence[fem.Function], out: PETSc.Vec) -> PETSc.Vec:
-        """Copy one Function per body into a stacked vector."""
-        fem_petsc.assign(functions, out)
-        return out
-
-    def quadratic(self, matrix: PETSc.Mat, x: PETSc.Vec) -> float:
-        """xᵀ A x (collective)."""
-        tmp = self._work[2]
-        matrix.mult(x, tmp)
-        return float(tmp.dot(x))
-
-    def load_work(self, du: PETSc.Vec, amplitudes: Sequence[float]) -> float:
-        """Δuᵀ f for the loads at the given amplitudes (gravity at 1), collective."""
-        return sum(a * float(vec.dot(du))
-                   for (_, vec), a in zip(self._loads, [1.0, *amplitudes], strict=True))
 
     def destroy(self) -> None:
         """Free the PETSc objects."""

@@ -43,7 +43,7 @@ from petsc4py import PETSc
 from .bulk import BulkOperators, MonolithicLayout, Timings, _Factorisation, interface_dofs
 from .errors import ConvergenceError
 from .model import ContactModel
-from .solver import NewtonOptions, convergence_reason
+from .solver import NewtonOptions, snes_reason
 
 __all__ = ["CondensedNewton", "InterfaceAssembler"]
 
@@ -291,10 +291,8 @@ class CondensedNewton:
             self._norms = [math.sqrt(max(float(whole), fnorm**2))]
         else:
             self._norms.append(fnorm)
-        rtol, atol, stol, max_it = snes.getTolerances()
-        reason, stalled = convergence_reason(
-            self._norms, xnorm, ynorm, rtol=rtol, atol=atol, stol=stol, max_it=max_it,
-            floor=self.floor, stall_its=self.options.stall_its)
+        reason, stalled = snes_reason(snes, self._norms, xnorm, ynorm, self.floor,
+                                      self.options.stall_its)
         self.floor_accepts += stalled
         return reason
 
@@ -354,7 +352,6 @@ class CondensedNewton:
             self.snes.solve(None, self._x)
             T.seconds["newton"] += time.perf_counter() - t0 - (
                 T.seconds["interface_assembly"] - assembly)
-            T.counts["newton"] += 1
             reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
             its = self.snes.getIterationNumber()
             if reason <= 0:

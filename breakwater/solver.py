@@ -102,6 +102,14 @@ def convergence_reason(norms: Sequence[float], xnorm: float, ynorm: float, *, rt
     return int(_R.CONVERGED_ITERATING), False
 
 
+def snes_reason(snes: PETSc.SNES, norms: Sequence[float], xnorm: float, ynorm: float,
+                floor: float, stall_its: int) -> tuple[int, bool]:
+    """:func:`convergence_reason` with the SNES's own tolerances (a convergence test)."""
+    rtol, atol, stol, max_it = snes.getTolerances()
+    return convergence_reason(norms, xnorm, ynorm, rtol=rtol, atol=atol, stol=stol,
+                              max_it=max_it, floor=floor, stall_its=stall_its)
+
+
 class NewtonSolver:
     """SNES Newton on ``F(x) = 0`` for one Function per body.
 
@@ -163,10 +171,8 @@ class NewtonSolver:
         if it == 0:
             self._norms = []
         self._norms.append(fnorm)
-        rtol, atol, stol, max_it = snes.getTolerances()
-        reason, stalled = convergence_reason(
-            self._norms, xnorm, ynorm, rtol=rtol, atol=atol, stol=stol, max_it=max_it,
-            floor=self.floor, stall_its=self.options.stall_its)
+        reason, stalled = snes_reason(snes, self._norms, xnorm, ynorm, self.floor,
+                                      self.options.stall_its)
         self.floor_accepts += stalled
         return reason
 

@@ -146,16 +146,24 @@ def test_blocks_fast_equals_reference(folder: pathlib.Path, shared_dir: pathlib.
     assert abs(h["corner1_slip"][-1] - h["corner1_slip"][0]) > 1e-6  # it slid
 
 
+def _two_blocks(path: pathlib.Path, friction: float | None,
+                fixed: tuple[str, ...] = ("b_bottom",), damping: Damping | None = None
+                ) -> ContactModel:
+    """Block ``a`` on block ``b`` under gravity; in frictional contact unless None."""
+    pairs = [] if friction is None else [ContactPair("interface", "a", "b", 1e10,
+                                                     friction=friction)]
+    return ContactModel(read_mesh(path, COMM),
+                        [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
+                         Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
+                        pairs, [Fixed(group) for group in fixed], gravity=(0.0, -9.81),
+                        damping=damping)
+
+
 def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     # S = (X_II)⁻¹ with X = A⁻¹ E is the Schur complement A_II − A_IB A_BB⁻¹ A_BI of
     # A: checked against a dense elimination of A (assembled by dolfinx, gathered).
     path = two_rectangles(folder / "two.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
-                          Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
-                         [ContactPair("interface", "a", "b", 1e10, friction=0.5)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81),
-                         damping=Damping(alpha=2.0, beta=1e-4))
+    model = _two_blocks(path, 0.5, damping=Damping(alpha=2.0, beta=1e-4))
     layout = MonolithicLayout(model)
     interface = interface_dofs(model, layout)
     dt, β1, β2 = 1e-3, 0.6, 0.605
@@ -191,10 +199,7 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
 
     # Without contact pairs a step is linear: the fast path is one back-solve and
     # gives the reference's state to round-off.
-    linear = ContactModel(read_mesh(path, COMM),
-                          [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
-                           Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
-                          [], [Fixed("b_bottom"), Fixed("a_top")], gravity=(0.0, -9.81))
+    linear = _two_blocks(path, None, fixed=("b_bottom", "a_top"))
     with pytest.raises(ValueError, match="solver must be one of fast, reference"):
         GN22(linear, dt, solver="slow")
     states = {}
@@ -221,11 +226,7 @@ def test_static_then_fast_step_is_at_rest(folder: pathlib.Path) -> None:
     # From the static equilibrium the first fast step stays at rest (no load change):
     # the condensed residual vanishes at Newton's start.
     path = two_rectangles(folder / "rest.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
-                          Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
-                         [ContactPair("interface", "a", "b", 1e10, friction=0.5)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _two_blocks(path, 0.5)
     u0, _ = solve_static(model)
     s = GN22(model, 1e-3)
     s.initialise(u0)
