@@ -48,17 +48,20 @@ def make_directory(path: str | pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
     return on_rank_zero(comm, make)
 
 
-def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool
-                  ) -> dict[str, Any]:
+def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool,
+                  static: bool = True) -> dict[str, Any]:
     """The ``outputs`` entry of ``summary.json``: the folder and the files of a run.
 
     Args:
         directory: The output folder.
         fields: The ParaView files.
         snapshot: Whether ``snapshot_max_ux.npz`` is written.
+        static: Whether ``static.npz`` and ``history.csv`` (whose first row is the
+            static state) are written: not when no static state was found.
     """
-    return {"directory": str(directory), "history": HISTORY, "fields": list(fields),
-            "static": STATIC, "snapshot": SNAPSHOT if snapshot else None}
+    return {"directory": str(directory), "history": HISTORY if static else None,
+            "fields": list(fields), "static": STATIC if static else None,
+            "snapshot": SNAPSHOT if snapshot else None}
 
 
 def temporary_path(path: pathlib.Path) -> pathlib.Path:

@@ -28,6 +28,7 @@ from mpi4py import MPI
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import MeshError
 from .mesh import group_tag
+from .runspec import InitialSpec
 
 
 @dataclass(frozen=True)
@@ -236,6 +237,10 @@ class ContactModel:
         damping: Rayleigh damping.
         degree: Polynomial degree of the displacement (2: six-node triangles).
 
+    Attributes:
+        initial: The initial state of a run (initial velocities, the loads of the
+            static state; :mod:`breakwater.initial`); set it before running.
+
     """
 
     def __init__(
@@ -299,6 +304,7 @@ class ContactModel:
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
         self._solvers = 0  # solvers built on this model (see options_prefix)
+        self.initial = InitialSpec()
 
     # --- set-up -------------------------------------------------------------------
 

@@ -13,7 +13,7 @@ from typing import Literal
 
 from .schema import InvalidField, positive, setting
 
-__all__ = ["OutputSpec", "PairProbeSpec", "ProbeSpec", "TimeSpec"]
+__all__ = ["InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec", "TimeSpec"]
 
 
 @dataclass(frozen=True)
@@ -129,3 +129,23 @@ class OutputSpec:
     progress: bool | None = None
     case_name: str = "case"
     checkpoint_interval: int = 0
+
+
+@dataclass(frozen=True)
+class InitialSpec:
+    """The initial state of a run (:mod:`breakwater.initial`).
+
+    Attributes:
+        velocities: Uniform initial velocity (m/s) of the bodies that move at t = 0, as
+            ``(body name, vector)`` pairs; the other bodies start at rest.
+        loads: Indices (in ``model.loads``) of the loads in the static initial state,
+            at their values at t = 0; None: every load. A load left out acts from
+            t = 0 on a body that is in equilibrium without it.
+    """
+
+    velocities: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    loads: tuple[int, ...] | None = None
+
+    def velocity(self, body: str) -> tuple[float, ...] | None:
+        """The initial velocity of a body (None: at rest)."""
+        return dict(self.velocities).get(body)

@@ -24,7 +24,8 @@ from dolfinx import fem
 from . import files, runstate
 from . import summary as sm
 from .checkpoint import CheckpointError
-from .gn22 import GN22, GN22Parameters, solve_static
+from .gn22 import GN22, GN22Parameters
+from .initial import initial_state
 from .interface import interface_nodes
 from .ledger import EnergyLedger
 from .model import ContactModel
@@ -142,22 +143,30 @@ class Session:
         self._warned: set[tuple[str, str]] = set()
 
     def start(self) -> None:
-        """Solve the static equilibrium, start the stepper from it at rest (collective)."""
+        """Find the initial state, start the stepper from it (collective).
+
+        The static equilibrium under gravity and the loads of the initial state, with
+        friction if needed, bodies that friction cannot hold held up to t = 0
+        (:func:`~breakwater.initial.initial_state`); at rest but for the bodies' initial
+        velocities (``model.initial``).
+        """
         m, st = self.model, self.state
         log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
                  m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
                  len(m.bodies), len(m.pairs))
         m.set_time(0.0)
-        u_static, st.static_iterations = solve_static(m)
-        log.info("static: %d Newton iterations", st.static_iterations)
+        init = initial_state(m)
+        st.static_iterations = init.iterations
+        log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
         self.stepped = x = Stepped(m, self.time, self.output, self.directory)
         s, out = x.stepper, x.files
-        s.initialise(u_static)
+        s.initialise(init.u, init.v)
         out.open_history(x.monitor.columns)
         out.open_fields()
         row = self.record(0.0, st.static_iterations)
         interface = interface_state(m, x.nodes, s.u)
         st.static = sm.static_summary(m, row, interface, st.static_iterations)
+        st.static.update(init.summary())
         st.contact = sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface)
         out.write_snapshot(files.STATIC, s.u, interface, 0.0)
         self.log_quality()
@@ -291,7 +300,7 @@ class Session:
             kind=self.time.solver, time_loop=st.time_loop)
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
-            snapshot=x is not None and x.peak.time is not None)
+            snapshot=x is not None and x.peak.time is not None, static=bool(st.static))
         return sm.run_summary(
             case_name=self.output.case_name, finished=finished, status=status, error=error,
             time=self.time, state=st, rows=self.rows,

@@ -360,7 +360,10 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
     if d.get("residual_slip") is not None:
         lines.append(f"  residual slip {num(d.get('residual_slip'))} m, max uplift "
                      f"{num(d.get('max_uplift'))} m")
-    if sol:
+    if sol and not sol.get("steps"):
+        lines.append(f"  solver: no time step taken, {num(sol.get('wall_time'), '.1f')} s "
+                     "wall time")
+    elif sol:
         lines.append(f"  solver: {sol.get('steps')} steps, {sol.get('newton_iterations')} "
                      f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
                      f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "

@@ -1,0 +1,295 @@
+"""The initial state of a run: static equilibrium, bodies held up to t = 0, initial velocities.
+
+The dynamics starts at t = 0 from a static equilibrium under gravity and the loads of
+the initial state (every load at its value at t = 0 unless the case says otherwise,
+:class:`~breakwater.runspec.InitialSpec`), at rest except for the bodies given an
+initial velocity. :func:`initial_state` finds it in up to three stages:
+
+1. **Frictionless** (:func:`breakwater.gn22.solve_static`). When it exists it is an
+   exact equilibrium of the velocity-regularised friction law, which carries no shear
+   at zero slip velocity: the dynamics then starts exactly at rest (the Goda case). It
+   does not exist when a tangential force acts on a body held by contact (a block on
+   an incline, a sustained side push): its Newton iteration then fails.
+2. **Frictional.** First the interfaces are *bonded* (a tangential penalty spring
+   ``k_b = ε_n`` in the residual: a nearly linear problem that always has a solution).
+   A contact pair whose bonded tangential resultant exceeds μ times its normal
+   resultant cannot be held by friction: it stays bonded (stage 3). On the other
+   pairs the friction law of ``forms/contact.py`` (:class:`forms.ContactLaw`, the
+   one the dynamics uses) acts on the slip *increment* from the unloaded state,
+   divided by a pseudo time τ: ``t_T = −μ p φ(Δu_T/τ)``, as if the initial loads
+   were applied over τ. τ is chosen so that the law's stick band is ``χτ = δ``, with
+   ``δ`` = :data:`STICK_BAND` times the mean interface facet length (a slip far below
+   anything the run resolves), and Newton uses the dynamics' slip guard
+   (:mod:`breakwater.slipguard`, with ``∂v/∂u = 1/τ``). The resulting state carries
+   the shear by friction, with the bodies' elastic shear deformation in it; the
+   dynamics then takes over with the velocity law, whose creep under a force below
+   μN is ``v = χF/sqrt((μN)² − F²)``.
+3. **Held.** A body on a pair that cannot hold it (no frictional equilibrium, e.g. a
+   block on an incline steeper than the friction angle) is held in place up to t = 0
+   by the bonding spring, with one warning naming it; at t = 0 the dynamics releases
+   it (the spring is not in the dynamic residual) and it slides from rest.
+
+Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
+only for the pairs that need it (or for every pair if the frictional Newton fails).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .errors import ConvergenceError
+from .gn22 import _scale, _tangential_stiffness, solve_static
+from .interface import interface_nodes
+from .model import ContactModel, _PairData
+from .slipguard import SlipGuard
+from .solver import NewtonOptions, NewtonSolver
+
+__all__ = ["STICK_BAND", "InitialState", "initial_state", "initial_velocities"]
+
+log = logging.getLogger("breakwater.initial")
+
+STICK_BAND = 1e-8
+"""Stick band of the frictional static state, as a fraction of the mean interface facet
+length: the slip below which the friction law is smooth (2.5e-10 m on a 25 mm
+facet). Far below any displacement the run resolves, yet 1e3× wider than the band of a
+GN22 step's Newton (χ·½β₂Δt²/(β₁Δt) ≈ 5e-15 m at χ = 1e-10 m/s, Δt = 1e-4 s)."""
+
+BONDING = 1.0
+"""Tangential spring of a bonded (or held) interface, as a multiple of the pair's ε_n."""
+
+
+@dataclass
+class InitialState:
+    """The state the dynamics starts from.
+
+    Attributes:
+        u: Displacements (one Function per body).
+        v: Initial velocities (one Function per body; zero at rest).
+        iterations: Newton iterations of every static solve.
+        kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
+            place up to t = 0).
+        held: Names of the bodies held in place up to t = 0 (released at t = 0).
+
+    """
+
+    u: list[fem.Function]
+    v: list[fem.Function]
+    iterations: int
+    kind: str = "frictionless"
+    held: list[str] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        """The entries of the ``static`` summary that describe how the state was found."""
+        return {"initial_state": self.kind, "held_bodies": list(self.held)}
+
+
+@contextlib.contextmanager
+def _initial_loads(model: ContactModel) -> Iterator[None]:
+    """Loads not in the initial state set to zero inside the block (restored after)."""
+    keep = model.initial.loads
+    saved = [float(ld.amplitude.value) for ld in model.loads]
+    try:
+        if keep is not None:
+            for k, ld in enumerate(model.loads):
+                if k not in keep:
+                    ld.amplitude.value = 0.0
+        yield
+    finally:
+        for ld, value in zip(model.loads, saved, strict=True):
+            ld.amplitude.value = value
+
+
+def initial_velocities(model: ContactModel) -> list[fem.Function]:
+    """The bodies' uniform initial velocities (``model.initial.velocities``; else zero)."""
+    v = model.functions("v_initial")
+    for f, b in zip(v, model.bodies, strict=True):
+        vel = model.initial.velocity(b.spec.name)
+        if vel is not None:
+            f.x.array.reshape(-1, model.gdim)[:] = np.asarray(vel, dtype=float)
+    return v
+
+
+def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> InitialState:
+    """The static initial state under gravity and the loads of the initial state (collective).
+
+    Call it with the loads at t = 0 (``model.set_time(0.0)``). See the module docstring.
+
+    Args:
+        model: The contact model (``model.initial`` says which loads are in the state
+            and the initial velocities).
+        options: Newton settings of the static solves.
+
+    Returns:
+        The initial state.
+
+    Raises:
+        ConvergenceError: No static state could be found (not even with the bodies
+            held).
+    """
+    with _initial_loads(model):
+        try:
+            u, its = solve_static(model, options=options)
+            state = InitialState(u, initial_velocities(model), its)
+        except ConvergenceError as e:
+            if not model.pairs:
+                raise
+            log.debug("no frictionless static state (%s): solving with friction", e)
+            state = _frictional(model, options, e.iterations)
+    return state
+
+
+def _bonded_term(pair: _PairData, u: Sequence, w: Sequence, k: float) -> ufl.Form:
+    """A tangential spring ``k`` between the two sides of a pair, ∫ k Δu_T·δw_T dS."""
+    jump = forms.tangential_part(u[pair.slave]("+") - u[pair.master]("-"), pair.n)
+    δw = forms.tangential_part(w[pair.slave]("+") - w[pair.master]("-"), pair.n)
+    return k * ufl.dot(jump, δw) * pair.dS
+
+
+def _resultants(model: ContactModel, pair: _PairData, u: Sequence[fem.Function],
+                k: float) -> tuple[float, float]:
+    """Normal resultant ∫p and tangential resultant |∫k Δu_T| of a bonded pair (N/m)."""
+    us, um = u[pair.slave]("+"), u[pair.master]("-")
+    normal = model.assemble(model.form(pair.law.pressure(us, um, pair.n) * pair.dS))
+    t_T = k * forms.tangential_part(us - um, pair.n)
+    shear = [model.assemble(model.form(t_T[i] * pair.dS)) for i in range(model.gdim)]
+    return normal, float(np.linalg.norm(shear))
+
+
+def _solve(model: ContactModel, F: ufl.Form, u: list[fem.Function], options: NewtonOptions | None,
+           stabilise: Sequence[_PairData], precheck: Any = None) -> int:
+    """Newton on F with the Jacobian-only weak tangential spring of ``solve_static``."""
+    F_t = F
+    for p in stabilise:
+        F_t += _bonded_term(p, u, model.w, 1e-2 * _tangential_stiffness(model, p))
+    solver = NewtonSolver(model, F, u, "initial", options, _scale(model), precheck=precheck,
+                          jacobian_of=F_t)
+    try:
+        return solver.solve()
+    finally:
+        solver.destroy()
+
+
+def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) -> InitialState:
+    """Stages 2 and 3 of the module docstring."""
+    pairs = model.pairs
+    k_b = [BONDING * float(p.ε_n.value) for p in pairs]
+    # The bonded state: from a small penetration along gravity (as solve_static).
+    u = model.functions("u")
+    g = model.gravity.value
+    if np.any(g):
+        for p in pairs:
+            u[p.slave].x.array.reshape(-1, model.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
+    bulk = model.bulk_residual(u)
+    normal = [forms.contact_residual(model.traction(p, u, None), model.w[p.slave]("+"),
+                                     model.w[p.master]("-"), p.dS) for p in pairs]
+    bonded = bulk + sum(n + _bonded_term(p, u, model.w, k)
+                        for n, p, k in zip(normal, pairs, k_b, strict=True))
+    its = tried + _solve(model, bonded, u, options, ())
+    # The pairs that friction cannot hold: bonded tangential resultant above μN.
+    hold = []
+    for p, k in zip(pairs, k_b, strict=True):
+        N, T = _resultants(model, p, u, k)
+        μ = float(p.law.friction.μ.value)
+        if T - μ * N > 1e-6 * max(N, T):
+            hold.append((p, N, T, μ))
+    held_pairs = {id(p) for p, *_ in hold}
+    free = [p for p in pairs if id(p) not in held_pairs]
+    v = initial_velocities(model)
+    if free:
+        u_bonded = [f.x.array.copy() for f in u]
+        try:
+            n, τ = _friction_solve(model, u, options, free, k_b, bulk, normal)
+            its += n
+            _creep_velocities(model, free, u, v, τ)
+        except ConvergenceError as e:
+            # No frictional equilibrium on the remaining pairs: hold them all.
+            log.debug("no frictional static state (%s): every pair held", e)
+            its += e.iterations
+            for f, x in zip(u, u_bonded, strict=True):
+                f.x.array[:] = x
+            for p in free:
+                N, T = _resultants(model, p, u, BONDING * float(p.ε_n.value))
+                hold.append((p, N, T, float(p.law.friction.μ.value)))
+            free = []
+    held: list[str] = []
+    for p, N, T, μ in hold:
+        body = model.bodies[p.slave].spec.name
+        if model.comm.rank == 0:
+            log.warning("initial state: body '%s' cannot be held by friction on '%s' "
+                        "(tangential force %.4g N/m, μN = %.4g N/m): held in place up to "
+                        "t = 0 and released at t = 0", body, p.spec.interface, T, μ * N)
+        if body not in held:
+            held.append(body)
+    return InitialState(u, v, its, "held" if held else "frictional", held)
+
+
+def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonOptions | None,
+                    free: Sequence[_PairData], k_b: Sequence[float], bulk: ufl.Form,
+                    normal: Sequence[ufl.Form]) -> tuple[int, float]:
+    """The frictional static solve, from the bonded state in ``u`` (stage 2).
+
+    Returns:
+        The Newton iterations and the pseudo time τ.
+    """
+    free_ids = {id(p) for p in free}
+    # One pseudo time: every free pair's stick band χτ is at most STICK_BAND × its facet
+    # length, and the slip guard sees the same velocities v = u/τ for every pair.
+    τ = min(STICK_BAND * _mean_facet_length(model, p) / float(p.law.friction.χ.value)
+            for p in free)
+    v = [f / τ for f in u]
+    F = bulk
+    for k, p in enumerate(model.pairs):
+        if id(p) in free_ids:  # the law of the dynamics, slip increment over τ as velocity
+            F += forms.contact_residual(model.traction(p, u, v), model.w[p.slave]("+"),
+                                        model.w[p.master]("-"), p.dS)
+        else:
+            F += normal[k] + _bonded_term(p, u, model.w, k_b[k])
+    guard = SlipGuard([n for n in interface_nodes(model) if id(n.pair) in free_ids])
+    step = model.functions("initial_step")
+
+    def precheck(x: PETSc.Vec, y: PETSc.Vec) -> None:
+        y.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        fem_petsc.assign(y, step)
+        fem_petsc.assign(x, u)
+        if guard([f.x.array / τ for f in u], [f.x.array for f in step], 1.0 / τ):
+            fem_petsc.assign(step, y)
+
+    return _solve(model, F, u, options, free, precheck), τ
+
+
+def _creep_velocities(model: ContactModel, free: Sequence[_PairData],
+                      u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
+    """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
+
+    With it the velocity law carries at t = 0 exactly the friction of the static state
+    (the quadrature points are the nodes), so that the dynamics starts in equilibrium
+    (a₀ = 0 without damping) instead of from zero friction. These velocities are the
+    law's creep, ≤ χ·(a few) (1e-10 m/s at the paper's χ): the bodies start at rest.
+    """
+    ids = {id(p) for p in free}
+    for nodes in interface_nodes(model):
+        p = nodes.pair
+        if id(p) not in ids:
+            continue
+        us, um = nodes.gather(u[p.slave].x.array, u[p.master].x.array)
+        vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
+        nodes.scatter_slave(vs + nodes.tangential(us - um) / τ, v[p.slave].x.array)
+        v[p.slave].x.scatter_forward()
+
+
+def _mean_facet_length(model: ContactModel, pair: _PairData) -> float:
+    """Mean facet length of a contact interface (m)."""
+    length = model.assemble(model.form(1.0 * pair.dS))
+    return length / model.comm.allreduce(len(pair.facet_data))
