@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 from . import casebuild
 from .errors import CaseError
 from .gmshtools import physical_groups
+from .initial import InitialCase
 from .loads import STANDARD_GRAVITY, Pulse, PulseShape, impact_velocity, pendulum_impulse
 from .meshes.goda import PHYSICAL_GROUPS, GodaGeometry
 from .runspec import TimeSpec
@@ -121,9 +122,14 @@ class BodyCase:
     poisson: float = setting(doc="Poisson's ratio ν, in (−1, 0.5)")
     shear_modulus: float | None = setting(None, unit="Pa", doc="shear modulus G")
     young_modulus: float | None = setting(None, unit="Pa", doc="Young's modulus E")
+    initial_velocity: tuple[float, ...] = setting((0.0, 0.0), unit="m/s", doc="uniform "
+                                                  "velocity of the body at t = 0")
 
     def __post_init__(self) -> None:
         positive(self.density, "density")
+        if len(self.initial_velocity) != 2 or not all(map(math.isfinite, self.initial_velocity)):
+            raise InvalidField("initial_velocity", f"must be 2 finite numbers (got "
+                               f"{list(self.initial_velocity)})")
         if not -1.0 < self.poisson < 0.5:
             raise InvalidField("poisson", f"Poisson's ratio must be in (-1, 0.5) (got "
                                f"{self.poisson:g})")
@@ -375,6 +381,7 @@ _DEFAULT_MESH = MeshCase()
 _NO_DAMPING = DampingCase()
 _NO_CALIBRATION = CalibrationCase()
 _DEFAULT_OUTPUT = OutputCase()
+_DEFAULT_INITIAL = InitialCase()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -394,6 +401,7 @@ class Case:
     contact: tuple[ContactCase, ...] = setting((), doc="contact pairs")
     fixed: tuple[FixedCase, ...] = setting((), doc="fixed boundaries")
     loads: tuple[LoadCase, ...] = setting((), doc="impulse loads")
+    initial: InitialCase = setting(_DEFAULT_INITIAL, doc="the initial state")  # noqa: RUF009 (a field() with docs)
     damping: DampingCase = setting(_NO_DAMPING, doc="Rayleigh damping")  # noqa: RUF009 (a field() with docs)
     calibration: CalibrationCase = setting(_NO_CALIBRATION, doc="stiffness calibration")  # noqa: RUF009 (a field() with docs)
     time: TimeCase = setting(doc="time integration")  # noqa: RUF009 (a field() with docs)
@@ -443,6 +451,11 @@ class Case:
                                    "it with [calibration])")
         for p in self.output.probes:
             body(p.body, f"output.probes.{p.name}.body")
+        loads = [ld.name for ld in self.loads]
+        for name in self.initial.loads or ():
+            if name not in loads:
+                raise InvalidField("initial.loads", f"no load named '{name}'"
+                                   f"{suggest(name, loads)} (loads: {', '.join(loads) or 'none'})")
         pairs = [c.name for c in self.contact]
         for q in self.output.pair_probes:
             if q.pair not in pairs:

@@ -23,7 +23,7 @@ from .errors import CaseError, MeshError
 from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
 from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
-from .runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from .runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -123,11 +123,19 @@ def build_model(case: Case, data: gmshio.MeshData,
         for ld in case.loads:
             pulse = ld.pulse(case.out_of_plane_length, _group_length(data, ld.group))
             loads.append(SurfaceLoad(ld.group, ld.direction, pulse))
-    return ContactModel(data, bodies, pairs, fixed, loads,
-                        gravity=case.gravity if dynamic else None,
-                        damping=Damping(case.damping.alpha, case.damping.beta)
-                        if dynamic else None,
-                        degree=case.mesh.degree)
+    model = ContactModel(data, bodies, pairs, fixed, loads,
+                         gravity=case.gravity if dynamic else None,
+                         damping=Damping(case.damping.alpha, case.damping.beta)
+                         if dynamic else None,
+                         degree=case.mesh.degree)
+    if dynamic:
+        names = case.initial.loads
+        model.initial = InitialSpec(
+            velocities=tuple((b.name, b.initial_velocity) for b in case.bodies
+                             if any(b.initial_velocity)),
+            loads=None if names is None else tuple(k for k, ld in enumerate(case.loads)
+                                                   if ld.name in names))
+    return model
 
 
 def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None

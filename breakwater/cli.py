@@ -4,8 +4,8 @@
 default). Every command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
 exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
-failed or interrupted (SIGTERM) run. ``run --resume`` continues a killed run in the
-same output folder from its last checkpoint (``output.checkpoint_interval``).
+failed or interrupted (SIGTERM, SIGINT) run. ``run --resume`` continues a killed run in
+the same output folder from its last checkpoint (``output.checkpoint_interval``).
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""A run and its process: a progress bar, log records of rank 0 only, SIGTERM.
+"""A run and its process: a progress bar, rank-0 logging, SIGTERM and SIGINT.
 
 :func:`rank_zero_logging` lets only rank 0 log on a logger while a run goes (set up by
 the run itself, not on import, so that importing breakwater changes no logging);
 :class:`Progress` draws a tqdm bar in simulated seconds on rank 0; :class:`StopSignal`
-turns SIGTERM into a request to stop at the next step boundary.
+turns SIGTERM and SIGINT into a request to stop at the next step boundary.
 """
 
 from __future__ import annotations
@@ -99,14 +99,16 @@ class Progress:
 
 
 class StopSignal:
-    """Catches SIGTERM: the run stops at the next step boundary.
+    """Catches SIGTERM and SIGINT (Ctrl-C): the run stops at the next step boundary.
 
     The handler only sets a flag (the time loop polls it collectively, so that every
-    rank stops at the same step) and restores the default action, so a second
-    SIGTERM kills the process at once. Installed only from the main thread.
+    rank stops at the same step) and restores the default action of both signals, so a
+    second SIGTERM or SIGINT kills the process at once (for SIGINT the operating
+    system's default, not Python's KeyboardInterrupt). Installed only from the main
+    thread.
     """
 
-    SIGNALS = (signal.SIGTERM,)
+    SIGNALS = (signal.SIGTERM, signal.SIGINT)
 
     def __init__(self) -> None:
         self.received = 0
@@ -114,7 +116,8 @@ class StopSignal:
 
     def _handle(self, signum: int, frame: object) -> None:
         self.received = signum
-        signal.signal(signum, signal.SIG_DFL)
+        for sig in self.SIGNALS:
+            signal.signal(sig, signal.SIG_DFL)
 
     def __enter__(self) -> StopSignal:
         if threading.current_thread() is threading.main_thread():

@@ -52,10 +52,11 @@ from .errors import ConvergenceError
 from .gn22 import _scale, _tangential_stiffness, solve_static
 from .interface import interface_nodes
 from .model import ContactModel, _PairData
+from .schema import setting
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
-__all__ = ["STICK_BAND", "InitialState", "initial_state", "initial_velocities"]
+__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities"]
 
 log = logging.getLogger("breakwater.initial")
 
@@ -67,6 +68,19 @@ GN22 step's Newton (χ·½β₂Δt²/(β₁Δt) ≈ 5e-15 m at χ = 1e-10 m/s, �
 
 BONDING = 1.0
 """Tangential spring of a bonded (or held) interface, as a multiple of the pair's ε_n."""
+
+
+@dataclass(frozen=True)
+class InitialCase:
+    """``[initial]``: the loads of the initial state.
+
+    The load names are checked by :class:`~breakwater.case.Case`; a body's initial
+    velocity is ``bodies.<name>.initial_velocity``.
+    """
+
+    loads: tuple[str, ...] | None = setting(None, doc="names of the loads in the static "
+                                            "initial state, at their values at t = 0 (default: "
+                                            "every load; [] none: gravity only)")
 
 
 @dataclass

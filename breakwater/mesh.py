@@ -49,13 +49,34 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
     with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
         try:
-            on_rank_zero(comm, lambda: gmsh.merge(str(path)))
+            on_rank_zero(comm, lambda: _merge(path, gdim))
+        except MeshError:
+            raise
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
             raise MeshError(f"{path}: cannot read the mesh ({e})") from e
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
     if not data.physical_groups:
         raise MeshError(f"{path}: the mesh has no named physical groups")
     return data
+
+
+def _merge(path: pathlib.Path, gdim: int) -> None:
+    """Read a ``.msh`` into the current gmsh model (rank 0) and check it is whole.
+
+    A truncated file may read without error but lack its elements, nodes or physical
+    groups (dolfinx would then fail with a RuntimeError or an IndexError).
+
+    Raises:
+        MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups.
+    """
+    gmsh.merge(str(path))
+    if not gmsh.model.getPhysicalGroups():
+        raise MeshError(f"{path}: cannot read the mesh (no physical groups: truncated?)")
+    if len(gmsh.model.mesh.getNodes()[0]) == 0:
+        raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
+    types, _, _ = gmsh.model.mesh.getElements(gdim)
+    if len(types) == 0:
+        raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
 
 
 def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2

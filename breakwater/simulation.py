@@ -22,10 +22,10 @@ removed when the run finishes), and ``run(..., resume=True)`` continues from it:
 ``history.csv`` is cut back to the rows of the checkpoint and the run goes on, giving
 the same history as an uninterrupted run (bit for bit serially). ``summary.json`` exists
 from the start of a run (``status: "running"``) and is rewritten at every checkpoint,
-so a killed run's folder says that it did not finish. On SIGTERM the run stops at the
-next step boundary (all ranks together), writes a checkpoint (when N > 0) and the
-outputs, with ``status: "interrupted"``, and raises :class:`RunInterrupted`; a second
-SIGTERM kills it at once.
+so a killed run's folder says that it did not finish. On SIGTERM or SIGINT (Ctrl-C)
+the run stops at the next step boundary (all ranks together), writes a checkpoint (when
+N > 0) and the outputs, with ``status: "interrupted"``, and raises :class:`RunInterrupted`; a second
+SIGTERM or SIGINT kills it at once.
 
 Every rank runs the same code (all measurements are collective and give the same
 values on every rank); only rank 0 writes files, logs and prints (the run's logger,
@@ -42,7 +42,7 @@ This module holds :func:`run` and its time loop; the parts it uses:
 - :mod:`breakwater.runstate`: the bookkeeping a checkpoint saves and restores whole;
 - :mod:`breakwater.summary`: ``summary.json`` and the report, from what the run produced;
 - :mod:`breakwater.outputs` and :mod:`breakwater.files`: the files written;
-- :mod:`breakwater.console`: the progress bar, rank-0 logging, SIGTERM.
+- :mod:`breakwater.console`: the progress bar, rank-0 logging, SIGTERM and SIGINT.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ class SimulationFailed(BreakwaterError):
 
 
 class RunInterrupted(SimulationFailed):
-    """The run stopped on a signal (SIGTERM); ``summary.json`` says ``interrupted``."""
+    """The run stopped on a signal (SIGTERM, SIGINT); ``summary.json`` says ``interrupted``."""
 
 
 class _Stop(BreakwaterError):
@@ -227,7 +227,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     Raises:
         SimulationFailed: The run stopped before ``time.end_time``; the outputs up to
             the last accepted step are written, with ``finished: false``.
-        RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM.
+        RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM or SIGINT.
         CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
     if fingerprint is None:

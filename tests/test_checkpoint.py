@@ -472,3 +472,39 @@ def test_kill_and_resume_a_process(mesh_path: pathlib.Path, shared_dir: pathlib.
     r = run("--out", str(out), "--resume")
     assert r.returncode == 2 and "finished" in r.stderr
     shutil.rmtree(ref, ignore_errors=True)
+
+
+@pytest.mark.serial
+def test_sigint_stops_like_sigterm(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
+    # Ctrl-C at a terminal (SIGINT): the clean stop of SIGTERM (checkpoint, outputs,
+    # "interrupted", exit status 1), not Python's KeyboardInterrupt (exit 130, the
+    # summary left at "running").
+    if COMM.size > 1:
+        pytest.skip("subprocess runs are serial")
+    case = shared_dir / "blocks.toml"
+    case.write_text(CASE.format(mesh=mesh_path))
+    out = shared_dir / "interrupted"
+    p = _start(case, out)
+    _when_rows(p, out, 45)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 1, err
+    assert "interrupted by SIGINT" in err and "Traceback" not in err
+    summary = _consistent(out)
+    assert summary["finished"] is False and summary["status"] == "interrupted"
+    assert summary["checkpoint"]["steps"] == summary["solver"]["steps"] >= 44
+    assert (out / CHECKPOINT).is_file()
+
+
+def test_second_signal_kills_at_once() -> None:
+    # The first SIGINT (or SIGTERM) only sets the flag and gives both signals back
+    # their default action: a second one kills the process at once.
+    from breakwater.console import StopSignal
+
+    before = {s: signal.getsignal(s) for s in StopSignal.SIGNALS}
+    with StopSignal() as stop:
+        assert stop.received == 0
+        os.kill(os.getpid(), signal.SIGINT)
+        assert stop.received == signal.SIGINT
+        assert all(signal.getsignal(s) == signal.SIG_DFL for s in StopSignal.SIGNALS)
+    assert {s: signal.getsignal(s) for s in StopSignal.SIGNALS} == before
