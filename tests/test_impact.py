@@ -119,3 +119,65 @@ def test_momentum_transfer(history):
     # dissipation (β1 = 0.6) smears the wave fronts and leaves 2.9 % in a; allow 5 %.
     assert v_b == pytest.approx(v0, rel=0.05)
     assert abs(v_a) < 0.05 * v0
+
+
+CASE = """\
+name = "bars"
+gravity = [0.0, 0.0]
+[mesh]
+source = "{mesh}"
+[bodies.a]
+density = {rho}
+poisson = 0.0
+young_modulus = {E}
+initial_velocity = [{v0}, 0.0]
+[bodies.b]
+density = {rho}
+poisson = 0.0
+young_modulus = {E}
+[contact.interface]
+slave = "a"
+master = "b"
+penalty = {penalty}
+[time]
+dt = {dt}
+end_time = {end}
+[output]
+directory = "{out}"
+figures = false
+field_interval = 0
+"""
+
+
+def test_initial_velocity_from_a_case_file(folder: pathlib.Path):
+    # The same impact set up by a case file: bar a's initial velocity is
+    # bodies.a.initial_velocity; the run layer starts from it (history.csv).
+    from breakwater.case import load_case
+    from breakwater.outputs import read_history
+    from breakwater.simulation import run
+
+    path = two_rectangles(folder / "bars_case.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
+                          layout="side")
+    dt = T_CONTACT / N_STEPS
+    case_file = folder / "bars.toml"
+    if COMM.rank == 0:
+        case_file.write_text(CASE.format(mesh=path, rho=ρ, E=E, v0=v0, penalty=PENALTY, dt=dt,
+                                         end=1.3 * T_CONTACT, out=folder / "bars"))
+    COMM.barrier()
+    built = load_case(case_file).build(COMM)
+    summary = run(built.model, built.time, built.output, report=False)
+    assert summary["finished"] and summary["static"]["initial_state"] == "frictionless"
+    h = read_history(folder / "bars" / "history.csv")
+    t, σ = h["t"], h["normal_force_0"] / H
+    # At t = 0 bar a moves at v0 (kinetic energy ½ ρ L H v0² per unit depth), b is at rest.
+    assert h["kinetic"][0] == pytest.approx(0.5 * ρ * L * H * v0**2, rel=1e-12)
+    on = σ > 1e-3 * σ_CONTACT
+    t_last = t[on].max()
+    window = (t > 0.3 * T_CONTACT) & (t < 0.85 * T_CONTACT)
+    if COMM.rank == 0:
+        print(f"\ncase file: contact until {t_last:.4e} s (2L/c = {T_CONTACT:.4e} s), mean "
+              f"stress {σ[window].mean():.5e} Pa (ρcv0/2 = {σ_CONTACT:.5e} Pa)")
+    # The tolerances of test_contact_duration and test_contact_stress (same mesh, penalty
+    # and step): two steps on the duration, 1 % on the mean contact stress.
+    assert abs(t_last - T_CONTACT) <= 2 * dt
+    assert σ[window].mean() == pytest.approx(σ_CONTACT, rel=0.01)
