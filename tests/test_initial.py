@@ -160,3 +160,25 @@ def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, ca
     # not even reproducible run to run): its slide differs from serial by a relative
     # 1e-9 at t = 0.05 s and 3-4e-9 at 0.1 s (measured), growing with the slide.
     _same_as_serial(r, folder, ABOVE, solver, dt, 1e-10 if solver == "reference" else 1e-8)
+
+
+def test_loads_of_the_initial_state(mesh_path):
+    # A sustained side push of half μN, present at t = 0: in the initial state by default
+    # (a frictional state: no frictionless one exists), left out with InitialSpec(loads=())
+    # (the frictionless state under gravity; the push then acts from t = 0 on).
+    from breakwater.model import SurfaceLoad
+    from breakwater.runspec import InitialSpec
+
+    push = 0.5 * μ * ρ * g * W * H / H  # Pa on the block's left face
+    mat = Material(ρ, ν, young_modulus=E)
+    model = ContactModel(read_mesh(mesh_path, COMM), [Body("a", mat), Body("b", mat)],
+                         [ContactPair("interface", "a", "b", penalty=PENALTY, friction=μ,
+                                      regularisation=χ)],
+                         [Fixed("b_bottom")], [SurfaceLoad("a_left", (1.0, 0.0), lambda t: push)],
+                         gravity=(0.0, -g))
+    model.set_time(0.0)
+    assert initial_state(model).kind == "frictional"
+    model.initial = InitialSpec(loads=())
+    state = initial_state(model)
+    assert state.kind == "frictionless" and state.held == []
+    assert float(model.loads[0].amplitude.value) == push  # restored after the static solve

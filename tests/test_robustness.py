@@ -1,0 +1,117 @@
+"""Failures that must end in one line, or in consistent outputs: a truncated mesh, a
+static state that cannot be found (the bad case files of ``[initial]`` are in
+tests/bad_cases, ``i*.toml``).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from breakwater import cli, session, simulation
+from breakwater.errors import ConvergenceError, MeshError
+from breakwater.mesh import read_mesh
+from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.runspec import OutputSpec, TimeSpec
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from blocks import two_rectangles
+
+COMM = MPI.COMM_WORLD
+
+CASE = """\
+name = "truncated"
+[mesh]
+source = "{mesh}"
+[bodies.a]
+density = 2000.0
+poisson = 0.25
+young_modulus = 1e9
+[bodies.b]
+density = 2000.0
+poisson = 0.25
+young_modulus = 1e9
+[contact.interface]
+slave = "a"
+master = "b"
+penalty = 1e12
+[fixed.b_bottom]
+[time]
+dt = 1e-4
+end_time = 1e-3
+"""
+
+
+@pytest.fixture(scope="module")
+def mesh_path(folder: pathlib.Path) -> pathlib.Path:
+    return two_rectangles(folder / "whole.msh", COMM, a=(0.2, 0.05), b=(0.2, 0.05), h=0.025)
+
+
+def _truncated(mesh_path: pathlib.Path, folder: pathlib.Path, section: str) -> pathlib.Path:
+    """The mesh cut just before a section (``$Entities``, ``$Nodes``...) or at its end."""
+    lines = mesh_path.read_text().splitlines(keepends=True)
+    cut = next(i for i, line in enumerate(lines) if line.strip() == section)
+    path = folder / f"cut_{section.strip('$')}.msh"
+    if COMM.rank == 0:
+        path.write_text("".join(lines[:cut + 1]))
+    COMM.barrier()
+    return path
+
+
+# Cut after the physical names (dolfinx: "RuntimeError: No 'physical groups' in gmsh
+# mesh"), after the entities (no nodes: an IndexError) and after the nodes (no cells).
+SECTIONS = ["$EndPhysicalNames", "$EndEntities", "$EndNodes", "$Nodes", "$Elements"]
+
+
+@pytest.mark.parametrize("section", SECTIONS)
+def test_truncated_mesh_is_a_mesh_error(mesh_path, folder, section):
+    path = _truncated(mesh_path, folder, section)
+    with pytest.raises(MeshError, match="cannot read the mesh"):
+        read_mesh(path, COMM)
+
+
+@pytest.mark.parametrize("section", ["$EndPhysicalNames", "$EndEntities", "$EndNodes"])
+def test_truncated_mesh_exit_2(mesh_path, folder, section, capsys):
+    path = _truncated(mesh_path, folder, section)
+    case = folder / f"truncated_{section.strip('$')}.toml"
+    if COMM.rank == 0:
+        case.write_text(CASE.format(mesh=path))
+    COMM.barrier()
+    assert cli.main(["run", str(case), "--out", str(folder / "never"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and "Traceback" not in err
+        assert err.startswith(f"breakwater: error: mesh.source: {path}: cannot read the mesh")
+
+
+def test_failed_static_state_report_and_summary(mesh_path, shared_dir, monkeypatch, capsys):
+    # No static state: nothing of the run exists but the summary, which says so and names
+    # no file that was not written; the report has no "None" or "n/a" solver line.
+    def fail(model, options=None):
+        raise ConvergenceError("static: Newton did not converge (SNES reason -5, 40 "
+                               "iterations, residual 7.370e+01)", -5, 40)
+
+    monkeypatch.setattr(session, "initial_state", fail)
+    material = Material(2000.0, 0.25, young_modulus=1e9)
+    model = ContactModel(read_mesh(mesh_path, COMM), [Body("a", material), Body("b", material)],
+                         [ContactPair("interface", "a", "b", penalty=1e12)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    out = shared_dir / "failed"
+    with pytest.raises(simulation.SimulationFailed, match="SNES reason -5"):
+        simulation.run(model, TimeSpec(dt=1e-4, end_time=1e-3),
+                       OutputSpec(out, figures=False, progress=False))
+    report = capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed" and "SNES reason -5" in summary["error"]
+    assert summary["outputs"]["static"] is None and summary["outputs"]["history"] is None
+    assert not (out / "static.npz").exists() and not (out / "history.csv").exists()
+    if COMM.rank == 0:
+        assert "solver: no time step taken" in report
+        assert "None" not in report and "mean n/a" not in report
