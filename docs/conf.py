@@ -82,6 +82,7 @@ def _modules(package: str) -> list[str]:
 # The physics core first, then the application; every other module of the package after.
 API_SECTIONS = {
     "The physics core": ["breakwater.model", "breakwater.interface", "breakwater.gn22",
+                         "breakwater.initial",
                          "breakwater.slipguard", "breakwater.solver", "breakwater.ledger",
                          "breakwater.probes"],
     "The fast step solver": ["breakwater.bulk", "breakwater.condensed"],
