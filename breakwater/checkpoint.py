@@ -108,10 +108,13 @@ def model_fingerprint(model: Any, time: Any, output: Any) -> str:
 
     The bodies (names, materials, global dof counts), contact pairs, number of
     boundary conditions, loads (group, direction, amplitude when it is a dataclass),
-    gravity, damping, the time settings and the probes. A load amplitude given as a
-    plain function is known by its name only.
+    gravity, damping, the initial state's settings (when not the default), the time
+    settings and the probes. A load amplitude given as a plain function is known by its
+    name only.
     """
+    initial = getattr(model, "initial", None)
     return _digest({
+        **({"initial": initial} if initial is not None and initial != type(initial)() else {}),
         "cells": model.comm.allreduce(
             model.mesh.topology.index_map(model.mesh.topology.dim).size_local),
         "bodies": [{"name": b.spec.name, "material": b.spec.material,
