@@ -159,7 +159,11 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
             if not model.pairs:
                 raise
             log.debug("no frictionless static state (%s): solving with friction", e)
-            state = _frictional(model, options, e.iterations)
+            try:
+                state = _frictional(model, options, e.iterations)
+            except (ConvergenceError, PETSc.Error) as f:
+                raise ConvergenceError(f"{e}; with friction: {f}", e.reason,
+                                       e.iterations + getattr(f, "iterations", 0)) from f
     return state
 
 
