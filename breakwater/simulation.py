@@ -3,8 +3,10 @@
 :func:`run` takes a built :class:`~breakwater.model.ContactModel` and the typed run
 settings of :mod:`breakwater.runspec`; it never reads TOML. The run
 
-1. solves the frictionless static equilibrium under gravity
-   (:func:`breakwater.gn22.solve_static`) and starts the GN22 stepper from it at rest;
+1. finds the initial state (:func:`breakwater.initial.initial_state`: the static
+   equilibrium under gravity and the loads of the initial state, frictionless when it
+   exists, else frictional, bodies that friction cannot hold held up to t = 0) and
+   starts the GN22 stepper from it, at rest but for the bodies' initial velocities;
 2. steps to ``end_time`` (the last step lands on it exactly). A step whose Newton
    solve fails is retried with Δt/2, up to ``max_cutbacks`` halvings; after
    :data:`GROW_AFTER` accepted steps the step doubles again, never above the nominal
