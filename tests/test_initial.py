@@ -155,10 +155,13 @@ def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, ca
     # It slides from rest: the whole block, every node with the mean to 1e-3.
     assert np.ptp(r["slip"][-1]) < 1e-3 * slide
     # The initial state agrees across partitions to 1e-22 m and the reference solver's
-    # slide to 8e-13 of its scale. The fast solver's interface unknowns carry the
-    # round-off of X_II = (A⁻¹)_II (README, "The fast step solver"; MUMPS in parallel is
-    # not even reproducible run to run): its slide differs from serial by a relative
-    # 1e-9 at t = 0.05 s and 3-4e-9 at 0.1 s (measured), growing with the slide.
+    # slide to 8e-13 of its scale. The fast solver's slide differs from serial by a
+    # relative 1e-9 at t = 0.05 s and 3-4e-9 at 0.1 s (measured; it varies from run to
+    # run, as MUMPS in parallel does), growing with the slide and independent of the
+    # Newton tolerance and of ε_n (1e-12 and 1e12 tried): most likely the assembled
+    # matrices applied to the block's rigid displacement (K ũ of the predictor cancels
+    # only to |K||ũ|ε, in a partition-dependent order), which the reference's element-
+    # wise residual does not meet. 1e-8 bounds it with margin.
     _same_as_serial(r, folder, ABOVE, solver, dt, 1e-10 if solver == "reference" else 1e-8)
 
 
