@@ -14,22 +14,20 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-import dolfinx
-import ufl
-from dolfinx import fem
 from mpi4py import MPI
 
 from .errors import CaseError, MeshError
+from .loadcase import load_summary, surface_loads
 from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
-from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
+from .model import Body, ContactModel, ContactPair, Damping, Fixed
 from .runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
 
     from .calibrate import CalibrationResult
-    from .case import Case, LoadCase
+    from .case import Case
 
 __all__ = ["BuiltCase", "build", "build_model", "calibrate", "mesh_file", "read_mesh"]
 
@@ -121,8 +119,7 @@ def build_model(case: Case, data: gmshio.MeshData,
     loads = []
     if dynamic:
         for ld in case.loads:
-            pulse = ld.pulse(case.out_of_plane_length, _group_length(data, ld.group))
-            loads.append(SurfaceLoad(ld.group, ld.direction, pulse))
+            loads += surface_loads(ld, data, case.out_of_plane_length)
     return ContactModel(data, bodies, pairs, fixed, loads,
                         gravity=case.gravity if dynamic else None,
                         damping=Damping(case.damping.alpha, case.damping.beta)
@@ -186,7 +183,8 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
         model = build_model(case, data, dynamic=True)
     except MeshError as e:
         raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
-    extra["loads"] = {ld.name: _load_summary(case, ld, data) for ld in case.loads}
+    extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
+                      for ld in case.loads}
 
     def where(name: str, group: str | None, point: tuple[float, ...] | None
               ) -> tuple[float, ...]:
@@ -213,37 +211,6 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
                         probes=probes, pair_probes=pair_probes, figures=o.figures,
                         case_name=case.name, checkpoint_interval=o.checkpoint_interval)
     return BuiltCase(case, model, case.time, output, extra)
-
-
-def _group_length(data: gmshio.MeshData, group: str) -> float:
-    """Length (m) of a facet group, summed over the ranks."""
-    msh = data.mesh
-    tag = group_tag(data, group, msh.topology.dim - 1)
-    ds = ufl.Measure("ds", domain=msh, subdomain_data=data.facet_tags)(tag)
-    one = fem.Constant(msh, dolfinx.default_scalar_type(1.0))
-    length = msh.comm.allreduce(fem.assemble_scalar(fem.form(one * ds)), op=MPI.SUM)
-    if not length > 0:
-        raise CaseError(f"facet group '{group}' has zero length on the boundary")
-    return float(length)
-
-
-def _load_summary(case: Case, load: LoadCase, data: gmshio.MeshData) -> dict[str, Any]:
-    h = _group_length(data, load.group)
-    pulse = load.pulse(case.out_of_plane_length, h)
-    info: dict[str, Any] = {
-        "group": load.group,
-        "impulse": load.total_impulse,
-        "impulse_per_length": load.total_impulse / case.out_of_plane_length,
-        "patch_length": h,
-        "shape": load.shape,
-        "duration": load.duration,
-        "start": load.start,
-        "peak_traction": pulse.maximum,
-        "peak_force_per_length": pulse.maximum * h,
-    }
-    if load.pendulum is not None:
-        info["impact_velocity"] = load.pendulum.velocity
-    return info
 
 
 def _mesh_summary(case: Case, data: gmshio.MeshData) -> dict[str, Any]:

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import pathlib
 from dataclasses import dataclass
 from typing import Literal
 
@@ -228,3 +229,42 @@ class Table:
         k = bisect.bisect_right(times, τ)  # times[k - 1] <= τ < times[k]
         t0, t1 = times[k - 1], times[k]
         return values[k - 1] + (values[k] - values[k - 1]) * (τ - t0) / (t1 - t0)
+
+
+def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Read a CSV history: rows ``t, value`` (commas or blanks between them).
+
+    Blank lines and ``#`` comments are skipped, and so is a first line that is not
+    numeric (a header such as ``t,value``).
+
+    Raises:
+        OSError: The file cannot be read (the message names it).
+        ValueError: A row is not two numbers (the message names the line).
+
+    """
+    if not path.is_file():
+        raise OSError(f"file not found: {path}")
+    times: list[float] = []
+    values: list[float] = []
+    header_allowed = True
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        cells = [c for c in text.replace(",", " ").replace(";", " ").split() if c]
+        try:
+            if len(cells) != 2:
+                raise ValueError
+            t, v = float(cells[0]), float(cells[1])
+        except ValueError:
+            if header_allowed:
+                header_allowed = False
+                continue
+            raise ValueError(f"{path.name} line {number}: expected two numbers t, value "
+                             f"(got {text!r})") from None
+        header_allowed = False
+        times.append(t)
+        values.append(v)
+    if not times:
+        raise ValueError(f"{path.name}: no data rows")
+    return tuple(times), tuple(values)

@@ -407,8 +407,8 @@ class ContactModel:
         both = fem.compute_integration_domains(fem.IntegralType.interior_facet, msh.topology,
                                                inner).reshape(-1, 4)
         sides = np.vstack([ext, both[:, :2], both[:, 2:]])
-        owners = np.unique(self._cell_body[sides[:, 0]]) if len(sides) else np.zeros(0, int)
-        owners = sorted(set().union(*self.comm.allgather(set(owners.tolist()))))
+        local = set(np.unique(self._cell_body[sides[:, 0]]).tolist()) if len(sides) else set()
+        owners = sorted(set().union(*self.comm.allgather(local)))
         if load.body is not None:
             index = self.body(load.body).index
             if index not in owners:
