@@ -506,6 +506,8 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
         need(f.name, 1, f"fixed.{f.name}")
     for ld in case.loads:
         need(ld.group, 1, f"loads.{ld.name}.group")
+        for k, extra in enumerate(ld.groups):
+            need(extra, 1, f"loads.{ld.name}.groups[{k}]")
         if ld.goda is not None and ld.goda.uplift_group is not None:
             need(ld.goda.uplift_group, 1, f"loads.{ld.name}.goda.uplift_group")
     for p in case.output.probes:

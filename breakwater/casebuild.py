@@ -119,7 +119,8 @@ def build_model(case: Case, data: gmshio.MeshData,
     loads = []
     if dynamic:
         for ld in case.loads:
-            loads += surface_loads(ld, data, case.out_of_plane_length)
+            if ld.enabled:
+                loads += surface_loads(ld, data, case.out_of_plane_length)
     return ContactModel(data, bodies, pairs, fixed, loads,
                         gravity=case.gravity if dynamic else None,
                         damping=Damping(case.damping.alpha, case.damping.beta)
@@ -184,7 +185,7 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
     except MeshError as e:
         raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
-                      for ld in case.loads}
+                      for ld in case.loads if ld.enabled}
 
     def where(name: str, group: str | None, point: tuple[float, ...] | None
               ) -> tuple[float, ...]:

@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from .loadfields import Pressure, PressureProfile
+from .loadfields import Pressure, PressureProfile, TractionField
 from .loads import (
     STANDARD_GRAVITY,
     Constant,
@@ -212,6 +212,10 @@ class LoadCase:
 
     name: str = setting(key=True, doc="name of the load")
     group: str = setting(doc="facet (1D) physical group loaded")
+    groups: tuple[str, ...] = setting((), doc="further facet groups loaded alike (e.g. the "
+                                      "parts of a split face); a force is spread over all")
+    enabled: bool = setting(True, doc="false: the load is not applied (e.g. a load of the "
+                            "case this one extends)")
     body: str | None = setting(None, doc="the body loaded, when the group is an interface "
                                "between two bodies")
     time_function: TimeFunction | None = setting(None, doc='"pulse" (default with impulse '  # noqa: RUF009 (a field() with docs)
@@ -259,9 +263,9 @@ class LoadCase:
                 positive(self.impulse, "impulse")
         else:
             if impulsive:
-                raise InvalidField("impulse" if self.impulse is not None else "pendulum",
-                                   f'an impulse needs time_function = "pulse" (got '
-                                   f'"{kind}")')
+                raise InvalidField("time_function", f'"{kind}" multiplies a force or '
+                                   f'pressure: an impulse (impulse or [pendulum]) needs '
+                                   f'"pulse"')
             if len(given) != 1:
                 raise InvalidField(given[1] if given else "force",
                                    f"give exactly one of {', '.join(MAGNITUDES)} (got "
@@ -312,6 +316,10 @@ class LoadCase:
         """The traction amplitude (Pa) of a pulse on a patch of the given length (m)."""
         per_area = self.total_impulse / (out_of_plane_length * patch_length)
         return Pulse(per_area, self.duration, self.shape, self.start, self.peak)
+
+    def length(self, data: gmshio.MeshData) -> float:
+        """Length (m) of the loaded groups on a mesh."""
+        return sum(group_length(data, g) for g in (self.group, *self.groups))
 
     def time_factor(self) -> Callable[[float], float]:
         """The dimensionless time function of a non-pulse load."""
@@ -372,7 +380,6 @@ def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
     """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
     import dolfinx
     import numpy as np
-    from mpi4py import MPI
 
     from .mesh import group_tag
 
@@ -384,10 +391,10 @@ def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
     x = msh.geometry.x[nodes, :2]
     lo = x.min(axis=0) if len(x) else np.full(2, np.inf)
     hi = x.max(axis=0) if len(x) else np.full(2, -np.inf)
-    return msh.comm.allreduce(lo, op=MPI.MIN), msh.comm.allreduce(hi, op=MPI.MAX)
+    return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))
 
 
-def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front_group: str
+def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
                    ) -> tuple[PressureProfile, float]:
     """The triangular uplift on the base and the base width B (m).
 
@@ -395,8 +402,8 @@ def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front_group: str
     """
     assert goda.uplift_group is not None
     lo, hi = _extent(data, goda.uplift_group)
-    flo, fhi = _extent(data, front_group)
-    front_x = 0.5 * (flo[0] + fhi[0])
+    ends = [_extent(data, g) for g in front]
+    front_x = 0.5 * (min(e[0][0] for e in ends) + max(e[1][0] for e in ends))
     width = float(hi[0] - lo[0])
     if abs(front_x - lo[0]) <= abs(front_x - hi[0]):
         origin, axis = (float(lo[0]), 0.0), (1.0, 0.0)
@@ -408,28 +415,35 @@ def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front_group: str
 
 def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
                   ) -> list[SurfaceLoad]:
-    """The model loads of a case's load on a mesh (a Goda load with uplift gives two)."""
+    """The model loads of a case's load on a mesh.
+
+    One per group (``group``, then ``groups``), plus the uplift of a Goda load.
+    """
     from .model import SurfaceLoad
 
+    groups = (load.group, *load.groups)
     if load.kind == "pulse":
-        pulse = load.pulse(out_of_plane_length, group_length(data, load.group))
-        return [SurfaceLoad(load.group, load.direction, pulse, body=load.body)]
+        pulse = load.pulse(out_of_plane_length, load.length(data))
+        return [SurfaceLoad(g, load.direction, pulse, body=load.body) for g in groups]
     factor = load.time_factor()
     d = load.direction
+    field: TractionField | None = None
+    t = 0.0
     if load.force is not None:
-        t = load.force / out_of_plane_length / group_length(data, load.group)
-        return [SurfaceLoad(load.group, (t * d[0], t * d[1]), factor, body=load.body)]
-    if load.traction is not None:
+        t = load.force / out_of_plane_length / load.length(data)
+    elif load.traction is not None:
         t = load.traction
-        return [SurfaceLoad(load.group, (t * d[0], t * d[1]), factor, body=load.body)]
-    if load.pressure is not None:
-        return [SurfaceLoad(load.group, (), factor, Pressure(load.pressure), load.body)]
-    if load.profile is not None:
-        return [SurfaceLoad(load.group, (), factor, load.profile.field(), load.body)]
-    assert load.goda is not None
-    loads = [SurfaceLoad(load.group, (), factor, load.goda.front(), load.body)]
-    if load.goda.uplift_group is not None:
-        profile, _ = uplift_profile(load.goda, data, load.group)
+    elif load.pressure is not None:
+        field = Pressure(load.pressure)
+    elif load.profile is not None:
+        field = load.profile.field()
+    else:
+        assert load.goda is not None
+        field = load.goda.front()
+    direction = (t * d[0], t * d[1]) if field is None else ()
+    loads = [SurfaceLoad(g, direction, factor, field, load.body) for g in groups]
+    if load.goda is not None and load.goda.uplift_group is not None:
+        profile, _ = uplift_profile(load.goda, data, groups)
         body = load.body or _owner(data, load.group)
         loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body))
     return loads
@@ -461,8 +475,10 @@ def _owner(data: gmshio.MeshData, group: str) -> str:
 def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
                  ) -> dict[str, Any]:
     """The load as the run's summary describes it."""
-    h = group_length(data, load.group)
+    h = load.length(data)
     info: dict[str, Any] = {"group": load.group}
+    if load.groups:
+        info["groups"] = list(load.groups)
     if load.kind == "pulse":
         pulse = load.pulse(out_of_plane_length, h)
         info.update({
@@ -498,7 +514,7 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
                      "horizontal_force_per_length": g.force,
                      "horizontal_moment_per_length": g.moment})
         if load.goda.uplift_group is not None:
-            _, width = uplift_profile(load.goda, data, load.group)
+            _, width = uplift_profile(load.goda, data, (load.group, *load.groups))
             info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),
                          "uplift_moment_per_length": g.uplift_moment(width)})
     return info
