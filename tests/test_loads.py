@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import pathlib
 
@@ -26,8 +27,10 @@ from blocks import two_rectangles
 from mpi4py import MPI
 
 from breakwater.case import CaseError, load_case
+from breakwater.errors import MeshError
 from breakwater.gn22 import GN22, solve_static
 from breakwater.loadcase import load_summary
+from breakwater.loadfields import Pressure
 from breakwater.loads import Constant, Pulse, Ramp, Table, TableEnded, read_table
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
@@ -438,3 +441,51 @@ def test_table_equal_to_pulse_gives_the_pulse_history(block):
     scale = np.abs(histories[0]).max()
     assert scale > 1e-6  # it slid
     assert np.abs(histories[1] - histories[0]).max() <= 1e-10 * scale
+
+
+def test_resolved_case_round_trip_and_overrides(stacked, folder):
+    # The resolved case (written as case.toml by a run) reads back to the same case; the
+    # table file is then an absolute path (--set takes one too).
+    import tomli_w
+
+    if COMM.rank == 0:
+        (folder / "record2.csv").write_text("0,0\n1,1\n")
+    loads = GODA_TOML + '''
+[loads.push]
+group = "a_right"
+traction = -10.0
+time_function = "table"
+table = { file = "record2.csv", hold_last = true }
+[loads.off]
+group = "a_top"
+pressure = 1.0
+enabled = false
+'''
+    case = load_case(_write_case(folder, stacked, loads, "round"))
+    again = folder / "round_resolved.toml"
+    if COMM.rank == 0:
+        again.write_text(tomli_w.dumps(case.resolved()))
+    COMM.barrier()
+    assert load_case(again).resolved() == case.resolved()
+    push = next(ld for ld in case.loads if ld.name == "push")
+    assert pathlib.Path(push.table.file) == (folder / "record2.csv").resolve()
+    path = json.dumps(str(folder / "record2.csv"))
+    assert load_case(again, [f"loads.push.table.file={path}"]).resolved() == case.resolved()
+    # A disabled load is not built; the Goda load gives its front and its uplift.
+    model = case.build_model(case.read_mesh(COMM, folder / "out"))
+    assert [ld.spec.group for ld in model.loads] == ["a_left", "interface", "a_right"]
+
+
+def test_interface_load_needs_its_side(block):
+    # An interface facet group borders two bodies: a load on it names the side.
+    data = read_mesh(block, COMM)
+    mat = Material(ρ, ν, young_modulus=E)
+    bodies = [Body("a", mat), Body("b", mat)]
+    with pytest.raises(MeshError, match=r"must lie on exactly one body.*a, b"):
+        ContactModel(data, bodies, [], [], [SurfaceLoad("interface", (0.0, 1.0), Constant())])
+    model = ContactModel(data, bodies, [], [],
+                         [SurfaceLoad("interface", (), Constant(), Pressure(100.0), "b")])
+    # On b's side (its top, outward normal +y) a pressure pushes down: −100 Pa × W.
+    fy = model.assemble(model.form(model.loads[0].unit[1] * model.loads[0].ds))
+    assert model.loads[0].body == model.body("b").index
+    assert fy == pytest.approx(-100.0 * W, rel=1e-12)
