@@ -287,8 +287,6 @@ class LoadCase:
         if kind != "table" and self.table is not None:
             raise InvalidField("table", f'a [table] needs time_function = "table" (got '
                                f'"{kind}")')
-        if self.force is not None:
-            positive(self.force, "force", strict=False)
         object.__setattr__(self, "_kind", kind)
 
     @property
