@@ -307,8 +307,9 @@ class Case:
                         "folder results/<name>")
     description: str = setting("", doc="free text")
     out_of_plane_length: float = setting(1.0, unit="m", doc="length of the real structure "
-                                         "out of plane: impulses and target stiffnesses of "
-                                         "the real structure are divided by it")
+                                         "out of plane: impulses, forces and target "
+                                         "stiffnesses of the real structure are divided "
+                                         "by it")
     gravity: tuple[float, ...] = setting((0.0, -9.81), unit="m/s²", doc="acceleration of "
                                          "gravity")
     mesh: MeshCase = setting(_DEFAULT_MESH, doc="the mesh")  # noqa: RUF009 (a field() with docs)
