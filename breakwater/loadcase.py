@@ -136,12 +136,14 @@ class ProfileCase:
     origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0")
 
     def __post_init__(self) -> None:
+        if len(self.axis) != 2 or not any(self.axis):
+            raise InvalidField("axis", f"must be a non-zero 2-vector (got {list(self.axis)})")
+        if len(self.origin) != 2:
+            raise InvalidField("origin", f"must have 2 coordinates (got {list(self.origin)})")
         try:
             self.field()
         except ValueError as e:
             raise InvalidField("points", str(e)) from None
-        if len(self.axis) != 2 or len(self.origin) != 2:
-            raise InvalidField("axis", "axis and origin must have 2 components")
 
     def field(self) -> PressureProfile:
         """The model's pressure profile."""

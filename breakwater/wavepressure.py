@@ -1,25 +1,24 @@
 """Goda's design wave pressure on a vertical breakwater (pure Python).
 
 Goda (1974) "New wave pressure formulae for composite breakwaters", Proc. 14th ICCE;
-Goda (2000) "Random Seas and Design of Maritime Structures", 2nd ed., §4.2; the
-Coastal Engineering Manual (USACE, EM 1110-2-1100) Part VI-5, Table VI-5-53. The
+Goda (2000) "Random Seas and Design of Maritime Structures", 2nd ed., chapter 4; the
+Coastal Engineering Manual (USACE, EM 1110-2-1100) Part VI-5 (Goda's formula). The
 quasi-static pressure of the highest wave H_max of the design sea state on the upright
-section of a vertical (or composite) breakwater, per metre of breakwater:
+section of a vertical (or composite) breakwater, per metre of breakwater (η*: the
+elevation above the design water level, SWL, where the pressure vanishes; p₁, p₂, p₃,
+p₄: the pressures at the SWL, at the sea bottom (extrapolated), at the base of the
+upright section and at its crest; p_u: the uplift at the seaward edge of the base,
+falling linearly to 0 at the heel)::
 
-- elevation of the pressure's vanishing point above the design water level (SWL)
-      η* = 0.75 (1 + cos β) λ₁ H_max
-- pressure at the SWL, at the sea bottom (extrapolated), at the base of the upright
-  section and at its crest
-      p₁ = ½ (1 + cos β) (λ₁ α₁ + λ₂ α₂ cos²β) ρ g H_max
-      p₂ = p₁ / cosh(2πh/L)
-      p₃ = α₃ p₁
-      p₄ = p₁ (1 − h_c/η*) if η* > h_c, else 0
-- uplift under the base, triangular: p_u at the seaward edge, 0 at the heel
-      p_u = ½ (1 + cos β) λ₃ α₁ α₃ ρ g H_max
-- with the coefficients
-      α₁ = 0.6 + ½ [(4πh/L) / sinh(4πh/L)]²
-      α₂ = min{ (h_b − d)/(3 h_b) (H_max/d)², 2d/H_max }
-      α₃ = 1 − (h'/h) [1 − 1/cosh(2πh/L)]
+    η*  = 0.75 (1 + cos β) λ₁ H_max
+    p₁  = ½ (1 + cos β) (λ₁ α₁ + λ₂ α₂ cos²β) ρ g H_max
+    p₂  = p₁ / cosh(2πh/L)
+    p₃  = α₃ p₁
+    p₄  = p₁ (1 − h_c/η*) if η* > h_c, else 0
+    p_u = ½ (1 + cos β) λ₃ α₁ α₃ ρ g H_max
+    α₁  = 0.6 + ½ [(4πh/L) / sinh(4πh/L)]²
+    α₂  = min{ (h_b − d)/(3 h_b) (H_max/d)², 2d/H_max }
+    α₃  = 1 − (h'/h) [1 − 1/cosh(2πh/L)]
 
 where h is the water depth in front of the breakwater, h_b the depth at 5 H_1/3
 seaward of it (here default h), d the depth above the armour of the rubble
@@ -30,12 +29,13 @@ upright section) and L the wavelength at depth h of the design period (linear
 dispersion, :func:`wavelength`). The pressure on the front face varies linearly from
 0 at η* to p₁ at the SWL and to p₃ at the base (the line to p₂ at the sea bottom).
 
-Resultants per metre (CEM Table VI-5-53), with h_c* = min(η*, h_c):
+Resultants per metre (the integrals of this profile), with h_c* = min(η*, h_c): the horizontal
+force P, its moment M_P about the base of the upright section, the uplift force U on a
+base of width B and its moment M_U about the heel::
 
-- horizontal force  P = ½ (p₁ + p₃) h' + ½ (p₁ + p₄) h_c*
-- its moment about the base of the upright section
-      M_P = (2p₁ + p₃) h'²/6 + ½ (p₁ + p₄) h' h_c* + (p₁ + 2p₄) h_c*²/6
-- uplift force U = ½ p_u B and its moment about the heel M_U = ⅔ U B (B: base width).
+    P   = ½ (p₁ + p₃) h' + ½ (p₁ + p₄) h_c*
+    M_P = (2p₁ + p₃) h'²/6 + ½ (p₁ + p₄) h' h_c* + (p₁ + 2p₄) h_c*²/6
+    U   = ½ p_u B,   M_U = ⅔ U B
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 - time functions (:mod:`breakwater.loads`): constant, ramp-and-hold, tabulated (CSV or
   inline), and a table through a pulse's knots equal to the pulse;
 - Goda's formula (:mod:`breakwater.wavepressure`) against an independent evaluation of
-  the equations of Goda (2000) §4.2 / CEM Table VI-5-53 and its limits;
+  the equations of Goda (2000, chapter 4; CEM Part VI-5) and its limits;
 - resultant force and moment of pressures integrated on a mesh (the Goda front
   profile, the uplift on one side of an interface, a profile, a uniform pressure, a
   force resultant) against their analytic integrals;
@@ -83,7 +83,7 @@ def test_read_table(tmp_path):
 # --- Goda's formula ---------------------------------------------------------------------
 
 def _goda_by_hand(H, T, h, h1, d, hc, beta_deg, hb, lam, rho, g):
-    """Goda (2000) §4.2, eqs. (4.1)-(4.6), written out again (independent of the module).
+    """Goda's formula (Goda 2000, chapter 4) written out again, independently of the module.
 
     The wavelength is found by bisection of ω² = g k tanh(kh) (the module uses Newton).
     """
@@ -108,8 +108,8 @@ def _goda_by_hand(H, T, h, h1, d, hc, beta_deg, hb, lam, rho, g):
     return dict(L=L, a1=a1, a2=a2, a3=a3, eta=eta, p1=p1, p3=p3, p4=p4, pu=pu, P=P, M=M)
 
 
-# A design example in the style of Goda (2000) §4.2 and CEM Example Problem VI-5-… (a
-# caisson on a rubble foundation): H_max = 9 m, T = 12 s, h = 15 m, h' = 11 m,
+# A design case of our own, with typical prototype values (a caisson on a rubble
+# foundation): H_max = 9 m, T = 12 s, h = 15 m, h' = 11 m,
 # d = 9 m, h_c = 5 m, h_b = 17 m, oblique incidence β = 15°, ρ = 1030 kg/m³. We could
 # not check a published worked example's printed numbers here, so the reference is
 # the formula evaluated independently (above), plus the closed-form limits below.
@@ -129,8 +129,9 @@ def test_goda_against_the_equations():
         assert value == pytest.approx(ref[key], rel=1e-12), key
     # p₂ = p₁/cosh(2πh/L) and p₃ lies on the line from p₁ (SWL) to p₂ (sea bottom).
     assert got.p3 == pytest.approx(got.p1 + (got.p2 - got.p1) * e["h1"] / e["h"], rel=1e-12)
-    # The resultant and moment are the integrals of the profile (Simpson, exact for the
-    # piecewise-linear profile with its kink at the SWL on a node).
+    # The resultant and moment are the integrals of the profile: the trapezoidal rule on
+    # 3200 intervals with the kink at the SWL on a node is exact for the force (a
+    # piecewise-linear integrand) and O(Δz²) ≈ 1e-7 off for the (quadratic) moment.
     z = np.linspace(-e["h1"], got.wetted_crest, 2 * 1600 + 1)
     z = np.union1d(z, [0.0])
     p = np.array([got.front(v) for v in z])
@@ -142,7 +143,7 @@ def test_goda_against_the_equations():
 
 def test_goda_limits():
     # Linear dispersion: L(T = 10 s, h = 10 m) = 92.4 m (tables of the dispersion
-    # relation, e.g. CEM Table II-1-…); deep water gT²/2π.
+    # relation); deep water gT²/2π.
     assert wavelength(10.0, 10.0) == pytest.approx(92.37, abs=0.01)
     assert wavelength(2.0, 100.0) == pytest.approx(9.81 * 4 / (2 * math.pi), rel=1e-12)
     # Deep water: α₁ → 0.6, α₃ → 1 − h'/h; normal incidence: η* = 1.5 H, p_u = α₁α₃ρgH.
