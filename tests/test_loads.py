@@ -527,3 +527,19 @@ def test_field_load_on_both_solvers_and_the_ledger(stacked, folder):
     (u_f, w_f, _), (u_r, w_r, _) = results["fast"], results["reference"]
     assert np.abs(u_f - u_r).max() <= 1e-8 * np.abs(u_r).max()
     assert w_f == pytest.approx(w_r, rel=1e-8)
+
+
+def test_design_wave_example_reads():
+    # examples/goda_design_wave.toml: the numbers its comments quote, from the case.
+    example = pathlib.Path(__file__).resolve().parents[1] / "examples" / "goda_design_wave.toml"
+    case = load_case(example)
+    loads = {ld.name: ld for ld in case.loads}
+    assert not loads["impact"].enabled
+    wave = loads["wave"]
+    assert wave.kind == "table" and wave.groups == ("impact",)
+    g = wave.goda.pressure()
+    assert (round(g.p1), round(g.p3), round(g.p4), round(g.uplift)) == (2104, 1841, 1543, 1240)
+    assert round(g.force) == 388 and round(g.uplift_force(case.mesh.goda.caisson_width)) == 127
+    assert g.wavelength == pytest.approx(2.21, abs=0.005)
+    factor = wave.time_factor()
+    assert factor(0.0) == 0.0 and factor(0.01) == 2.5 and factor(case.time.end_time) == 0.0
