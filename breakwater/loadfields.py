@@ -3,10 +3,10 @@
 A surface load is ``amplitude(t) × field`` (:class:`breakwater.model.SurfaceLoad`):
 the field is the traction (Pa) per unit amplitude, a fixed UFL expression of the
 position ``x`` and of the outward unit normal ``n`` of the loaded body, so that the
-fast solver assembles each load once at unit amplitude. The fields (frozen
-dataclasses; ``traction(x, n)`` gives the UFL vector):
+fast solver assembles each load once at unit amplitude. A constant traction is the
+load's ``direction`` vector itself; the fields here (frozen dataclasses;
+``traction(x, n)`` gives the UFL vector) are
 
-- :class:`Uniform`: a constant traction vector (Pa);
 - :class:`Pressure`: a uniform pressure p normal to the surface, **positive pushing
   into the body** (traction −p n);
 - :class:`PressureProfile`: a pressure p(s) varying along the surface, linear between
@@ -23,7 +23,7 @@ from typing import Protocol
 import numpy as np
 import ufl
 
-__all__ = ["Pressure", "PressureProfile", "TractionField", "Uniform"]
+__all__ = ["Pressure", "PressureProfile", "TractionField"]
 
 
 class TractionField(Protocol):
@@ -31,17 +31,6 @@ class TractionField(Protocol):
 
     def traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         """The traction (Pa) at position ``x`` where the outward normal is ``n``."""
-
-
-@dataclass(frozen=True)
-class Uniform:
-    """A constant traction vector (Pa)."""
-
-    vector: tuple[float, ...]
-
-    def traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-        """The constant vector."""
-        return ufl.as_vector(self.vector)
 
 
 @dataclass(frozen=True)
