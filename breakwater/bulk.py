@@ -170,7 +170,7 @@ class BulkOperators:
         gravity = sum(_body_force(b, m.gravity, w[i]) for i, b in enumerate(m.bodies))
         loads.append((None, self._vector(gravity)))
         for ld in m.loads:
-            unit = ufl.dot(ufl.as_vector(ld.spec.direction), w[ld.body]) * ld.ds
+            unit = ufl.dot(ld.unit, w[ld.body]) * ld.ds
             loads.append((ld.amplitude, self._vector(unit)))
         return loads
 

@@ -38,7 +38,7 @@ from . import casebuild
 from .errors import CaseError
 from .gmshtools import physical_groups
 from .initial import InitialCase
-from .loads import STANDARD_GRAVITY, Pulse, PulseShape, impact_velocity, pendulum_impulse
+from .loadcase import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
 from .meshes.goda import PHYSICAL_GROUPS, GodaGeometry
 from .runspec import TimeSpec
 from .schema import InvalidField, Schema, positive, setting, suggest, to_toml
@@ -58,12 +58,15 @@ __all__ = [
     "ContactCase",
     "DampingCase",
     "FixedCase",
+    "GodaCase",
     "LoadCase",
     "MeshCase",
     "OutputCase",
     "PairProbeCase",
     "PendulumCase",
     "ProbeCase",
+    "ProfileCase",
+    "TableCase",
     "TimeCase",
     "builtin_case",
     "case_reference",
@@ -197,87 +200,6 @@ class FixedCase:
 
 
 @dataclass(frozen=True)
-class PendulumCase:
-    """``[loads.<name>.pendulum]``: the impulse of a pendulum, I = M ω (1 + e₀) (eq. 29)."""
-
-    mass: float = setting(unit="kg", doc="pendulum mass M")
-    cord_length: float = setting(unit="m", doc="cord length l₀")
-    release_distance: float = setting(unit="m", doc="release distance s₀ from the struck face")
-    restitution: float = setting(doc="coefficient of restitution e₀, in [0, 1]")
-    gravity: float = setting(STANDARD_GRAVITY, unit="m/s²", doc="g in ω = s₀ sqrt(g/l₀)")
-
-    def __post_init__(self) -> None:
-        for name in ("mass", "cord_length", "release_distance", "gravity"):
-            positive(getattr(self, name), name)
-        if not 0.0 <= self.restitution <= 1.0:
-            raise InvalidField("restitution", f"must be in [0, 1] (got {self.restitution:g})")
-
-    @property
-    def velocity(self) -> float:
-        """Impact velocity ω (m/s)."""
-        return impact_velocity(self.cord_length, self.release_distance, self.gravity)
-
-    @property
-    def impulse(self) -> float:
-        """Impulse I (N s)."""
-        return pendulum_impulse(self.mass, self.cord_length, self.release_distance,
-                                self.restitution, self.gravity)
-
-
-@dataclass(frozen=True)
-class LoadCase:
-    """``[loads.<name>]``: an impulse applied as a traction pulse on a facet group.
-
-    The traction is ``I / (out_of_plane_length · patch length) · shape(t)`` along
-    ``direction``, with ∫ shape dt = 1, so the force per metre out of plane
-    integrates to ``I / out_of_plane_length``. Give exactly one of ``impulse`` and
-    ``[loads.<name>.pendulum]``.
-    """
-
-    name: str = setting(key=True, doc="name of the load")
-    group: str = setting(doc="facet (1D) physical group loaded (the struck patch)")
-    direction: tuple[float, ...] = setting((1.0, 0.0), doc="direction of the traction "
-                                           "(normalised)")
-    impulse: float | None = setting(None, unit="N s", doc="impulse I of the real (3D) "
-                                    "structure; divided by out_of_plane_length")
-    pendulum: PendulumCase | None = setting(None, doc="the impulse from a pendulum (eq. 29)")  # noqa: RUF009 (a field() with docs)
-    shape: PulseShape = setting("triangular", doc="force-time shape of the pulse")  # noqa: RUF009 (a field() with docs)
-    duration: float = setting(2e-3, unit="s", doc="pulse duration")
-    start: float = setting(0.0, unit="s", doc="time the pulse starts")
-    peak: float = setting(0.5, doc="triangular: time of the peak as a fraction of the "
-                          "duration, in [0, 1]")
-
-    def __post_init__(self) -> None:
-        if len(self.direction) != 2 or not any(self.direction):
-            raise InvalidField("direction", f"must be a non-zero 2-vector (got "
-                               f"{list(self.direction)})")
-        norm = math.hypot(*self.direction)
-        object.__setattr__(self, "direction", tuple(c / norm for c in self.direction))
-        if (self.impulse is None) == (self.pendulum is None):
-            raise InvalidField("impulse", "give either impulse or a [pendulum] table (exactly "
-                               "one)")
-        if self.impulse is not None:
-            positive(self.impulse, "impulse")
-        positive(self.duration, "duration")
-        positive(self.start, "start", strict=False)
-        if not 0.0 <= self.peak <= 1.0:
-            raise InvalidField("peak", f"must be in [0, 1] (got {self.peak:g})")
-
-    @property
-    def total_impulse(self) -> float:
-        """The impulse I of the real structure (N s)."""
-        if self.pendulum is not None:
-            return self.pendulum.impulse
-        assert self.impulse is not None
-        return self.impulse
-
-    def pulse(self, out_of_plane_length: float, patch_length: float) -> Pulse:
-        """The traction amplitude (Pa) on a patch of the given length (m)."""
-        per_area = self.total_impulse / (out_of_plane_length * patch_length)
-        return Pulse(per_area, self.duration, self.shape, self.start, self.peak)
-
-
-@dataclass(frozen=True)
 class DampingCase:
     """``[damping]``: Rayleigh damping C = αM + βK of every body."""
 
@@ -392,15 +314,16 @@ class Case:
                         "folder results/<name>")
     description: str = setting("", doc="free text")
     out_of_plane_length: float = setting(1.0, unit="m", doc="length of the real structure "
-                                         "out of plane: impulses and target stiffnesses of "
-                                         "the real structure are divided by it")
+                                         "out of plane: impulses, forces and target "
+                                         "stiffnesses of the real structure are divided "
+                                         "by it")
     gravity: tuple[float, ...] = setting((0.0, -9.81), unit="m/s²", doc="acceleration of "
                                          "gravity")
     mesh: MeshCase = setting(_DEFAULT_MESH, doc="the mesh")  # noqa: RUF009 (a field() with docs)
     bodies: tuple[BodyCase, ...] = setting((), doc="the bodies")
     contact: tuple[ContactCase, ...] = setting((), doc="contact pairs")
     fixed: tuple[FixedCase, ...] = setting((), doc="fixed boundaries")
-    loads: tuple[LoadCase, ...] = setting((), doc="impulse loads")
+    loads: tuple[LoadCase, ...] = setting((), doc="surface loads (see breakwater.loadcase)")
     initial: InitialCase = setting(_DEFAULT_INITIAL, doc="the initial state")  # noqa: RUF009 (a field() with docs)
     damping: DampingCase = setting(_NO_DAMPING, doc="Rayleigh damping")  # noqa: RUF009 (a field() with docs)
     calibration: CalibrationCase = setting(_NO_CALIBRATION, doc="stiffness calibration")  # noqa: RUF009 (a field() with docs)
@@ -451,6 +374,10 @@ class Case:
                                    "it with [calibration])")
         for p in self.output.probes:
             body(p.body, f"output.probes.{p.name}.body")
+        for ld in self.loads:
+            if ld.body is not None:
+                body(ld.body, f"loads.{ld.name}.body")
+            ld.check_duration(self.time.end_time)
         loads = [ld.name for ld in self.loads]
         for name in self.initial.loads or ():
             if name not in loads:
@@ -544,8 +471,10 @@ def builtin_case(name: str) -> pathlib.Path:
     return path
 
 
-_SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA,)})
-"""The TOML form of a case (``mesh.source`` is a path unless it is "goda")."""
+_SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA,),
+                                                   "loads.*.table.file": ()})
+"""The TOML form of a case (``mesh.source`` is a path unless it is "goda"; so is a load
+table's ``file``)."""
 
 
 # --- physical groups of the mesh ------------------------------------------------------
@@ -591,6 +520,10 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
         need(f.name, 1, f"fixed.{f.name}")
     for ld in case.loads:
         need(ld.group, 1, f"loads.{ld.name}.group")
+        for k, extra in enumerate(ld.groups):
+            need(extra, 1, f"loads.{ld.name}.groups[{k}]")
+        if ld.goda is not None and ld.goda.uplift_group is not None:
+            need(ld.goda.uplift_group, 1, f"loads.{ld.name}.goda.uplift_group")
     for p in case.output.probes:
         if p.group is not None:
             need(p.group, 0, f"output.probes.{p.name}.group")

@@ -14,12 +14,10 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-import dolfinx
-import ufl
-from dolfinx import fem
 from mpi4py import MPI
 
 from .errors import CaseError, MeshError
+from .loadcase import load_summary, surface_loads
 from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
 from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
@@ -29,7 +27,7 @@ if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
 
     from .calibrate import CalibrationResult
-    from .case import Case, LoadCase
+    from .case import Case
 
 __all__ = ["BuiltCase", "build", "build_model", "calibrate", "mesh_file", "read_mesh"]
 
@@ -118,11 +116,14 @@ def build_model(case: Case, data: gmshio.MeshData,
     pairs = [ContactPair(c.name, c.slave, c.master, c.penalty, c.friction,
                          c.regularisation, c.gap) for c in case.contact]
     fixed = [Fixed(f.name, tuple(f.components)) for f in case.fixed]
-    loads = []
+    loads: list[SurfaceLoad] = []
+    owner: list[str] = []  # the case load each model load comes from
     if dynamic:
         for ld in case.loads:
-            pulse = ld.pulse(case.out_of_plane_length, _group_length(data, ld.group))
-            loads.append(SurfaceLoad(ld.group, ld.direction, pulse))
+            if ld.enabled:
+                made = surface_loads(ld, data, case.out_of_plane_length)
+                owner += [ld.name] * len(made)
+                loads += made
     model = ContactModel(data, bodies, pairs, fixed, loads,
                          gravity=case.gravity if dynamic else None,
                          damping=Damping(case.damping.alpha, case.damping.beta)
@@ -133,8 +134,8 @@ def build_model(case: Case, data: gmshio.MeshData,
         model.initial = InitialSpec(
             velocities=tuple((b.name, b.initial_velocity) for b in case.bodies
                              if any(b.initial_velocity)),
-            loads=None if names is None else tuple(k for k, ld in enumerate(case.loads)
-                                                   if ld.name in names))
+            loads=None if names is None else tuple(k for k, name in enumerate(owner)
+                                                   if name in names))
     return model
 
 
@@ -194,7 +195,8 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
         model = build_model(case, data, dynamic=True)
     except MeshError as e:
         raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
-    extra["loads"] = {ld.name: _load_summary(case, ld, data) for ld in case.loads}
+    extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
+                      for ld in case.loads if ld.enabled}
 
     def where(name: str, group: str | None, point: tuple[float, ...] | None
               ) -> tuple[float, ...]:
@@ -221,37 +223,6 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
                         probes=probes, pair_probes=pair_probes, figures=o.figures,
                         case_name=case.name, checkpoint_interval=o.checkpoint_interval)
     return BuiltCase(case, model, case.time, output, extra)
-
-
-def _group_length(data: gmshio.MeshData, group: str) -> float:
-    """Length (m) of a facet group, summed over the ranks."""
-    msh = data.mesh
-    tag = group_tag(data, group, msh.topology.dim - 1)
-    ds = ufl.Measure("ds", domain=msh, subdomain_data=data.facet_tags)(tag)
-    one = fem.Constant(msh, dolfinx.default_scalar_type(1.0))
-    length = msh.comm.allreduce(fem.assemble_scalar(fem.form(one * ds)), op=MPI.SUM)
-    if not length > 0:
-        raise CaseError(f"facet group '{group}' has zero length on the boundary")
-    return float(length)
-
-
-def _load_summary(case: Case, load: LoadCase, data: gmshio.MeshData) -> dict[str, Any]:
-    h = _group_length(data, load.group)
-    pulse = load.pulse(case.out_of_plane_length, h)
-    info: dict[str, Any] = {
-        "group": load.group,
-        "impulse": load.total_impulse,
-        "impulse_per_length": load.total_impulse / case.out_of_plane_length,
-        "patch_length": h,
-        "shape": load.shape,
-        "duration": load.duration,
-        "start": load.start,
-        "peak_traction": pulse.maximum,
-        "peak_force_per_length": pulse.maximum * h,
-    }
-    if load.pendulum is not None:
-        info["impact_velocity"] = load.pendulum.velocity
-    return info
 
 
 def _mesh_summary(case: Case, data: gmshio.MeshData) -> dict[str, Any]:

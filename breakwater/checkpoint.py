@@ -107,10 +107,10 @@ def model_fingerprint(model: Any, time: Any, output: Any) -> str:
     """SHA-256 of what defines a run built without a case file.
 
     The bodies (names, materials, global dof counts), contact pairs, number of
-    boundary conditions, loads (group, direction, amplitude when it is a dataclass),
-    gravity, damping, the initial state's settings (when not the default), the time
-    settings and the probes. A load amplitude given as a plain function is known by its
-    name only.
+    boundary conditions, loads (group, direction, amplitude when it is a dataclass, the
+    traction field and the side loaded when given), gravity, damping, the initial
+    state's settings (when not the default), the time settings and the probes. A load
+    amplitude given as a plain function is known by its name only.
     """
     initial = getattr(model, "initial", None)
     return _digest({
@@ -123,7 +123,10 @@ def model_fingerprint(model: Any, time: Any, output: Any) -> str:
         "pairs": [p.spec for p in model.pairs],
         "bcs": len(model.bcs),
         "loads": [{"group": ld.spec.group, "direction": ld.spec.direction,
-                   "amplitude": ld.spec.amplitude} for ld in model.loads],
+                   "amplitude": ld.spec.amplitude,
+                   **{k: v for k, v in (("field", ld.spec.field), ("body", ld.spec.body))
+                      if v is not None}}
+                  for ld in model.loads],
         "gravity": model.gravity.value,
         "damping": model.damping,
         "time": time,

@@ -18,7 +18,6 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import dolfinx
-import ufl
 from dolfinx import fem
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
@@ -75,7 +74,7 @@ class EnergyLedger:
         self._amp0 = [fem.Constant(m.mesh, dolfinx.default_scalar_type(0.0)) for _ in m.loads]
         work = sum(forms.external_power(b.ρ, m.gravity, Δu[i], b.dx) for i, b in bodies)
         for ld, a0 in zip(m.loads, self._amp0, strict=True):
-            t̄ = 0.5 * (a0 + ld.amplitude) * ufl.as_vector(ld.spec.direction)
+            t̄ = 0.5 * (a0 + ld.amplitude) * ld.unit
             work += forms.surface_traction(t̄, Δu[ld.body], ld.ds)
         self._work = m.form(work)
         self._friction = [

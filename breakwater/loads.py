@@ -1,4 +1,16 @@
-"""Impact loads: the pendulum impulse (eq. 29) and force-time pulse shapes.
+"""Load time functions: pulses of given impulse, constant, ramp-and-hold, tabulated.
+
+Every load is a time function t ↦ factor times a fixed spatial traction field (see
+:mod:`breakwater.loadfields`); the time functions here are plain callables (frozen
+dataclasses, so that a checkpoint can fingerprint them):
+
+- :class:`Pulse`: an impact pulse of given impulse (below), with the pendulum impulse
+  of eq. 29 (:func:`pendulum_impulse`);
+- :class:`Constant`: ``value`` from ``start`` on (zero before);
+- :class:`Ramp`: zero until ``start``, linear rise to ``value`` over ``rise``, then held;
+- :class:`Table`: linear interpolation of (t, value) points (a measured record), the
+  first value before the first point; after the last point an error unless
+  ``hold_last``.
 
 A pulse is an amplitude ``t ↦ f(t)`` that is zero outside ``[start, start + duration]``
 and whose time integral is exactly the impulse it was built for, so the
@@ -17,7 +29,9 @@ other shapes are integrated to O(Δt²) (or O(Δt) at the jumps of the rectangle
 
 from __future__ import annotations
 
+import bisect
 import math
+import pathlib
 from dataclasses import dataclass
 from typing import Literal
 
@@ -127,3 +141,130 @@ class Pulse:
         else:
             rise = 1.0
         return self.maximum * rise
+
+
+@dataclass(frozen=True)
+class Constant:
+    """A constant factor ``value`` from ``start`` on, zero before (callable: t ↦ factor).
+
+    With ``start = 0`` the load is present at t = 0 (and enters the initial static
+    state); with ``start > 0`` it is applied suddenly at the first step end ≥ start.
+    """
+
+    value: float = 1.0
+    start: float = 0.0
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        return self.value if t >= self.start else 0.0
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """Zero until ``start``, linear rise to ``value`` at ``start + rise``, then held."""
+
+    value: float = 1.0
+    start: float = 0.0
+    rise: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.rise > 0 and math.isfinite(self.rise)):
+            raise ValueError(f"ramp rise time must be > 0 (got {self.rise})")
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        s = (t - self.start) / self.rise
+        return self.value * min(max(s, 0.0), 1.0)
+
+
+class TableEnded(ValueError):
+    """A :class:`Table` was evaluated after its last point without ``hold_last``."""
+
+
+@dataclass(frozen=True)
+class Table:
+    """Linear interpolation of a tabulated history (callable: t ↦ factor).
+
+    Attributes:
+        times: Increasing times (s), at least two.
+        values: The factor at each time.
+        hold_last: After the last time keep the last value (else :class:`TableEnded`).
+        start: The table's time 0 is at ``start`` (s): factor(t) = table(t − start).
+
+    Before the first point the factor is the first value.
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    hold_last: bool = False
+    start: float = 0.0
+
+    def __post_init__(self) -> None:
+        if len(self.times) != len(self.values):
+            raise ValueError("times and values must have the same length")
+        if len(self.times) < 2:
+            raise ValueError("a table needs at least two points")
+        if not all(math.isfinite(v) for v in (*self.times, *self.values)):
+            raise ValueError("table values must be finite")
+        for k in range(1, len(self.times)):
+            if not self.times[k] > self.times[k - 1]:
+                raise ValueError(f"times must increase (point {k}: t = {self.times[k]:g} after "
+                                 f"t = {self.times[k - 1]:g})")
+
+    @property
+    def end(self) -> float:
+        """The time of the last point (s), on the run's clock."""
+        return self.start + self.times[-1]
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        τ = t - self.start
+        times, values = self.times, self.values
+        if τ <= times[0]:
+            return values[0]
+        if τ >= times[-1]:
+            if τ > times[-1] and not self.hold_last:
+                raise TableEnded(f"the table ends at t = {self.end:g} s (asked at t = {t:g} s)")
+            return values[-1]
+        k = bisect.bisect_right(times, τ)  # times[k - 1] <= τ < times[k]
+        t0, t1 = times[k - 1], times[k]
+        return values[k - 1] + (values[k] - values[k - 1]) * (τ - t0) / (t1 - t0)
+
+
+def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Read a CSV history: rows ``t, value`` (commas or blanks between them).
+
+    Blank lines and ``#`` comments are skipped, and so is a first line that is not
+    numeric (a header such as ``t,value``).
+
+    Raises:
+        OSError: The file cannot be read (the message names it).
+        ValueError: A row is not two numbers (the message names the line).
+
+    """
+    if not path.is_file():
+        raise OSError(f"file not found: {path}")
+    times: list[float] = []
+    values: list[float] = []
+    header_allowed = True
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        cells = [c for c in text.replace(",", " ").replace(";", " ").split() if c]
+        try:
+            if len(cells) != 2:
+                raise ValueError
+            t, v = float(cells[0]), float(cells[1])
+        except ValueError:
+            if header_allowed:
+                header_allowed = False
+                continue
+            raise ValueError(f"{path.name} line {number}: expected two numbers t, value "
+                             f"(got {text!r})") from None
+        header_allowed = False
+        times.append(t)
+        values.append(v)
+    if not times:
+        raise ValueError(f"{path.name}: no data rows")
+    return tuple(times), tuple(values)

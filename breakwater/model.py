@@ -27,6 +27,7 @@ from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import MeshError
+from .loadfields import TractionField
 from .mesh import group_tag
 from .runspec import InitialSpec
 
@@ -152,18 +153,33 @@ class Fixed:
 
 @dataclass(frozen=True)
 class SurfaceLoad:
-    """A traction ``amplitude(t) * direction`` (Pa) on a named facet group.
+    """A traction ``amplitude(t) × field`` (Pa) on a named facet group.
 
     Attributes:
-        group: Facet group on the boundary of one body.
-        direction: Traction per unit amplitude (a vector of the geometric dimension).
+        group: Facet group on the boundary of one body (or an interface between two
+            bodies, with ``body`` naming the side loaded).
+        direction: Traction per unit amplitude (a vector of the geometric dimension);
+            empty when ``field`` gives it.
         amplitude: Time function t ↦ scale factor.
+        field: Traction per unit amplitude as a UFL expression of the position and the
+            outward normal of the body (:mod:`breakwater.loadfields`); None: the
+            constant ``direction``.
+        body: The body loaded; None: the one body whose boundary holds the group.
 
     """
 
     group: str
     direction: tuple[float, ...]
     amplitude: Callable[[float], float]
+    field: TractionField | None = None
+    body: str | None = None
+
+    def unit_traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr
+                      ) -> ufl.core.expr.Expr:
+        """The traction per unit amplitude at ``x`` (outward normal ``n``)."""
+        if self.field is not None:
+            return self.field.traction(x, n)
+        return ufl.as_vector(self.direction)
 
 
 @dataclass(frozen=True)
@@ -216,11 +232,17 @@ class _PairData:
 
 @dataclass
 class _LoadData:
+    """What the model builds for one load: ``traction = amplitude × unit``."""
+
     spec: SurfaceLoad
     body: int
     ds: ufl.Measure
     amplitude: fem.Constant
+    unit: ufl.core.expr.Expr
     traction: ufl.core.expr.Expr = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.traction = self.amplitude * self.unit
 
 
 class ContactModel:
@@ -302,6 +324,7 @@ class ContactModel:
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
+        self._load_data: list[tuple[int, np.ndarray]] = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
         self._solvers = 0  # solvers built on this model (see options_prefix)
         self.initial = InitialSpec()
@@ -370,15 +393,50 @@ class ContactModel:
         return bcs
 
     def _build_load(self, k: int, load: SurfaceLoad) -> _LoadData:
-        body, _ = self._locate(load.group)
-        if len(load.direction) != self.gdim:
+        """The load's measure: one-sided facet integrals on the loaded body.
+
+        Every load integrates over the exterior-facet pairs (cell, local facet) of its
+        body, in one shared list (dolfinx compiles a form only if all its integrals of
+        a type share one subdomain_data object); on an interface between two bodies
+        the pairs are those of the side named by ``load.body``.
+        """
+        msh, data = self.mesh, self.mesh_data
+        fdim = msh.topology.dim - 1
+        if load.field is None and len(load.direction) != self.gdim:
             raise ValueError(f"load on '{load.group}': direction needs {self.gdim} components")
-        tag = group_tag(self.mesh_data, load.group, self.mesh.topology.dim - 1)
-        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.mesh_data.facet_tags)(tag)
-        amp = fem.Constant(self.mesh, dolfinx.default_scalar_type(load.amplitude(0.0)))
-        data = _LoadData(load, body.index, ds, amp)
-        data.traction = amp * ufl.as_vector(load.direction)
-        return data
+        assert data.facet_tags is not None
+        facets = data.facet_tags.find(group_tag(data, load.group, fdim))
+        outer = np.intersect1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
+        ext = fem.compute_integration_domains(fem.IntegralType.exterior_facet, msh.topology,
+                                              outer).reshape(-1, 2)
+        inner = np.setdiff1d(facets, outer)
+        both = fem.compute_integration_domains(fem.IntegralType.interior_facet, msh.topology,
+                                               inner).reshape(-1, 4)
+        sides = np.vstack([ext, both[:, :2], both[:, 2:]])
+        local = set(np.unique(self._cell_body[sides[:, 0]]).tolist()) if len(sides) else set()
+        owners = sorted(set().union(*self.comm.allgather(local)))
+        if load.body is not None:
+            index = self.body(load.body).index
+            if index not in owners:
+                raise MeshError(f"facet group '{load.group}' is not on the boundary of "
+                                f"body '{load.body}'")
+        elif len(owners) != 1:
+            names = ", ".join(self.bodies[i].spec.name for i in owners)
+            raise MeshError(f"facet group '{load.group}' must lie on exactly one body "
+                            f"(found on {len(owners)}{': ' + names if names else ''}; name "
+                            "the body loaded)")
+        else:
+            index = owners[0]
+        if self.comm.allreduce(len(inner)) == 0:
+            entities = ext  # the exterior pairs in dolfinx's own order (as ds(tag) would)
+        else:
+            entities = sides[self._cell_body[sides[:, 0]] == index]
+        tag = 2000 + k
+        self._load_data.append((tag, entities.astype(np.int32).ravel()))
+        ds = ufl.Measure("ds", domain=msh, subdomain_data=self._load_data)(tag)
+        amp = fem.Constant(msh, dolfinx.default_scalar_type(load.amplitude(0.0)))
+        unit = load.unit_traction(ufl.SpatialCoordinate(msh), ufl.FacetNormal(msh))
+        return _LoadData(load, index, ds, amp, unit)
 
     # --- physics ------------------------------------------------------------------
 

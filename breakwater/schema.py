@@ -377,15 +377,31 @@ class Schema:
     # --- files, extends and overrides ------------------------------------------------------
 
     def _resolve_paths(self, raw: dict[str, Any], base: pathlib.Path) -> None:
-        """Resolve the path values of a file's data against the file's folder."""
+        """Resolve the path values of a file's data against the file's folder.
+
+        A ``*`` in a path key stands for every entry of a table (``loads.*.table.file``).
+        """
         for key, names in self.paths.items():
             *tables, last = key.split(".")
-            node: Any = raw
+            nodes: list[Any] = [raw]
             for part in tables:
-                node = node.get(part) if isinstance(node, dict) else None
-            if isinstance(node, dict) and isinstance(node.get(last), str) \
-                    and node[last] not in names:
-                node[last] = str((base / node[last]).resolve())
+                nodes = [n.get(part) if part != "*" else v
+                         for n in nodes if isinstance(n, dict)
+                         for v in ([None] if part != "*" else list(n.values()))]
+            for node in nodes:
+                if isinstance(node, dict) and isinstance(node.get(last), str) \
+                        and node[last] not in names:
+                    node[last] = str((base / node[last]).resolve())
+
+    def _path_key(self, here: str) -> Collection[str] | None:
+        """The names that are not paths, if the dotted key ``here`` is a path key."""
+        parts = here.split(".")
+        for key, names in self.paths.items():
+            pattern = key.split(".")
+            if len(pattern) == len(parts) and all(p in ("*", q)
+                                                  for p, q in zip(pattern, parts, strict=True)):
+                return names
+        return None
 
     def _load_raw(self, path: pathlib.Path, chain: tuple[pathlib.Path, ...],
                   origins: dict[str, str]) -> dict[str, Any]:
@@ -477,7 +493,8 @@ class Schema:
                 i += 1
                 continue
             break
-        if here in self.paths and isinstance(value, str) and value not in self.paths[here]:
+        not_paths = self._path_key(here)
+        if not_paths is not None and isinstance(value, str) and value not in not_paths:
             value = str(pathlib.Path(value).resolve())
         node[part] = value
         for p in [p for p in origins if p == here or p.startswith(here + ".")]:

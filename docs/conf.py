@@ -88,6 +88,8 @@ API_SECTIONS = {
     "The fast step solver": ["breakwater.bulk", "breakwater.condensed"],
     "The physics in UFL (forms/)": _modules("breakwater.forms"),
     "Cases and runs": ["breakwater.case", "breakwater.simulation"],
+    "Loads": ["breakwater.loads", "breakwater.loadfields", "breakwater.wavepressure",
+              "breakwater.loadcase"],
 }
 
 

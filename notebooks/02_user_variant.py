@@ -26,7 +26,9 @@
 # 3. the comparison: peak displacement, residual slip, uplift;
 # 4. a geometry the built-in generator does not make, a mound with a berm on the
 #    seaward side, built with the gmsh Python API, written as a `.msh` file with named
-#    physical groups and run through a case file that `extends` the built-in case.
+#    physical groups and run through a case file that `extends` the built-in case;
+# 5. a measured wave-pressure record read from a CSV file and applied to the caisson's
+#    seaward face instead of the pendulum, beside Goda's design wave pressure.
 #
 # | environment variable | default | meaning |
 # |---|---|---|
@@ -363,3 +365,90 @@ display(Image(filename=str(OUT / "berm" / "figures" / "max_ux_deformed.png"), wi
 # pressure is again $\rho g h$ = 4586 Pa. Every output of the built-in case (history,
 # summary, fields for ParaView, figures) is there for the user's mesh too, in
 # `<output>/berm/`.
+
+# %% [markdown]
+# ## 5. A measured pressure record
+#
+# A pressure record measured on a model (a transducer sampled in time) is a CSV file of
+# `t, value` rows. A case reads it as a tabulated time function, `time_function =
+# "table"` with `table.file` (relative to the case file), interpolated linearly between
+# the samples; a header line and `#` comments are skipped. No measured record ships
+# with breakwater: the cell below writes a synthetic one in its place, a "church-roof"
+# breaking-wave history (impact peak, then the quasi-static hump of the crest) sampled
+# at 2 kHz with transducer noise. To use your own, point `table.file` at it.
+
+# %%
+from breakwater.loads import read_table
+from breakwater.wavepressure import goda_pressure
+
+(OUT / "measured").mkdir(parents=True, exist_ok=True)
+record = OUT / "measured" / "pressure_record.csv"
+rng = np.random.default_rng(2011)
+t = np.arange(0.0, 0.4, 5e-4)
+p = 2100.0 * np.interp(t, [0, 0.01, 0.02, 0.03, 0.1, 0.25, 0.35],
+                       [0, 2.5, 1.1, 0.9, 1.0, 1.0, 0]) + 20.0 * rng.standard_normal(len(t))
+p[0] = 0.0  # the wave arrives after t = 0: no load in the initial static state
+np.savetxt(record, np.column_stack([t, p]), delimiter=",", header="t (s),p (Pa)",
+           comments="")
+
+times, values = read_table(record)  # what the case reads: (t, value) tuples
+print(f"{len(times)} samples from {times[0]} s to {times[-1]} s, peak {max(values):.0f} Pa")
+
+# %% [markdown]
+# The record is a point pressure. The case below spreads it over the seaward face with
+# a shape: a `[profile]` of factors along the elevation y, 1 below the still water level
+# (y = 0.32 m) and falling to 0 at the caisson's top, times the record in Pa. The
+# impulse of the built-in case is switched off (`enabled = false`). For comparison,
+# Goda's design pressure of a laboratory-scale wave (H_max = 0.18 m, T = 1.4 s, the
+# `examples/goda_design_wave.toml` case) is drawn with it.
+
+# %%
+case_file = OUT / "measured" / "measured_wave.toml"
+case_file.write_text(f'''\
+extends = "goda"
+name = "measured_wave"
+
+[bodies.mound]
+shear_modulus = {G!r}  # Pa: the gravel of the paper's case
+
+[calibration]
+enabled = false
+
+[loads.impact]         # no pendulum
+enabled = false
+
+[loads.wave]
+group = "caisson_front"
+groups = ["impact"]    # the bolt's patch, a group of its own on the same face
+time_function = "table"
+table.file = "pressure_record.csv"
+table.hold_last = true
+# the shape along y (factors): 1 up to the still water level, 0 at the caisson top
+profile = {{ points = [[0.19, 1.0], [0.32, 1.0], [0.392, 0.0]], axis = [0.0, 1.0] }}
+''')
+measured = load_case(case_file, common("measured_wave"))
+wave = next(ld for ld in measured.loads if ld.name == "wave")
+factor = wave.time_factor()
+print(f"time function: {wave.kind}; at t = 0.01 s: {factor(0.01):.0f} Pa")
+summary_measured = run(measured)
+
+goda = goda_pressure(0.18, 1.4, depth=0.32, toe_depth=0.13, berm_depth=0.13,
+                     crest_height=0.072)
+fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 3.5), width_ratios=[2, 1])
+ax1.plot(times, values, lw=0.6, label="record (Pa)")
+ax1.set_xlabel("t (s)")
+ax1.set_ylabel("pressure at the still water level (Pa)")
+ax1.grid(lw=0.3)
+ax1.legend()
+y = np.linspace(0.19, 0.392, 200)
+ax2.plot([goda.front(v - 0.32) for v in y], y, label="Goda, H = 0.18 m")
+ax2.plot(wave.profile.field().pressure(y) * goda.p1, y, "--", label="profile × p₁")
+ax2.axhline(0.32, color="tab:blue", lw=0.5)
+ax2.set_xlabel("p (Pa)")
+ax2.set_ylabel("y (m)")
+ax2.legend(fontsize=8)
+fig.tight_layout()
+fig.savefig(OUT / "measured" / "record_and_profile.png", dpi=120, bbox_inches="tight")
+plt.show()
+print(f"Goda: p1 = {goda.p1:.0f} Pa, p3 = {goda.p3:.0f} Pa, p4 = {goda.p4:.0f} Pa, "
+      f"uplift {goda.uplift:.0f} Pa; P = {goda.force:.0f} N/m")

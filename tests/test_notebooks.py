@@ -171,6 +171,13 @@ def test_user_variant(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> 
     assert pathlib.Path(case["mesh"]["source"]).name == "berm.msh"
     assert case["bodies"]["mound"]["shear_modulus"] == G
     assert berm["mesh"]["source"].endswith("berm.msh")
-    for name in ("comparison.png", "meshes.png", "berm/berm_mesh.png", "berm/berm.msh"):
+    # The measured record was read from its CSV file as the wave load's table.
+    measured = _check_run(out / "measured_wave", figures=False)
+    assert measured["loads"]["wave"]["time_function"] == "table"
+    assert "impact" not in measured["loads"]  # the pendulum was switched off
+    case = tomllib.loads((out / "measured_wave" / "case.toml").read_text(encoding="utf-8"))
+    assert pathlib.Path(case["loads"]["wave"]["table"]["file"]).name == "pressure_record.csv"
+    for name in ("comparison.png", "meshes.png", "berm/berm_mesh.png", "berm/berm.msh",
+                 "measured/record_and_profile.png"):
         assert (out / name).is_file(), name
     assert len(_outputs(nb, "image/png")) >= 5

@@ -1,0 +1,205 @@
+"""Goda's design wave pressure on a vertical breakwater (pure Python).
+
+Goda (1974) "New wave pressure formulae for composite breakwaters", Proc. 14th ICCE;
+Goda (2000) "Random Seas and Design of Maritime Structures", 2nd ed., chapter 4; the
+Coastal Engineering Manual (USACE, EM 1110-2-1100) Part VI-5 (Goda's formula). The
+quasi-static pressure of the highest wave H_max of the design sea state on the upright
+section of a vertical (or composite) breakwater, per metre of breakwater (η*: the
+elevation above the design water level, SWL, where the pressure vanishes; p₁, p₂, p₃,
+p₄: the pressures at the SWL, at the sea bottom (extrapolated), at the base of the
+upright section and at its crest; p_u: the uplift at the seaward edge of the base,
+falling linearly to 0 at the heel)::
+
+    η*  = 0.75 (1 + cos β) λ₁ H_max
+    p₁  = ½ (1 + cos β) (λ₁ α₁ + λ₂ α₂ cos²β) ρ g H_max
+    p₂  = p₁ / cosh(2πh/L)
+    p₃  = α₃ p₁
+    p₄  = p₁ (1 − h_c/η*) if η* > h_c, else 0
+    p_u = ½ (1 + cos β) λ₃ α₁ α₃ ρ g H_max
+    α₁  = 0.6 + ½ [(4πh/L) / sinh(4πh/L)]²
+    α₂  = min{ (h_b − d)/(3 h_b) (H_max/d)², 2d/H_max }
+    α₃  = 1 − (h'/h) [1 − 1/cosh(2πh/L)]
+
+where h is the water depth in front of the breakwater, h_b the depth at 5 H_1/3
+seaward of it (here default h), d the depth above the armour of the rubble
+foundation (the berm), h' the depth of the base of the upright section below the
+SWL, h_c the crest elevation above the SWL, β the angle between the wave direction
+and the normal to the breakwater, λ₁, λ₂, λ₃ modification factors (1 for a plain
+upright section) and L the wavelength at depth h of the design period (linear
+dispersion, :func:`wavelength`). The pressure on the front face varies linearly from
+0 at η* to p₁ at the SWL and to p₃ at the base (the line to p₂ at the sea bottom).
+
+Resultants per metre (the integrals of this profile), with h_c* = min(η*, h_c): the horizontal
+force P, its moment M_P about the base of the upright section, the uplift force U on a
+base of width B and its moment M_U about the heel::
+
+    P   = ½ (p₁ + p₃) h' + ½ (p₁ + p₄) h_c*
+    M_P = (2p₁ + p₃) h'²/6 + ½ (p₁ + p₄) h' h_c* + (p₁ + 2p₄) h_c*²/6
+    U   = ½ p_u B,   M_U = ⅔ U B
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["GodaPressure", "goda_pressure", "wavelength"]
+
+
+def wavelength(period: float, depth: float, gravity: float = 9.81) -> float:
+    """Wavelength L (m) of linear waves: ω² = g k tanh(k h), L = 2π/k (Newton's method).
+
+    Args:
+        period: Wave period T (s).
+        depth: Water depth h (m).
+        gravity: g (m/s²).
+
+    """
+    if not (period > 0 and depth > 0 and gravity > 0):
+        raise ValueError("period, depth and gravity must be > 0")
+    ω2 = (2.0 * math.pi / period) ** 2
+    # Start from Eckart's (1952) approximation (a few per cent off), then Newton.
+    k0 = ω2 / gravity
+    k = k0 / math.sqrt(math.tanh(k0 * depth))
+    for _ in range(100):
+        th = math.tanh(k * depth)
+        f = gravity * k * th - ω2
+        df = gravity * (th + k * depth * (1.0 - th * th))
+        step = f / df
+        k -= step
+        if abs(step) < 1e-15 * k:
+            break
+    return 2.0 * math.pi / k
+
+
+@dataclass(frozen=True)
+class GodaPressure:
+    """The result of Goda's formula (SI units: m, Pa, N/m, N m/m).
+
+    Attributes:
+        wavelength: L at the depth h (m).
+        alpha1, alpha2, alpha3: α₁, α₂, α₃.
+        eta_star: η* (m above the SWL).
+        p1, p2, p3, p4: Pressures at the SWL, the sea bottom, the base of the upright
+            section and its crest (Pa).
+        uplift: p_u at the seaward edge of the base (Pa).
+        toe_depth: h' (m below the SWL).
+        crest_height: h_c (m above the SWL).
+
+    """
+
+    wavelength: float
+    alpha1: float
+    alpha2: float
+    alpha3: float
+    eta_star: float
+    p1: float
+    p2: float
+    p3: float
+    p4: float
+    uplift: float
+    toe_depth: float
+    crest_height: float
+
+    @property
+    def wetted_crest(self) -> float:
+        """h_c* = min(η*, h_c): the height of the loaded face above the SWL (m)."""
+        return min(self.eta_star, self.crest_height)
+
+    def front(self, z: float) -> float:
+        """Pressure on the front face at elevation z above the SWL (Pa; 0 off the face)."""
+        if z < -self.toe_depth or z > self.wetted_crest:
+            return 0.0
+        if z >= 0.0:
+            return self.p1 * (1.0 - z / self.eta_star)
+        return self.p1 + (self.p3 - self.p1) * (-z / self.toe_depth)
+
+    def front_points(self) -> tuple[tuple[float, float], ...]:
+        """(z, p) points of the front profile (z above the SWL), linear between them."""
+        points = [(-self.toe_depth, self.p3), (0.0, self.p1)]
+        if self.wetted_crest > 0.0:
+            points.append((self.wetted_crest, self.p4))
+        return tuple(points)
+
+    @property
+    def force(self) -> float:
+        """Horizontal force P on the upright section (N/m)."""
+        hc = self.wetted_crest
+        return 0.5 * (self.p1 + self.p3) * self.toe_depth + 0.5 * (self.p1 + self.p4) * hc
+
+    @property
+    def moment(self) -> float:
+        """Moment M_P of the horizontal force about the base of the upright section (N m/m)."""
+        h1, hc, p1, p3, p4 = self.toe_depth, self.wetted_crest, self.p1, self.p3, self.p4
+        return ((2 * p1 + p3) * h1**2 / 6 + 0.5 * (p1 + p4) * h1 * hc
+                + (p1 + 2 * p4) * hc**2 / 6)
+
+    def uplift_force(self, width: float) -> float:
+        """Uplift U = ½ p_u B on a base of width B (N/m)."""
+        return 0.5 * self.uplift * width
+
+    def uplift_moment(self, width: float) -> float:
+        """Moment M_U = ⅔ U B of the uplift about the heel (N m/m)."""
+        return 2.0 / 3.0 * self.uplift_force(width) * width
+
+
+def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: float,
+                  berm_depth: float, crest_height: float, angle: float = 0.0,
+                  breaking_depth: float | None = None,
+                  factors: tuple[float, float, float] = (1.0, 1.0, 1.0),
+                  density: float = 1025.0, gravity: float = 9.81) -> GodaPressure:
+    """Goda's design wave pressures (see the module docstring for the equations).
+
+    Args:
+        wave_height: H_max (m).
+        period: Period of the design wave (s).
+        depth: Water depth h in front of the breakwater (m).
+        toe_depth: h', depth of the base of the upright section below the SWL (m).
+        berm_depth: d, depth above the armour of the foundation (m), <= h'.
+        crest_height: h_c, crest elevation above the SWL (m).
+        angle: β, wave incidence from the normal to the breakwater (degrees).
+        breaking_depth: h_b, depth at 5 H_1/3 seaward (m); None: h.
+        factors: λ₁, λ₂, λ₃.
+        density: Water density ρ (kg/m³).
+        gravity: g (m/s²).
+
+    Raises:
+        ValueError: An input out of range (named in the message).
+
+    """
+    hb = depth if breaking_depth is None else breaking_depth
+    checks = {"wave_height": wave_height, "period": period, "depth": depth,
+              "toe_depth": toe_depth, "berm_depth": berm_depth, "breaking_depth": hb,
+              "density": density, "gravity": gravity}
+    for name, value in checks.items():
+        if not (value > 0 and math.isfinite(value)):
+            raise ValueError(f"{name} must be > 0 (got {value:g})")
+    if not crest_height >= 0:
+        raise ValueError(f"crest_height must be >= 0 (got {crest_height:g})")
+    if toe_depth > depth:
+        raise ValueError(f"toe_depth h' = {toe_depth:g} m must not exceed the depth "
+                         f"h = {depth:g} m")
+    if berm_depth > toe_depth:
+        raise ValueError(f"berm_depth d = {berm_depth:g} m must not exceed toe_depth "
+                         f"h' = {toe_depth:g} m")
+    if not 0.0 <= angle < 90.0:
+        raise ValueError(f"angle must be in [0, 90) degrees (got {angle:g})")
+    if any(not f >= 0 for f in factors) or len(factors) != 3:
+        raise ValueError(f"factors must be three values >= 0 (got {list(factors)})")
+    λ1, λ2, λ3 = factors
+    L = wavelength(period, depth, gravity)
+    kh2 = 4.0 * math.pi * depth / L
+    α1 = 0.6 + 0.5 * (kh2 / math.sinh(kh2)) ** 2
+    α2 = min((hb - berm_depth) / (3.0 * hb) * (wave_height / berm_depth) ** 2,
+             2.0 * berm_depth / wave_height)
+    cosh = math.cosh(2.0 * math.pi * depth / L)
+    α3 = 1.0 - toe_depth / depth * (1.0 - 1.0 / cosh)
+    cb = math.cos(math.radians(angle))
+    η = 0.75 * (1.0 + cb) * λ1 * wave_height
+    ρgH = density * gravity * wave_height
+    p1 = 0.5 * (1.0 + cb) * (λ1 * α1 + λ2 * α2 * cb**2) * ρgH
+    p4 = p1 * (1.0 - crest_height / η) if η > crest_height else 0.0
+    pu = 0.5 * (1.0 + cb) * λ3 * α1 * α3 * ρgH
+    return GodaPressure(wavelength=L, alpha1=α1, alpha2=α2, alpha3=α3, eta_star=η, p1=p1,
+                        p2=p1 / cosh, p3=α3 * p1, p4=p4, uplift=pu, toe_depth=toe_depth,
+                        crest_height=crest_height)
