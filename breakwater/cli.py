@@ -151,8 +151,12 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     q = args.quiet
     _say(f"calibration of the shear modulus of '{r.body}' to the horizontal stiffness of "
          f"'{r.structure}' (case '{case.name}')", q)
-    _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
-         f"{r.target:.6g} N/m per m", q)
+    if cal.stiffness_basis == "block":
+        _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
+             f"{r.target:.6g} N/m per m", q)
+    else:
+        _say(f"  target   K_x = {target:.6g} N/m per m (calibration.stiffness_basis = "
+             '"metre")', q)
     _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
     _say(f"  achieved K_x = {r.stiffness:.6g} N/m per m = {r.stiffness * L:.6g} N/m "
          f"(relative error {r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
