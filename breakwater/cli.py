@@ -1,11 +1,13 @@
 """Command line: ``python -m breakwater {run,mesh,calibrate,sweep,show-case} [CASE] ...``.
 
 ``CASE`` is a case file (TOML), or the name of a built-in case (``goda``, the
-default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every command takes ``--set key=value`` overrides (repeatable). Errors
+default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every
+command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
 exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
 failed or interrupted (SIGTERM) run. ``run --resume`` continues a killed run in the
-same output folder from its last checkpoint (``output.checkpoint_interval``).
+same output folder from its last checkpoint (``output.checkpoint_interval``); ``sweep``
+exits 0 only when every case of the study finished.
 """
 
 from __future__ import annotations

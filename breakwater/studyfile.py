@@ -211,7 +211,8 @@ class _Reader:
             raise self.error("samples.count", f"expected an integer >= 1 (got {count!r})")
         if not isinstance(seed, int) or isinstance(seed, bool):
             raise self.error("samples.seed", f"expected an integer (got {seed!r})")
-        specs = _flatten(table, leaf=lambda v: set(v) <= set(DISTRIBUTIONS))
+        specs = _flatten(table, leaf=lambda v: not any(isinstance(x, Mapping)
+                                                       for x in v.values()))
         if not specs:
             raise self.error("samples", "no key to sample")
         checked: dict[str, tuple[str, Any]] = {}
@@ -447,4 +448,4 @@ def _names(labels: Sequence[str]) -> str:
 
 def _strip(error: CaseError) -> str:
     text = " ".join(str(error).split())
-    return text.removeprefix(f"{OVERRIDE}: ")
+    return text.removeprefix(f"{OVERRIDE}: ").removeprefix(f"{OVERRIDE} ")

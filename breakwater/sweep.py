@@ -36,7 +36,6 @@ import io
 import json
 import logging
 import math
-import os
 import pathlib
 import shutil
 import signal
@@ -49,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 from mpi4py import MPI
 
-from . import files
+from . import checkpoint, files, simulation  # importing PETSc is collective: at import
 from .errors import CaseError
 from .parallel import on_rank_zero
 from .studyfile import Point, Study, check_points, toml_literal
@@ -233,7 +232,6 @@ def _one_line(error: BaseException) -> str:
 def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
               comm: MPI.Comm) -> dict[str, Any]:
     """Run one case on ``comm`` (collective); its record, written last in its folder."""
-    from . import checkpoint, simulation
     from .checkpoint import CheckpointError
 
     def prepare() -> bool:
@@ -296,7 +294,7 @@ def _record(point: Point, fingerprint: str, status: str, error: str | None = Non
 class _Counter:
     """The next case number, shared by every rank (an MPI window on rank 0)."""
 
-    def __init__(self, comm: MPI.Comm) -> None:
+    def __init__(self, comm: MPI.Intracomm) -> None:
         size = MPI.INT64_T.Get_size()
         self.win = MPI.Win.Allocate(size if comm.rank == 0 else 0, size, comm=comm)
         if comm.rank == 0:
@@ -320,7 +318,7 @@ class _Counter:
 
 
 def run_study(study: Study, out: str | pathlib.Path | None = None,
-              comm: MPI.Comm | None = None, ranks_per_case: int = 1,
+              comm: MPI.Intracomm | None = None, ranks_per_case: int = 1,
               quiet: bool = False) -> StudyOutcome:
     """Run every point of a study that has not finished yet (collective).
 
@@ -344,10 +342,11 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         raise CaseError(f"--ranks-per-case {ranks_per_case}: must divide the number of "
                         f"ranks ({comm.size})")
     folder = files.make_directory(out if out is not None else f"results/{study.name}", comm)
-    points, cases = on_rank_zero(comm, lambda: check_points(study, folder))
-    from .checkpoint import case_fingerprint
-
-    fingerprints = [case_fingerprint(c.resolved()) for c in cases]
+    # Rank 0 checks every point (the same error on every rank); then each rank reads
+    # the cases itself (cheap, and no large broadcast).
+    on_rank_zero(comm, lambda: bool(check_points(study, folder)))
+    points, cases = check_points(study, folder)
+    fingerprints = [checkpoint.case_fingerprint(c.resolved()) for c in cases]
     keys = study.keys
 
     def pending() -> list[int]:

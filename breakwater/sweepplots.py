@@ -57,7 +57,7 @@ def _number(text: str) -> float | None:
 
 
 def _label(column: str) -> str:
-    factor, unit = _scale(column)
+    unit = _scale(column)[1]
     return f"{column} ({unit})" if unit else column
 
 
@@ -122,8 +122,12 @@ def _figure(path: pathlib.Path, x: str, ys: Sequence[str], others: Sequence[str]
         for (ci, c), (si, s) in itertools.product(enumerate(colours), enumerate(styles)):
             line = [r for r in rows if (colour_key is None or r[colour_key] == c)
                     and tuple(r[k] for k in style_keys) == s]
-            pts = sorted((_number(r[x]), _number(r[y])) for r in line)
-            pts = [(a, b) for a, b in pts if a is not None and b is not None]
+            pts: list[tuple[float, float]] = []
+            for r in line:
+                a, b = _number(r[x]), _number(r[y])
+                if a is not None and b is not None:
+                    pts.append((a, b))
+            pts.sort()
             if not pts:
                 continue
             parts = ([f"{colour_key.rsplit('.', 1)[-1]}={_text(c)}"] if colour_key else []) \
