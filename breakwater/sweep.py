@@ -93,7 +93,8 @@ def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = N
 
     Columns: ``time_reached``; per probe ``peak_ux.<p>``, ``time_peak_ux.<p>``,
     ``residual_ux.<p>``; ``time_of_max_ux``, ``residual_slip``, ``max_uplift``;
-    ``static_mean_pressure``; ``energy_balance_error``; ``steps``,
+    ``static_mean_pressure``; ``energy_balance_error`` (the largest over the run) and
+    ``external_work`` (at the end), per metre out of plane; ``steps``,
     ``newton_iterations``, ``cutbacks``; ``loop_time`` (s); per body
     ``shear_modulus.<body>`` of the case as run (the calibrated G included).
     """
@@ -113,7 +114,9 @@ def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = N
     for key in ("time_of_max_ux", "residual_slip", "max_uplift"):
         put(key, dyn.get(key))
     put("static_mean_pressure", (summary.get("static") or {}).get("mean_contact_pressure"))
-    put("energy_balance_error", (summary.get("energy") or {}).get("max_balance_error"))
+    energy = summary.get("energy") or {}
+    put("energy_balance_error", energy.get("max_balance_error"))
+    put("external_work", (energy.get("final") or {}).get("external_work"))
     solver = summary.get("solver") or {}
     put("steps", solver.get("steps"))
     put("newton_iterations", solver.get("newton_iterations"))

@@ -164,7 +164,8 @@ def test_ranks_per_case_must_divide(shared_dir, capsys):
 
 # --- running studies ---------------------------------------------------------------
 
-NUMBERS_EXCLUDED = ("wall_time", "loop_time")  # clocks
+NUMBERS_EXCLUDED = ("wall_time", "loop_time", "newton_iterations")  # clocks; counts apart
+DISPLACEMENTS = ("peak_ux", "residual_ux", "residual_slip", "max_uplift")
 
 
 def numbers(rows: list[dict[str, str]]) -> dict[str, list[float]]:
@@ -180,13 +181,24 @@ def numbers(rows: list[dict[str, str]]) -> dict[str, list[float]]:
     return out
 
 
+def column_of(rows: list[dict[str, str]], name: str) -> list[float]:
+    return [float(r[name]) for r in rows]
+
+
 def test_groups_give_the_same_table(shared_dir):
     """2 groups of 1 rank and 1 group of 2 ranks: the same numbers.
 
     Each case's headline numbers come from its history; the fast solver's histories on
-    1 and 2 ranks agree to 5e-11 of their scale (README, test_fastpath), so 1e-9 of a
-    column's largest value is a margin of 20. Newton iteration totals are integers that
-    the partition does not change on these 30 steps (compared exactly).
+    1 and 2 ranks agree to 5e-11 of their scale, its displacements to 1.3e-10 (README,
+    test_fastpath), so 1e-9 of a column's largest value is a margin of 7 or more. The
+    displacements (peaks, residuals, slip, uplift) share one scale, the largest of
+    them: the slip is a difference of the two sides' displacements, which carries their
+    round-off (measured: 5e-14 m on a 5e-6 m slip, 1e-10 of the 5e-4 m peak). Likewise
+    the energy balance error is a sum of the ledger's terms, on the scale of the
+    external work (measured: 6e-11 J/m against 0.05 J/m of work). Newton iteration
+    totals are compared apart: an iterate whose residual lands at the tolerance may
+    pass on one partition and not on the other (measured: 147 against 146 iterations in
+    30 steps; README: a Newton count may differ by one across ranks); allowed: 2.
     """
     path = study_file(shared_dir, '''[grid]
 "contact.interface.friction" = [0.5, 0.8]
@@ -205,10 +217,17 @@ def test_groups_give_the_same_table(shared_dir):
         assert all(float(r["steps"]) == 30 for r in tables[k])
     a, b = numbers(tables[1]), numbers(tables[COMM.size])
     assert a.keys() == b.keys() and "residual_slip" in a and "peak_ux.gauge_top" in a
+    lengths = [c for c in a if c.split(".")[0] in DISPLACEMENTS]
+    length_scale = max(abs(v) for c in lengths for v in a[c])
     for column, values in a.items():
-        scale = max(abs(v) for v in values) or 1.0
+        scale = length_scale if column in lengths else max(abs(v) for v in values) or 1.0
+        if column == "energy_balance_error":
+            scale = max(abs(v) for v in a["external_work"])
         for x, y in zip(values, b[column], strict=True):
             assert abs(x - y) <= 1e-9 * scale, (column, x, y)
+    for x, y in zip(*(column_of(t, "newton_iterations") for t in (tables[1], tables[COMM.size])),
+                    strict=True):
+        assert abs(x - y) <= 2
     # the pulse matters: a shorter pulse of the same impulse gives a larger peak at 3 ms
     assert a["peak_ux.gauge_top"][0] > a["peak_ux.gauge_top"][1] > 0
     # the figures: one per varied key
