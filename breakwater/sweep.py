@@ -156,7 +156,17 @@ def read_records(out: pathlib.Path, points: Sequence[Point]) -> list[dict[str, A
 
 def write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
                 fingerprints: Sequence[str]) -> pathlib.Path:
-    """Write ``sweep.csv`` from the points' records (atomically, under a file lock)."""
+    """Write ``sweep.csv`` from the points' records (atomically, under a file lock).
+
+    The lock is held while the records are read: the last writer's table holds every
+    record written before it.
+    """
+    with _locked(out):
+        return _write_table(out, points, keys, fingerprints)
+
+
+def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
+                 fingerprints: Sequence[str]) -> pathlib.Path:
     records = read_records(out, points)
     columns: dict[str, None] = {}
     for r in records:
@@ -174,8 +184,7 @@ def write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
         writer.writerow([p.index, p.folder, *values, rec.get("status", "pending"),
                          _cell(rec.get("wall_time")), *(_cell(head.get(c)) for c in columns),
                          rec.get("error") or ""])
-    with _locked(out):
-        return files.atomic_write_text(out / TABLE, buffer.getvalue())
+    return files.atomic_write_text(out / TABLE, buffer.getvalue())
 
 
 def _cell(value: Any) -> str:
