@@ -157,7 +157,7 @@ def _figure(path: pathlib.Path, x: str, ys: Sequence[str], others: Sequence[str]
         fig.legend(handles, labels, loc="outside right upper", fontsize=7)
     fig.suptitle(f"{title}: against {x}", fontsize=10)
     tmp = temporary_path(path)
-    fig.savefig(tmp, dpi=110)
+    fig.savefig(tmp, dpi=80)
     tmp.replace(path)
     return path
 
