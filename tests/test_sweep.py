@@ -259,9 +259,13 @@ def test_failing_point(shared_dir, capsys):
     if COMM.rank == 0:
         assert "1/2 finished, 1 failed" in printed
     # the failed case is run again on a rerun (and fails again); the finished one is not
+    finished = out / rows[0]["folder"] / RECORD
+    stamp = finished.stat().st_mtime_ns
     assert cli.main(["sweep", str(path), "--out", str(out), "-q"]) == 1
-    assert read_table(out / TABLE) == rows or \
-        [r["status"] for r in read_table(out / TABLE)] == ["finished", "failed"]
+    again = read_table(out / TABLE)
+    assert [r["status"] for r in again] == ["finished", "failed"]
+    assert again[1]["error"] == rows[1]["error"]
+    assert finished.stat().st_mtime_ns == stamp
 
 
 # --- killed studies (a real process) ------------------------------------------------------
