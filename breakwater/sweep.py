@@ -412,7 +412,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         from . import sweepplots
 
         try:
-            drawn = sweepplots.make_figures(folder, study)
+            drawn = sweepplots.make_figures(folder, study, TABLE)
         except Exception as e:  # the table is written; a figure problem is reported
             print(f"breakwater: warning: the figures of the study could not be drawn: "
                   f"{_one_line(e)}", file=sys.stderr, flush=True)
@@ -425,12 +425,4 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         return outcome
 
     return on_rank_zero(comm, finish)
-
-
-def study_columns(path: pathlib.Path) -> tuple[list[str], list[dict[str, str]]]:
-    """Read ``sweep.csv``: its header and its rows."""
-    with open(path, encoding="utf-8", newline="") as f:
-        reader = csv.DictReader(f)
-        rows = list(reader)
-        return list(reader.fieldnames or []), rows
 

@@ -16,6 +16,7 @@ Usage: ``python -m breakwater.sweepplots STUDY.toml DIR`` redraws them.
 
 from __future__ import annotations
 
+import csv
 import itertools
 import math
 import pathlib
@@ -28,7 +29,7 @@ from matplotlib.figure import Figure
 from .files import temporary_path
 from .studyfile import Study, load_study
 
-__all__ = ["make_figures"]
+__all__ = ["make_figures", "read_table"]
 
 DEFAULT_Y = ("time_of_max_ux", "residual_slip", "peak_ux.", "residual_ux.", "max_uplift")
 STYLES = ("-", "--", ":", "-.")
@@ -66,12 +67,19 @@ def _text(value: str) -> str:
     return f"{x:.4g}" if x is not None else value
 
 
-def make_figures(directory: str | pathlib.Path, study: Study) -> list[pathlib.Path]:
-    """Draw the study's figures from ``directory/sweep.csv``; the files written."""
-    from .sweep import TABLE, study_columns
+def read_table(path: pathlib.Path) -> tuple[list[str], list[dict[str, str]]]:
+    """Read ``sweep.csv``: its header and its rows."""
+    with open(path, encoding="utf-8", newline="") as f:
+        reader = csv.DictReader(f)
+        rows = list(reader)
+        return list(reader.fieldnames or []), rows
 
+
+def make_figures(directory: str | pathlib.Path, study: Study, table: str = "sweep.csv"
+                 ) -> list[pathlib.Path]:
+    """Draw the study's figures from ``directory/sweep.csv``; the files written."""
     directory = pathlib.Path(directory)
-    header, rows = study_columns(directory / TABLE)
+    header, rows = read_table(directory / table)
     done = [r for r in rows if r.get("status") == "finished"]
     if not done:
         return []
