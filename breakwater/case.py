@@ -32,7 +32,7 @@ import math
 import pathlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 from . import casebuild
 from .errors import CaseError
@@ -211,6 +211,10 @@ class DampingCase:
         positive(self.beta, "beta", strict=False)
 
 
+StiffnessBasis = Literal["block", "metre"]
+"""How ``calibration.stiffness`` is read: the whole block's K_x, or per metre."""
+
+
 @dataclass(frozen=True)
 class CalibrationCase:
     """``[calibration]``: the shear modulus of ``body`` from a horizontal stiffness.
@@ -224,7 +228,11 @@ class CalibrationCase:
     body: str = setting("", doc="body whose shear modulus is calibrated (its ν is kept)")
     structure: str = setting("", doc="body whose horizontal stiffness is matched")
     stiffness: float | None = setting(None, unit="N/m", doc="target stiffness K_x of the "
-                                      "real structure; divided by out_of_plane_length")
+                                      "real structure (see stiffness_basis)")
+    stiffness_basis: StiffnessBasis = setting("block", doc='"block": K_x is the whole '  # noqa: RUF009 (a field() with docs)
+                                              "block's, divided by out_of_plane_length; "
+                                              '"metre": K_x is already per metre of plane '
+                                              "strain")
     tolerance: float = setting(1e-4, doc="relative tolerance on K_x")
     tangential_penalty: float = setting(1e3, doc="tangential stiffness of the bonded "
                                         "interface, as a multiple of ε_n")
@@ -234,10 +242,18 @@ class CalibrationCase:
     def __post_init__(self) -> None:
         if self.stiffness is not None:
             positive(self.stiffness, "stiffness")
+        if self.stiffness_basis not in get_args(StiffnessBasis):
+            raise InvalidField("stiffness_basis", f'must be "block" or "metre" (got '
+                               f"{self.stiffness_basis!r})")
         for name in ("tolerance", "tangential_penalty", "initial_guess"):
             positive(getattr(self, name), name)
         if self.max_iterations < 2:
             raise InvalidField("max_iterations", f"must be >= 2 (got {self.max_iterations})")
+
+    def per_metre(self, stiffness: float, out_of_plane_length: float) -> float:
+        """The target stiffness per metre of plane strain (N/m per m) of a K_x (N/m)."""
+        return stiffness / out_of_plane_length if self.stiffness_basis == "block" \
+            else stiffness
 
 
 TimeCase = TimeSpec

@@ -146,8 +146,9 @@ def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None
     Args:
         case: The case.
         data: The mesh.
-        target: Target stiffness of the real structure (N/m), divided by
-            ``out_of_plane_length``; ``calibration.stiffness`` if None.
+        target: Target stiffness (N/m), read as ``calibration.stiffness_basis`` says
+            (``"block"``: divided by ``out_of_plane_length``); ``calibration.stiffness``
+            if None.
 
     """
     from .calibrate import calibrate_shear_modulus
@@ -165,7 +166,7 @@ def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None
         raise CaseError(f"calibration target stiffness must be > 0 (got {k:g})")
     model = build_model(case, data, {cal.body: cal.initial_guess}, dynamic=False)
     return calibrate_shear_modulus(model, cal.body, cal.structure,
-                                   k / case.out_of_plane_length, cal.tolerance,
+                                   cal.per_metre(k, case.out_of_plane_length), cal.tolerance,
                                    cal.initial_guess, cal.tangential_penalty,
                                    cal.max_iterations)
 

@@ -1,11 +1,13 @@
-"""Command line: ``python -m breakwater {run,mesh,calibrate,show-case} [CASE] ...``.
+"""Command line: ``python -m breakwater {run,mesh,calibrate,sweep,show-case} [CASE] ...``.
 
 ``CASE`` is a case file (TOML), or the name of a built-in case (``goda``, the
-default). Every command takes ``--set key=value`` overrides (repeatable). Errors
+default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every
+command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
 exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
 failed or interrupted (SIGTERM, SIGINT) run. ``run --resume`` continues a killed run in
-the same output folder from its last checkpoint (``output.checkpoint_interval``).
+the same output folder from its last checkpoint (``output.checkpoint_interval``); ``sweep``
+exits 0 only when every case of the study finished.
 """
 
 from __future__ import annotations
@@ -151,8 +153,12 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     q = args.quiet
     _say(f"calibration of the shear modulus of '{r.body}' to the horizontal stiffness of "
          f"'{r.structure}' (case '{case.name}')", q)
-    _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
-         f"{r.target:.6g} N/m per m", q)
+    if cal.stiffness_basis == "block":
+        _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
+             f"{r.target:.6g} N/m per m", q)
+    else:
+        _say(f"  target   K_x = {target:.6g} N/m per m (calibration.stiffness_basis = "
+             '"metre")', q)
     _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
     _say(f"  achieved K_x = {r.stiffness:.6g} N/m per m = {r.stiffness * L:.6g} N/m "
          f"(relative error {r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
@@ -161,6 +167,18 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     if _rank() == 0 and args.quiet:
         print(f"{r.shear_modulus:.10g}")
     return EXIT_OK
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from .studyfile import load_study
+    from .sweep import run_study
+
+    study = load_study(args.study, args.set or [])
+    if not args.verbose:  # the cases' own messages: one line per case instead
+        logging.getLogger("breakwater").setLevel(logging.CRITICAL)
+    outcome = run_study(study, args.out, ranks_per_case=args.ranks_per_case,
+                        quiet=args.quiet)
+    return EXIT_OK if outcome.complete else EXIT_FAILED
 
 
 def _cmd_show_case(args: argparse.Namespace) -> int:
@@ -182,18 +200,20 @@ def _cmd_show_case(args: argparse.Namespace) -> int:
 # --- the parser ---------------------------------------------------------------------
 
 def _parser() -> argparse.ArgumentParser:
-    common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("case", nargs="?", default=None, metavar="CASE",
-                        help="case file (TOML) or built-in case name (default: goda)")
-    common.add_argument("--set", action="append", metavar="KEY=VALUE",
-                        help="override a case field by its dotted path, e.g. "
-                             "time.dt=5e-5 or bodies.mound.density=1800 (repeatable)")
-    noise = common.add_mutually_exclusive_group()
+    flags = argparse.ArgumentParser(add_help=False)
+    flags.add_argument("--set", action="append", metavar="KEY=VALUE",
+                       help="override a case field by its dotted path, e.g. "
+                            "time.dt=5e-5 or bodies.mound.density=1800 (repeatable; "
+                            "sweep: for every case)")
+    noise = flags.add_mutually_exclusive_group()
     noise.add_argument("-q", "--quiet", action="store_true", help="print only warnings "
                        "and errors")
     noise.add_argument("-v", "--verbose", action="store_true", help="print debug messages")
-    common.add_argument("--debug", action="store_true",
-                        help="show the traceback of errors")
+    flags.add_argument("--debug", action="store_true",
+                       help="show the traceback of errors")
+    common = argparse.ArgumentParser(add_help=False, parents=[flags])
+    common.add_argument("case", nargs="?", default=None, metavar="CASE",
+                        help="case file (TOML) or built-in case name (default: goda)")
 
     parser = argparse.ArgumentParser(
         prog=PROG, description="Dynamic frictional contact of deformable bodies: a "
@@ -232,6 +252,21 @@ def _parser() -> argparse.ArgumentParser:
                    help="target stiffness of the real structure, N/m (default: "
                         "calibration.stiffness), divided by out_of_plane_length")
     p.set_defaults(func=_cmd_calibrate)
+
+    p = sub.add_parser("sweep", parents=[flags], help="run a parameter study",
+                       description="Run every point of a study file (a base case and the "
+                       "case keys to vary) as a case in its own folder, with sweep.csv "
+                       "and figures; under mpiexec the ranks form groups running one case "
+                       "each, handed out dynamically. Rerunning skips the finished cases. "
+                       "Exit status 0 when every case finished, 1 otherwise.")
+    p.add_argument("study", type=pathlib.Path, metavar="STUDY",
+                   help="study file (TOML; see breakwater.studyfile)")
+    p.add_argument("--out", type=pathlib.Path, default=None, metavar="DIR",
+                   help="the study's folder (default: results/<study name>)")
+    p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
+                   help="ranks of each group running a case (must divide the number of "
+                        "ranks; default 1)")
+    p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("show-case", parents=[common], help="print the resolved case",
                        description="Print the fully resolved case (TOML, defaults "

@@ -1,0 +1,347 @@
+"""Parameter studies (breakwater.studyfile, breakwater.sweep): points, bad studies, MPI
+groups, resume after a kill, a failing point.
+
+The sweeps run the Goda case for 3 ms (30 steps, about 1 s a case): the numbers are
+the headline numbers of real runs, compared across the ways of running them.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports the PETSc of the dolfinx wheel first)
+
+# isort: split
+from breakwater import cli
+from breakwater.errors import CaseError
+from breakwater.studyfile import check_points, load_study, toml_literal
+from breakwater.sweep import RECORD, TABLE, run_study
+
+COMM = MPI.COMM_WORLD
+BAD = pathlib.Path(__file__).parent / "bad_studies"
+BAD_FILES = sorted(BAD.glob("*.toml"))
+EXAMPLES = pathlib.Path(__file__).parents[1] / "examples"
+
+SHORT = '''base = "goda"
+[set]
+"time.end_time" = {end}
+"output.field_interval" = 0
+"output.figures" = false
+'''
+
+
+def study_file(folder: pathlib.Path, body: str, end: float = 0.003,
+               name: str = "study.toml") -> pathlib.Path:
+    """A study of the short Goda case (written by rank 0, seen by every rank)."""
+    path = folder / name
+    if COMM.rank == 0:
+        path.write_text(SHORT.format(end=end) + body)
+    COMM.barrier()
+    return path
+
+
+def read_table(path: pathlib.Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def expected(path: pathlib.Path) -> str:
+    first = path.read_text().splitlines()[0]
+    assert first.startswith("# expect: "), path
+    return first.removeprefix("# expect: ")
+
+
+# --- study files ------------------------------------------------------------------
+
+def test_grid_zip_samples_and_derived(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('''base = "goda"
+[grid]
+"contact.interface.friction" = [0.5, 0.8]
+"mesh.goda.bolt_height" = [0.034, 0.1345]
+[zip]
+"loads.impact.duration" = [1e-3, 2e-3]
+"loads.impact.peak" = [0.5, 0.25]
+[samples]
+count = 3
+seed = 7
+"bodies.mound.density" = {uniform = [1600, 2000]}
+"bodies.mound.poisson" = {choice = [0.2, 0.3]}
+[[derived]]
+from = "mesh.goda.bolt_height"
+key = "loads.impact.pendulum.cord_length"
+table = [[0.034, 3.527], [0.101, 3.46], [0.168, 3.393]]
+interpolate = true
+''')
+    study = load_study(path)
+    # product: 2 (grid) x 2 (grid) x 2 (zip rows) x 3 (sample rows), last fastest
+    assert len(study.points) == 24
+    assert study.keys == ("contact.interface.friction", "mesh.goda.bolt_height",
+                          "loads.impact.duration", "loads.impact.peak",
+                          "bodies.mound.density", "bodies.mound.poisson",
+                          "loads.impact.pendulum.cord_length")
+    p = study.points
+    assert p[0].values["contact.interface.friction"] == 0.5
+    assert p[12].values["contact.interface.friction"] == 0.8
+    assert (p[3].values["loads.impact.duration"], p[3].values["loads.impact.peak"]) \
+        == (2e-3, 0.25)
+    assert p[0].values["bodies.mound.density"] == p[3].values["bodies.mound.density"]
+    assert all(1600 <= q.values["bodies.mound.density"] < 2000 for q in p)
+    # samples are reproducible from the seed
+    assert [q.values for q in load_study(path).points] == [q.values for q in p]
+    points, cases = check_points(study, tmp_path / "out")
+    cords = [q.values["loads.impact.pendulum.cord_length"] for q in points]
+    assert cords[0] == 3.527  # a row of the table
+    # 0.1345 is halfway between the rows 0.101 and 0.168: linear interpolation
+    assert math.isclose(cords[6], (3.46 + 3.393) / 2, rel_tol=1e-12)
+    assert cases[6].loads[0].pendulum.cord_length == cords[6]
+    assert cases[6].mesh.goda.bolt_height == 0.1345
+    assert cases[5].output_directory == tmp_path / "out" / points[5].folder
+    assert points[5].folder.startswith("case-0005_friction=0.5_bolt_height=0.034_")
+
+
+def test_toml_literal_round_trip():
+    import tomllib
+
+    for value in (0.1 + 0.2, 1e-300, -3, True, "a \"b\" \\ é", [1, 2.5], {"k": [0.5]}):
+        assert tomllib.loads(f"v = {toml_literal(value)}")["v"] == value
+
+
+def test_enough_bad_studies():
+    assert len(BAD_FILES) >= 10
+
+
+@pytest.mark.parametrize("path", BAD_FILES, ids=lambda p: p.stem)
+def test_bad_study_message(path, tmp_path):
+    with pytest.raises(CaseError) as info:
+        check_points(load_study(path), tmp_path)
+    message = str(info.value)
+    assert expected(path) in message
+    assert "\n" not in message
+    assert message.startswith(path.name)  # the study file is named first
+
+
+@pytest.mark.parametrize("path", [BAD / "03_invalid_point.toml", BAD / "04_empty_study.toml"],
+                         ids=lambda p: p.stem)
+def test_bad_study_through_main(path, shared_dir, capsys):
+    out = shared_dir / "out"
+    assert cli.main(["sweep", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and expected(path) in err and "Traceback" not in err
+    assert not any(out.glob("case-*"))  # nothing ran
+
+
+def test_examples_are_valid(tmp_path):
+    bolts = load_study(EXAMPLES / "bolt_heights.toml")
+    points, cases = check_points(bolts, tmp_path)
+    assert len(points) == 9
+    for p, c in zip(points, cases, strict=True):  # the cord follows the bolt (Goda 1994)
+        cord = {0.034: 3.527, 0.101: 3.46, 0.168: 3.393}[c.mesh.goda.bolt_height]
+        assert c.loads[0].pendulum.cord_length == cord == \
+            p.values["loads.impact.pendulum.cord_length"]
+    calibration = load_study(EXAMPLES / "paper_calibration.toml")
+    assert len(check_points(calibration, tmp_path)[0]) == 48
+
+
+def test_ranks_per_case_must_divide(shared_dir, capsys):
+    path = study_file(shared_dir, '[grid]\n"contact.interface.friction" = [0.5]\n')
+    assert cli.main(["sweep", str(path), "--ranks-per-case", str(COMM.size + 1)]) == 2
+    if COMM.rank == 0:
+        assert "--ranks-per-case" in capsys.readouterr().err
+
+
+# --- running studies ---------------------------------------------------------------
+
+NUMBERS_EXCLUDED = ("wall_time", "loop_time", "newton_iterations")  # clocks; counts apart
+DISPLACEMENTS = ("peak_ux", "residual_ux", "residual_slip", "max_uplift")
+
+
+def numbers(rows: list[dict[str, str]]) -> dict[str, list[float]]:
+    """The numeric columns of a table (the clocks left out)."""
+    out: dict[str, list[float]] = {}
+    for column in rows[0]:
+        if column in NUMBERS_EXCLUDED:
+            continue
+        try:
+            out[column] = [float(r[column]) for r in rows]
+        except ValueError:
+            continue
+    return out
+
+
+def column_of(rows: list[dict[str, str]], name: str) -> list[float]:
+    return [float(r[name]) for r in rows]
+
+
+def test_groups_give_the_same_table(shared_dir):
+    """2 groups of 1 rank and 1 group of 2 ranks: the same numbers.
+
+    Each case's headline numbers come from its history; the fast solver's histories on
+    1 and 2 ranks agree to 5e-11 of their scale, its displacements to 1.3e-10 (README,
+    test_fastpath), so 1e-9 of a column's largest value is a margin of 7 or more. The
+    displacements (peaks, residuals, slip, uplift) share one scale, the largest of
+    them: the slip is a difference of the two sides' displacements, which carries their
+    round-off (measured: 5e-14 m on a 5e-6 m slip, 1e-10 of the 5e-4 m peak). Likewise
+    the energy balance error is a sum of the ledger's terms, on the scale of the
+    external work (measured: 6e-11 J/m against 0.05 J/m of work). Newton iteration
+    totals are compared apart: an iterate whose residual lands at the tolerance may
+    pass on one partition and not on the other (measured: 147 against 146 iterations in
+    30 steps; README: a Newton count may differ by one across ranks); allowed: 2.
+    """
+    path = study_file(shared_dir, '''[grid]
+"contact.interface.friction" = [0.5, 0.8]
+"loads.impact.duration" = [1e-3, 2e-3]
+''')
+    study = load_study(path)
+    tables = {}
+    for k in sorted({1, COMM.size}):
+        out = shared_dir / f"groups{k}"
+        outcome = run_study(study, out, ranks_per_case=k, quiet=True)
+        assert outcome.complete and outcome.finished == 4 and outcome.skipped == 0
+        tables[k] = read_table(out / TABLE)
+        assert [r["status"] for r in tables[k]] == ["finished"] * 4
+        assert [float(r["contact.interface.friction"]) for r in tables[k]] == \
+            [0.5, 0.5, 0.8, 0.8]
+        assert all(float(r["steps"]) == 30 for r in tables[k])
+    a, b = numbers(tables[1]), numbers(tables[COMM.size])
+    assert a.keys() == b.keys() and "residual_slip" in a and "peak_ux.gauge_top" in a
+    lengths = [c for c in a if c.split(".")[0] in DISPLACEMENTS]
+    length_scale = max(abs(v) for c in lengths for v in a[c])
+    for column, values in a.items():
+        scale = length_scale if column in lengths else max(abs(v) for v in values) or 1.0
+        if column == "energy_balance_error":
+            scale = max(abs(v) for v in a["external_work"])
+        for x, y in zip(values, b[column], strict=True):
+            assert abs(x - y) <= 1e-9 * scale, (column, x, y)
+    for x, y in zip(*(column_of(t, "newton_iterations") for t in (tables[1], tables[COMM.size])),
+                    strict=True):
+        assert abs(x - y) <= 2
+    # the pulse matters: a shorter pulse of the same impulse gives a larger peak at 3 ms
+    assert a["peak_ux.gauge_top"][0] > a["peak_ux.gauge_top"][1] > 0
+    # the figures: one per varied key
+    figures = sorted(p.name for p in (shared_dir / "groups1" / "figures").glob("*.png"))
+    assert figures == ["vs_contact_interface_friction.png", "vs_loads_impact_duration.png"]
+    # a rerun skips every finished case: no record is rewritten
+    out = shared_dir / "groups1"
+    records = sorted(out.glob(f"case-*/{RECORD}"))
+    stamps = [p.stat().st_mtime_ns for p in records]
+    outcome = run_study(study, out, quiet=True)
+    assert outcome.complete and outcome.skipped == 4
+    assert [p.stat().st_mtime_ns for p in records] == stamps
+
+
+def test_failing_point(shared_dir, capsys):
+    """A case whose steps cannot converge (one Newton iteration, no cut-back) fails; the
+    study records its one-line error, runs the others and exits 1."""
+    path = study_file(shared_dir, '''"time.max_cutbacks" = 0
+[grid]
+"time.newton_max_it" = [40, 1]
+''')
+    out = shared_dir / "failing"
+    assert cli.main(["sweep", str(path), "--out", str(out)]) == 1
+    rows = read_table(out / TABLE)
+    assert [r["status"] for r in rows] == ["finished", "failed"]
+    assert rows[0]["error"] == ""
+    assert "did not converge" in rows[1]["error"] and "\n" not in rows[1]["error"]
+    printed = capsys.readouterr().out
+    if COMM.rank == 0:
+        assert "1/2 finished, 1 failed" in printed
+    # the failed case is run again on a rerun (and fails again); the finished one is not
+    finished = out / rows[0]["folder"] / RECORD
+    stamp = finished.stat().st_mtime_ns
+    assert cli.main(["sweep", str(path), "--out", str(out), "-q"]) == 1
+    again = read_table(out / TABLE)
+    assert [r["status"] for r in again] == ["finished", "failed"]
+    assert again[1]["error"] == rows[1]["error"]
+    assert finished.stat().st_mtime_ns == stamp
+
+
+# --- killed studies (a real process) ------------------------------------------------------
+
+def _sweep(path: pathlib.Path, out: pathlib.Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "breakwater", "sweep", str(path),
+                             "--out", str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "OMP_NUM_THREADS": "1"})
+
+
+def _wait_for_finished(out: pathlib.Path, count: int, process: subprocess.Popen,
+                       timeout: float = 120.0) -> None:
+    start = time.monotonic()
+    while time.monotonic() - start < timeout:
+        done = [p for p in out.glob(f"case-*/{RECORD}")
+                if json.loads(p.read_text()).get("status") == "finished"]
+        if len(done) >= count:
+            return
+        assert process.poll() is None, process.communicate()
+        time.sleep(0.05)
+    raise TimeoutError
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
+def test_resume_after_a_kill(tmp_path, how):
+    """Kill a sweep after its first case, rerun: the finished case is not run again, a
+    half-run case is never counted as finished, and every case finishes."""
+    if COMM.size > 1:
+        pytest.skip("subprocess sweeps run serially")
+    path = study_file(tmp_path, '[grid]\n"contact.interface.friction" = [0.5, 0.6, 0.7, 0.8]\n',
+                      end=0.01)
+    out = tmp_path / "out"
+    process = _sweep(path, out)
+    _wait_for_finished(out, 1, process)
+    process.send_signal(how)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == (-signal.SIGKILL if how == signal.SIGKILL else 1), err
+    records = {p.parent.name: json.loads(p.read_text()) for p in out.glob(f"case-*/{RECORD}")}
+    finished = {k for k, r in records.items() if r["status"] == "finished"}
+    assert 1 <= len(finished) < 4
+    for name, r in records.items():
+        summary = out / name / "summary.json"
+        if r["status"] != "finished":  # a half-run case is not finished in any way
+            assert not summary.exists() or json.loads(summary.read_text())["status"] \
+                != "finished" or how == signal.SIGKILL
+    if how == signal.SIGTERM:
+        statuses = [r["status"] for r in read_table(out / TABLE)]
+        assert statuses.count("finished") == len(finished)
+        assert "interrupted" in statuses or "pending" in statuses
+    stamps = {k: (out / k / RECORD).stat().st_mtime_ns for k in finished}
+    rerun = _sweep(path, out)
+    printed, err = rerun.communicate(timeout=300)
+    assert rerun.returncode == 0, err
+    assert f"{len(finished)} finished before, {4 - len(finished)} to run" in printed
+    assert {k: (out / k / RECORD).stat().st_mtime_ns for k in finished} == stamps
+    rows = read_table(out / TABLE)
+    assert [r["status"] for r in rows] == ["finished"] * 4
+
+
+# --- the calibration's reading of K_x (the paper-calibration study) -----------------------
+
+def test_stiffness_basis(shared_dir):
+    """``calibration.stiffness_basis``: Goda's K_x = 500 kN/m divided by the 0.205 m block
+    length (default) or taken per metre of plane strain; the calibration meets it."""
+    from breakwater.case import load_case
+
+    block = load_case()
+    metre = load_case(None, ['calibration.stiffness_basis="metre"'])
+    assert block.calibration.stiffness_basis == "block"
+    assert block.calibration.per_metre(500e3, 0.205) == 500e3 / 0.205
+    assert metre.calibration.per_metre(500e3, 0.205) == 500e3
+    data = metre.read_mesh(COMM, shared_dir)
+    result = metre.calibrate(data)
+    assert result.target == 500e3
+    assert abs(result.stiffness - 500e3) <= metre.calibration.tolerance * 500e3
+    # the softer reading: G = 0.434 MPa at refinement 1 (README), against 2.28 MPa
+    assert 0.40e6 < result.shear_modulus < 0.47e6
