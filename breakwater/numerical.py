@@ -43,9 +43,10 @@ class NumericalDissipation:
         self.stepper = s = stepper
         m = s.model
         β1, β2 = s.params.beta1, s.params.beta2
-        self._bulk = m.form(sum(
-            forms.gn22_bulk_dissipation(b.ρ, m.α, m.β, b.λ, b.μ, v0[i], s.v[i], s.a[i],
-                                        s.da[i], s.dt, β1, β2, b.dx)
+        # With β₁ = β₂ = ½ both coefficients vanish: no form to assemble.
+        self._bulk = None if β1 == β2 == 0.5 else m.form(sum(
+            forms.gn22_bulk_dissipation(b.ρ, m.α, m.β, b.λ, b.μ, s.v[i], s.a[i], s.da[i],
+                                        s.dt, β1, β2, b.dx)
             for i, b in enumerate(m.bodies)))
         self._contact = m.form(sum(
             forms.gn22_contact_dissipation(
@@ -58,4 +59,5 @@ class NumericalDissipation:
         """The bulk and the contact share of the last step's numerical dissipation (J/m)."""
         m = self.stepper.model
         contact = 0.0 if self._contact is None else m.assemble(self._contact)
-        return m.assemble(self._bulk), contact
+        bulk = 0.0 if self._bulk is None else m.assemble(self._bulk)
+        return bulk, contact

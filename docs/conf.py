@@ -83,6 +83,7 @@ def _modules(package: str) -> list[str]:
 API_SECTIONS = {
     "The physics core": ["breakwater.model", "breakwater.interface", "breakwater.gn22",
                          "breakwater.slipguard", "breakwater.solver", "breakwater.ledger",
+                         "breakwater.numerical",
                          "breakwater.probes"],
     "The fast step solver": ["breakwater.bulk", "breakwater.condensed"],
     "The physics in UFL (forms/)": _modules("breakwater.forms"),
