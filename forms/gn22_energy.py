@@ -23,7 +23,8 @@ so the energy the ledger's physical entries do not account for over the step is
     D_contact = Δu·f̄_c − ΔE_penalty − ΔD_friction          (:func:`gn22_contact_dissipation`)
 
 and ΔE + ΔD_R + ΔD_F + D_bulk + D_contact = ΔW holds to the equilibrium's residual.
-Both vanish with β₁ = β₂ = ½ on terms linear in the state (D_bulk identically: g = c = 0).
+D_bulk vanishes identically with β₁ = β₂ = ½ (g = c = 0), D_contact where no contact
+point switches and the slip velocity is constant over the step.
 For a linear undamped unforced problem (M a + K u = 0), substituting the equations
 gives Newmark's identity (Hughes, *The Finite Element Method*, 1987, §9.3.3; Krenk,
 CMAME 195, 2006): D_bulk = Δ(½ c Δt² a·M a) + g (Δu·K Δu + c Δt² Δa·M Δa), a stored
