@@ -248,10 +248,24 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
 
 
 def energy_summary(rows: Sequence[Mapping[str, float]]) -> dict[str, Any]:
-    """The ``energy`` entry of the summary: the largest |balance error|, the last ledger."""
+    """The ``energy`` entry of the summary: the largest |balance error|, the last ledger.
+
+    Also the largest |balance error| and the final numerical dissipation as fractions
+    of the final external work (None when no work was done).
+    """
     balance = [abs(r["balance_error"]) for r in rows]
-    return {"max_balance_error": max(balance) if balance else None,
-            "final": {k: rows[-1][k] for k in FIELDS} if rows else None}
+    work = rows[-1]["external_work"] if rows else 0.0
+
+    def of_work(x: float | None) -> float | None:
+        return None if x is None or not work else x / abs(work)
+
+    largest = max(balance) if balance else None
+    numerical = rows[-1].get("numerical_dissipation") if rows else None
+    return {"max_balance_error": largest,
+            "final": {k: rows[-1][k] for k in FIELDS if k in rows[-1]} if rows else None,
+            "numerical_dissipation": numerical,
+            "max_balance_error_over_external_work": of_work(largest),
+            "numerical_dissipation_over_external_work": of_work(numerical)}
 
 
 def run_summary(*, case_name: str, finished: bool, status: str, error: str | None,
@@ -388,6 +402,12 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"{num(ratios.get('master'), '.3g')} (master): {q.get('verdict')}")
     e = summary.get("energy", {})
     if e.get("max_balance_error") is not None:
-        lines.append(f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m")
+        line = f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m"
+        if e.get("max_balance_error_over_external_work") is not None:
+            line += (f" ({num(e['max_balance_error_over_external_work'], '.2g')} of the "
+                     f"external work); numerical dissipation "
+                     f"{num(e.get('numerical_dissipation'))} J/m "
+                     f"({pct(e.get('numerical_dissipation_over_external_work'))})")
+        lines.append(line)
     lines.append(f"  outputs: {directory}")
     return "\n".join(lines)

@@ -37,6 +37,7 @@ from .energy import (
     rayleigh_power,
     strain_energy,
 )
+from .gn22_energy import gn22_bulk_dissipation, gn22_contact_dissipation
 
 __all__ = [
     "ContactLaw",
@@ -47,6 +48,8 @@ __all__ = [
     "elastic_residual",
     "external_power",
     "friction_power",
+    "gn22_bulk_dissipation",
+    "gn22_contact_dissipation",
     "inertia",
     "kinetic_energy",
     "lame_from_shear",

@@ -26,6 +26,7 @@ from breakwater.case import CaseError, load_case
 from breakwater.condensed import BulkOperators, MonolithicLayout, interface_dofs
 from breakwater.files import read_history
 from breakwater.gn22 import GN22, solve_static
+from breakwater.ledger import FIELDS
 from breakwater.mesh import read_mesh
 from breakwater.model import (
     Body,
@@ -81,6 +82,23 @@ def _same_forces(a: pathlib.Path, b: pathlib.Path) -> None:
                                        atol=1e-7 * np.abs(hb[name]).max(), err_msg=name)
 
 
+def _same_ledger(a: pathlib.Path, b: pathlib.Path) -> None:
+    """The energy ledgers agree to 1e-7 of the largest ledger entry, and both close.
+
+    The numerical dissipation reads the solved step (Δa, the contact state), so it is as
+    sensitive as the resultants (see :func:`_same_forces`); both balances close to the
+    Newton tolerance (1e-8 of the external work, see test_numerical_dissipation.py).
+    """
+    ha, hb = read_history(a / "history.csv"), read_history(b / "history.csv")
+    scale = max(np.abs(hb[k]).max() for k in FIELDS)
+    for name in FIELDS:
+        np.testing.assert_allclose(ha[name], hb[name], rtol=0, atol=1e-7 * scale,
+                                   err_msg=name)
+    for h in (ha, hb):
+        assert np.abs(h["balance_error"]).max() < 1e-8 * h["external_work"][-1]
+    assert abs(hb["numerical_dissipation"][-1]) > 1e-3 * scale  # compared where nonzero
+
+
 def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
     # 60 steps of 0.1 ms on a coarse mesh: the 2 ms pendulum pulse, the front corner
     # lifting and the interface sliding (the flip guard acts), frictional contact at
@@ -100,6 +118,7 @@ def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
     compared = _same_kinematics(shared_dir / "fast", shared_dir / "reference")
     assert {"gauge_top_ux", "corner_front_slip", "corner_front_opening"} <= set(compared)
     _same_forces(shared_dir / "fast", shared_dir / "reference")
+    _same_ledger(shared_dir / "fast", shared_dir / "reference")
     # The fast path's split of the time loop is recorded.
     loop = fast["solver"]["time_loop"]
     assert {"wall", "outputs", "factorisation", "back_solves", "interface_assembly"} <= \
@@ -142,6 +161,7 @@ def test_blocks_fast_equals_reference(folder: pathlib.Path, shared_dir: pathlib.
     compared = _same_kinematics(shared_dir / "fast", shared_dir / "reference")
     assert {"corner0_slip", "corner1_slip", "corner1_opening"} <= set(compared)
     _same_forces(shared_dir / "fast", shared_dir / "reference")
+    _same_ledger(shared_dir / "fast", shared_dir / "reference")
     h = read_history(shared_dir / "fast" / "history.csv")
     assert abs(h["corner1_slip"][-1] - h["corner1_slip"][0]) > 1e-6  # it slid
 

@@ -108,6 +108,13 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
     assert written["versions"]["mpi_size"] == COMM.size
     assert written["energy"]["max_balance_error"] == pytest.approx(
         np.abs(h["balance_error"]).max(), rel=1e-12)
+    W = h["external_work"][-1]
+    assert written["energy"]["numerical_dissipation"] == pytest.approx(
+        h["numerical_dissipation"][-1], rel=1e-12)
+    assert written["energy"]["numerical_dissipation_over_external_work"] == pytest.approx(
+        h["numerical_dissipation"][-1] / abs(W), rel=1e-12)
+    # The ledger closes (1e-8 of the work: Newton's tolerance, test_numerical_dissipation).
+    assert written["energy"]["max_balance_error_over_external_work"] < 1e-8
     dyn = written["dynamic"]
     k = int(np.argmax(np.abs(h["top_ux"])))
     assert dyn["peak_ux"]["top"] == {"value": pytest.approx(h["top_ux"][k], rel=1e-12),
