@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
+from typing import Protocol
 
 import dolfinx
 import numpy as np
@@ -45,7 +46,28 @@ from .errors import ConvergenceError
 from .model import ContactModel
 from .solver import NewtonOptions, snes_reason
 
-__all__ = ["CondensedNewton", "InterfaceAssembler"]
+__all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
+
+
+class ContactForces(Protocol):
+    """Contact forces on the interface unknowns, a part of f_c (summed over providers).
+
+    Evaluated at the state Functions (u, v, a at t and the step's Δa, which
+    :class:`CondensedNewton` sets before calling); both arrays are the same on every rank.
+    """
+
+    def vector(self) -> np.ndarray:
+        """f_c on the interface unknowns, shape ``(n_I,)``."""
+        ...
+
+    def matrix(self) -> np.ndarray:
+        """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
+        ...
+
+
+#: Builds the contact-force providers of a model from its stacked layout and the
+#: interface unknowns (global stacked indices, sorted).
+ContactFactory = Callable[[MonolithicLayout, np.ndarray], Sequence[ContactForces]]
 
 
 class InterfaceAssembler:
@@ -156,6 +178,9 @@ class CondensedNewton:
         force_scale: Force norm that scales ``options.atol``.
         guard: Optional slip guard ``guard(v, step, dv_dx) -> corrected`` on local body
             arrays (:class:`~breakwater.slipguard.SlipGuard`), the SNES pre-check.
+        contact: Builds the contact forces (:class:`ContactForces`, summed); None: the
+            UFL of ``interface_residual`` assembled over the contact facets
+            (:class:`InterfaceAssembler`).
     """
 
     def __init__(self, model: ContactModel,
@@ -165,7 +190,7 @@ class CondensedNewton:
                  interface_residual: ufl.Form | None, options: NewtonOptions | None = None,
                  force_scale: float = 1.0,
                  guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float], int]
-                 | None = None) -> None:
+                 | None = None, contact: ContactFactory | None = None) -> None:
         self.model = model
         self.u, self.v, self.a, self.da = (list(x) for x in state)
         self.dt = dt
@@ -187,9 +212,11 @@ class CondensedNewton:
         start, n_local = layout.start, layout.offsets[-1]
         self._owned = (self.I >= start) & (self.I < start + n_local)
         self._owned_rows = self.I[self._owned] - start
-        self.assembler = None if interface_residual is None else InterfaceAssembler(
-            model, layout, ufl.extract_blocks(interface_residual), self.da, self._write,
-            self.I)
+        self.contact: list[ContactForces] = []
+        if interface_residual is not None:
+            self.contact = list(contact(layout, self.I)) if contact is not None else [
+                InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
+                                   self.da, self._write, self.I)]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
@@ -246,17 +273,21 @@ class CondensedNewton:
 
     def _contact(self, y: np.ndarray) -> np.ndarray:
         """f_c(y) on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.vector()
+            out = self.contact[0].vector()
+            for c in self.contact[1:]:
+                out = out + c.vector()
+            return out
 
     def _contact_jacobian(self, y: np.ndarray) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.matrix()
+            out = self.contact[0].matrix()
+            for c in self.contact[1:]:
+                out = out + c.matrix()
+            return out
 
     def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
         assert self._fact is not None
