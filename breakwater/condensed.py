@@ -44,6 +44,7 @@ from petsc4py import PETSc
 from .bulk import BulkOperators, MonolithicLayout, Timings, _Factorisation, interface_dofs
 from .errors import ConvergenceError
 from .model import ContactModel
+from .parallel import single_threaded_blas
 from .solver import NewtonOptions, snes_reason
 
 __all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
@@ -192,6 +193,8 @@ class CondensedNewton:
                  guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float], int]
                  | None = None, contact: ContactFactory | None = None) -> None:
         self.model = model
+        # Every rank runs the same small dense algebra: one BLAS thread per rank.
+        single_threaded_blas(model.comm)
         self.u, self.v, self.a, self.da = (list(x) for x in state)
         self.dt = dt
         self.beta1, self.beta2 = beta1, beta2
@@ -361,7 +364,7 @@ class CondensedNewton:
         with T("bulk_products"):
             for fns, vec in ((self.u, V["u"]), (self.v, V["v"]), (self.a, V["a"]),
                              (self.da, V["da"])):
-                fem_petsc.assign(fns, vec)
+                self.layout.assign(fns, vec)
         bulk.predictor_residual(V["u"], V["v"], V["a"], dt, V["r0"])
         bulk.solve(fact, V["r0"], V["z"])
         if self.n == 0:  # no contact: the step is linear

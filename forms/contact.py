@@ -104,6 +104,8 @@ def _floats(law):
 
 def tangential_part(v, n):
     """Tangential projection (I − n⊗n) v (UFL, or nodal arrays ``(n, gdim)``)."""
+    if isinstance(v, np.ndarray) and isinstance(n, np.ndarray) and v.ndim == 2:
+        return v - np.einsum("ki,ki->k", v, n)[:, None] * n  # the same, without dispatch
     op = _ops(v, n)
     return v - op.scale(op.dot(v, n), n)
 
@@ -278,8 +280,7 @@ class ContactLaw:
         g_n = np.einsum("ki,ki->k", u_s - u_m, n) + g0
         closed = g_n <= 0.0
         p = np.where(closed, -ε_n * g_n, 0.0)
-        dv = v_s - v_m
-        v_T = dv - np.einsum("ki,ki->k", dv, n)[:, None] * n
+        v_T = tangential_part(v_s - v_m, n)
         s = np.sqrt(np.einsum("ki,ki->k", v_T, v_T) + χ**2)
         φ = v_T / s[:, None]
         t_s = p[:, None] * (n - μ * φ)
