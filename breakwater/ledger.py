@@ -115,7 +115,7 @@ class EnergyLedger:
                                  [*self._stored, self._rayleigh, *self._friction, self._work])
         kin, strain, pen = (float(x) for x in values[:3])
         r = self.row
-        if first:
+        if self.reference is None:
             self.reference = kin + strain + pen
         else:
             rayleigh, friction1, friction0, work = (float(x) for x in values[3:])
