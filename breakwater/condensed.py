@@ -283,14 +283,26 @@ class CondensedNewton:
                 out = out + c.vector()
             return out
 
-    def _contact_jacobian(self, y: np.ndarray) -> np.ndarray:
-        """∂f_c/∂y on the interface unknowns (the same on every rank)."""
+    def _contact_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """X ∂f_c/∂y on the interface unknowns (the same on every rank).
+
+        A provider with a ``left_product(X)`` method gives the product itself (from its
+        matrix's structure); the others their dense matrix.
+        """
+        out = np.zeros((self.n, self.n))
+        dense: np.ndarray | None = None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            out = self.contact[0].matrix()
-            for c in self.contact[1:]:
-                out = out + c.matrix()
-            return out
+            for c in self.contact:
+                product = getattr(c, "left_product", None)
+                if product is not None:
+                    out += product(X)
+                else:
+                    m = c.matrix()
+                    dense = m if dense is None else dense + m
+        if dense is not None:
+            out += X @ dense
+        return out
 
     def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
         assert self._fact is not None
@@ -308,7 +320,7 @@ class CondensedNewton:
     def _jacobian(self, snes: PETSc.SNES, x: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         assert self._fact is not None
         y = x.getArray(readonly=True)
-        dense = self._fact.X_II @ self._contact_jacobian(y)
+        dense = self._contact_jacobian(y, self._fact.X_II)
         dense[np.diag_indices_from(dense)] += 1.0
         P.getDenseArray()[:] = dense
         P.assemble()

@@ -83,3 +83,19 @@ def test_blocks_nodal_equals_forms(folder: pathlib.Path) -> None:
         _compare(stepper)
     finally:
         stepper.destroy()
+
+
+def test_left_product_is_the_dense_product() -> None:
+    # X ∂f_c from the matrix's node structure equals the dense product (a random X).
+    model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
+    stepper = GN22(model, 1e-4)
+    try:
+        _random_state(stepper, 5)
+        provider = stepper.solver.contact[0]
+        n = provider.n
+        X = np.random.default_rng(7).standard_normal((n + 3, n))
+        expected = X @ provider.matrix()
+        np.testing.assert_allclose(provider.left_product(X), expected, rtol=0,
+                                   atol=1e-12 * np.abs(expected).max())
+    finally:
+        stepper.destroy()
