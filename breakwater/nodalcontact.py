@@ -181,6 +181,8 @@ class NodalContactForces:
         """u₁, v₁ of both sides at the quadrature points (one reduction under MPI)."""
         gdim = self.nodes.gdim
         out = self._gathered
+        if self.comm.size > 1:
+            out[:] = 0.0  # the other ranks' nodes: their values come in the sum
         dt = float(self.dt.value)
         for k, (local, place, arrays) in enumerate(self._take):
             u1, v1, _ = self.kinematics(*(x[local] for x in arrays), dt, self.beta1,
