@@ -20,10 +20,18 @@ convergence test keeps its meaning. Once y converges the whole increment is
 ``Δa = z − X f_c(y)``. Per distinct Δt: one assembly and factorisation of A (MUMPS) and
 one multi-right-hand-side solve for X (cached: cut-backs come back to the same Δt). Per
 step: a few sparse matrix-vector products for r₀, one back-solve for z and one dense
-product with X. Per Newton iteration: the interface forms (the UFL of ``forms/``, over the
-contact facets only) and a dense solve of size n_I. The Newton is a PETSc SNES on the
+product with X. Per Newton iteration: the contact forces and their Jacobian on the
+interface unknowns and a dense solve of size n_I. The Newton is a PETSc SNES on the
 interface unknowns (every rank solves the same small system, so every rank takes the same
 decisions), with the convergence test and the slip-reversal pre-check of the reference path.
+
+The contact forces come from providers (:class:`ContactForces`: ``vector()`` and
+``matrix()`` on the interface unknowns at the state Functions, summed over the list a
+:data:`ContactFactory` builds). Conforming pairs in 2D use
+:class:`~breakwater.nodalcontact.NodalContactForces`, the interface forms' nodal
+quadrature evaluated on arrays (and ``left_product(X)``, the product X_II ∂f_c/∂y from
+its node-by-node structure); :class:`InterfaceAssembler` assembles the UFL of
+``forms/`` over the contact facets, for everything else.
 """
 
 from __future__ import annotations

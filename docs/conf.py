@@ -84,7 +84,8 @@ API_SECTIONS = {
     "The physics core": ["breakwater.model", "breakwater.interface", "breakwater.gn22",
                          "breakwater.slipguard", "breakwater.solver", "breakwater.ledger",
                          "breakwater.probes"],
-    "The fast step solver": ["breakwater.bulk", "breakwater.condensed"],
+    "The fast step solver": ["breakwater.bulk", "breakwater.condensed",
+                             "breakwater.nodalcontact"],
     "The physics in UFL (forms/)": _modules("breakwater.forms"),
     "Cases and runs": ["breakwater.case", "breakwater.simulation"],
 }
