@@ -64,9 +64,9 @@ class PointProbe:
         self.size = V.dofmap.index_map_bs
         self._blocks = np.zeros(0, np.int32)
         self._phi = np.zeros(0)
+        unit = fem.Function(V)  # collective (its vector's scatter), on every rank
         if comm.rank == self.owner:
             self._blocks = V.dofmap.cell_dofs(self._cell).copy()
-            unit = fem.Function(V)
             phi = []
             for blk in self._blocks:
                 unit.x.array[:] = 0.0
