@@ -15,7 +15,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections import OrderedDict
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,6 +84,12 @@ class MonolithicLayout:
         base = self._starts[owner] + self._offsets[owner, body] \
             + (blocks - starts[owner]) * bs
         return (base[:, None] + np.arange(bs)).ravel()
+
+    def assign(self, functions: Sequence[fem.Function], vec: PETSc.Vec) -> None:
+        """Copy the owned entries of one Function per body into a stacked vector."""
+        out = vec.array
+        for f, lo, hi in zip(functions, self.offsets[:-1], self.offsets[1:], strict=True):
+            out[lo:hi] = f.x.array[: hi - lo]
 
     def owned_local(self, body: int, dofs: np.ndarray) -> np.ndarray:
         """Positions in the stacked vector's owned array of owned body-local DOFs."""

@@ -20,10 +20,18 @@ convergence test keeps its meaning. Once y converges the whole increment is
 ``Δa = z − X f_c(y)``. Per distinct Δt: one assembly and factorisation of A (MUMPS) and
 one multi-right-hand-side solve for X (cached: cut-backs come back to the same Δt). Per
 step: a few sparse matrix-vector products for r₀, one back-solve for z and one dense
-product with X. Per Newton iteration: the interface forms (the UFL of ``forms/``, over the
-contact facets only) and a dense solve of size n_I. The Newton is a PETSc SNES on the
+product with X. Per Newton iteration: the contact forces and their Jacobian on the
+interface unknowns and a dense solve of size n_I. The Newton is a PETSc SNES on the
 interface unknowns (every rank solves the same small system, so every rank takes the same
 decisions), with the convergence test and the slip-reversal pre-check of the reference path.
+
+The contact forces come from providers (:class:`ContactForces`: ``vector()`` and
+``matrix()`` on the interface unknowns at the state Functions, summed over the list a
+:data:`ContactFactory` builds). Conforming pairs in 2D use
+:class:`~breakwater.nodalcontact.NodalContactForces`, the interface forms' nodal
+quadrature evaluated on arrays (and ``left_product(X)``, the product X_II ∂f_c/∂y from
+its node-by-node structure); :class:`InterfaceAssembler` assembles the UFL of
+``forms/`` over the contact facets, for everything else.
 """
 
 from __future__ import annotations
@@ -31,6 +39,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
+from typing import Protocol
 
 import dolfinx
 import numpy as np
@@ -43,9 +52,31 @@ from petsc4py import PETSc
 from .bulk import BulkOperators, MonolithicLayout, Timings, _Factorisation, interface_dofs
 from .errors import ConvergenceError
 from .model import ContactModel
+from .parallel import single_threaded_blas
 from .solver import NewtonOptions, snes_reason
 
-__all__ = ["CondensedNewton", "InterfaceAssembler"]
+__all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
+
+
+class ContactForces(Protocol):
+    """Contact forces on the interface unknowns, a part of f_c (summed over providers).
+
+    Evaluated at the state Functions (u, v, a at t and the step's Δa, which
+    :class:`CondensedNewton` sets before calling); both arrays are the same on every rank.
+    """
+
+    def vector(self) -> np.ndarray:
+        """f_c on the interface unknowns, shape ``(n_I,)``."""
+        ...
+
+    def matrix(self) -> np.ndarray:
+        """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
+        ...
+
+
+#: Builds the contact-force providers of a model from its stacked layout and the
+#: interface unknowns (global stacked indices, sorted).
+ContactFactory = Callable[[MonolithicLayout, np.ndarray], Sequence[ContactForces]]
 
 
 class InterfaceAssembler:
@@ -156,6 +187,9 @@ class CondensedNewton:
         force_scale: Force norm that scales ``options.atol``.
         guard: Optional slip guard ``guard(v, step, dv_dx) -> corrected`` on local body
             arrays (:class:`~breakwater.slipguard.SlipGuard`), the SNES pre-check.
+        contact: Builds the contact forces (:class:`ContactForces`, summed); None: the
+            UFL of ``interface_residual`` assembled over the contact facets
+            (:class:`InterfaceAssembler`).
     """
 
     def __init__(self, model: ContactModel,
@@ -165,8 +199,10 @@ class CondensedNewton:
                  interface_residual: ufl.Form | None, options: NewtonOptions | None = None,
                  force_scale: float = 1.0,
                  guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float], int]
-                 | None = None) -> None:
+                 | None = None, contact: ContactFactory | None = None) -> None:
         self.model = model
+        # Every rank runs the same small dense algebra: one BLAS thread per rank.
+        single_threaded_blas(model.comm)
         self.u, self.v, self.a, self.da = (list(x) for x in state)
         self.dt = dt
         self.beta1, self.beta2 = beta1, beta2
@@ -187,9 +223,11 @@ class CondensedNewton:
         start, n_local = layout.start, layout.offsets[-1]
         self._owned = (self.I >= start) & (self.I < start + n_local)
         self._owned_rows = self.I[self._owned] - start
-        self.assembler = None if interface_residual is None else InterfaceAssembler(
-            model, layout, ufl.extract_blocks(interface_residual), self.da, self._write,
-            self.I)
+        self.contact: list[ContactForces] = []
+        if interface_residual is not None:
+            self.contact = list(contact(layout, self.I)) if contact is not None else [
+                InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
+                                   self.da, self._write, self.I)]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
@@ -246,17 +284,33 @@ class CondensedNewton:
 
     def _contact(self, y: np.ndarray) -> np.ndarray:
         """f_c(y) on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.vector()
+            out = self.contact[0].vector()
+            for c in self.contact[1:]:
+                out = out + c.vector()
+            return out
 
-    def _contact_jacobian(self, y: np.ndarray) -> np.ndarray:
-        """∂f_c/∂y on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
+    def _contact_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """X ∂f_c/∂y on the interface unknowns (the same on every rank).
+
+        A provider with a ``left_product(X)`` method gives the product itself (from its
+        matrix's structure); the others their dense matrix.
+        """
+        out = np.zeros((self.n, self.n))
+        dense: np.ndarray | None = None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.matrix()
+            for c in self.contact:
+                product = getattr(c, "left_product", None)
+                if product is not None:
+                    out += product(X)
+                else:
+                    m = c.matrix()
+                    dense = m if dense is None else dense + m
+        if dense is not None:
+            out += X @ dense
+        return out
 
     def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
         assert self._fact is not None
@@ -274,7 +328,7 @@ class CondensedNewton:
     def _jacobian(self, snes: PETSc.SNES, x: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
         assert self._fact is not None
         y = x.getArray(readonly=True)
-        dense = self._fact.X_II @ self._contact_jacobian(y)
+        dense = self._contact_jacobian(y, self._fact.X_II)
         dense[np.diag_indices_from(dense)] += 1.0
         P.getDenseArray()[:] = dense
         P.assemble()
@@ -330,7 +384,7 @@ class CondensedNewton:
         with T("bulk_products"):
             for fns, vec in ((self.u, V["u"]), (self.v, V["v"]), (self.a, V["a"]),
                              (self.da, V["da"])):
-                fem_petsc.assign(fns, vec)
+                self.layout.assign(fns, vec)
         bulk.predictor_residual(V["u"], V["v"], V["a"], dt, V["r0"])
         bulk.solve(fact, V["r0"], V["z"])
         if self.n == 0:  # no contact: the step is linear

@@ -30,6 +30,7 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .condensed import CondensedNewton
 from .interface import InterfaceNodes, interface_nodes
 from .model import ContactModel, _PairData
+from .nodalcontact import NodalContactForces, nodal_contact_applies
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
@@ -197,11 +198,21 @@ class GN22:
         self.flips = 0  # nodes whose slip reversal the guard cut, over the run
         self.solver: NewtonSolver | CondensedNewton
         if solver == "fast":
+            state = (self.u, self.v, self.a, self.da)
+            contact = None
+            if model.pairs and nodal_contact_applies(model):
+                # The interface forms' nodal quadrature evaluated on arrays.
+                nodes = self.nodes or interface_nodes(model)
+
+                def contact(layout, interface):  # type: ignore[no-untyped-def]
+                    return [NodalContactForces(model, nd, layout, interface, state, self.dt,
+                                               p.beta1, p.beta2, gn22_kinematics)
+                            for nd in nodes]
             self.solver = CondensedNewton(
-                model, (self.u, self.v, self.a, self.da), self.dt, p.beta1, p.beta2,
+                model, state, self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
                 newton, force_scale=_scale(model),
-                guard=self._guard_counted if self.guard else None)
+                guard=self._guard_counted if self.guard else None, contact=contact)
         else:
             self._y = model.functions("step")
             F = model.residual(self.u1, self.v1, self.a1)

@@ -523,6 +523,22 @@ class ContactModel:
         """Assemble a compiled scalar form and sum over the ranks."""
         return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
 
+    def assemble_many(self, compiled: Sequence[fem.Form | None]) -> np.ndarray:
+        """Assemble compiled scalar forms (None: 0) and sum them over the ranks at once.
+
+        The same numbers as :meth:`assemble` of each, with one reduction for all and
+        dolfinx's C++ assembler called directly (per-step outputs).
+        """
+        cpp = dolfinx.cpp.fem
+        out = np.zeros(len(compiled))
+        for k, c in enumerate(compiled):
+            if c is not None:
+                f = c._cpp_object
+                out[k] = cpp.assemble_scalar(f, cpp.pack_constants(f), cpp.pack_coefficients(f))
+        if self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out
+
     def weight(self) -> list[float]:
         """Weight |g| ∫ρ of each body (N, or N/m in plane strain)."""
         g = float(np.linalg.norm(self.gravity.value))

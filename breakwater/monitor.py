@@ -75,8 +75,9 @@ class Monitor:
         r: dict[str, float] = {"t": float(s.t.value), "dt": dt,
                                "newton_iterations": float(iterations)}
         r.update(self.probes.values(s.u))
-        for k, compiled in enumerate(self._contact):
-            length, normal, tangential = (self.model.assemble(c) for c in compiled)
+        resultants = self.model.assemble_many([c for forms in self._contact for c in forms])
+        for k in range(len(self._contact)):
+            length, normal, tangential = (float(x) for x in resultants[3 * k: 3 * k + 3])
             r[f"contact_length_{k}"] = length
             r[f"normal_force_{k}"] = normal
             r[f"tangential_force_{k}"] = tangential

@@ -9,6 +9,7 @@ made by rank 0 and seen by every rank.
 
 from __future__ import annotations
 
+import ctypes
 import pathlib
 import pickle
 import shutil
@@ -91,3 +92,41 @@ def shared_tempdir(comm: MPI.Comm, prefix: str = "breakwater-") -> Iterator[path
         if comm.rank == 0:
             shutil.rmtree(folder, ignore_errors=True)
         comm.barrier()
+
+
+#: The thread-count setters of the OpenBLAS builds a process may load (PETSc's and
+#: basix's plain OpenBLAS, NumPy's scipy-openblas64).
+_BLAS_SETTERS = ("openblas_set_num_threads", "scipy_openblas_set_num_threads64_")
+
+
+def single_threaded_blas(comm: MPI.Comm) -> list[str]:
+    """One BLAS thread per rank in every OpenBLAS loaded, when ``comm`` has 2+ ranks.
+
+    Under MPI each rank's multithreaded BLAS (MUMPS' dense kernels, NumPy's products of
+    the fast solver's interface matrices) starts as many threads as there are cores,
+    and the ranks' threads contend for the same cores. Found through the libraries
+    mapped into this process (``/proc/self/maps``, Linux); nothing is done elsewhere.
+
+    Returns:
+        The libraries set to one thread.
+    """
+    if comm.size < 2:
+        return []
+    done = []
+    try:
+        with open("/proc/self/maps") as f:
+            libs = {line.split()[-1] for line in f if "openblas" in line.lower()}
+    except OSError:
+        return []
+    for lib in sorted(libs):
+        try:
+            handle = ctypes.CDLL(lib)
+        except OSError:
+            continue
+        for name in _BLAS_SETTERS:
+            setter = getattr(handle, name, None)
+            if setter is not None:
+                setter(ctypes.c_int(1))
+                done.append(lib)
+                break
+    return done

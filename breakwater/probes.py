@@ -58,15 +58,34 @@ class PointProbe:
             raise MeshError(f"probe '{self.name}': point {tuple(point)} is not in body "
                             f"'{body}'")
         self._cell = int(local[0]) if len(local) else -1
+        # The value is Σ φ_j(x) u_j over the cell's DOF blocks: the basis functions at
+        # the point, found once by evaluating each of them (the owner only).
+        V = b.V
+        self.size = V.dofmap.index_map_bs
+        self._blocks = np.zeros(0, np.int32)
+        self._phi = np.zeros(0)
+        unit = fem.Function(V)  # collective (its vector's scatter), on every rank
+        if comm.rank == self.owner:
+            self._blocks = V.dofmap.cell_dofs(self._cell).copy()
+            phi = []
+            for blk in self._blocks:
+                unit.x.array[:] = 0.0
+                unit.x.array[blk * self.size] = 1.0
+                phi.append(unit.eval(x.reshape(1, 3), np.array([self._cell], np.int32)).ravel()[0])
+            self._phi = np.array(phi)
+
+    def local_value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
+        """The value at the point on the owning rank; zeros on the others (no reduction)."""
+        f = functions if isinstance(functions, fem.Function) else functions[self.body.index]
+        if not len(self._blocks):
+            return np.zeros(self.size)
+        return self._phi @ f.x.array.reshape(-1, self.size)[self._blocks]
 
     def value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
         """The value at the point of the body's Function (or of a list, one per body)."""
-        f = functions if isinstance(functions, fem.Function) else functions[self.body.index]
-        comm = self.model.comm
-        out = None
-        if comm.rank == self.owner:
-            out = f.eval(self.point.reshape(1, 3), np.array([self._cell], np.int32)).ravel()
-        return comm.bcast(out, root=self.owner)
+        out = self.local_value(functions)
+        self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out
 
 
 def _tangent(n: np.ndarray) -> np.ndarray:
@@ -113,7 +132,10 @@ class PairProbe:
             Keys ``slip``, ``opening``, ``slave_ux``, ``slave_uy``, ``master_ux``,
             ``master_uy``.
         """
-        us, um = self.slave.value(u), self.master.value(u)
+        return self.from_values(self.slave.value(u), self.master.value(u))
+
+    def from_values(self, us: np.ndarray, um: np.ndarray) -> dict[str, float]:
+        """:meth:`value` from the two sides' displacements at the point."""
         jump = us - um
         opening = float(jump @ self.normal)
         if self.gdim == 2:
@@ -140,6 +162,7 @@ class Probes:
 
     def __init__(self, model: ContactModel, output: OutputSpec,
                  nodes: Sequence[InterfaceNodes]) -> None:
+        self._comm = model.comm
         self.points = [PointProbe(model, p.body, p.point, p.name) for p in output.probes]
         self.pairs = [PairProbe(model, p, nodes) for p in output.pair_probes]
         self.columns: list[str] = []
@@ -159,11 +182,18 @@ class Probes:
         return [pp.name for pp in self.pairs]
 
     def values(self, u: Sequence[fem.Function]) -> dict[str, float]:
-        """The probes' columns for the state ``u`` (collective)."""
+        """The probes' columns for the state ``u`` (collective: one reduction for all)."""
+        every = [*self.points, *(q for pp in self.pairs for q in (pp.slave, pp.master))]
+        if not every:
+            return {}
+        values = np.array([p.local_value(u) for p in every])
+        if self._comm.size > 1:
+            self._comm.Allreduce(MPI.IN_PLACE, values, op=MPI.SUM)
         r: dict[str, float] = {}
-        for p in self.points:
-            value = p.value(u)
+        for p, value in zip(self.points, values, strict=False):
             r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
-        for pp in self.pairs:
-            r.update({f"{pp.name}_{k}": x for k, x in pp.value(u).items()})
+        sides = values[len(self.points):]
+        for k, pp in enumerate(self.pairs):
+            r.update({f"{pp.name}_{key}": x
+                      for key, x in pp.from_values(sides[2 * k], sides[2 * k + 1]).items()})
         return r

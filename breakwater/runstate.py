@@ -54,7 +54,8 @@ class RunState:
         ledger: (Saved copy) The energy ledger's state
             (:meth:`~breakwater.ledger.EnergyLedger.state`).
         snapshot: (Saved copy) ``time`` and ``value`` of the peak snapshot.
-        time_loop: Wall time of the time loop (``wall``, s) and of its parts: ``outputs``
+        time_loop: Wall time of the time loop (``wall``, s), its CPU time (``cpu``) and
+            the wall time of its parts: ``outputs``
             (history rows, ledger, fields, checkpoints) and, for the fast solver, the
             parts of :class:`~breakwater.condensed.Timings`; summed over resumed parts.
 

@@ -225,8 +225,9 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
                    time_loop: Mapping[str, float] | None = None) -> dict[str, Any]:
     """The ``solver`` entry of the summary.
 
-    ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``
-    and, for the fast solver, ``factorisation``, ``back_solves``, ``bulk_products``,
+    ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``,
+    ``cpu`` (the process's CPU time over the loop, all threads) and, for the fast
+    solver, ``factorisation``, ``back_solves``, ``bulk_products``,
     ``interface_assembly`` and ``newton`` (:class:`~breakwater.condensed.Timings`).
     """
     its = iterations
