@@ -44,6 +44,7 @@ from .bulk import BulkOperators, MonolithicLayout, Timings, _Factorisation, inte
 from .errors import ConvergenceError
 from .model import ContactModel
 from .solver import NewtonOptions, snes_reason
+from .surfacepair import SurfaceContact
 
 __all__ = ["CondensedNewton", "InterfaceAssembler"]
 
@@ -172,8 +173,8 @@ class CondensedNewton:
         self.beta1, self.beta2 = beta1, beta2
         self.options = o = options or NewtonOptions()
         self.layout = layout = MonolithicLayout(model)
-        self.I = interface_dofs(model, layout) if interface_residual is not None \
-            else np.zeros(0, np.int64)
+        self.I = interface_dofs(model, layout) \
+            if interface_residual is not None or model.surface_pairs else np.zeros(0, np.int64)
         self.n = n = len(self.I)
         self.timings = Timings()
         self.bulk = BulkOperators(model, layout, self.I, beta1, beta2, timings=self.timings)
@@ -187,9 +188,15 @@ class CondensedNewton:
         start, n_local = layout.start, layout.offsets[-1]
         self._owned = (self.I >= start) & (self.I < start + n_local)
         self._owned_rows = self.I[self._owned] - start
-        self.assembler = None if interface_residual is None else InterfaceAssembler(
-            model, layout, ufl.extract_blocks(interface_residual), self.da, self._write,
-            self.I)
+        # The providers of the interface forces: the conforming pairs' forms and each
+        # general pair (breakwater.surfacepair); f_c and ∂f_c/∂y are their sums.
+        self.providers: list[InterfaceAssembler | SurfaceContact] = [] \
+            if interface_residual is None else [InterfaceAssembler(
+                model, layout, ufl.extract_blocks(interface_residual), self.da, self._write,
+                self.I)]
+        self.providers += [SurfaceContact(model, p, layout, self.I,
+                                          (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+                           for p in model.surface_pairs]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
@@ -246,17 +253,15 @@ class CondensedNewton:
 
     def _contact(self, y: np.ndarray) -> np.ndarray:
         """f_c(y) on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.vector()
+            return sum((p.vector() for p in self.providers), np.zeros(self.n))
 
     def _contact_jacobian(self, y: np.ndarray) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns (the same on every rank)."""
-        assert self.assembler is not None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            return self.assembler.matrix()
+            return sum((p.matrix() for p in self.providers), np.zeros((self.n, self.n)))
 
     def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
         assert self._fact is not None

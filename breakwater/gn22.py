@@ -182,6 +182,9 @@ class GN22:
                  flip_guard: bool = True, solver: str = "fast") -> None:
         if solver not in self.SOLVERS:
             raise ValueError(f"solver must be one of {', '.join(self.SOLVERS)} (got {solver!r})")
+        if solver == "reference" and model.surface_pairs:
+            raise ValueError("general contact pairs (slave and master surfaces) need the "
+                             "fast solver (time.solver = \"fast\")")
         self.model = model
         self.params = p = parameters or GN22Parameters()
         msh = model.mesh
