@@ -7,12 +7,18 @@ projection (eq. 7), the slip velocity is the slave's velocity relative to the ma
 material point under the projection, ``v_s − v̄_m``, and the laws are those of
 :mod:`forms.contact` (their NumPy path), written once for both kinds of pair.
 
-Scheme (Gauss-point-to-segment, single pass): the slave integration points are
-``points`` Gauss points per slave facet in the reference configuration (weight: the
-reference length); the master surface is the exact current image of the master facets
-(the P2 displacement makes each facet a quadratic curve, its three nodes the closure
-DOFs). The slave receives ``−∫ t_s N_s`` and the master ``+∫ t_s N̄_m`` at the
-projection (action and reaction).
+Scheme (segment-to-segment, single pass): each slave facet is cut into segments at the
+points where the master facets' vertices project onto it (current configuration), and
+each segment carries ``points`` Gauss points (weight: the reference length), so that
+every point's projection stays within one master facet over a segment and the
+integrand is smooth there; on a flat patch the integration is exact (the patch test).
+The cuts move with the bodies but are held fixed in the linearisation, which stays
+exact: the integrand is continuous across a cut, so the derivatives of the cut
+positions cancel between the two segments. ``segmented = False`` gives plain
+Gauss-point-to-segment integration (Gauss points per slave facet). The master surface
+is the exact current image of the master facets (the P2 displacement makes each facet a
+quadratic curve, its three nodes the closure DOFs). The slave receives ``−∫ t_s N_s``
+and the master ``+∫ t_s N̄_m`` at the projection (action and reaction).
 
 The pair is a provider of the fast solver (:mod:`breakwater.condensed`): ``vector()``
 and ``matrix()`` give the contact residual and its Jacobian with respect to the step's
@@ -62,7 +68,10 @@ class SurfacePair:
         penalty: Normal penalty ε_n (N/m³).
         friction: Coulomb coefficient μ (-).
         regularisation: Regularisation velocity χ (m/s).
-        points: Gauss points per slave facet.
+        points: Gauss points per integration segment.
+        segmented: Cut each slave facet where the master facets' vertices project onto
+            it (segment-to-segment integration: exact on a flat patch); False: one
+            segment per slave facet (Gauss-point-to-segment).
         radius: Search radius (m): a point farther from the master surface has no
             projection (out of contact); None: the longest master facet.
     """
@@ -75,7 +84,8 @@ class SurfacePair:
     penalty: float
     friction: float = 0.0
     regularisation: float = 1e-10
-    points: int = 4
+    points: int = 3
+    segmented: bool = True
     radius: float | None = None
 
     gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
@@ -234,14 +244,8 @@ class SurfaceContact:
         master.dofs[flip] = master.dofs[flip][:, swap]
         self.slave, self.master = slave, master
         self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
-        # The slave integration points: Gauss points of each slave facet.
-        g, w = np.polynomial.legendre.leggauss(spec.points)
-        nn = slave.X.shape[1]
-        N, dN, _ = shape(g, nn)
-        tangent = np.einsum("gn,fnd->fgd", dN, slave.X)
-        self.point_facet = np.repeat(np.arange(len(slave.X)), len(g))
-        self.Ns = np.tile(N, (len(slave.X), 1))
-        self.weight = (w * np.linalg.norm(tangent, axis=2)).ravel()
+        # The Gauss rule of each integration segment on [−1, 1].
+        self._gauss = np.polynomial.legendre.leggauss(spec.points)
         lengths = np.linalg.norm(master.X[:, 1] - master.X[:, 0], axis=1)
         self.radius = spec.radius if spec.radius is not None else \
             float(lengths.max()) if len(lengths) else 1.0
@@ -278,25 +282,58 @@ class SurfaceContact:
         return (u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
                 v + dt * a + self.beta1 * dt * da)
 
-    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, np.ndarray]:
-        """The contact points with a projection and their local data (real)."""
+    def _integration(self, xs: np.ndarray, xm: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The slave integration points: (slave facet, ξ, weight) of each.
+
+        Each slave facet is cut where the master facets' vertices project onto it
+        (current configuration, ``segmented``), or not at all; each segment carries
+        the Gauss rule. The weight is the reference length.
+        """
+        s = self.slave
+        n_f, nn = s.X.shape[:2]
+        facet = [np.arange(n_f), np.arange(n_f)]
+        cut = [-np.ones(n_f), np.ones(n_f)]
+        if self.spec.segmented and len(xm) and n_f:
+            vertices = xm[:, :2].reshape(-1, xm.shape[2])
+            on, xi = project(vertices, xs, FacetGrid(xs, self.radius))
+            inside = (on >= 0) & (np.abs(xi) < 1 - 1e-12)
+            facet.append(on[inside])
+            cut.append(xi[inside])
+        f, c = np.concatenate(facet), np.concatenate(cut)
+        order = np.lexsort((c, f))
+        f, c = f[order], c[order]
+        seg = np.flatnonzero((f[1:] == f[:-1]) & (c[1:] - c[:-1] > 1e-12))
+        f_seg, a, b = f[seg], c[seg], c[seg + 1]
+        g, w = self._gauss
+        xi = (0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * g).ravel()
+        point_facet = np.repeat(f_seg, len(g))
+        _, dN, _ = shape(xi, nn)
+        jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
+        weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
+        return point_facet, xi, weight
+
+    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
+        """The contact points and the local data of those with a projection (real)."""
         import time
 
         s, m = self.slave, self.master
         xs_all = s.X + u1[self.pos_s]
         xm_all = m.X + u1[self.pos_m]
         t0 = time.perf_counter()
-        points = np.einsum("kn,knd->kd", self.Ns, xs_all[self.point_facet])
-        grid = FacetGrid(xm_all, self.radius)
-        facet, xi = project(points, xm_all, grid)
+        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
+        Ns, _, _ = shape(xi_s, s.X.shape[1])
+        points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
+        facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius))
         self.searches += 1
         self.search_seconds += time.perf_counter() - t0
         on = np.flatnonzero(facet >= 0)
-        f_s, f_m = self.point_facet[on], facet[on]
-        return {"index": on, "facet": f_m, "Ns": self.Ns[on], "xs": xs_all[f_s], "vs": v1[self.pos_s][f_s],
-                "xm": xm_all[f_m], "vm": v1[self.pos_m][f_m], "xi": xi[on],
-                "weight": self.weight[on],
-                "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1)}
+        f_s, f_m = point_facet[on], facet[on]
+        return {"index": on, "facet": f_m, "Ns": Ns[on], "xs": xs_all[f_s],
+                "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m], "vm": v1[self.pos_m][f_m],
+                "xi": xi[on], "weight": weight[on],
+                "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1),
+                "all_x": points, "all_weight": weight}
 
     # --- the provider ---------------------------------------------------------------
 
@@ -345,11 +382,9 @@ class SurfaceContact:
         """
         u1, v1 = self._state()
         p = self._points(u1, v1)
-        s = self.slave
-        xs_all = s.X + u1[self.pos_s]
-        points = np.einsum("kn,knd->kd", self.Ns, xs_all[self.point_facet])
+        points = p["all_x"]
         total = len(points)
-        out: dict[str, Any] = {"x": points, "weight": self.weight,
+        out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
                                "gap": np.full(total, np.nan), "pressure": np.zeros(total),
                                "slip_velocity": np.zeros((total, points.shape[1])),
                                "facet": np.full(total, -1), "xi": np.zeros(total)}
