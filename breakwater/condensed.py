@@ -157,6 +157,8 @@ class CondensedNewton:
         force_scale: Force norm that scales ``options.atol``.
         guard: Optional slip guard ``guard(v, step, dv_dx) -> corrected`` on local body
             arrays (:class:`~breakwater.slipguard.SlipGuard`), the SNES pre-check.
+        surface_guard: The slip guard of the general pairs (their ``precheck``), also
+            a pre-check.
     """
 
     def __init__(self, model: ContactModel,
@@ -166,7 +168,7 @@ class CondensedNewton:
                  interface_residual: ufl.Form | None, options: NewtonOptions | None = None,
                  force_scale: float = 1.0,
                  guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float], int]
-                 | None = None) -> None:
+                 | None = None, surface_guard: bool = True) -> None:
         self.model = model
         self.u, self.v, self.a, self.da = (list(x) for x in state)
         self.dt = dt
@@ -233,7 +235,9 @@ class CondensedNewton:
         ksp.setType("preonly")
         ksp.getPC().setType("lu")
         snes.setConvergenceTest(self._converged)
-        if guard is not None:
+        self.surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
+        self.surface_flips = 0
+        if guard is not None or self.surface_guard:
             snes.setLineSearchPreCheck(self._precheck)
         snes.setFromOptions()
 
@@ -308,7 +312,12 @@ class CondensedNewton:
         v₁ = ṽ + β₁Δt y and the step are written at the interface entries, the only
         ones the guard reads, and the step is read back where the guard cut it.
         """
-        assert self.guard is not None
+        if self.surface_guard:
+            for p in self.providers:
+                if isinstance(p, SurfaceContact):
+                    self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
+        if self.guard is None:
+            return
         dv_dx = self.beta1 * float(self.dt.value)
         velocity = self._v_pred_I + dv_dx * x.getArray(readonly=True)
         step = y.getArray(readonly=True)

@@ -204,7 +204,7 @@ class GN22:
                 model, (self.u, self.v, self.a, self.da), self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
                 newton, force_scale=_scale(model),
-                guard=self._guard_counted if self.guard else None)
+                guard=self._guard_counted if self.guard else None, surface_guard=flip_guard)
         else:
             self._y = model.functions("step")
             F = model.residual(self.u1, self.v1, self.a1)

@@ -33,8 +33,10 @@ complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -171,39 +173,108 @@ def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0, np.int64)
 
 
-def point_forces(law: forms.ContactLaw, Ns: np.ndarray, xs: np.ndarray, vs: np.ndarray,
-                 xm: np.ndarray, vm: np.ndarray, xi: np.ndarray, weight: np.ndarray,
-                 refine: int = 2) -> np.ndarray:
-    """Nodal residual contributions of contact points (real or complex arithmetic).
+def _unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Unit tangent dx/dξ / |dx/dξ| (analytic: no abs, complex-step safe)."""
+    t = np.einsum("kn,knd->kd", dN, nodes)
+    return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
+
+
+def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,
+                  groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
+                  ) -> np.ndarray:
+    """Nodal residual of the normal pressure at contact points (real or complex).
+
+    The point ``x_s = Σ N_s x_k`` of the slave facet is projected onto the master facet
+    (``refine`` Newton steps from ξ, in the inputs' arithmetic, so that a complex step
+    carries the implicit derivative of the projection); ``g_n = (x_s − x̄)·n̄``
+    (eq. 7), ``p = ε_n ⟨−g_n⟩₊`` (eq. 12), from :class:`forms.ContactLaw`.
 
     Args:
         law: The contact law (float parameters).
         Ns: Slave shape functions at each point, ``(K, nn)``.
-        xs: Current slave facet nodes, ``(K, nn, gdim)``; ``vs`` their velocities.
-        vs: Slave node velocities.
-        xm: Current master facet nodes (oriented: ``(t_y, −t_x)`` is outward), ``vm``
-            their velocities.
-        vm: Master node velocities.
-        xi: The projection's local coordinate on the master facet (Newton's start:
-            ``refine`` more Newton steps are taken, in the inputs' arithmetic).
-        weight: Reference length weight of each point.
+        xi: The projection's local coordinate on the master facet (Newton's start).
+        weight: Reference length of each point.
+        groups: ``[(x, v)]`` of the slave facet and of the master facet (oriented:
+            ``(t_y, −t_x)`` is outward), each ``(K, nn, gdim)``.
         refine: Newton steps of the projection.
 
     Returns:
         ``(K, 2 nn, gdim)``: the residual on the slave's nodes, then on the master's.
     """
+    (xs, _), (xm, _) = groups
     x_s = np.einsum("kn,knd->kd", Ns, xs)
-    v_s = np.einsum("kn,knd->kd", Ns, vs)
     xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
     N, dN, _ = shape(xi, xm.shape[1])
-    x_m = np.einsum("kn,knd->kd", N, xm)
-    tangent = np.einsum("kn,knd->kd", dN, xm)
-    tangent = tangent / np.sqrt(np.sum(tangent * tangent, axis=1))[:, None]
-    n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
-    v_m = np.einsum("kn,knd->kd", N, vm)
-    t = law.traction(x_s, x_m, n, v_s, v_m) * weight[:, None]
-    return np.concatenate([-Ns[:, :, None] * t[:, None, :], N[:, :, None] * t[:, None, :]],
-                          axis=1)
+    t = _unit_tangent(dN, xm)
+    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    traction = law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n) * weight[:, None]
+    return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
+                           N[:, :, None] * traction[:, None, :]], axis=1)
+
+
+def friction_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                    weight: np.ndarray, N0: np.ndarray, t0: np.ndarray,
+                    groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
+                    ) -> np.ndarray:
+    """Nodal residual of the friction traction at contact points (real or complex).
+
+    The pressure is that of the current projection (as :func:`normal_forces`); the
+    slip velocity is measured at the projection of the start of the step, ξ̄₀ on the
+    master facet f₀ with unit tangent t₀ there: ``v_T = t₀ ⊗ t₀ (v_s − v̄_m(ξ̄₀))``,
+    relative to the master material point under the projection (eqs. 8-10). Frozen
+    over the step, the slip velocity is linear in the step's unknown, so that Newton's
+    slip guard lands a reversing slip exactly at zero (:meth:`SurfaceContact.precheck`).
+
+    Args:
+        law: The contact law (float parameters).
+        Ns: Slave shape functions at each point, ``(K, nn)``.
+        xi: The current projection's local coordinate (Newton's start).
+        weight: Reference length of each point.
+        N0: Master shape functions at ξ̄₀ on f₀, ``(K, nn)``.
+        t0: Unit tangent at ξ̄₀, ``(K, gdim)``.
+        groups: ``[(x, v)]`` of the slave facet, the current master facet and f₀.
+        refine: Newton steps of the projection.
+
+    Returns:
+        ``(K, 3 nn, gdim)``: the residual on the slave's nodes, the current master
+        facet's (zero) and f₀'s.
+    """
+    (xs, vs), (xm, _), (_, v0) = groups
+    x_s = np.einsum("kn,knd->kd", Ns, xs)
+    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
+    N, dN, _ = shape(xi, xm.shape[1])
+    t = _unit_tangent(dN, xm)
+    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    p = law.pressure(x_s, np.einsum("kn,knd->kd", N, xm), n)
+    slip = np.einsum("kn,knd->kd", Ns, vs) - np.einsum("kn,knd->kd", N0, v0)
+    v_T = t0 * np.sum(slip * t0, axis=1)[:, None]
+    traction = law.friction.traction(p, v_T) * weight[:, None]
+    return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
+                           np.zeros_like(N[:, :, None] * traction[:, None, :]),
+                           N0[:, :, None] * traction[:, None, :]], axis=1)
+
+
+def _jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+              cu: float, cv: float) -> np.ndarray:
+    """∂kernel/∂Δa per point by complex steps, ``(K, local, local)``.
+
+    Each local DOF (group, node, component) is stepped in x by ``i h cu`` and in v
+    by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa).
+    """
+    cx = [(x.astype(complex), v.astype(complex)) for x, v in groups]
+    K, nn, gdim = cx[0][0].shape
+    local = len(cx) * nn * gdim
+    J = np.zeros((K, local, local))
+    for j in range(local):
+        group, rest = divmod(j, nn * gdim)
+        node, comp = divmod(rest, gdim)
+        x, v = cx[group]
+        x[:, node, comp] += 1j * _H * cu
+        v[:, node, comp] += 1j * _H * cv
+        J[:, :, j] = kernel(cx).reshape(K, local).imag / _H
+        x[:, node, comp] = x[:, node, comp].real
+        v[:, node, comp] = v[:, node, comp].real
+    return J
 
 
 class SurfaceContact:
@@ -259,6 +330,8 @@ class SurfaceContact:
             self._owned.append((local[hit], pos[hit]))
         self.searches = 0
         self.search_seconds = 0.0
+        self._frozen_key: np.ndarray | None = None
+        self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -270,16 +343,23 @@ class SurfaceContact:
 
     # --- the current state ----------------------------------------------------------
 
-    def _state(self) -> tuple[np.ndarray, np.ndarray]:
-        """u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0)."""
+    def _state(self, y: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """u₀, u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0).
+
+        Args:
+            y: Δa at the interface unknowns; None: read from the Δa Functions.
+        """
         out = np.zeros((4, self.n + 1))
         for k, fns in enumerate((self.u, self.v, self.a, self.da)):
             for f, (local, pos) in zip(fns, self._owned, strict=True):
                 out[k, pos] = f.x.array[local]
         self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         u, v, a, da = out
+        if y is not None:
+            da[:-1] = y
         dt = float(self.dt.value)
-        return (u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
+        return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
                 v + dt * a + self.beta1 * dt * da)
 
     def _integration(self, xs: np.ndarray, xm: np.ndarray
@@ -313,15 +393,38 @@ class SurfaceContact:
         weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
         return point_facet, xi, weight
 
-    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
-        """The contact points and the local data of those with a projection (real)."""
-        import time
+    def _nodal(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Nodal integration of the slave facets: (facet, ξ, weight) at each node.
 
+        The Gauss-Lobatto rule whose points are the facet's nodes (trapezoid, Simpson):
+        the weights are the nodes' tributary reference lengths, as in the paper's
+        nodal contact forces (SPEC eq. 23).
+        """
+        X = self.slave.X
+        n_f, nn = X.shape[:2]
+        xi, w = (np.array([-1.0, 1.0]), np.array([1.0, 1.0])) if nn == 2 else \
+            (np.array([-1.0, 1.0, 0.0]), np.array([1.0, 1.0, 4.0]) / 3)
+        facet = np.repeat(np.arange(n_f), nn)
+        xi_all = np.tile(xi, n_f)
+        _, dN, _ = shape(xi_all, nn)
+        jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, X[facet]), axis=1)
+        return facet, xi_all, np.tile(w, n_f) * jac
+
+    def _points(self, u1: np.ndarray, v1: np.ndarray, nodal: bool = False
+                ) -> dict[str, Any]:
+        """The contact points and the local data of those with a projection (real).
+
+        Args:
+            u1: Displacements at the interface unknowns (a trailing 0).
+            v1: Velocities at the interface unknowns (a trailing 0).
+            nodal: The slave nodes (:meth:`_nodal`) rather than the segments' points.
+        """
         s, m = self.slave, self.master
         xs_all = s.X + u1[self.pos_s]
         xm_all = m.X + u1[self.pos_m]
         t0 = time.perf_counter()
-        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
+        point_facet, xi_s, weight = self._nodal() if nodal else \
+            self._integration(xs_all, xm_all)
         Ns, _, _ = shape(xi_s, s.X.shape[1])
         points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
         facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius))
@@ -329,80 +432,173 @@ class SurfaceContact:
         self.search_seconds += time.perf_counter() - t0
         on = np.flatnonzero(facet >= 0)
         f_s, f_m = point_facet[on], facet[on]
-        return {"index": on, "facet": f_m, "Ns": Ns[on], "xs": xs_all[f_s],
-                "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m], "vm": v1[self.pos_m][f_m],
-                "xi": xi[on], "weight": weight[on],
+        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns[on],
+                "xs": xs_all[f_s], "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m],
+                "vm": v1[self.pos_m][f_m], "xi": xi[on], "weight": weight[on],
                 "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1),
                 "all_x": points, "all_weight": weight}
+
+    def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The projection of each slave node at the start of the step (cached).
+
+        Returns:
+            Per nodal point (:meth:`_nodal`): the master facet f₀ (−1: none), its
+            shape functions at ξ̄₀ and the unit tangent there, in the configuration
+            at the start of the step.
+        """
+        if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
+            return self._frozen_data
+        s, m = self.slave, self.master
+        facet_s, xi_s, _ = self._nodal()
+        Ns, _, _ = shape(xi_s, s.X.shape[1])
+        xs = s.X + u0[self.pos_s]
+        xm = m.X + u0[self.pos_m]
+        points = np.einsum("kn,knd->kd", Ns, xs[facet_s])
+        facet, xi = project(points, xm, FacetGrid(xm, self.radius))
+        N0, dN0, _ = shape(xi, m.X.shape[1])
+        t0 = _unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
+            np.zeros_like(points)
+        self._frozen_key = u0.copy()
+        self._frozen_data = (facet, N0, t0)
+        return self._frozen_data
+
+    def _parts(self, y: np.ndarray | None = None) -> list[tuple[Any, list, np.ndarray]]:
+        """The kernels of the current iterate: (kernel of the local groups, groups, pos).
+
+        The normal pressure is integrated on the segments (:meth:`_integration`); the
+        friction traction at the slave nodes (nodal quadrature, :meth:`_nodal`), with
+        the slip velocity at the projection of the start of the step
+        (:func:`friction_forces`): there Newton's slip guard can land a reversing slip
+        velocity exactly at zero (:meth:`precheck`); at points between nodes it cannot,
+        and with χ = 1e-10 Newton then cycles.
+        """
+        u0, u1, v1 = self._state(y)
+        law = self.law
+        p = self._points(u1, v1)
+        parts: list[tuple[Any, list, np.ndarray]] = [(
+            partial(normal_forces, law, p["Ns"], p["xi"], p["weight"]),
+            [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"])]
+        if self.spec.friction:
+            q = self._points(u1, v1, nodal=True)
+            f0, N0, t0 = self._frozen(u0)
+            f0, N0, t0 = f0[q["index"]], N0[q["index"]], t0[q["index"]]
+            ok = f0 >= 0
+            f0 = f0[ok]
+            xm0 = self.master.X + u1[self.pos_m]
+            parts.append((
+                partial(friction_forces, law, q["Ns"][ok], q["xi"][ok], q["weight"][ok],
+                        N0[ok], t0[ok]),
+                [(q["xs"][ok], q["vs"][ok]), (q["xm"][ok], q["vm"][ok]),
+                 (xm0[f0], v1[self.pos_m][f0])],
+                np.concatenate([q["pos"][ok], self.pos_m[f0]], axis=1)))
+        return parts
 
     # --- the provider ---------------------------------------------------------------
 
     def vector(self) -> np.ndarray:
         """The contact residual at the interface unknowns (the same on every rank)."""
-        p = self._points(*self._state())
-        f = point_forces(self.law, p["Ns"], p["xs"], p["vs"], p["xm"], p["vm"], p["xi"],
-                         p["weight"])
-        pos = p["pos"].ravel()
-        keep = pos >= 0
-        return np.bincount(pos[keep], weights=f.ravel()[keep], minlength=self.n)
+        out = np.zeros(self.n)
+        for kernel, groups, pos in self._parts():
+            f = kernel(groups).ravel()
+            pos = pos.ravel()
+            keep = pos >= 0
+            out += np.bincount(pos[keep], weights=f[keep], minlength=self.n)
+        return out
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense (complex step)."""
-        p = self._points(*self._state())
         dt = float(self.dt.value)
         cu, cv = 0.5 * self.beta2 * dt**2, self.beta1 * dt
-        K, nn, gdim = p["xs"].shape
-        local = 2 * nn * gdim
-        J = np.zeros((K, local, local))
-        xs, vs, xm, vm = (p[k].astype(complex) for k in ("xs", "vs", "xm", "vm"))
-        for j in range(local):
-            side, rest = divmod(j, nn * gdim)
-            node, comp = divmod(rest, gdim)
-            x, v = (xs, vs) if side == 0 else (xm, vm)
-            x[:, node, comp] += 1j * _H * cu
-            v[:, node, comp] += 1j * _H * cv
-            f = point_forces(self.law, p["Ns"], xs, vs, xm, vm, p["xi"], p["weight"])
-            J[:, :, j] = f.reshape(K, local).imag / _H
-            x[:, node, comp] = x[:, node, comp].real
-            v[:, node, comp] = v[:, node, comp].real
-        rows = p["pos"].reshape(K, local)
-        flat = rows[:, :, None] * self.n + rows[:, None, :]
-        keep = (rows[:, :, None] >= 0) & (rows[:, None, :] >= 0)
-        out = np.bincount(flat[keep], weights=J[keep], minlength=self.n * self.n)
+        out = np.zeros(self.n * self.n)
+        for kernel, groups, pos in self._parts():
+            J = _jacobian(kernel, groups, cu, cv)
+            rows = pos.reshape(len(J), -1)
+            flat = rows[:, :, None] * self.n + rows[:, None, :]
+            keep = (rows[:, :, None] >= 0) & (rows[:, None, :] >= 0)
+            out += np.bincount(flat[keep], weights=J[keep], minlength=self.n * self.n)
         return out.reshape(self.n, self.n)
 
+    def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
+        """Newton's slip guard (:mod:`breakwater.slipguard`) at the slave nodes.
+
+        Where Newton's step (the next iterate is ``x − step``) would reverse a slave
+        node's slip velocity (:func:`friction_forces`: relative to the master material
+        point under its projection at the start of the step, along the tangent there)
+        from outside the stick band χ, the node's tangential step is cut so that it
+        lands at zero slip velocity, where the stick tangent μp/χ is exact. The slip
+        velocity is linear in Δa, so the landing is exact.
+
+        Args:
+            x: The current iterate (Δa at the interface unknowns).
+            step: Newton's step, changed in place where cut.
+
+        Returns:
+            The nodes corrected (the same on every rank).
+        """
+        if not self.spec.friction:
+            return 0
+        u0, _, v1 = self._state(x)
+        facet, N0, t0 = self._frozen(u0)
+        facet_s, _, _ = self._nodal()
+        nn = self.slave.X.shape[1]
+        # One nodal point per slave node (shared vertices appear once per facet).
+        node = self.pos_s[facet_s, np.tile(np.arange(nn), len(self.slave.X))]
+        _, first = np.unique(node[:, 0], return_index=True)
+        keep = first[(facet[first] >= 0) & np.all(node[first] >= 0, axis=1)]
+        if not len(keep):
+            return 0
+        pos, f, N, t = node[keep], facet[keep], N0[keep], t0[keep]
+        dv = self.beta1 * float(self.dt.value)
+        ext = np.append(step, 0.0)
+        pos_m = self.pos_m[f]
+        v_m = np.einsum("kn,knd->kd", N, v1[pos_m])
+        y_m = np.einsum("kn,knd->kd", N, ext[pos_m])
+        y_s = ext[pos]
+        c0 = np.sum((v1[pos] - v_m) * t, axis=1)
+        c1 = c0 - dv * np.sum((y_s - y_m) * t, axis=1)
+        fix = (c0 * c1 < 0) & (np.abs(c0) > self.law.friction.stick_band)
+        if not fix.any():
+            return 0
+        # The slave's step: normal part kept, tangential part landing at c = 0.
+        t, ys = t[fix], y_s[fix]
+        along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
+        step[pos[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
+        return int(fix.sum())
+
+    def resultant(self) -> np.ndarray:
+        """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain)."""
+        out = np.zeros(self.slave.X.shape[2])
+        nn = self.slave.X.shape[1]
+        for kernel, groups, _ in self._parts():
+            # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
+            out -= kernel(groups)[:, :nn].sum(axis=(0, 1))
+        return out
+
     def state(self) -> dict[str, np.ndarray]:
-        """Every slave point at the step's current iterate (the same on every rank).
+        """Every normal integration point at the step's current iterate (every rank).
 
         Returns:
             ``x`` (current position), ``gap`` (g_n; NaN without a projection),
-            ``pressure``, ``slip_velocity`` (tangential, relative to the master
-            material point), ``weight`` (reference length), ``facet`` (master facet,
-            −1: none), ``xi`` (its local coordinate).
+            ``pressure``, ``weight`` (reference length), ``facet`` (master facet, −1:
+            none), ``xi`` (its local coordinate).
         """
-        u1, v1 = self._state()
+        _, u1, v1 = self._state()
         p = self._points(u1, v1)
         points = p["all_x"]
         total = len(points)
         out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
                                "gap": np.full(total, np.nan), "pressure": np.zeros(total),
-                               "slip_velocity": np.zeros((total, points.shape[1])),
                                "facet": np.full(total, -1), "xi": np.zeros(total)}
         if len(p["index"]):
             x_s = np.einsum("kn,knd->kd", p["Ns"], p["xs"])
-            v_s = np.einsum("kn,knd->kd", p["Ns"], p["vs"])
             xi = closest_point(x_s, p["xm"], p["xi"], iterations=2, tol=0.0)
             N, dN, _ = shape(xi, p["xm"].shape[1])
-            x_m = np.einsum("kn,knd->kd", N, p["xm"])
-            tangent = np.einsum("kn,knd->kd", dN, p["xm"])
-            tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-            n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
-            gap = self.law.gap(x_s, x_m, n)
-            v_rel = v_s - np.einsum("kn,knd->kd", N, p["vm"])
+            t = _unit_tangent(dN, p["xm"])
+            n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+            gap = self.law.gap(x_s, np.einsum("kn,knd->kd", N, p["xm"]), n)
             i = p["index"]
             out["gap"][i] = gap
             out["pressure"][i] = self.law.normal.pressure(gap)
-            out["slip_velocity"][i] = forms.tangential_part(v_rel, n)
             out["facet"][i] = p["facet"]
             out["xi"][i] = xi
         return out
