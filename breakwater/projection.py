@@ -175,10 +175,13 @@ def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
     point, cand = grid.candidates(points)
     if not len(point):
         return facet, xi_out
-    xi = np.real(closest_point(points[point], nodes[cand]))
-    x, _, _ = curve(nodes[cand], xi)
-    dist = np.sum((x - points[point]) ** 2, axis=1)
-    ok = (np.abs(xi) <= 1 + tol) & (dist <= grid.radius ** 2)
+    xi = np.real(closest_point(points[point], nodes[cand], iterations=8))
+    x, dx, _ = curve(nodes[cand], xi)
+    r = x - points[point]
+    dist = np.sum(r * r, axis=1)
+    # Converged: the residual (x − p)·x' vanishes to round-off of the facet's size.
+    stationary = np.abs(np.sum(r * dx, axis=1)) <= 1e-10 * np.sum(dx * dx, axis=1)
+    ok = (np.abs(xi) <= 1 + tol) & (dist <= grid.radius ** 2) & stationary
     point, cand, xi, dist = point[ok], cand[ok], xi[ok], dist[ok]
     # The nearest projection of each point (ties: the lowest facet index).
     order = np.lexsort((cand, dist, point))

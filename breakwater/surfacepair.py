@@ -179,6 +179,19 @@ def _unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
 
 
+def _contact_point(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄)."""
+    (xs, _), (xm, _) = groups
+    x_s = np.einsum("kn,knd->kd", Ns, xs)
+    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
+    N, dN, _ = shape(xi, xm.shape[1])
+    t = _unit_tangent(dN, xm)
+    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    return x_s, N, n, law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n)
+
+
 def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,
                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
                   ) -> np.ndarray:
@@ -201,62 +214,28 @@ def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight:
     Returns:
         ``(K, 2 nn, gdim)``: the residual on the slave's nodes, then on the master's.
     """
-    (xs, _), (xm, _) = groups
-    x_s = np.einsum("kn,knd->kd", Ns, xs)
-    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
-    N, dN, _ = shape(xi, xm.shape[1])
-    t = _unit_tangent(dN, xm)
-    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-    traction = law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n) * weight[:, None]
+    _, N, _, traction = _contact_point(law, Ns, xi, groups, refine)
+    traction = traction * weight[:, None]
     return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
                            N[:, :, None] * traction[:, None, :]], axis=1)
 
 
-def friction_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
-                    weight: np.ndarray, N0: np.ndarray, t0: np.ndarray,
-                    groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
-                    ) -> np.ndarray:
-    """Nodal residual of the friction traction at contact points (real or complex).
+def nodal_normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                        weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+                        refine: int = 2) -> np.ndarray:
+    """Each point's share ``p w N_k`` of its slave nodes' normal forces, ``(K, nn)``.
 
-    The pressure is that of the current projection (as :func:`normal_forces`); the
-    slip velocity is measured at the projection of the start of the step, ξ̄₀ on the
-    master facet f₀ with unit tangent t₀ there: ``v_T = t₀ ⊗ t₀ (v_s − v̄_m(ξ̄₀))``,
-    relative to the master material point under the projection (eqs. 8-10). Frozen
-    over the step, the slip velocity is linear in the step's unknown, so that Newton's
-    slip guard lands a reversing slip exactly at zero (:meth:`SurfaceContact.precheck`).
-
-    Args:
-        law: The contact law (float parameters).
-        Ns: Slave shape functions at each point, ``(K, nn)``.
-        xi: The current projection's local coordinate (Newton's start).
-        weight: Reference length of each point.
-        N0: Master shape functions at ξ̄₀ on f₀, ``(K, nn)``.
-        t0: Unit tangent at ξ̄₀, ``(K, gdim)``.
-        groups: ``[(x, v)]`` of the slave facet, the current master facet and f₀.
-        refine: Newton steps of the projection.
-
-    Returns:
-        ``(K, 3 nn, gdim)``: the residual on the slave's nodes, the current master
-        facet's (zero) and f₀'s.
+    Summed over the points, ``λ_k = ∫ p N_k``: the normal force of slave node k
+    consistent with the integrated pressure (as :func:`normal_forces`).
     """
-    (xs, vs), (xm, _), (_, v0) = groups
-    x_s = np.einsum("kn,knd->kd", Ns, xs)
-    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
-    N, dN, _ = shape(xi, xm.shape[1])
-    t = _unit_tangent(dN, xm)
-    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-    p = law.pressure(x_s, np.einsum("kn,knd->kd", N, xm), n)
-    slip = np.einsum("kn,knd->kd", Ns, vs) - np.einsum("kn,knd->kd", N0, v0)
-    v_T = t0 * np.sum(slip * t0, axis=1)[:, None]
-    traction = law.friction.traction(p, v_T) * weight[:, None]
-    return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
-                           np.zeros_like(N[:, :, None] * traction[:, None, :]),
-                           N0[:, :, None] * traction[:, None, :]], axis=1)
+    _, _, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    p = np.sum(traction * n, axis=1)
+    return (p * weight)[:, None] * Ns
 
 
 def _jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
               cu: float, cv: float) -> np.ndarray:
-    """∂kernel/∂Δa per point by complex steps, ``(K, local, local)``.
+    """∂kernel/∂Δa per point by complex steps, ``(K, outputs, local)``.
 
     Each local DOF (group, node, component) is stepped in x by ``i h cu`` and in v
     by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa).
@@ -264,17 +243,20 @@ def _jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
     cx = [(x.astype(complex), v.astype(complex)) for x, v in groups]
     K, nn, gdim = cx[0][0].shape
     local = len(cx) * nn * gdim
-    J = np.zeros((K, local, local))
+    J: np.ndarray | None = None
     for j in range(local):
         group, rest = divmod(j, nn * gdim)
         node, comp = divmod(rest, gdim)
         x, v = cx[group]
         x[:, node, comp] += 1j * _H * cu
         v[:, node, comp] += 1j * _H * cv
-        J[:, :, j] = kernel(cx).reshape(K, local).imag / _H
+        column = kernel(cx).reshape(K, -1).imag / _H
+        if J is None:
+            J = np.zeros((K, column.shape[1], local))
+        J[:, :, j] = column
         x[:, node, comp] = x[:, node, comp].real
         v[:, node, comp] = v[:, node, comp].real
-    return J
+    return J if J is not None else np.zeros((K, 0, 0))
 
 
 class SurfaceContact:
@@ -330,6 +312,12 @@ class SurfaceContact:
             self._owned.append((local[hit], pos[hit]))
         self.searches = 0
         self.search_seconds = 0.0
+        # The slave nodes (friction acts on them): one id per node, by global DOF.
+        _, first, self.node_of = np.unique(slave.dofs[..., 0], return_index=True,
+                                             return_inverse=True)
+        self.node_of = self.node_of.reshape(slave.dofs.shape[:2])
+        self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
+        self.node_X = slave.X.reshape(-1, model.gdim)[first]
         self._frozen_key: np.ndarray | None = None
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
 
@@ -393,38 +381,18 @@ class SurfaceContact:
         weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
         return point_facet, xi, weight
 
-    def _nodal(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Nodal integration of the slave facets: (facet, ξ, weight) at each node.
-
-        The Gauss-Lobatto rule whose points are the facet's nodes (trapezoid, Simpson):
-        the weights are the nodes' tributary reference lengths, as in the paper's
-        nodal contact forces (SPEC eq. 23).
-        """
-        X = self.slave.X
-        n_f, nn = X.shape[:2]
-        xi, w = (np.array([-1.0, 1.0]), np.array([1.0, 1.0])) if nn == 2 else \
-            (np.array([-1.0, 1.0, 0.0]), np.array([1.0, 1.0, 4.0]) / 3)
-        facet = np.repeat(np.arange(n_f), nn)
-        xi_all = np.tile(xi, n_f)
-        _, dN, _ = shape(xi_all, nn)
-        jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, X[facet]), axis=1)
-        return facet, xi_all, np.tile(w, n_f) * jac
-
-    def _points(self, u1: np.ndarray, v1: np.ndarray, nodal: bool = False
-                ) -> dict[str, Any]:
-        """The contact points and the local data of those with a projection (real).
+    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
+        """The integration points and the local data of those with a projection (real).
 
         Args:
             u1: Displacements at the interface unknowns (a trailing 0).
             v1: Velocities at the interface unknowns (a trailing 0).
-            nodal: The slave nodes (:meth:`_nodal`) rather than the segments' points.
         """
         s, m = self.slave, self.master
         xs_all = s.X + u1[self.pos_s]
         xm_all = m.X + u1[self.pos_m]
         t0 = time.perf_counter()
-        point_facet, xi_s, weight = self._nodal() if nodal else \
-            self._integration(xs_all, xm_all)
+        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
         Ns, _, _ = shape(xi_s, s.X.shape[1])
         points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
         facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius))
@@ -442,18 +410,14 @@ class SurfaceContact:
         """The projection of each slave node at the start of the step (cached).
 
         Returns:
-            Per nodal point (:meth:`_nodal`): the master facet f₀ (−1: none), its
-            shape functions at ξ̄₀ and the unit tangent there, in the configuration
-            at the start of the step.
+            Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
+            and the unit tangent there, in the configuration at the start of the step.
         """
         if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
             return self._frozen_data
-        s, m = self.slave, self.master
-        facet_s, xi_s, _ = self._nodal()
-        Ns, _, _ = shape(xi_s, s.X.shape[1])
-        xs = s.X + u0[self.pos_s]
+        m = self.master
         xm = m.X + u0[self.pos_m]
-        points = np.einsum("kn,knd->kd", Ns, xs[facet_s])
+        points = self.node_X + u0[self.node_pos]
         facet, xi = project(points, xm, FacetGrid(xm, self.radius))
         N0, dN0, _ = shape(xi, m.X.shape[1])
         t0 = _unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
@@ -462,71 +426,147 @@ class SurfaceContact:
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
 
-    def _parts(self, y: np.ndarray | None = None) -> list[tuple[Any, list, np.ndarray]]:
-        """The kernels of the current iterate: (kernel of the local groups, groups, pos).
+    def _normal(self, u1: np.ndarray, v1: np.ndarray
+                ) -> tuple[Any, list, np.ndarray, Any, np.ndarray]:
+        """The normal part of the current iterate.
 
-        The normal pressure is integrated on the segments (:meth:`_integration`); the
-        friction traction at the slave nodes (nodal quadrature, :meth:`_nodal`), with
-        the slip velocity at the projection of the start of the step
-        (:func:`friction_forces`): there Newton's slip guard can land a reversing slip
-        velocity exactly at zero (:meth:`precheck`); at points between nodes it cannot,
-        and with χ = 1e-10 Newton then cycles.
+        Returns:
+            The point kernel, its groups (local arguments), the interface positions of
+            its outputs, the kernel of the points' shares of the nodal normal forces
+            and the slave node of each share.
         """
-        u0, u1, v1 = self._state(y)
-        law = self.law
         p = self._points(u1, v1)
-        parts: list[tuple[Any, list, np.ndarray]] = [(
-            partial(normal_forces, law, p["Ns"], p["xi"], p["weight"]),
-            [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"])]
-        if self.spec.friction:
-            q = self._points(u1, v1, nodal=True)
-            f0, N0, t0 = self._frozen(u0)
-            f0, N0, t0 = f0[q["index"]], N0[q["index"]], t0[q["index"]]
-            ok = f0 >= 0
-            f0 = f0[ok]
-            xm0 = self.master.X + u1[self.pos_m]
-            parts.append((
-                partial(friction_forces, law, q["Ns"][ok], q["xi"][ok], q["weight"][ok],
-                        N0[ok], t0[ok]),
-                [(q["xs"][ok], q["vs"][ok]), (q["xm"][ok], q["vm"][ok]),
-                 (xm0[f0], v1[self.pos_m][f0])],
-                np.concatenate([q["pos"][ok], self.pos_m[f0]], axis=1)))
-        return parts
+        return (partial(normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
+                [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
+                partial(nodal_normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
+                self.node_of[p["slave_facet"]])
+
+    def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray
+                  ) -> dict[str, np.ndarray] | None:
+        """The nodal friction forces (None: no slave node in contact).
+
+        Per slave node k in contact (λ_k > 0, a projection at the start of the step),
+        the force ``−μ λ_k φ(v_T)`` (:class:`forms.ContactLaw`'s friction with the
+        nodal normal force λ_k in place of the pressure), with
+        ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``.
+        """
+        facet, N0, t0 = self._frozen(u0)
+        k = np.flatnonzero((facet >= 0) & (λ > 0))
+        if not len(k):
+            return None
+        pos_m = self.pos_m[facet[k]]
+        slip = v1[self.node_pos[k]] - np.einsum("kn,knd->kd", N0[k], v1[pos_m])
+        t = t0[k]
+        v_T = t * np.sum(slip * t, axis=1)[:, None]
+        friction = self.law.friction
+        force = friction.traction(λ[k], v_T)
+        return {"k": k, "pos_s": self.node_pos[k], "pos_m": pos_m, "N0": N0[k], "t": t,
+                "v_T": v_T, "force": force, "unit": friction.traction(np.ones(len(k)), v_T)}
+
+    def _nodal_forces(self, kernel: Any, groups: list, node: np.ndarray) -> np.ndarray:
+        """λ: the slave nodes' normal forces ∫ p N_k."""
+        share = kernel(groups)
+        return np.bincount(node.ravel(), weights=share.ravel(),
+                           minlength=len(self.node_pos))
 
     # --- the provider ---------------------------------------------------------------
 
     def vector(self) -> np.ndarray:
         """The contact residual at the interface unknowns (the same on every rank)."""
-        out = np.zeros(self.n)
-        for kernel, groups, pos in self._parts():
-            f = kernel(groups).ravel()
-            pos = pos.ravel()
-            keep = pos >= 0
-            out += np.bincount(pos[keep], weights=f[keep], minlength=self.n)
+        u0, u1, v1 = self._state()
+        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
+        out = self._add(np.zeros(self.n), pos, kernel(groups))
+        if self.spec.friction:
+            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+            if fr is not None:
+                self._add(out, fr["pos_s"], -fr["force"])
+                self._add(out, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
+        return out
+
+    def _add(self, out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """out[pos] += values (skipping Dirichlet entries, −1), in array order."""
+        pos, values = pos.ravel(), values.ravel()
+        keep = pos >= 0
+        out += np.bincount(pos[keep], weights=values[keep], minlength=self.n)
         return out
 
     def matrix(self) -> np.ndarray:
-        """∂(contact residual)/∂Δa at the interface unknowns, dense (complex step)."""
+        """∂(contact residual)/∂Δa at the interface unknowns, dense.
+
+        The normal part by complex steps of the point kernel (the projection's Newton
+        in complex arithmetic: exact, its implicit dependence included); the friction
+        part by the chain rule through λ_k (complex steps of the point shares) and
+        v_T (linear in Δa; ∂φ/∂v_T by complex steps).
+        """
         dt = float(self.dt.value)
         cu, cv = 0.5 * self.beta2 * dt**2, self.beta1 * dt
-        out = np.zeros(self.n * self.n)
-        for kernel, groups, pos in self._parts():
-            J = _jacobian(kernel, groups, cu, cv)
-            rows = pos.reshape(len(J), -1)
-            flat = rows[:, :, None] * self.n + rows[:, None, :]
-            keep = (rows[:, :, None] >= 0) & (rows[:, None, :] >= 0)
-            out += np.bincount(flat[keep], weights=J[keep], minlength=self.n * self.n)
-        return out.reshape(self.n, self.n)
+        n = self.n
+        u0, u1, v1 = self._state()
+        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
+        out = np.zeros(n * n)
+        J = _jacobian(kernel, groups, cu, cv)
+        rows = pos.reshape(len(J), -1)
+        self._add_block(out, rows, rows, J)
+        if not self.spec.friction:
+            return out.reshape(n, n)
+        lam = self._nodal_forces(lam_kernel, groups, node)
+        fr = self._friction(u0, v1, lam)
+        if fr is None:
+            return out.reshape(n, n)
+        # dλ/dΔa (slave nodes × interface), from the points' shares.
+        Jl = _jacobian(lam_kernel, groups, cu, cv)  # (K, nn, local)
+        cols = np.broadcast_to(rows[:, None, :], Jl.shape)
+        nodes = np.broadcast_to(node[:, :, None], Jl.shape)
+        keep = cols >= 0
+        dlam = np.bincount((nodes * n + cols)[keep], weights=Jl[keep],
+                           minlength=len(self.node_pos) * n).reshape(-1, n)
+        k, t, N0 = fr["k"], fr["t"], fr["N0"]
+        gdim = t.shape[1]
+        # ∂force/∂v_T by complex steps of the law (2 components).
+        D = np.zeros((len(k), gdim, gdim))
+        for c in range(gdim):
+            v = fr["v_T"].astype(complex)
+            v[:, c] += 1j * _H
+            D[:, :, c] = self.law.friction.traction(lam[k], v).imag / _H
+        B = cv * np.einsum("kij,kj,kl->kil", D, t, t)  # ∂force/∂(slave node Δa)
+        # Rows: the slave node (−force) and the master nodes of f₀ (+N0 force).
+        row_pos = np.concatenate([fr["pos_s"][:, None, :], fr["pos_m"]], axis=1)
+        sign = np.concatenate([-np.ones((len(k), 1)), N0], axis=1)  # (k, 1 + nn)
+        # λ part: force = unit · λ.
+        dforce_lam = fr["unit"][:, :, None] * dlam[k][:, None, :]  # (k, gdim, n)
+        for r in range(row_pos.shape[1]):
+            rp = row_pos[:, r, :]
+            vals = sign[:, r, None, None] * dforce_lam
+            rr = np.broadcast_to(rp[:, :, None], vals.shape)
+            cc = np.broadcast_to(np.arange(n)[None, None, :], vals.shape)
+            ok = rr >= 0
+            out += np.bincount((rr * n + cc)[ok], weights=vals[ok], minlength=n * n)
+        # v_T part: slave node columns (B), master f₀ node columns (−N0_j B).
+        col_pos = row_pos
+        col_sign = np.concatenate([np.ones((len(k), 1)), -N0], axis=1)
+        for r in range(row_pos.shape[1]):
+            for c in range(col_pos.shape[1]):
+                block = (sign[:, r] * col_sign[:, c])[:, None, None] * B
+                self._add_block(out, row_pos[:, r, :], col_pos[:, c, :], block)
+        return out.reshape(n, n)
+
+    def _add_block(self, out: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+                   block: np.ndarray) -> None:
+        """out[rows, cols] += block per point (flat out; Dirichlet entries skipped)."""
+        n = self.n
+        flat = rows[:, :, None] * n + cols[:, None, :]
+        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
+        out += np.bincount(flat[keep], weights=block[keep], minlength=n * n)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
         """Newton's slip guard (:mod:`breakwater.slipguard`) at the slave nodes.
 
         Where Newton's step (the next iterate is ``x − step``) would reverse a slave
-        node's slip velocity (:func:`friction_forces`: relative to the master material
-        point under its projection at the start of the step, along the tangent there)
-        from outside the stick band χ, the node's tangential step is cut so that it
-        lands at zero slip velocity, where the stick tangent μp/χ is exact. The slip
-        velocity is linear in Δa, so the landing is exact.
+        node's slip velocity (relative to the master material point under its
+        projection at the start of the step, along the tangent there) from outside the
+        stick band χ, the node's tangential step is cut so that it lands at zero slip
+        velocity, where the stick tangent is exact. The slip velocity is linear in Δa,
+        so the landing is exact.
 
         Args:
             x: The current iterate (Δa at the interface unknowns).
@@ -539,18 +579,13 @@ class SurfaceContact:
             return 0
         u0, _, v1 = self._state(x)
         facet, N0, t0 = self._frozen(u0)
-        facet_s, _, _ = self._nodal()
-        nn = self.slave.X.shape[1]
-        # One nodal point per slave node (shared vertices appear once per facet).
-        node = self.pos_s[facet_s, np.tile(np.arange(nn), len(self.slave.X))]
-        _, first = np.unique(node[:, 0], return_index=True)
-        keep = first[(facet[first] >= 0) & np.all(node[first] >= 0, axis=1)]
+        keep = np.flatnonzero((facet >= 0) & np.all(self.node_pos >= 0, axis=1))
         if not len(keep):
             return 0
-        pos, f, N, t = node[keep], facet[keep], N0[keep], t0[keep]
+        pos, N, t = self.node_pos[keep], N0[keep], t0[keep]
         dv = self.beta1 * float(self.dt.value)
         ext = np.append(step, 0.0)
-        pos_m = self.pos_m[f]
+        pos_m = self.pos_m[facet[keep]]
         v_m = np.einsum("kn,knd->kd", N, v1[pos_m])
         y_m = np.einsum("kn,knd->kd", N, ext[pos_m])
         y_s = ext[pos]
@@ -567,11 +602,15 @@ class SurfaceContact:
 
     def resultant(self) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain)."""
-        out = np.zeros(self.slave.X.shape[2])
+        u0, u1, v1 = self._state()
+        kernel, groups, _, lam_kernel, node = self._normal(u1, v1)
         nn = self.slave.X.shape[1]
-        for kernel, groups, _ in self._parts():
-            # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
-            out -= kernel(groups)[:, :nn].sum(axis=(0, 1))
+        # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
+        out = -kernel(groups)[:, :nn].sum(axis=(0, 1))
+        if self.spec.friction:
+            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+            if fr is not None:
+                out += fr["force"].sum(axis=0)
         return out
 
     def state(self) -> dict[str, np.ndarray]:
