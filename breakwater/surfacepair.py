@@ -233,6 +233,18 @@ def nodal_normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
     return (p * weight)[:, None] * Ns
 
 
+def _normal_and_shares(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                       weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+                       refine: int = 2) -> np.ndarray:
+    """:func:`normal_forces` and :func:`nodal_normal_forces` side by side, ``(K, ·)``."""
+    _, N, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    tw = traction * weight[:, None]
+    forces = np.concatenate([-Ns[:, :, None] * tw[:, None, :], N[:, :, None] * tw[:, None, :]],
+                            axis=1)
+    shares = (np.sum(tw * n, axis=1))[:, None] * Ns
+    return np.concatenate([forces.reshape(len(Ns), -1), shares], axis=1)
+
+
 def _jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
               cu: float, cv: float) -> np.ndarray:
     """∂kernel/∂Δa per point by complex steps, ``(K, outputs, local)``.
@@ -319,6 +331,8 @@ class SurfaceContact:
         self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
         self.node_X = slave.X.reshape(-1, model.gdim)[first]
         self._frozen_key: np.ndarray | None = None
+        self._normal_key: np.ndarray | None = None
+        self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
 
     @staticmethod
@@ -331,12 +345,13 @@ class SurfaceContact:
 
     # --- the current state ----------------------------------------------------------
 
-    def _state(self, y: np.ndarray | None = None
+    def _state(self, y: np.ndarray | None = None, accepted: bool = False
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """u₀, u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0).
 
         Args:
             y: Δa at the interface unknowns; None: read from the Δa Functions.
+            accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
         out = np.zeros((4, self.n + 1))
         for k, fns in enumerate((self.u, self.v, self.a, self.da)):
@@ -344,6 +359,8 @@ class SurfaceContact:
                 out[k, pos] = f.x.array[local]
         self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         u, v, a, da = out
+        if accepted:
+            return u, u, v
         if y is not None:
             da[:-1] = y
         dt = float(self.dt.value)
@@ -435,11 +452,16 @@ class SurfaceContact:
             its outputs, the kernel of the points' shares of the nodal normal forces
             and the slave node of each share.
         """
+        key = np.concatenate([u1, v1])
+        if self._normal_key is not None and np.array_equal(self._normal_key, key):
+            return self._normal_data
         p = self._points(u1, v1)
-        return (partial(normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
+        self._normal_key = key
+        self._normal_data = (partial(normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
                 [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
                 partial(nodal_normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
                 self.node_of[p["slave_facet"]])
+        return self._normal_data
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray
                   ) -> dict[str, np.ndarray] | None:
@@ -504,7 +526,9 @@ class SurfaceContact:
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = np.zeros(n * n)
-        J = _jacobian(kernel, groups, cu, cv)
+        both = _jacobian(partial(_normal_and_shares, *kernel.args), groups, cu, cv)
+        size = pos.shape[1] * pos.shape[2]
+        J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
         rows = pos.reshape(len(J), -1)
         self._add_block(out, rows, rows, J)
         if not self.spec.friction:
@@ -514,7 +538,6 @@ class SurfaceContact:
         if fr is None:
             return out.reshape(n, n)
         # dλ/dΔa (slave nodes × interface), from the points' shares.
-        Jl = _jacobian(lam_kernel, groups, cu, cv)  # (K, nn, local)
         cols = np.broadcast_to(rows[:, None, :], Jl.shape)
         nodes = np.broadcast_to(node[:, :, None], Jl.shape)
         keep = cols >= 0
@@ -600,9 +623,14 @@ class SurfaceContact:
         step[pos[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
         return int(fix.sum())
 
-    def resultant(self) -> np.ndarray:
-        """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain)."""
-        u0, u1, v1 = self._state()
+    def resultant(self, accepted: bool = True) -> np.ndarray:
+        """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).
+
+        Args:
+            accepted: At the stepper's accepted state (u, v); False: at the current
+                Newton iterate of the step.
+        """
+        u0, u1, v1 = self._state(accepted=accepted)
         kernel, groups, _, lam_kernel, node = self._normal(u1, v1)
         nn = self.slave.X.shape[1]
         # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
@@ -613,15 +641,15 @@ class SurfaceContact:
                 out += fr["force"].sum(axis=0)
         return out
 
-    def state(self) -> dict[str, np.ndarray]:
-        """Every normal integration point at the step's current iterate (every rank).
+    def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
+        """Every normal integration point (every rank), as :meth:`resultant`.
 
         Returns:
             ``x`` (current position), ``gap`` (g_n; NaN without a projection),
             ``pressure``, ``weight`` (reference length), ``facet`` (master facet, −1:
             none), ``xi`` (its local coordinate).
         """
-        _, u1, v1 = self._state()
+        _, u1, v1 = self._state(accepted=accepted)
         p = self._points(u1, v1)
         points = p["all_x"]
         total = len(points)
