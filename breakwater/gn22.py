@@ -130,6 +130,11 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
         The displacements and the Newton iterations.
     """
     u = list(u) if u is not None else model.functions("u")
+    if model.surface_pairs:
+        # General pairs have no static solve: a body held only by them would make the
+        # stiffness singular, and their forces are not UFL forms. The dynamics starts
+        # from the given (undeformed) state at rest and settles by itself.
+        return u, 0
     g = model.gravity.value
     if not any(f.x.array.any() for f in u) and np.any(g):
         # A small penetration along gravity so that every contact starts active.

@@ -148,6 +148,9 @@ class Session:
                  m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
                  len(m.bodies), len(m.pairs))
         m.set_time(0.0)
+        if m.surface_pairs:
+            log.warning("general contact pairs: no static equilibrium, the run starts from "
+                        "the undeformed state at rest")
         u_static, st.static_iterations = solve_static(m)
         log.info("static: %d Newton iterations", st.static_iterations)
         self.stepped = x = Stepped(m, self.time, self.output, self.directory)
