@@ -387,3 +387,58 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     t, ux = h["t"], h["corner_ux"]
     a = 0.5 * 0.5 * 9.81  # (F − μN)/m with F = 1.5 μN
     assert abs(ux[-1] / (0.5 * a * t[-1] ** 2) - 1) < 0.02
+
+
+class _Killed(Exception):
+    """Stands for a kill (not a BreakwaterError: the run does not clean up)."""
+
+
+def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
+                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run with a general pair killed after its checkpoint resumes to the history of
+    the uninterrupted run (1e-12 of each column's scale; the state is u, v, a, and the
+    pair rebuilds its surfaces and start-of-step projections from them)."""
+    from breakwater import simulation
+    from breakwater.files import read_history
+    from breakwater.runspec import OutputSpec, ProbeSpec, TimeSpec
+
+    mesh = rectangles(shared_dir / "resume.msh", COMM,
+                      [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 7, 2),
+                       Rectangle("block", -0.1, 1e-3, 0.2, 0.1, 4, 2)])
+
+    def run(directory: pathlib.Path, **kwargs: object) -> dict:
+        pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10,
+                           friction=0.5)
+        model = ContactModel(read_mesh(mesh, COMM), [Body("base", STEEL_LIKE),
+                                                     Body("block", STEEL_LIKE)],
+                             fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                             loads=[SurfaceLoad("block_left", (2e3, 0.0), lambda t: 1.0)],
+                             surface_pairs=[pair])
+        output = OutputSpec(directory, field_interval=0, figures=False, progress=False,
+                            checkpoint_interval=5,
+                            probes=(ProbeSpec("corner", "block", (-0.1, 1e-3)),))
+        return simulation.run(model, TimeSpec(dt=1e-3, end_time=0.03), output,
+                              report=False, **kwargs)  # type: ignore[arg-type]
+
+    full = run(shared_dir / "full")
+    assert full["finished"] is True
+    solve = GN22.solve
+
+    def killed(self: GN22) -> int:
+        if float(self.t.value) >= 0.0225:
+            raise _Killed("killed")
+        return solve(self)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(GN22, "solve", killed)
+        with pytest.raises(_Killed):
+            run(shared_dir / "resumed")
+    resumed = run(shared_dir / "resumed", resume=True)
+    assert resumed["finished"] is True
+    assert [r["t"] for r in resumed["resumed_from"]] == pytest.approx([0.02])
+    a = read_history(shared_dir / "full" / "history.csv")
+    b = read_history(shared_dir / "resumed" / "history.csv")
+    np.testing.assert_array_equal(a["t"], b["t"])
+    for key in ("corner_ux", "corner_uy", "kinetic", "strain"):
+        scale = np.abs(a[key]).max()
+        assert np.abs(a[key] - b[key]).max() <= 1e-12 * scale, key
