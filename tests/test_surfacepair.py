@@ -387,6 +387,12 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     t, ux = h["t"], h["corner_ux"]
     a = 0.5 * 0.5 * 9.81  # (F − μN)/m with F = 1.5 μN
     assert abs(ux[-1] / (0.5 * a * t[-1] ** 2) - 1) < 0.02
+    # The pair's history columns: while the block slides, the friction resultant is
+    # μ times the normal one (every contact node slides the same way).
+    fx, fy = h["sliding_force_x"][-1], h["sliding_force_y"][-1]
+    assert fy > 0 and abs(fx / fy + 0.5) < 1e-3
+    assert h["sliding_contact_length"][-1] == pytest.approx(0.2)
+    assert 0 < h["sliding_penetration"][-1] < 1e-6
 
 
 class _Killed(Exception):
