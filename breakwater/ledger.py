@@ -23,6 +23,7 @@ from dolfinx import fem
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .gn22 import GN22
+from .surfacepair import SurfaceContact
 
 FIELDS = ("kinetic", "strain", "penalty", "rayleigh_dissipation", "friction_dissipation",
           "external_work", "balance_error")
@@ -84,6 +85,11 @@ class EnergyLedger:
                        for p in m.pairs))
             if m.pairs else None
             for u, v in ((s.u, s.v), (self.u0, self.v0))]
+        # General pairs (breakwater.surfacepair): their penalty energy and friction
+        # power come from the pairs themselves, at the accepted state.
+        self._surfaces = [p for p in getattr(s.solver, "providers", ())
+                          if isinstance(p, SurfaceContact)]
+        self._surface_power = 0.0
         self.reference: float | None = None
         self.row = Energies()
         self._t0 = 0.0
@@ -95,13 +101,15 @@ class EnergyLedger:
         is everything :meth:`record` needs to continue.
         """
         return {"reference": self.reference, "row": self.row.as_dict(), "t0": self._t0,
-                "amp0": [float(a.value) for a in self._amp0]}
+                "amp0": [float(a.value) for a in self._amp0],
+                "surface_power": self._surface_power}
 
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller)."""
         self.reference = state["reference"]
         self.row = Energies(**state["row"])
         self._t0 = state["t0"]
+        self._surface_power = state.get("surface_power", 0.0)
         for a0, value in zip(self._amp0, state["amp0"], strict=True):
             a0.value = value
 
@@ -113,6 +121,9 @@ class EnergyLedger:
         s, m = self.stepper, self.stepper.model
         t = float(s.t.value)
         kin, strain, pen = (self._value(f) for f in self._stored)
+        surface = [sp.energies() for sp in self._surfaces]
+        pen += sum(e for e, _ in surface)
+        power = sum(p for _, p in surface)
         r = self.row
         if self.reference is None:
             self.reference = kin + strain + pen
@@ -120,7 +131,8 @@ class EnergyLedger:
             Δt = t - self._t0
             r.rayleigh_dissipation += Δt * self._value(self._rayleigh)
             r.friction_dissipation += 0.5 * Δt * (self._value(self._friction[0])
-                                                  + self._value(self._friction[1]))
+                                                  + self._value(self._friction[1])
+                                                  + power + self._surface_power)
             r.external_work += self._value(self._work)
         r.kinetic, r.strain, r.penalty = kin, strain, pen
         r.balance_error = (r.stored - self.reference + r.rayleigh_dissipation
@@ -131,4 +143,5 @@ class EnergyLedger:
         for a0, ld in zip(self._amp0, m.loads, strict=True):
             a0.value = ld.amplitude.value
         self._t0 = t
+        self._surface_power = power
         return Energies(**r.as_dict())

@@ -641,6 +641,26 @@ class SurfaceContact:
                 out += fr["force"].sum(axis=0)
         return out
 
+    def energies(self) -> tuple[float, float]:
+        """The penalty energy and the friction power at the accepted state (the ledger).
+
+        ``∫ ½ ε_n ⟨−g_n⟩₊²`` on the normal integration points and
+        ``Σ_k μ λ_k |v_T|²/sqrt(|v_T|² + χ²)`` on the slave nodes.
+        """
+        state = self.state()
+        closed = state["gap"] <= 0
+        energy = float(np.sum(state["weight"][closed]
+                              * self.law.normal.energy(state["gap"][closed])))
+        power = 0.0
+        if self.spec.friction:
+            u0, u1, v1 = self._state(accepted=True)
+            _, groups, _, lam_kernel, node = self._normal(u1, v1)
+            lam = self._nodal_forces(lam_kernel, groups, node)
+            fr = self._friction(u0, v1, lam)
+            if fr is not None:
+                power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
+        return energy, power
+
     def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
         """Every normal integration point (every rank), as :meth:`resultant`.
 

@@ -448,3 +448,34 @@ def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
     for key in ("corner_ux", "corner_uy", "kinetic", "strain"):
         scale = np.abs(a[key]).max()
         assert np.abs(a[key] - b[key]).max() <= 1e-12 * scale, key
+
+
+def test_energy_ledger_with_a_general_pair(shared_dir: pathlib.Path) -> None:
+    """The ledger counts a general pair's penalty energy and friction dissipation: a
+    block dropped 1 mm and pushed by 1.5 μN (μ = 0.5), β₁ = β₂ = ½ (the trapezoidal
+    rule, no numerical dissipation), the contact resolved in time (ε_n = 1e8 N/m³:
+    contact period 2π sqrt(m/(ε_n w)) = 8.9 ms against Δt = 0.2 ms): the balance
+    error stays below 1 % of the friction dissipation (measured 0.5 %, made at the
+    impact; without the pair's terms it would be the whole dissipation)."""
+    from breakwater.ledger import EnergyLedger
+
+    N = STEEL_LIKE.density * G * 0.2 * 0.1
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e8, friction=0.5)
+    model = _model(shared_dir / "energy.msh", COMM,
+                   [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 7, 2),
+                    Rectangle("block", -0.1, 1e-3, 0.2, 0.1, 4, 2)], pair,
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                   loads=[SurfaceLoad("block_left", (1.5 * 0.5 * N / 0.1, 0.0),
+                                      lambda t: 1.0)])
+    stepper = GN22(model, 2e-4, GN22Parameters(0.5, 0.5))
+    stepper.initialise()
+    ledger = EnergyLedger(stepper)
+    ledger.record()
+    penalty = 0.0
+    for _ in range(125):
+        stepper.step()
+        row = ledger.record()
+        penalty = max(penalty, row.penalty)
+    assert penalty > 0 and row.friction_dissipation > 0.1
+    assert abs(row.balance_error) < 1e-2 * row.friction_dissipation
+    stepper.destroy()
