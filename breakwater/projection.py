@@ -14,7 +14,7 @@ taken on real parts.
 
 The candidate facets of each point come from a uniform grid of the facets' bounding
 boxes (:class:`FacetGrid`): O(points + facets), not all pairs. A projection is kept
-if it falls inside its facet (|ξ| ≤ 1 + tol); of several, the nearest wins, so a point
+if it falls inside its facet (``|ξ| ≤ 1 + tol``); of several, the nearest wins, so a point
 whose projection leaves one facet continues onto the neighbour. A point with no
 projection within the search radius (beyond a convex corner, past the end of the
 surface, or farther than the radius) has none: it is out of contact.
@@ -78,7 +78,7 @@ def closest_point(points: np.ndarray, nodes: np.ndarray, xi: np.ndarray | None =
         nodes: The facet of each point, shape ``(m, nn, gdim)``.
         xi: Newton's start (default: the projection onto the chord).
         iterations: At most this many Newton steps (each iterate is kept in [−2, 2]).
-        tol: Stop when every real |Δξ| is below this.
+        tol: Stop when every real ``|Δξ|`` is below this.
 
     Returns:
         ξ, shape ``(m,)``; complex if any input is.
@@ -164,7 +164,7 @@ def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
         points: Shape ``(m, gdim)``.
         nodes: Facet node positions, shape ``(F, nn, gdim)``.
         grid: The candidate search of these facets.
-        tol: A projection at |ξ| ≤ 1 + tol is inside its facet.
+        tol: A projection at ``|ξ| ≤ 1 + tol`` is inside its facet.
 
     Returns:
         The facet of each point (−1: no projection) and its local coordinate ξ.

@@ -174,7 +174,7 @@ def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
 
 
 def _unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """Unit tangent dx/dξ / |dx/dξ| (analytic: no abs, complex-step safe)."""
+    """Unit tangent ``dx/dξ / |dx/dξ|`` (analytic: no abs, complex-step safe)."""
     t = np.einsum("kn,knd->kd", dN, nodes)
     return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
 
