@@ -44,6 +44,14 @@ from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .mesh import group_tag
+from .pointkernels import (
+    H,
+    jacobian,
+    nodal_normal_forces,
+    normal_and_shares,
+    normal_forces,
+    unit_tangent,
+)
 from .projection import FacetGrid, closest_point, project, shape
 
 if TYPE_CHECKING:
@@ -53,8 +61,6 @@ if TYPE_CHECKING:
     from .model import ContactModel
 
 __all__ = ["SurfaceContact", "SurfacePair", "surface_dofs"]
-
-_H = 1e-20  # complex step (no cancellation: any tiny step is exact to round-off)
 
 
 @dataclass(frozen=True)
@@ -171,104 +177,6 @@ def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
             out.append(layout.global_index[b.index][(blocks[:, None] * bs
                                                      + np.arange(bs)).ravel()])
     return np.concatenate(out) if out else np.zeros(0, np.int64)
-
-
-def _unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
-    """Unit tangent ``dx/dξ / |dx/dξ|`` (analytic: no abs, complex-step safe)."""
-    t = np.einsum("kn,knd->kd", dN, nodes)
-    return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
-
-
-def _contact_point(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
-                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄)."""
-    (xs, _), (xm, _) = groups
-    x_s = np.einsum("kn,knd->kd", Ns, xs)
-    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
-    N, dN, _ = shape(xi, xm.shape[1])
-    t = _unit_tangent(dN, xm)
-    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-    return x_s, N, n, law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n)
-
-
-def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,
-                  groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
-                  ) -> np.ndarray:
-    """Nodal residual of the normal pressure at contact points (real or complex).
-
-    The point ``x_s = Σ N_s x_k`` of the slave facet is projected onto the master facet
-    (``refine`` Newton steps from ξ, in the inputs' arithmetic, so that a complex step
-    carries the implicit derivative of the projection); ``g_n = (x_s − x̄)·n̄``
-    (eq. 7), ``p = ε_n ⟨−g_n⟩₊`` (eq. 12), from :class:`forms.ContactLaw`.
-
-    Args:
-        law: The contact law (float parameters).
-        Ns: Slave shape functions at each point, ``(K, nn)``.
-        xi: The projection's local coordinate on the master facet (Newton's start).
-        weight: Reference length of each point.
-        groups: ``[(x, v)]`` of the slave facet and of the master facet (oriented:
-            ``(t_y, −t_x)`` is outward), each ``(K, nn, gdim)``.
-        refine: Newton steps of the projection.
-
-    Returns:
-        ``(K, 2 nn, gdim)``: the residual on the slave's nodes, then on the master's.
-    """
-    _, N, _, traction = _contact_point(law, Ns, xi, groups, refine)
-    traction = traction * weight[:, None]
-    return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
-                           N[:, :, None] * traction[:, None, :]], axis=1)
-
-
-def nodal_normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
-                        weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-                        refine: int = 2) -> np.ndarray:
-    """Each point's share ``p w N_k`` of its slave nodes' normal forces, ``(K, nn)``.
-
-    Summed over the points, ``λ_k = ∫ p N_k``: the normal force of slave node k
-    consistent with the integrated pressure (as :func:`normal_forces`).
-    """
-    _, _, n, traction = _contact_point(law, Ns, xi, groups, refine)
-    p = np.sum(traction * n, axis=1)
-    return (p * weight)[:, None] * Ns
-
-
-def _normal_and_shares(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
-                       weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-                       refine: int = 2) -> np.ndarray:
-    """:func:`normal_forces` and :func:`nodal_normal_forces` side by side, ``(K, ·)``."""
-    _, N, n, traction = _contact_point(law, Ns, xi, groups, refine)
-    tw = traction * weight[:, None]
-    forces = np.concatenate([-Ns[:, :, None] * tw[:, None, :], N[:, :, None] * tw[:, None, :]],
-                            axis=1)
-    shares = (np.sum(tw * n, axis=1))[:, None] * Ns
-    return np.concatenate([forces.reshape(len(Ns), -1), shares], axis=1)
-
-
-def _jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-              cu: float, cv: float) -> np.ndarray:
-    """∂kernel/∂Δa per point by complex steps, ``(K, outputs, local)``.
-
-    Each local DOF (group, node, component) is stepped in x by ``i h cu`` and in v
-    by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa).
-    """
-    cx = [(x.astype(complex), v.astype(complex)) for x, v in groups]
-    K, nn, gdim = cx[0][0].shape
-    local = len(cx) * nn * gdim
-    J: np.ndarray | None = None
-    for j in range(local):
-        group, rest = divmod(j, nn * gdim)
-        node, comp = divmod(rest, gdim)
-        x, v = cx[group]
-        x[:, node, comp] += 1j * _H * cu
-        v[:, node, comp] += 1j * _H * cv
-        column = kernel(cx).reshape(K, -1).imag / _H
-        if J is None:
-            J = np.zeros((K, column.shape[1], local))
-        J[:, :, j] = column
-        x[:, node, comp] = x[:, node, comp].real
-        v[:, node, comp] = v[:, node, comp].real
-    return J if J is not None else np.zeros((K, 0, 0))
 
 
 class SurfaceContact:
@@ -437,7 +345,7 @@ class SurfaceContact:
         points = self.node_X + u0[self.node_pos]
         facet, xi = project(points, xm, FacetGrid(xm, self.radius))
         N0, dN0, _ = shape(xi, m.X.shape[1])
-        t0 = _unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
+        t0 = unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
             np.zeros_like(points)
         self._frozen_key = u0.copy()
         self._frozen_data = (facet, N0, t0)
@@ -526,7 +434,7 @@ class SurfaceContact:
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = np.zeros(n * n)
-        both = _jacobian(partial(_normal_and_shares, *kernel.args), groups, cu, cv)
+        both = jacobian(partial(normal_and_shares, *kernel.args), groups, cu, cv)
         size = pos.shape[1] * pos.shape[2]
         J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
         rows = pos.reshape(len(J), -1)
@@ -549,8 +457,8 @@ class SurfaceContact:
         D = np.zeros((len(k), gdim, gdim))
         for c in range(gdim):
             v = fr["v_T"].astype(complex)
-            v[:, c] += 1j * _H
-            D[:, :, c] = self.law.friction.traction(lam[k], v).imag / _H
+            v[:, c] += 1j * H
+            D[:, :, c] = self.law.friction.traction(lam[k], v).imag / H
         B = cv * np.einsum("kij,kj,kl->kil", D, t, t)  # ∂force/∂(slave node Δa)
         # Rows: the slave node (−force) and the master nodes of f₀ (+N0 force).
         row_pos = np.concatenate([fr["pos_s"][:, None, :], fr["pos_m"]], axis=1)
@@ -680,7 +588,7 @@ class SurfaceContact:
             x_s = np.einsum("kn,knd->kd", p["Ns"], p["xs"])
             xi = closest_point(x_s, p["xm"], p["xi"], iterations=2, tol=0.0)
             N, dN, _ = shape(xi, p["xm"].shape[1])
-            t = _unit_tangent(dN, p["xm"])
+            t = unit_tangent(dN, p["xm"])
             n = np.stack([t[:, 1], -t[:, 0]], axis=1)
             gap = self.law.gap(x_s, np.einsum("kn,knd->kd", N, p["xm"]), n)
             i = p["index"]
