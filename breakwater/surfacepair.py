@@ -40,6 +40,7 @@ from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
@@ -55,8 +56,6 @@ from .pointkernels import (
 from .projection import FacetGrid, closest_point, project, shape
 
 if TYPE_CHECKING:
-    from dolfinx import fem
-
     from .bulk import MonolithicLayout
     from .model import ContactModel
 
@@ -164,8 +163,6 @@ def _surface(model: ContactModel, layout: MonolithicLayout, body: int, group: st
 def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
     """Global stacked indices of the DOFs of every general pair's two surfaces (local)."""
     fdim = model.mesh.topology.dim - 1
-    from dolfinx import fem
-
     out = []
     for spec in model.surface_pairs:
         for name, group in ((spec.slave, spec.slave_surface),
