@@ -402,8 +402,8 @@ class _Killed(Exception):
 def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """A run with a general pair killed after its checkpoint resumes to the history of
-    the uninterrupted run (1e-12 of each column's scale; the state is u, v, a, and the
-    pair rebuilds its surfaces and start-of-step projections from them)."""
+    the uninterrupted run (the state is u, v, a, and the pair rebuilds its surfaces and
+    start-of-step projections from them): a block dropped 1 mm and pushed by 1.5 μN."""
     from breakwater import simulation
     from breakwater.files import read_history
     from breakwater.runspec import OutputSpec, ProbeSpec, TimeSpec
@@ -418,7 +418,7 @@ def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
         model = ContactModel(read_mesh(mesh, COMM), [Body("base", STEEL_LIKE),
                                                      Body("block", STEEL_LIKE)],
                              fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
-                             loads=[SurfaceLoad("block_left", (2e3, 0.0), lambda t: 1.0)],
+                             loads=[SurfaceLoad("block_left", (2943.0, 0.0), lambda t: 1.0)],
                              surface_pairs=[pair])
         output = OutputSpec(directory, field_interval=0, figures=False, progress=False,
                             checkpoint_interval=5,
@@ -445,9 +445,14 @@ def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
     a = read_history(shared_dir / "full" / "history.csv")
     b = read_history(shared_dir / "resumed" / "history.csv")
     np.testing.assert_array_equal(a["t"], b["t"])
+    # Serially the resumed history is the uninterrupted one bit for bit (measured 0).
+    # On 2 ranks two uninterrupted runs already differ by 6e-9 of u_x (the parallel
+    # solves are not bitwise reproducible, and the friction law's stick tangent μλ/χ
+    # amplifies their round-off); the resumed run is within that (measured 4e-9).
+    rtol = 1e-12 if COMM.size == 1 else 1e-7
     for key in ("corner_ux", "corner_uy", "kinetic", "strain"):
         scale = np.abs(a[key]).max()
-        assert np.abs(a[key] - b[key]).max() <= 1e-12 * scale, key
+        assert np.abs(a[key] - b[key]).max() <= rtol * scale, key
 
 
 def test_energy_ledger_with_a_general_pair(shared_dir: pathlib.Path) -> None:
