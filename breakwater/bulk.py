@@ -27,6 +27,7 @@ from petsc4py import PETSc
 
 from .mesh import group_tag
 from .model import ContactModel
+from .surfacepair import surface_dofs
 
 __all__ = ["BulkOperators", "MonolithicLayout", "Timings", "body_index", "interface_dofs"]
 
@@ -342,7 +343,8 @@ def interface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
     for condition in model.bcs:
         dofs, _ = condition.dof_indices()
         bc.append(layout.global_index[body_index(model, condition.function_space)][dofs])
-    mine = np.unique(np.concatenate(local)) if local else np.zeros(0, np.int64)
+    local.append(surface_dofs(model, layout))
+    mine = np.unique(np.concatenate(local))
     every = np.unique(np.concatenate(model.comm.allgather(mine)))
     fixed = np.unique(np.concatenate(model.comm.allgather(
         np.concatenate(bc) if bc else np.zeros(0, np.int64))))

@@ -162,24 +162,49 @@ class BodyCase:
 
 @dataclass(frozen=True)
 class ContactCase:
-    """``[contact.<interface>]``: penalty contact with regularised Coulomb friction."""
+    """``[contact.<interface>]``: penalty contact with regularised Coulomb friction.
+
+    With ``slave_surface`` and ``master_surface`` the pair is general (surfaces that
+    need not match, finite sliding: :mod:`breakwater.surfacepair`) and ``<interface>``
+    is just its name.
+    """
 
     name: str = setting(key=True, doc="interface facet (1D) physical group, shared by the "
-                        "two bodies (conforming)")
+                        "two bodies (conforming); with slave_surface/master_surface, the "
+                        "pair's name")
     slave: str = setting(doc="body whose nodes are penalised (the paper: the caisson)")
     master: str = setting(doc="body whose outward normal defines the gap (the mound)")
     penalty: float = setting(unit="N/m³", doc="normal penalty ε_n")
     friction: float = setting(0.0, doc="Coulomb friction coefficient μ (0: frictionless)")
     regularisation: float = setting(1e-10, unit="m/s", doc="regularisation velocity χ of "
                                     "the friction law (eq. 15)")
-    gap: float = setting(0.0, unit="m", doc="initial normal gap g₀")
+    gap: float = setting(0.0, unit="m", doc="initial normal gap g₀ (conforming pairs)")
+    slave_surface: str | None = setting(None, doc="general pair: facet group on the slave's "
+                                        "boundary (its integration points are projected)")
+    master_surface: str | None = setting(None, doc="general pair: facet group on the "
+                                         "master's boundary")
+    points: int = setting(3, doc="general pair: Gauss points per integration segment")
 
     def __post_init__(self) -> None:
+        if (self.slave_surface is None) != (self.master_surface is None):
+            raise InvalidField("master_surface" if self.master_surface is None
+                               else "slave_surface", "a general pair needs both "
+                               "slave_surface and master_surface")
+        if self.general and self.gap:
+            raise InvalidField("gap", "a general pair takes its gap from the geometry "
+                               "(remove gap)")
+        if self.points < 1:
+            raise InvalidField("points", f"must be >= 1 (got {self.points})")
         positive(self.penalty, "penalty")
         positive(self.friction, "friction", strict=False)
         positive(self.regularisation, "regularisation")
         if self.slave == self.master:
             raise InvalidField("master", "slave and master must be different bodies")
+
+    @property
+    def general(self) -> bool:
+        """A pair between two surfaces that need not match (not one shared group)."""
+        return self.slave_surface is not None
 
 
 @dataclass(frozen=True)
@@ -370,7 +395,13 @@ class Case:
         for c in self.contact:
             body(c.slave, f"contact.{c.name}.slave")
             body(c.master, f"contact.{c.name}.master")
+            if c.general and self.time.solver != "fast":
+                raise InvalidField("time.solver", f"contact.{c.name} is a general pair "
+                                   '(slave_surface/master_surface): it needs "fast"')
         cal = self.calibration
+        if cal.enabled and any(c.general for c in self.contact):
+            raise InvalidField("calibration.enabled", "the calibration bonds conforming "
+                               "pairs only; a case with general pairs cannot calibrate")
         if cal.enabled:
             body(cal.body, "calibration.body")
             body(cal.structure, "calibration.structure")
@@ -401,6 +432,10 @@ class Case:
                                    f"{suggest(name, loads)} (loads: {', '.join(loads) or 'none'})")
         pairs = [c.name for c in self.contact]
         for q in self.output.pair_probes:
+            if q.pair in pairs and next(c for c in self.contact if c.name == q.pair).general:
+                raise InvalidField(f"output.pair_probes.{q.name}.pair",
+                                   f"'{q.pair}' is a general pair: pair probes need a "
+                                   "conforming pair")
             if q.pair not in pairs:
                 raise InvalidField(f"output.pair_probes.{q.name}.pair",
                                    f"no contact pair '{q.pair}'{suggest(q.pair, pairs)} "
@@ -531,7 +566,11 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
     for b in case.bodies:
         need(b.name, 2, f"bodies.{b.name}")
     for c in case.contact:
-        need(c.name, 1, f"contact.{c.name}")
+        if c.general:
+            need(c.slave_surface or "", 1, f"contact.{c.name}.slave_surface")
+            need(c.master_surface or "", 1, f"contact.{c.name}.master_surface")
+        else:
+            need(c.name, 1, f"contact.{c.name}")
     for f in case.fixed:
         need(f.name, 1, f"fixed.{f.name}")
     for ld in case.loads:

@@ -22,6 +22,7 @@ from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
 from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
 from .runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from .surfacepair import SurfacePair
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -114,7 +115,11 @@ def build_model(case: Case, data: gmshio.MeshData,
     moduli = shear_moduli or {}
     bodies = [Body(b.name, b.material(moduli.get(b.name))) for b in case.bodies]
     pairs = [ContactPair(c.name, c.slave, c.master, c.penalty, c.friction,
-                         c.regularisation, c.gap) for c in case.contact]
+                         c.regularisation, c.gap) for c in case.contact if not c.general]
+    surface_pairs = [SurfacePair(c.name, c.slave, c.master, c.slave_surface or "",
+                                 c.master_surface or "", c.penalty, c.friction,
+                                 c.regularisation, c.points)
+                     for c in case.contact if c.general]
     fixed = [Fixed(f.name, tuple(f.components)) for f in case.fixed]
     loads: list[SurfaceLoad] = []
     owner: list[str] = []  # the case load each model load comes from
@@ -128,7 +133,7 @@ def build_model(case: Case, data: gmshio.MeshData,
                          gravity=case.gravity if dynamic else None,
                          damping=Damping(case.damping.alpha, case.damping.beta)
                          if dynamic else None,
-                         degree=case.mesh.degree)
+                         degree=case.mesh.degree, surface_pairs=surface_pairs)
     if dynamic:
         names = case.initial.loads
         model.initial = InitialSpec(
@@ -213,7 +218,7 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
                             "expected one")
         return tuple(float(c) for c in x[0, :model.gdim])
 
-    pair_index = {c.name: k for k, c in enumerate(case.contact)}
+    pair_index = {c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
     o = case.output
     probes = tuple(ProbeSpec(p.name, p.body, where(f"output.probes.{p.name}", p.group, p.point))
                    for p in o.probes)

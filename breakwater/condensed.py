@@ -54,6 +54,7 @@ from .errors import ConvergenceError
 from .model import ContactModel
 from .parallel import single_threaded_blas
 from .solver import NewtonOptions, snes_reason
+from .surfacepair import SurfaceContact
 
 __all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
 
@@ -190,6 +191,8 @@ class CondensedNewton:
         contact: Builds the contact forces (:class:`ContactForces`, summed); None: the
             UFL of ``interface_residual`` assembled over the contact facets
             (:class:`InterfaceAssembler`).
+        surface_guard: The slip guard of the general pairs (their ``precheck``), also
+            a pre-check.
     """
 
     def __init__(self, model: ContactModel,
@@ -199,7 +202,8 @@ class CondensedNewton:
                  interface_residual: ufl.Form | None, options: NewtonOptions | None = None,
                  force_scale: float = 1.0,
                  guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float], int]
-                 | None = None, contact: ContactFactory | None = None) -> None:
+                 | None = None, contact: ContactFactory | None = None,
+                 surface_guard: bool = True) -> None:
         self.model = model
         # Every rank runs the same small dense algebra: one BLAS thread per rank.
         single_threaded_blas(model.comm)
@@ -208,8 +212,8 @@ class CondensedNewton:
         self.beta1, self.beta2 = beta1, beta2
         self.options = o = options or NewtonOptions()
         self.layout = layout = MonolithicLayout(model)
-        self.I = interface_dofs(model, layout) if interface_residual is not None \
-            else np.zeros(0, np.int64)
+        self.I = interface_dofs(model, layout) \
+            if interface_residual is not None or model.surface_pairs else np.zeros(0, np.int64)
         self.n = n = len(self.I)
         self.timings = Timings()
         self.bulk = BulkOperators(model, layout, self.I, beta1, beta2, timings=self.timings)
@@ -223,11 +227,15 @@ class CondensedNewton:
         start, n_local = layout.start, layout.offsets[-1]
         self._owned = (self.I >= start) & (self.I < start + n_local)
         self._owned_rows = self.I[self._owned] - start
-        self.contact: list[ContactForces] = []
+        self.providers: list[ContactForces] = []
         if interface_residual is not None:
-            self.contact = list(contact(layout, self.I)) if contact is not None else [
+            self.providers = list(contact(layout, self.I)) if contact is not None else [
                 InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
                                    self.da, self._write, self.I)]
+        # General pairs (breakwater.surfacepair): one provider each.
+        self.providers += [SurfaceContact(model, p, layout, self.I,
+                                          (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+                           for p in model.surface_pairs]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
@@ -264,7 +272,9 @@ class CondensedNewton:
         ksp.setType("preonly")
         ksp.getPC().setType("lu")
         snes.setConvergenceTest(self._converged)
-        if guard is not None:
+        self.surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
+        self.surface_flips = 0
+        if guard is not None or self.surface_guard:
             snes.setLineSearchPreCheck(self._precheck)
         snes.setFromOptions()
 
@@ -286,8 +296,8 @@ class CondensedNewton:
         """f_c(y) on the interface unknowns (the same on every rank)."""
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            out = self.contact[0].vector()
-            for c in self.contact[1:]:
+            out = self.providers[0].vector()
+            for c in self.providers[1:]:
                 out = out + c.vector()
             return out
 
@@ -301,7 +311,7 @@ class CondensedNewton:
         dense: np.ndarray | None = None
         with self.timings("interface_assembly"):
             self._set_interface(y)
-            for c in self.contact:
+            for c in self.providers:
                 product = getattr(c, "left_product", None)
                 if product is not None:
                     out += product(X)
@@ -357,7 +367,12 @@ class CondensedNewton:
         v₁ = ṽ + β₁Δt y and the step are written at the interface entries, the only
         ones the guard reads, and the step is read back where the guard cut it.
         """
-        assert self.guard is not None
+        if self.surface_guard:
+            for p in self.providers:
+                if isinstance(p, SurfaceContact):
+                    self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
+        if self.guard is None:
+            return
         dv_dx = self.beta1 * float(self.dt.value)
         velocity = self._v_pred_I + dv_dx * x.getArray(readonly=True)
         step = y.getArray(readonly=True)

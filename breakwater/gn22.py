@@ -131,6 +131,11 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
         The displacements and the Newton iterations.
     """
     u = list(u) if u is not None else model.functions("u")
+    if model.surface_pairs:
+        # General pairs have no static solve: a body held only by them would make the
+        # stiffness singular, and their forces are not UFL forms. The dynamics starts
+        # from the given (undeformed) state at rest and settles by itself.
+        return u, 0
     g = model.gravity.value
     if not any(f.x.array.any() for f in u) and np.any(g):
         # A small penetration along gravity so that every contact starts active.
@@ -183,6 +188,9 @@ class GN22:
                  flip_guard: bool = True, solver: str = "fast") -> None:
         if solver not in self.SOLVERS:
             raise ValueError(f"solver must be one of {', '.join(self.SOLVERS)} (got {solver!r})")
+        if solver == "reference" and model.surface_pairs:
+            raise ValueError("general contact pairs (slave and master surfaces) need the "
+                             "fast solver (time.solver = \"fast\")")
         self.model = model
         self.params = p = parameters or GN22Parameters()
         msh = model.mesh
@@ -212,7 +220,8 @@ class GN22:
                 model, state, self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
                 newton, force_scale=_scale(model),
-                guard=self._guard_counted if self.guard else None, contact=contact)
+                guard=self._guard_counted if self.guard else None, contact=contact,
+                surface_guard=flip_guard)
         else:
             self._y = model.functions("step")
             F = model.residual(self.u1, self.v1, self.a1)

@@ -29,6 +29,7 @@ from dolfinx import fem
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .gn22 import GN22
 from .numerical import NumericalDissipation
+from .surfacepair import SurfaceContact
 
 FIELDS = ("kinetic", "strain", "penalty", "rayleigh_dissipation", "friction_dissipation",
           "external_work", "balance_error", "numerical_dissipation",
@@ -95,6 +96,11 @@ class EnergyLedger:
             if m.pairs else None
             for u, v in ((s.u, s.v), (self.u0, self.v0))]
         self._numerical = NumericalDissipation(s, self.u0, self.v0)
+        # General pairs (breakwater.surfacepair): their penalty energy and friction
+        # power come from the pairs themselves, at the accepted state.
+        self._surfaces = [p for p in getattr(s.solver, "providers", ())
+                          if isinstance(p, SurfaceContact)]
+        self._surface_power = 0.0
         self.reference: float | None = None
         self.row = Energies()
         self._t0 = 0.0
@@ -106,13 +112,15 @@ class EnergyLedger:
         is everything :meth:`record` needs to continue.
         """
         return {"reference": self.reference, "row": self.row.as_dict(), "t0": self._t0,
-                "amp0": [float(a.value) for a in self._amp0]}
+                "amp0": [float(a.value) for a in self._amp0],
+                "surface_power": self._surface_power}
 
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller)."""
         self.reference = state["reference"]
         self.row = Energies(**state["row"])
         self._t0 = state["t0"]
+        self._surface_power = state.get("surface_power", 0.0)
         for a0, value in zip(self._amp0, state["amp0"], strict=True):
             a0.value = value
 
@@ -126,6 +134,9 @@ class EnergyLedger:
                                  [*self._stored, self._rayleigh, *self._friction, self._work,
                                   *self._numerical.compiled])
         kin, strain, pen = (float(x) for x in values[:3])
+        surface = [sp.energies() for sp in self._surfaces]
+        pen += sum(e for e, _ in surface)
+        power = sum(p for _, p in surface)
         r = self.row
         if self.reference is None:
             self.reference = kin + strain + pen
@@ -133,7 +144,8 @@ class EnergyLedger:
             rayleigh, friction1, friction0, work, bulk, contact = (float(x) for x in values[3:])
             Δt = t - self._t0
             r.rayleigh_dissipation += Δt * rayleigh
-            r.friction_dissipation += 0.5 * Δt * (friction1 + friction0)
+            r.friction_dissipation += 0.5 * Δt * (friction1 + friction0 + power
+                                                  + self._surface_power)
             r.external_work += work
             r.numerical_dissipation += bulk + contact
             r.numerical_dissipation_contact += contact
@@ -147,4 +159,5 @@ class EnergyLedger:
         for a0, ld in zip(self._amp0, m.loads, strict=True):
             a0.value = ld.amplitude.value
         self._t0 = t
+        self._surface_power = power
         return Energies(**r.as_dict())

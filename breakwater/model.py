@@ -30,6 +30,7 @@ from .errors import MeshError
 from .loadfields import TractionField
 from .mesh import group_tag
 from .runspec import InitialSpec
+from .surfacepair import SurfacePair
 
 
 @dataclass(frozen=True)
@@ -258,6 +259,8 @@ class ContactModel:
         gravity: Body force per unit mass (m/s²), e.g. ``(0, -9.81)``.
         damping: Rayleigh damping.
         degree: Polynomial degree of the displacement (2: six-node triangles).
+        surface_pairs: General contact pairs between two surfaces that need not match
+            (:mod:`breakwater.surfacepair`; the fast solver only).
 
     Attributes:
         initial: The initial state of a run (initial velocities, the loads of the
@@ -275,6 +278,7 @@ class ContactModel:
         gravity: Sequence[float] | None = None,
         damping: Damping | None = None,
         degree: int = 2,
+        surface_pairs: Sequence[SurfacePair] = (),
     ) -> None:
         self.mesh_data = mesh_data
         self.mesh = msh = mesh_data.mesh
@@ -323,6 +327,7 @@ class ContactModel:
         # if all its integrals of a type share one subdomain_data object.
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
+        self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self._load_data: list[tuple[int, np.ndarray]] = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
@@ -367,6 +372,17 @@ class ContactModel:
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
         return _PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
+
+    def _check_surfaces(self, pair: SurfacePair) -> SurfacePair:
+        """A general pair whose surfaces lie on its bodies' boundaries."""
+        for role, body, group in (("slave", pair.slave, pair.slave_surface),
+                                  ("master", pair.master, pair.master_surface)):
+            self.body(body)
+            found, _ = self._locate(group)
+            if found.spec.name != body:
+                raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
+                                f"body '{found.spec.name}', not on the {role} '{body}'")
+        return pair
 
     def _locate(self, group: str) -> tuple[_BodyData, np.ndarray]:
         """The body whose boundary holds a facet group, and its facets in the submesh."""

@@ -21,6 +21,7 @@ from .ledger import FIELDS
 from .model import ContactModel
 from .probes import Probes
 from .runspec import OutputSpec
+from .surfacepair import SurfaceContact
 
 __all__ = ["Monitor", "interface_state", "pair_names"]
 
@@ -32,8 +33,11 @@ class Monitor:
     (:class:`~breakwater.probes.Probes`: ``<probe>_ux``, ``<probe>_uy``,
     ``<pair probe>_<key>``); per contact pair ``k``: ``contact_length_k`` (length
     where g_n ≤ 0), ``normal_force_k``, ``tangential_force_k`` (resultants on the
-    slave), ``penetration_k`` (largest nodal ⟨−g_n⟩₊, m); the ledger's
-    :data:`~breakwater.ledger.FIELDS`.
+    slave), ``penetration_k`` (largest nodal ⟨−g_n⟩₊, m); per general pair ``name``
+    (:mod:`~breakwater.surfacepair`): ``<name>_force_x``, ``<name>_force_y`` (the
+    resultant on the slave), ``<name>_contact_length`` (reference length of the
+    integration points where g_n ≤ 0), ``<name>_penetration`` (largest ⟨−g_n⟩₊ there,
+    m); the ledger's :data:`~breakwater.ledger.FIELDS`.
 
     Args:
         model: The contact model.
@@ -67,6 +71,11 @@ class Monitor:
         for k in range(len(model.pairs)):
             self.columns += [f"contact_length_{k}", f"normal_force_{k}",
                              f"tangential_force_{k}", f"penetration_{k}"]
+        self._surfaces = [p for p in getattr(stepper.solver, "providers", ())
+                          if isinstance(p, SurfaceContact)]
+        for sp in self._surfaces:
+            self.columns += [f"{sp.spec.name}_{key}" for key in
+                             ("force_x", "force_y", "contact_length", "penetration")]
         self.columns += list(FIELDS)
 
     def row(self, dt: float, iterations: int, energies: Mapping[str, float]) -> dict[str, float]:
@@ -84,6 +93,14 @@ class Monitor:
         for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
             gap = nd.contact_state(s.u[p.slave].x.array, s.u[p.master].x.array)["gap"]
             r[f"penetration_{k}"] = quality.max_penetration(gap)
+        for sp in self._surfaces:
+            force = sp.resultant()
+            state = sp.state()
+            closed = state["gap"] <= 0  # NaN (no projection): open
+            name = sp.spec.name
+            r[f"{name}_force_x"], r[f"{name}_force_y"] = float(force[0]), float(force[1])
+            r[f"{name}_contact_length"] = float(state["weight"][closed].sum())
+            r[f"{name}_penetration"] = float(-state["gap"][closed].min(initial=0.0))
         r.update({k: float(energies[k]) for k in FIELDS})
         return r
 

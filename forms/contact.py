@@ -22,7 +22,9 @@ product of a scalar field with a vector field) come from :func:`_ops`, which pic
 UFL or NumPy from the type of the arguments. On the UFL path the parameters may be
 ``fem.Constant`` s and the vectors restricted expressions (``u_s("+")``); on the
 NumPy path the parameters are floats, scalars per node have shape ``(n,)`` and
-vectors per node shape ``(n, gdim)``.
+vectors per node shape ``(n, gdim)``; the arrays may be complex (the NumPy operations
+are analytic, so a complex step differentiates them: the general contact pairs of
+:mod:`breakwater.surfacepair` take their Jacobian so).
 
 Quantities are written for a slave body s pressed on a master body m, on a
 conforming interface, with the master's outward unit normal ``n`` (pointing from
@@ -77,7 +79,9 @@ class _NumpyOps:
 
     @staticmethod
     def where_closed(g_n, closed, open_):
-        return np.where(np.asarray(g_n) <= 0.0, closed, open_)
+        # The real part decides: complex arrays carry complex-step derivatives
+        # (breakwater.surfacepair), and the active set does not depend on them.
+        return np.where(np.real(np.asarray(g_n)) <= 0.0, closed, open_)
 
     @staticmethod
     def scale(s, v):

@@ -1,0 +1,121 @@
+"""The point kernels of the general contact pairs: nodal forces of contact points.
+
+Vectorised over points, written with analytic NumPy operations only (no ``abs``, the
+active set decided on real parts by :mod:`forms.contact`), so that they run in complex
+arithmetic: :func:`jacobian` differentiates any of them by complex steps, exactly (no
+cancellation), the projection's Newton (:func:`breakwater.projection.closest_point`)
+included. Used by :class:`breakwater.surfacepair.SurfaceContact`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .projection import closest_point, shape
+
+__all__ = ["jacobian", "nodal_normal_forces", "normal_and_shares", "normal_forces",
+           "unit_tangent"]
+
+H = 1e-20  # complex step (no cancellation: any tiny step is exact to round-off)
+
+
+def unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Unit tangent ``dx/dξ / |dx/dξ|`` (analytic: no abs, complex-step safe)."""
+    t = np.einsum("kn,knd->kd", dN, nodes)
+    return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
+
+
+def _contact_point(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄)."""
+    (xs, _), (xm, _) = groups
+    x_s = np.einsum("kn,knd->kd", Ns, xs)
+    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
+    N, dN, _ = shape(xi, xm.shape[1])
+    t = unit_tangent(dN, xm)
+    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    return x_s, N, n, law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n)
+
+
+def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,
+                  groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
+                  ) -> np.ndarray:
+    """Nodal residual of the normal pressure at contact points (real or complex).
+
+    The point ``x_s = Σ N_s x_k`` of the slave facet is projected onto the master facet
+    (``refine`` Newton steps from ξ, in the inputs' arithmetic, so that a complex step
+    carries the implicit derivative of the projection); ``g_n = (x_s − x̄)·n̄``
+    (eq. 7), ``p = ε_n ⟨−g_n⟩₊`` (eq. 12), from :class:`forms.ContactLaw`.
+
+    Args:
+        law: The contact law (float parameters).
+        Ns: Slave shape functions at each point, ``(K, nn)``.
+        xi: The projection's local coordinate on the master facet (Newton's start).
+        weight: Reference length of each point.
+        groups: ``[(x, v)]`` of the slave facet and of the master facet (oriented:
+            ``(t_y, −t_x)`` is outward), each ``(K, nn, gdim)``.
+        refine: Newton steps of the projection.
+
+    Returns:
+        ``(K, 2 nn, gdim)``: the residual on the slave's nodes, then on the master's.
+    """
+    _, N, _, traction = _contact_point(law, Ns, xi, groups, refine)
+    traction = traction * weight[:, None]
+    return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
+                           N[:, :, None] * traction[:, None, :]], axis=1)
+
+
+def nodal_normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                        weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+                        refine: int = 2) -> np.ndarray:
+    """Each point's share ``p w N_k`` of its slave nodes' normal forces, ``(K, nn)``.
+
+    Summed over the points, ``λ_k = ∫ p N_k``: the normal force of slave node k
+    consistent with the integrated pressure (as :func:`normal_forces`).
+    """
+    _, _, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    p = np.sum(traction * n, axis=1)
+    return (p * weight)[:, None] * Ns
+
+
+def normal_and_shares(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
+                       weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+                       refine: int = 2) -> np.ndarray:
+    """:func:`normal_forces` and :func:`nodal_normal_forces` side by side, ``(K, ·)``."""
+    _, N, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    tw = traction * weight[:, None]
+    forces = np.concatenate([-Ns[:, :, None] * tw[:, None, :], N[:, :, None] * tw[:, None, :]],
+                            axis=1)
+    shares = (np.sum(tw * n, axis=1))[:, None] * Ns
+    return np.concatenate([forces.reshape(len(Ns), -1), shares], axis=1)
+
+
+def jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
+              cu: float, cv: float) -> np.ndarray:
+    """∂kernel/∂Δa per point by complex steps, ``(K, outputs, local)``.
+
+    Each local DOF (group, node, component) is stepped in x by ``i h cu`` and in v
+    by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa).
+    """
+    cx = [(x.astype(complex), v.astype(complex)) for x, v in groups]
+    K, nn, gdim = cx[0][0].shape
+    local = len(cx) * nn * gdim
+    J: np.ndarray | None = None
+    for j in range(local):
+        group, rest = divmod(j, nn * gdim)
+        node, comp = divmod(rest, gdim)
+        x, v = cx[group]
+        x[:, node, comp] += 1j * H * cu
+        v[:, node, comp] += 1j * H * cv
+        column = kernel(cx).reshape(K, -1).imag / H
+        if J is None:
+            J = np.zeros((K, column.shape[1], local))
+        J[:, :, j] = column
+        x[:, node, comp] = x[:, node, comp].real
+        v[:, node, comp] = v[:, node, comp].real
+    return J if J is not None else np.zeros((K, 0, 0))

@@ -1,0 +1,596 @@
+"""General contact pairs: two surfaces that need not match, with finite sliding (2-D).
+
+SPEC §1, eqs. 5-9 and 12-15: each slave integration point is projected onto the master
+surface in the current configuration (closest point, :mod:`breakwater.projection`);
+the normal gap is ``g_n = (x_s − x̄_m)·n̄`` with n̄ the master's outward normal at the
+projection (eq. 7), the slip velocity is the slave's velocity relative to the master
+material point under the projection, ``v_s − v̄_m``, and the laws are those of
+:mod:`forms.contact` (their NumPy path), written once for both kinds of pair.
+
+Scheme (segment-to-segment, single pass): each slave facet is cut into segments at the
+points where the master facets' vertices project onto it (current configuration), and
+each segment carries ``points`` Gauss points (weight: the reference length), so that
+every point's projection stays within one master facet over a segment and the
+integrand is smooth there; on a flat patch the integration is exact (the patch test).
+The cuts move with the bodies but are held fixed in the linearisation, which stays
+exact: the integrand is continuous across a cut, so the derivatives of the cut
+positions cancel between the two segments. ``segmented = False`` gives plain
+Gauss-point-to-segment integration (Gauss points per slave facet). The master surface
+is the exact current image of the master facets (the P2 displacement makes each facet a
+quadratic curve, its three nodes the closure DOFs). The slave receives ``−∫ t_s N_s``
+and the master ``+∫ t_s N̄_m`` at the projection (action and reaction).
+
+The pair is a provider of the fast solver (:mod:`breakwater.condensed`): ``vector()``
+and ``matrix()`` give the contact residual and its Jacobian with respect to the step's
+unknown Δa on the interface unknowns. The surfaces' data (reference node coordinates,
+interface positions of their DOFs, sorted by coordinates) are gathered once on every
+rank; at each call the current u, v at the interface are reduced onto every rank (one
+``Allreduce``) and every rank evaluates the same points in the same order, so the
+result does not depend on the partition. The Jacobian is exact: a complex step per
+local DOF of a (slave facet, master facet) point, with the projection's Newton run in
+complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import partial
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .mesh import group_tag
+from .pointkernels import (
+    H,
+    jacobian,
+    nodal_normal_forces,
+    normal_and_shares,
+    normal_forces,
+    unit_tangent,
+)
+from .projection import FacetGrid, closest_point, project, shape
+
+if TYPE_CHECKING:
+    from .bulk import MonolithicLayout
+    from .model import ContactModel
+
+__all__ = ["SurfaceContact", "SurfacePair", "surface_dofs"]
+
+
+@dataclass(frozen=True)
+class SurfacePair:
+    """Penalty contact with regularised Coulomb friction between two surfaces.
+
+    Attributes:
+        name: The pair's name (the case's ``[contact.NAME]``).
+        slave: Body whose integration points are projected.
+        master: Body whose surface (and outward normal) they are projected on.
+        slave_surface: Facet group on the slave's boundary.
+        master_surface: Facet group on the master's boundary.
+        penalty: Normal penalty ε_n (N/m³).
+        friction: Coulomb coefficient μ (-).
+        regularisation: Regularisation velocity χ (m/s).
+        points: Gauss points per integration segment.
+        segmented: Cut each slave facet where the master facets' vertices project onto
+            it (segment-to-segment integration: exact on a flat patch); False: one
+            segment per slave facet (Gauss-point-to-segment).
+        radius: Search radius (m): a point farther from the master surface has no
+            projection (out of contact); None: the longest master facet.
+    """
+
+    name: str
+    slave: str
+    master: str
+    slave_surface: str
+    master_surface: str
+    penalty: float
+    friction: float = 0.0
+    regularisation: float = 1e-10
+    points: int = 3
+    segmented: bool = True
+    radius: float | None = None
+
+    gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
+
+    def __post_init__(self) -> None:
+        if not self.penalty > 0:
+            raise ValueError(f"contact penalty must be > 0 (got {self.penalty})")
+        if not self.friction >= 0:
+            raise ValueError(f"friction coefficient must be >= 0 (got {self.friction})")
+        if not self.regularisation > 0:
+            raise ValueError(f"regularisation must be > 0 (got {self.regularisation})")
+        if self.slave == self.master:
+            raise ValueError("a contact pair needs two different bodies")
+        if not self.points >= 1:
+            raise ValueError(f"points per facet must be >= 1 (got {self.points})")
+        if self.radius is not None and not self.radius > 0:
+            raise ValueError(f"search radius must be > 0 (got {self.radius})")
+
+
+@dataclass
+class _Surface:
+    """The facets of one surface, gathered on every rank and sorted by coordinates.
+
+    Attributes:
+        X: Reference node coordinates, ``(F, nn, gdim)`` (closure order: the two
+            vertices, then the mid-edge node).
+        dofs: Global stacked indices of the nodes' components, ``(F, nn, gdim)``.
+        interior: A point inside each facet's cell, ``(F, gdim)``.
+    """
+
+    X: np.ndarray
+    dofs: np.ndarray
+    interior: np.ndarray
+
+
+def _surface(model: ContactModel, layout: MonolithicLayout, body: int, group: str) -> _Surface:
+    """The facets of a body's facet group (collective)."""
+    b = model.bodies[body]
+    V, sub = b.V, b.submesh
+    tdim = sub.topology.dim
+    fdim, gdim = tdim - 1, model.gdim
+    sub.topology.create_connectivity(fdim, tdim)
+    sub.topology.create_connectivity(tdim, fdim)
+    f2c, c2f = sub.topology.connectivity(fdim, tdim), sub.topology.connectivity(tdim, fdim)
+    facets = b.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    facets = facets[facets < sub.topology.index_map(fdim).size_local]
+    closure = V.dofmap.dof_layout.entity_closure_dofs
+    coords = V.tabulate_dof_coordinates()[:, :gdim]
+    bs = V.dofmap.index_map_bs
+    nn = len(closure(fdim, 0))
+    X = np.zeros((len(facets), nn, gdim))
+    dofs = np.zeros((len(facets), nn, gdim), np.int64)
+    interior = np.zeros((len(facets), gdim))
+    for k, f in enumerate(facets):
+        c = f2c.links(f)[0]
+        local = int(np.flatnonzero(c2f.links(c) == f)[0])
+        cell = V.dofmap.cell_dofs(c)
+        blocks = cell[closure(fdim, local)]
+        X[k] = coords[blocks]
+        dofs[k] = layout.global_index[body][(blocks[:, None] * bs + np.arange(gdim))]
+        interior[k] = coords[cell].mean(axis=0)
+    X, dofs, interior = (np.concatenate(model.comm.allgather(a)) for a in (X, dofs, interior))
+    mid = X.mean(axis=1)
+    order = np.lexsort(mid.T[::-1])
+    return _Surface(X[order], dofs[order], interior[order])
+
+
+def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
+    """Global stacked indices of the DOFs of every general pair's two surfaces (local)."""
+    fdim = model.mesh.topology.dim - 1
+    out = []
+    for spec in model.surface_pairs:
+        for name, group in ((spec.slave, spec.slave_surface),
+                            (spec.master, spec.master_surface)):
+            b = model.body(name)
+            blocks = fem.locate_dofs_topological(
+                b.V, fdim, b.facet_tags.find(group_tag(model.mesh_data, group, fdim)))
+            bs = b.V.dofmap.index_map_bs
+            out.append(layout.global_index[b.index][(blocks[:, None] * bs
+                                                     + np.arange(bs)).ravel()])
+    return np.concatenate(out) if out else np.zeros(0, np.int64)
+
+
+class SurfaceContact:
+    """One general pair as a provider of the fast solver's interface (see the module doc).
+
+    Args:
+        model: The contact model.
+        spec: The pair.
+        layout: The stacked-vector layout.
+        interface: Global stacked indices of the interface unknowns (sorted).
+        state: ``(u, v, a, Δa)``, one Function per body each.
+        dt: The step size constant.
+        beta1: GN22 β₁.
+        beta2: GN22 β₂.
+    """
+
+    def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
+                 interface: np.ndarray,
+                 state: tuple[Sequence[fem.Function], Sequence[fem.Function],
+                              Sequence[fem.Function], Sequence[fem.Function]],
+                 dt: fem.Constant, beta1: float, beta2: float) -> None:
+        self.spec, self.comm = spec, model.comm
+        self.law = forms.ContactLaw.of(spec)
+        self.n = n = len(interface)
+        self.u, self.v, self.a, self.da = state
+        self.dt, self.beta1, self.beta2 = dt, beta1, beta2
+        s, m = model.body(spec.slave).index, model.body(spec.master).index
+        slave = _surface(model, layout, s, spec.slave_surface)
+        master = _surface(model, layout, m, spec.master_surface)
+        # Orient each master facet so that (t_y, −t_x) points out of its cell.
+        mid = master.X.mean(axis=1)
+        chord = master.X[:, 1] - master.X[:, 0]
+        flip = np.sum((master.interior - mid) * np.stack([chord[:, 1], -chord[:, 0]], 1),
+                      axis=1) > 0
+        swap = np.arange(master.X.shape[1])
+        swap[:2] = [1, 0]
+        master.X[flip] = master.X[flip][:, swap]
+        master.dofs[flip] = master.dofs[flip][:, swap]
+        self.slave, self.master = slave, master
+        self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
+        # The Gauss rule of each integration segment on [−1, 1].
+        self._gauss = np.polynomial.legendre.leggauss(spec.points)
+        lengths = np.linalg.norm(master.X[:, 1] - master.X[:, 0], axis=1)
+        self.radius = spec.radius if spec.radius is not None else \
+            float(lengths.max()) if len(lengths) else 1.0
+        # Owned entries of each body at the interface unknowns (for the reduction).
+        self._owned = []
+        for i, gi in enumerate(layout.global_index):
+            local = np.arange(layout.sizes[i])
+            pos = np.searchsorted(interface, gi[local])
+            pos = np.minimum(pos, max(n - 1, 0))
+            hit = interface[pos] == gi[local] if n else np.zeros(len(local), bool)
+            self._owned.append((local[hit], pos[hit]))
+        self.searches = 0
+        self.search_seconds = 0.0
+        # The slave nodes (friction acts on them): one id per node, by global DOF.
+        _, first, self.node_of = np.unique(slave.dofs[..., 0], return_index=True,
+                                             return_inverse=True)
+        self.node_of = self.node_of.reshape(slave.dofs.shape[:2])
+        self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
+        self.node_X = slave.X.reshape(-1, model.gdim)[first]
+        self._frozen_key: np.ndarray | None = None
+        self._normal_key: np.ndarray | None = None
+        self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
+        self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
+
+    @staticmethod
+    def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """Interface position of each DOF, −1 where it is not an unknown (Dirichlet)."""
+        if not len(interface):
+            return np.full(dofs.shape, -1, np.int64)
+        at = np.minimum(np.searchsorted(interface, dofs), len(interface) - 1)
+        return np.where(interface[at] == dofs, at, -1)
+
+    # --- the current state ----------------------------------------------------------
+
+    def _state(self, y: np.ndarray | None = None, accepted: bool = False
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """u₀, u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0).
+
+        Args:
+            y: Δa at the interface unknowns; None: read from the Δa Functions.
+            accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
+        """
+        out = np.zeros((4, self.n + 1))
+        for k, fns in enumerate((self.u, self.v, self.a, self.da)):
+            for f, (local, pos) in zip(fns, self._owned, strict=True):
+                out[k, pos] = f.x.array[local]
+        self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        u, v, a, da = out
+        if accepted:
+            return u, u, v
+        if y is not None:
+            da[:-1] = y
+        dt = float(self.dt.value)
+        return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
+                v + dt * a + self.beta1 * dt * da)
+
+    def _integration(self, xs: np.ndarray, xm: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The slave integration points: (slave facet, ξ, weight) of each.
+
+        Each slave facet is cut where the master facets' vertices project onto it
+        (current configuration, ``segmented``), or not at all; each segment carries
+        the Gauss rule. The weight is the reference length.
+        """
+        s = self.slave
+        n_f, nn = s.X.shape[:2]
+        facet = [np.arange(n_f), np.arange(n_f)]
+        cut = [-np.ones(n_f), np.ones(n_f)]
+        if self.spec.segmented and len(xm) and n_f:
+            vertices = xm[:, :2].reshape(-1, xm.shape[2])
+            on, xi = project(vertices, xs, FacetGrid(xs, self.radius))
+            inside = (on >= 0) & (np.abs(xi) < 1 - 1e-12)
+            facet.append(on[inside])
+            cut.append(xi[inside])
+        f, c = np.concatenate(facet), np.concatenate(cut)
+        order = np.lexsort((c, f))
+        f, c = f[order], c[order]
+        seg = np.flatnonzero((f[1:] == f[:-1]) & (c[1:] - c[:-1] > 1e-12))
+        f_seg, a, b = f[seg], c[seg], c[seg + 1]
+        g, w = self._gauss
+        xi = (0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * g).ravel()
+        point_facet = np.repeat(f_seg, len(g))
+        _, dN, _ = shape(xi, nn)
+        jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
+        weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
+        return point_facet, xi, weight
+
+    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
+        """The integration points and the local data of those with a projection (real).
+
+        Args:
+            u1: Displacements at the interface unknowns (a trailing 0).
+            v1: Velocities at the interface unknowns (a trailing 0).
+        """
+        s, m = self.slave, self.master
+        xs_all = s.X + u1[self.pos_s]
+        xm_all = m.X + u1[self.pos_m]
+        t0 = time.perf_counter()
+        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
+        Ns, _, _ = shape(xi_s, s.X.shape[1])
+        points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
+        facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius))
+        self.searches += 1
+        self.search_seconds += time.perf_counter() - t0
+        on = np.flatnonzero(facet >= 0)
+        f_s, f_m = point_facet[on], facet[on]
+        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns[on],
+                "xs": xs_all[f_s], "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m],
+                "vm": v1[self.pos_m][f_m], "xi": xi[on], "weight": weight[on],
+                "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1),
+                "all_x": points, "all_weight": weight}
+
+    def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The projection of each slave node at the start of the step (cached).
+
+        Returns:
+            Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
+            and the unit tangent there, in the configuration at the start of the step.
+        """
+        if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
+            return self._frozen_data
+        m = self.master
+        xm = m.X + u0[self.pos_m]
+        points = self.node_X + u0[self.node_pos]
+        facet, xi = project(points, xm, FacetGrid(xm, self.radius))
+        N0, dN0, _ = shape(xi, m.X.shape[1])
+        t0 = unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
+            np.zeros_like(points)
+        self._frozen_key = u0.copy()
+        self._frozen_data = (facet, N0, t0)
+        return self._frozen_data
+
+    def _normal(self, u1: np.ndarray, v1: np.ndarray
+                ) -> tuple[Any, list, np.ndarray, Any, np.ndarray]:
+        """The normal part of the current iterate.
+
+        Returns:
+            The point kernel, its groups (local arguments), the interface positions of
+            its outputs, the kernel of the points' shares of the nodal normal forces
+            and the slave node of each share.
+        """
+        key = np.concatenate([u1, v1])
+        if self._normal_key is not None and np.array_equal(self._normal_key, key):
+            return self._normal_data
+        p = self._points(u1, v1)
+        self._normal_key = key
+        self._normal_data = (partial(normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
+                [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
+                partial(nodal_normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
+                self.node_of[p["slave_facet"]])
+        return self._normal_data
+
+    def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray
+                  ) -> dict[str, np.ndarray] | None:
+        """The nodal friction forces (None: no slave node in contact).
+
+        Per slave node k in contact (λ_k > 0, a projection at the start of the step),
+        the force ``−μ λ_k φ(v_T)`` (:class:`forms.ContactLaw`'s friction with the
+        nodal normal force λ_k in place of the pressure), with
+        ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``.
+        """
+        facet, N0, t0 = self._frozen(u0)
+        k = np.flatnonzero((facet >= 0) & (λ > 0))
+        if not len(k):
+            return None
+        pos_m = self.pos_m[facet[k]]
+        slip = v1[self.node_pos[k]] - np.einsum("kn,knd->kd", N0[k], v1[pos_m])
+        t = t0[k]
+        v_T = t * np.sum(slip * t, axis=1)[:, None]
+        friction = self.law.friction
+        force = friction.traction(λ[k], v_T)
+        return {"k": k, "pos_s": self.node_pos[k], "pos_m": pos_m, "N0": N0[k], "t": t,
+                "v_T": v_T, "force": force, "unit": friction.traction(np.ones(len(k)), v_T)}
+
+    def _nodal_forces(self, kernel: Any, groups: list, node: np.ndarray) -> np.ndarray:
+        """λ: the slave nodes' normal forces ∫ p N_k."""
+        share = kernel(groups)
+        return np.bincount(node.ravel(), weights=share.ravel(),
+                           minlength=len(self.node_pos))
+
+    # --- the provider ---------------------------------------------------------------
+
+    def vector(self) -> np.ndarray:
+        """The contact residual at the interface unknowns (the same on every rank)."""
+        u0, u1, v1 = self._state()
+        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
+        out = self._add(np.zeros(self.n), pos, kernel(groups))
+        if self.spec.friction:
+            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+            if fr is not None:
+                self._add(out, fr["pos_s"], -fr["force"])
+                self._add(out, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
+        return out
+
+    def _add(self, out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """out[pos] += values (skipping Dirichlet entries, −1), in array order."""
+        pos, values = pos.ravel(), values.ravel()
+        keep = pos >= 0
+        out += np.bincount(pos[keep], weights=values[keep], minlength=self.n)
+        return out
+
+    def matrix(self) -> np.ndarray:
+        """∂(contact residual)/∂Δa at the interface unknowns, dense.
+
+        The normal part by complex steps of the point kernel (the projection's Newton
+        in complex arithmetic: exact, its implicit dependence included); the friction
+        part by the chain rule through λ_k (complex steps of the point shares) and
+        v_T (linear in Δa; ∂φ/∂v_T by complex steps).
+        """
+        dt = float(self.dt.value)
+        cu, cv = 0.5 * self.beta2 * dt**2, self.beta1 * dt
+        n = self.n
+        u0, u1, v1 = self._state()
+        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
+        out = np.zeros(n * n)
+        both = jacobian(partial(normal_and_shares, *kernel.args), groups, cu, cv)
+        size = pos.shape[1] * pos.shape[2]
+        J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
+        rows = pos.reshape(len(J), -1)
+        self._add_block(out, rows, rows, J)
+        if not self.spec.friction:
+            return out.reshape(n, n)
+        lam = self._nodal_forces(lam_kernel, groups, node)
+        fr = self._friction(u0, v1, lam)
+        if fr is None:
+            return out.reshape(n, n)
+        # dλ/dΔa (slave nodes × interface), from the points' shares.
+        cols = np.broadcast_to(rows[:, None, :], Jl.shape)
+        nodes = np.broadcast_to(node[:, :, None], Jl.shape)
+        keep = cols >= 0
+        dlam = np.bincount((nodes * n + cols)[keep], weights=Jl[keep],
+                           minlength=len(self.node_pos) * n).reshape(-1, n)
+        k, t, N0 = fr["k"], fr["t"], fr["N0"]
+        gdim = t.shape[1]
+        # ∂force/∂v_T by complex steps of the law (2 components).
+        D = np.zeros((len(k), gdim, gdim))
+        for c in range(gdim):
+            v = fr["v_T"].astype(complex)
+            v[:, c] += 1j * H
+            D[:, :, c] = self.law.friction.traction(lam[k], v).imag / H
+        B = cv * np.einsum("kij,kj,kl->kil", D, t, t)  # ∂force/∂(slave node Δa)
+        # Rows: the slave node (−force) and the master nodes of f₀ (+N0 force).
+        row_pos = np.concatenate([fr["pos_s"][:, None, :], fr["pos_m"]], axis=1)
+        sign = np.concatenate([-np.ones((len(k), 1)), N0], axis=1)  # (k, 1 + nn)
+        # λ part: force = unit · λ.
+        dforce_lam = fr["unit"][:, :, None] * dlam[k][:, None, :]  # (k, gdim, n)
+        for r in range(row_pos.shape[1]):
+            rp = row_pos[:, r, :]
+            vals = sign[:, r, None, None] * dforce_lam
+            rr = np.broadcast_to(rp[:, :, None], vals.shape)
+            cc = np.broadcast_to(np.arange(n)[None, None, :], vals.shape)
+            ok = rr >= 0
+            out += np.bincount((rr * n + cc)[ok], weights=vals[ok], minlength=n * n)
+        # v_T part: slave node columns (B), master f₀ node columns (−N0_j B).
+        col_pos = row_pos
+        col_sign = np.concatenate([np.ones((len(k), 1)), -N0], axis=1)
+        for r in range(row_pos.shape[1]):
+            for c in range(col_pos.shape[1]):
+                block = (sign[:, r] * col_sign[:, c])[:, None, None] * B
+                self._add_block(out, row_pos[:, r, :], col_pos[:, c, :], block)
+        return out.reshape(n, n)
+
+    def _add_block(self, out: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+                   block: np.ndarray) -> None:
+        """out[rows, cols] += block per point (flat out; Dirichlet entries skipped)."""
+        n = self.n
+        flat = rows[:, :, None] * n + cols[:, None, :]
+        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
+        out += np.bincount(flat[keep], weights=block[keep], minlength=n * n)
+
+    def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
+        """Newton's slip guard (:mod:`breakwater.slipguard`) at the slave nodes.
+
+        Where Newton's step (the next iterate is ``x − step``) would reverse a slave
+        node's slip velocity (relative to the master material point under its
+        projection at the start of the step, along the tangent there) from outside the
+        stick band χ, the node's tangential step is cut so that it lands at zero slip
+        velocity, where the stick tangent is exact. The slip velocity is linear in Δa,
+        so the landing is exact.
+
+        Args:
+            x: The current iterate (Δa at the interface unknowns).
+            step: Newton's step, changed in place where cut.
+
+        Returns:
+            The nodes corrected (the same on every rank).
+        """
+        if not self.spec.friction:
+            return 0
+        u0, _, v1 = self._state(x)
+        facet, N0, t0 = self._frozen(u0)
+        keep = np.flatnonzero((facet >= 0) & np.all(self.node_pos >= 0, axis=1))
+        if not len(keep):
+            return 0
+        pos, N, t = self.node_pos[keep], N0[keep], t0[keep]
+        dv = self.beta1 * float(self.dt.value)
+        ext = np.append(step, 0.0)
+        pos_m = self.pos_m[facet[keep]]
+        v_m = np.einsum("kn,knd->kd", N, v1[pos_m])
+        y_m = np.einsum("kn,knd->kd", N, ext[pos_m])
+        y_s = ext[pos]
+        c0 = np.sum((v1[pos] - v_m) * t, axis=1)
+        c1 = c0 - dv * np.sum((y_s - y_m) * t, axis=1)
+        fix = (c0 * c1 < 0) & (np.abs(c0) > self.law.friction.stick_band)
+        if not fix.any():
+            return 0
+        # The slave's step: normal part kept, tangential part landing at c = 0.
+        t, ys = t[fix], y_s[fix]
+        along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
+        step[pos[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
+        return int(fix.sum())
+
+    def resultant(self, accepted: bool = True) -> np.ndarray:
+        """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).
+
+        Args:
+            accepted: At the stepper's accepted state (u, v); False: at the current
+                Newton iterate of the step.
+        """
+        u0, u1, v1 = self._state(accepted=accepted)
+        kernel, groups, _, lam_kernel, node = self._normal(u1, v1)
+        nn = self.slave.X.shape[1]
+        # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
+        out = -kernel(groups)[:, :nn].sum(axis=(0, 1))
+        if self.spec.friction:
+            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+            if fr is not None:
+                out += fr["force"].sum(axis=0)
+        return out
+
+    def energies(self) -> tuple[float, float]:
+        """The penalty energy and the friction power at the accepted state (the ledger).
+
+        ``∫ ½ ε_n ⟨−g_n⟩₊²`` on the normal integration points and
+        ``Σ_k μ λ_k |v_T|²/sqrt(|v_T|² + χ²)`` on the slave nodes.
+        """
+        state = self.state()
+        closed = state["gap"] <= 0
+        energy = float(np.sum(state["weight"][closed]
+                              * self.law.normal.energy(state["gap"][closed])))
+        power = 0.0
+        if self.spec.friction:
+            u0, u1, v1 = self._state(accepted=True)
+            _, groups, _, lam_kernel, node = self._normal(u1, v1)
+            lam = self._nodal_forces(lam_kernel, groups, node)
+            fr = self._friction(u0, v1, lam)
+            if fr is not None:
+                power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
+        return energy, power
+
+    def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
+        """Every normal integration point (every rank), as :meth:`resultant`.
+
+        Returns:
+            ``x`` (current position), ``gap`` (g_n; NaN without a projection),
+            ``pressure``, ``weight`` (reference length), ``facet`` (master facet, −1:
+            none), ``xi`` (its local coordinate).
+        """
+        _, u1, v1 = self._state(accepted=accepted)
+        p = self._points(u1, v1)
+        points = p["all_x"]
+        total = len(points)
+        out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
+                               "gap": np.full(total, np.nan), "pressure": np.zeros(total),
+                               "facet": np.full(total, -1), "xi": np.zeros(total)}
+        if len(p["index"]):
+            x_s = np.einsum("kn,knd->kd", p["Ns"], p["xs"])
+            xi = closest_point(x_s, p["xm"], p["xi"], iterations=2, tol=0.0)
+            N, dN, _ = shape(xi, p["xm"].shape[1])
+            t = unit_tangent(dN, p["xm"])
+            n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+            gap = self.law.gap(x_s, np.einsum("kn,knd->kd", N, p["xm"]), n)
+            i = p["index"]
+            out["gap"][i] = gap
+            out["pressure"][i] = self.law.normal.pressure(gap)
+            out["facet"][i] = p["facet"]
+            out["xi"][i] = xi
+        return out

@@ -1,0 +1,84 @@
+"""Bodies meshed separately in one gmsh file (disconnected components), for general pairs.
+
+Each body is its own surface with its own element size, so the meshes of two bodies in
+contact need not match (:mod:`breakwater.surfacepair`); each side of a body is an
+exterior facet group. Rectangles are structured (transfinite) triangles.
+"""
+
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import gmsh
+from mpi4py import MPI
+
+from breakwater.gmshtools import gmsh_session
+
+__all__ = ["Rectangle", "rectangles"]
+
+
+@dataclass(frozen=True)
+class Rectangle:
+    """A rectangular body ``[x0, x0 + width] × [y0, y0 + height]``.
+
+    Its physical groups: ``name`` (cells) and ``name_bottom``, ``name_right``,
+    ``name_top``, ``name_left`` (facets).
+
+    Attributes:
+        name: Body name.
+        x0: Left edge (m).
+        y0: Bottom edge (m).
+        width: Width (m).
+        height: Height (m).
+        nx: Elements along the width.
+        ny: Elements along the height.
+    """
+
+    name: str
+    x0: float
+    y0: float
+    width: float
+    height: float
+    nx: int
+    ny: int
+
+
+def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectangle],
+               order: int = 1) -> pathlib.Path:
+    """Write a mesh of separate rectangles (rank 0 writes; collective).
+
+    Args:
+        path: Output ``.msh`` (the same on all ranks).
+        comm: Communicator.
+        bodies: The rectangles.
+        order: Geometric order of the elements.
+
+    Returns:
+        The path.
+    """
+    path = pathlib.Path(path)
+    if comm.rank == 0:
+        with gmsh_session(model="apart"):
+            geo = gmsh.model.geo
+            groups = []
+            for b in bodies:
+                corners = ((b.x0, b.y0), (b.x0 + b.width, b.y0),
+                           (b.x0 + b.width, b.y0 + b.height), (b.x0, b.y0 + b.height))
+                p = [geo.addPoint(x, y, 0) for x, y in corners]
+                lines = [geo.addLine(p[k], p[(k + 1) % 4]) for k in range(4)]
+                surface = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+                groups.append((b, lines, surface))
+            geo.synchronize()
+            for b, lines, surface in groups:
+                for line, n in zip(lines, (b.nx, b.ny, b.nx, b.ny), strict=True):
+                    gmsh.model.mesh.setTransfiniteCurve(line, n + 1)
+                gmsh.model.mesh.setTransfiniteSurface(surface)
+                gmsh.model.addPhysicalGroup(2, [surface], name=b.name)
+                for line, side in zip(lines, ("bottom", "right", "top", "left"), strict=True):
+                    gmsh.model.addPhysicalGroup(1, [line], name=f"{b.name}_{side}")
+            gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+    return pathlib.Path(comm.bcast(str(path), root=0))
