@@ -44,7 +44,7 @@ def _random_state(stepper: GN22, seed: int) -> None:
 
 def _compare(stepper: GN22) -> None:
     solver = stepper.solver
-    providers = solver.contact
+    providers = solver.providers
     assert providers and all(isinstance(p, NodalContactForces) for p in providers)
     forms = InterfaceAssembler(stepper.model, solver.layout, ufl.extract_blocks(
         stepper.model.interface_residual(stepper.u1, stepper.v1)), stepper.da,
@@ -91,7 +91,7 @@ def test_left_product_is_the_dense_product() -> None:
     stepper = GN22(model, 1e-4)
     try:
         _random_state(stepper, 5)
-        provider = stepper.solver.contact[0]
+        provider = stepper.solver.providers[0]
         n = provider.n
         X = np.random.default_rng(7).standard_normal((n + 3, n))
         expected = X @ provider.matrix()
