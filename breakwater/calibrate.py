@@ -150,6 +150,10 @@ class HorizontalStiffness:
         self.set_shear_modulus(body, shear_modulus)
         return self()
 
+    def destroy(self) -> None:
+        """Free the solver's PETSc objects (their MPI communicators are a finite resource)."""
+        self.solver.destroy()
+
 
 def calibrate_shear_modulus(model: ContactModel, body: str, structure: str, target: float,
                             tolerance: float = 1e-4, initial_guess: float | None = None,
@@ -195,28 +199,31 @@ def calibrate_shear_modulus(model: ContactModel, body: str, structure: str, targ
         history.append((G, K))
         return K
 
-    K = solve(G)
-    G_next = G * target / K
-    for _ in range(max_iterations - 1):
-        if abs(K - target) <= tolerance * target:
-            break
-        if not (math.isfinite(G_next) and G_next > 0):
-            break
-        G_prev, K_prev = G, K
-        G, K = G_next, solve(G_next)
-        dlogK = math.log(K) - math.log(K_prev)
-        if abs(dlogK) < 1e-14:
-            break  # K no longer depends on G: saturated
-        slope = dlogK / (math.log(G) - math.log(G_prev))
-        if slope <= 0.02:
-            raise CalibrationError(
-                f"the stiffness of '{structure}' no longer grows with the shear modulus "
-                f"of '{body}' (K = {K:.4g} N/m at G = {G:.4g} Pa): target {target:.4g} "
-                "N/m is out of reach (structure or interface too soft)")
-        # Bound the step: at most a factor 100 on G per iteration.
-        step = min(max((math.log(target) - math.log(K)) / slope, -math.log(100.0)),
-                   math.log(100.0))
-        G_next = G * math.exp(step)
+    try:
+        K = solve(G)
+        G_next = G * target / K
+        for _ in range(max_iterations - 1):
+            if abs(K - target) <= tolerance * target:
+                break
+            if not (math.isfinite(G_next) and G_next > 0):
+                break
+            G_prev, K_prev = G, K
+            G, K = G_next, solve(G_next)
+            dlogK = math.log(K) - math.log(K_prev)
+            if abs(dlogK) < 1e-14:
+                break  # K no longer depends on G: saturated
+            slope = dlogK / (math.log(G) - math.log(G_prev))
+            if slope <= 0.02:
+                raise CalibrationError(
+                    f"the stiffness of '{structure}' no longer grows with the shear modulus "
+                    f"of '{body}' (K = {K:.4g} N/m at G = {G:.4g} Pa): target {target:.4g} "
+                    "N/m is out of reach (structure or interface too soft)")
+            # Bound the step: at most a factor 100 on G per iteration.
+            step = min(max((math.log(target) - math.log(K)) / slope, -math.log(100.0)),
+                       math.log(100.0))
+            G_next = G * math.exp(step)
+    finally:
+        problem.destroy()
     error = abs(K - target) / target
     if error > tolerance:
         raise CalibrationError(f"calibration of '{body}' did not converge: K = {K:.6g} N/m "

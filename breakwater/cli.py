@@ -149,7 +149,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     r = case.calibrate(data, target)
     # Independent check: a new model built with the calibrated modulus.
     model = case.build_model(data, {r.body: r.shear_modulus}, dynamic=False)
-    check = HorizontalStiffness(model, r.structure, cal.tangential_penalty)()
+    problem = HorizontalStiffness(model, r.structure, cal.tangential_penalty)
+    try:
+        check = problem()
+    finally:
+        problem.destroy()
     q = args.quiet
     _say(f"calibration of the shear modulus of '{r.body}' to the horizontal stiffness of "
          f"'{r.structure}' (case '{case.name}')", q)

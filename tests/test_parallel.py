@@ -56,3 +56,38 @@ def test_shared_tempdir():
         COMM.barrier()
         assert (folder / "f.txt").read_text() == "x"
     assert not pathlib.Path(folder).exists()
+
+
+def _free_communicators() -> int:
+    """How many more communicators this process can create (MPICH: about 2048 in all)."""
+    comms = []
+    try:
+        while True:
+            comms.append(COMM.Dup())
+    except MPI.Exception:
+        pass
+    for c in comms:
+        c.Free()
+    return len(comms)
+
+
+def test_a_run_leaves_no_communicator_behind(tmp_path: pathlib.Path) -> None:
+    # Every PETSc solver holds MPI communicators, a finite resource of the process
+    # (MPICH: 2048 context ids): a study that runs many cases in one process fails
+    # once they are used up. The calibration's solver was not destroyed (30 per run,
+    # measured); a whole run (calibration, static state, time steps, outputs) must
+    # leave the count where it was.
+    import gc
+
+    from breakwater.cli import main
+
+    out = COMM.bcast(str(tmp_path), root=0)
+    argv = ["run", "--quiet", "--out", out, "--set", "time.end_time=0.0003",
+            "--set", "output.figures=false"]
+    assert main([*argv, "--set", "time.solver=\"reference\""]) == 0  # the first: caches
+    gc.collect()
+    before = _free_communicators()
+    for solver in ("fast", "reference"):
+        assert main([*argv, "--set", f"time.solver=\"{solver}\""]) == 0
+    gc.collect()
+    assert _free_communicators() == before
