@@ -22,7 +22,8 @@
 A case counts as finished only when its ``sweep_case.json`` says ``finished`` for the
 same case (fingerprint of the resolved case) and its ``summary.json`` agrees; a rerun
 skips those and runs the others again (a killed case resumes from its checkpoint when
-it has one, otherwise starts afresh in an emptied folder). SIGTERM stops the study:
+it has one, otherwise starts afresh in an emptied folder). SIGTERM or SIGINT stops the
+study (:class:`~breakwater.console.StopSignal`, as a run; a second signal kills):
 the running cases stop at their next step (``interrupted``, with a checkpoint when the
 case makes them), no new case starts.
 """
@@ -38,9 +39,7 @@ import logging
 import math
 import pathlib
 import shutil
-import signal
 import sys
-import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -49,6 +48,7 @@ from typing import TYPE_CHECKING, Any
 from mpi4py import MPI
 
 from . import checkpoint, files, simulation  # importing PETSc is collective: at import
+from .console import StopSignal
 from .errors import CaseError
 from .parallel import on_rank_zero
 from .studyfile import Point, Study, check_points, toml_literal
@@ -212,29 +212,6 @@ def _locked(out: pathlib.Path) -> Iterator[None]:
                 fcntl.flock(f, fcntl.LOCK_UN)
 
 
-# --- signals ------------------------------------------------------------------------------
-
-class _Stop:
-    """SIGTERM between cases: no new case starts (a second SIGTERM kills)."""
-
-    def __init__(self) -> None:
-        self.received = 0
-        self._previous: Any = None
-
-    def _handle(self, signum: int, frame: object) -> None:
-        self.received = signum
-        signal.signal(signum, signal.SIG_DFL)
-
-    def __enter__(self) -> _Stop:
-        if threading.current_thread() is threading.main_thread():
-            self._previous = signal.signal(signal.SIGTERM, self._handle)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self._previous is not None:
-            signal.signal(signal.SIGTERM, self._previous)
-
-
 # --- one case ----------------------------------------------------------------------------
 
 def _one_line(error: BaseException) -> str:
@@ -377,7 +354,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
     try:
-        with _Stop() as stop:
+        with StopSignal() as stop:
             while True:
                 if group.allreduce(stop.received, op=MPI.MAX):
                     break
