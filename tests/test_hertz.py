@@ -106,9 +106,9 @@ def _table(rows: list[dict[str, float]]) -> None:
 
 
 def test_hertz_coarse(shared_dir: pathlib.Path) -> None:
-    """Element size b/10 near the contact: b and p_max within 3 % (measured in the
-    README), and the contact resultant balances the load (1e-2: the remaining
-    dynamics at 80 ms)."""
+    """Element size b/10 near the contact (2 ranks, 7 s): b and p_max within 3 %
+    (measured −1.62 % and −0.39 %), and the contact resultant balances the load
+    within 1e-2 (measured −2.6e-3: the remaining dynamics at 80 ms)."""
     r = hertz_run(shared_dir / "hertz10.msh", 0.1)
     _table([r])
     assert abs(r["force"] / (P / 2) - 1) < 1e-2
@@ -118,11 +118,19 @@ def test_hertz_coarse(shared_dir: pathlib.Path) -> None:
 
 @pytest.mark.serial
 def test_hertz_converges(shared_dir: pathlib.Path) -> None:
-    """Element sizes b/10, b/20, b/40: the errors in b and p_max decrease with h, and
-    on the finest mesh both are within 3 %."""
-    rows = [hertz_run(shared_dir / f"hertz{k}.msh", 1 / k) for k in (10, 20, 40)]
+    """Element sizes b/10 and b/20 (serial: 50 s): the error in b decreases with h and
+    both errors are within 3 % on the finer mesh.
+
+    Measured (b, p_max errors): b/10 −1.62 %, −0.39 %; b/20 −1.37 %, −0.30 %; b/30
+    −1.12 %, −0.49 % (77 s); b/40 p_max −0.40 % (6 min all three). The error in b
+    falls with h; the one in p_max does not: it sits at the penalty's softening
+    (E*/(ε_n b) = 0.5 %) and the remaining out-of-balance of the damped run (∫p
+    within 0.2-0.3 % of P/2), so p_max is asserted within 1 % on every mesh.
+    """
+    rows = [hertz_run(shared_dir / f"hertz{k}.msh", 1 / k) for k in (10, 20)]
     _table(rows)
     eb = [abs(r["b"] / B - 1) for r in rows]
     ep = [abs(r["p_max"] / P_MAX - 1) for r in rows]
-    assert eb[-1] < 0.03 and ep[-1] < 0.03
-    assert ep[-1] < ep[0] and eb[-1] < eb[0]
+    assert eb[1] < eb[0]
+    assert eb[1] < 0.03 and ep[1] < 0.03
+    assert max(ep) < 0.01
