@@ -134,3 +134,27 @@ def test_hertz_converges(shared_dir: pathlib.Path) -> None:
     assert eb[1] < eb[0]
     assert eb[1] < 0.03 and ep[1] < 0.03
     assert max(ep) < 0.01
+
+
+def test_hertz_mesh(shared_dir: pathlib.Path) -> None:
+    """The generator's bodies and groups: the quarter disc's area πR²/4 (second-order
+    geometry: the arc's mid-nodes on the circle; measured −8e-6 with sizes 0.3R to
+    R/100), the block's 9R², the block's top 3R and the contact arc's length R·30°
+    (measured −2e-7)."""
+    import ufl
+    from dolfinx import fem
+
+    data = read_mesh(hertz(shared_dir / "hertzmesh.msh", COMM, R, 3 * R, 3 * R, B, 0.3 * R,
+                           2 * B), COMM)
+    groups = data.physical_groups
+
+    def measure(name: str, dim: int) -> float:
+        tags = data.cell_tags if dim == 2 else data.facet_tags
+        m = ufl.Measure("dx" if dim == 2 else "ds", domain=data.mesh, subdomain_data=tags)
+        form = fem.form(fem.Constant(data.mesh, 1.0) * m(groups[name][1]))
+        return COMM.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+
+    assert measure("cylinder", 2) == pytest.approx(np.pi * R**2 / 4, rel=1e-4)
+    assert measure("block", 2) == pytest.approx(9 * R**2, rel=1e-12)
+    assert measure("cylinder_contact", 1) == pytest.approx(R * np.pi / 6, rel=1e-4)
+    assert measure("block_top", 1) == pytest.approx(3 * R, rel=1e-12)
