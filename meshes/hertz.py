@@ -1,0 +1,92 @@
+"""A quarter cylinder on a block, meshed separately (the plane-strain Hertz problem).
+
+The half-cylinder of radius R (axis and flat top at y = R; here its quarter x ≥ 0, by
+symmetry) touches the block's top y = 0 at the origin; the two bodies are separate
+surfaces of one gmsh file (disconnected components), refined near the origin, so that
+their meshes do not match (:mod:`breakwater.surfacepair`). Physical groups:
+
+- ``cylinder`` (cells): ``cylinder_contact`` (the arc within ``contact_angle`` of the
+  bottom), ``cylinder_arc`` (the rest of the arc), ``cylinder_top`` (the flat top
+  y = R), ``cylinder_axis`` (x = 0);
+- ``block`` (cells): ``block_top``, ``block_bottom``, ``block_right``, ``block_axis``.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+import gmsh
+from mpi4py import MPI
+
+from breakwater.gmshtools import gmsh_session
+
+__all__ = ["hertz"]
+
+
+def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
+          depth: float, fine: float, coarse: float, fine_zone: float,
+          contact_angle: float = 30.0, overlap: float = 0.0,
+          order: int = 2) -> pathlib.Path:
+    """Write the mesh (rank 0 writes; collective).
+
+    Args:
+        path: Output ``.msh`` (the same on all ranks).
+        comm: Communicator.
+        radius: Cylinder radius R (m); its axis is at (0, R).
+        width: Block width (m), ``[0, width] × [−depth, 0]``.
+        depth: Block depth (m).
+        fine: Element size within ``fine_zone`` of the origin (m).
+        coarse: Element size far from it (m).
+        fine_zone: Radius of the refined zone (m); the size grows linearly to
+            ``coarse`` over the next 4 ``fine_zone``.
+        contact_angle: Angle (degrees from the bottom) of the ``cylinder_contact`` arc.
+        overlap: The cylinder is moved down by this (m): it starts with a contact zone
+            (its vertical position is free, so the loaded equilibrium does not depend
+            on it), where a point contact would give Newton no vertical stiffness.
+        order: Geometric order (2: the arc's mid-nodes on the circle).
+
+    Returns:
+        The path.
+    """
+    path = pathlib.Path(path)
+    if comm.rank == 0:
+        with gmsh_session(model="hertz"):
+            geo = gmsh.model.geo
+            R, θ = radius, math.radians(contact_angle)
+            y0 = -overlap
+            centre = geo.addPoint(0, y0 + R, 0)
+            bottom = geo.addPoint(0, y0, 0)
+            a = geo.addPoint(R * math.sin(θ), y0 + R - R * math.cos(θ), 0)
+            east = geo.addPoint(R, y0 + R, 0)
+            cyl = [geo.addCircleArc(bottom, centre, a), geo.addCircleArc(a, centre, east),
+                   geo.addLine(east, centre), geo.addLine(centre, bottom)]
+            cyl_surface = geo.addPlaneSurface([geo.addCurveLoop(cyl)])
+            corners = [geo.addPoint(x, y, 0) for x, y in
+                       ((0, -depth), (width, -depth), (width, 0), (0, 0))]
+            blk = [geo.addLine(corners[k], corners[(k + 1) % 4]) for k in range(4)]
+            blk_surface = geo.addPlaneSurface([geo.addCurveLoop(blk)])
+            geo.synchronize()
+            field = gmsh.model.mesh.field
+            distance = field.add("Distance")
+            field.setNumbers(distance, "PointsList", [bottom, corners[3]])
+            threshold = field.add("Threshold")
+            field.setNumber(threshold, "InField", distance)
+            field.setNumber(threshold, "SizeMin", fine)
+            field.setNumber(threshold, "SizeMax", coarse)
+            field.setNumber(threshold, "DistMin", fine_zone)
+            field.setNumber(threshold, "DistMax", 5 * fine_zone)
+            field.setAsBackgroundMesh(threshold)
+            for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints",
+                           "MeshSizeFromCurvature"):
+                gmsh.option.setNumber(f"Mesh.{option}", 0)
+            gmsh.model.addPhysicalGroup(2, [cyl_surface], name="cylinder")
+            for line, name in zip(cyl, ("contact", "arc", "top", "axis"), strict=True):
+                gmsh.model.addPhysicalGroup(1, [line], name=f"cylinder_{name}")
+            gmsh.model.addPhysicalGroup(2, [blk_surface], name="block")
+            for line, name in zip(blk, ("bottom", "right", "top", "axis"), strict=True):
+                gmsh.model.addPhysicalGroup(1, [line], name=f"block_{name}")
+            gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+    return pathlib.Path(comm.bcast(str(path), root=0))
