@@ -30,7 +30,7 @@ from .errors import MeshError
 from .loadfields import TractionField
 from .mesh import group_tag
 from .runspec import InitialSpec
-from .surfacepair import SurfacePair
+from .surfacepair import SurfacePair, check_pair_settings
 
 
 @dataclass(frozen=True)
@@ -128,14 +128,8 @@ class ContactPair:
     gap: float = 0.0
 
     def __post_init__(self) -> None:
-        if not self.penalty > 0:
-            raise ValueError(f"contact penalty must be > 0 (got {self.penalty})")
-        if not self.friction >= 0:
-            raise ValueError(f"friction coefficient must be >= 0 (got {self.friction})")
-        if not self.regularisation > 0:
-            raise ValueError(f"regularisation must be > 0 (got {self.regularisation})")
-        if self.slave == self.master:
-            raise ValueError("a contact pair needs two different bodies")
+        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
+                            self.master)
 
 
 @dataclass(frozen=True)

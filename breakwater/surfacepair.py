@@ -59,7 +59,24 @@ if TYPE_CHECKING:
     from .bulk import MonolithicLayout
     from .model import ContactModel
 
-__all__ = ["SurfaceContact", "SurfacePair", "surface_dofs"]
+__all__ = ["SurfaceContact", "SurfacePair", "check_pair_settings", "surface_dofs"]
+
+
+def check_pair_settings(penalty: float, friction: float, regularisation: float, slave: str,
+                        master: str) -> None:
+    """Check the law's settings and bodies of a contact pair (conforming or general).
+
+    Raises:
+        ValueError: A setting out of range, or the same body on both sides.
+    """
+    if not penalty > 0:
+        raise ValueError(f"contact penalty must be > 0 (got {penalty})")
+    if not friction >= 0:
+        raise ValueError(f"friction coefficient must be >= 0 (got {friction})")
+    if not regularisation > 0:
+        raise ValueError(f"regularisation must be > 0 (got {regularisation})")
+    if slave == master:
+        raise ValueError("a contact pair needs two different bodies")
 
 
 @dataclass(frozen=True)
@@ -98,14 +115,8 @@ class SurfacePair:
     gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
 
     def __post_init__(self) -> None:
-        if not self.penalty > 0:
-            raise ValueError(f"contact penalty must be > 0 (got {self.penalty})")
-        if not self.friction >= 0:
-            raise ValueError(f"friction coefficient must be >= 0 (got {self.friction})")
-        if not self.regularisation > 0:
-            raise ValueError(f"regularisation must be > 0 (got {self.regularisation})")
-        if self.slave == self.master:
-            raise ValueError("a contact pair needs two different bodies")
+        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
+                            self.master)
         if not self.points >= 1:
             raise ValueError(f"points per facet must be >= 1 (got {self.points})")
         if self.radius is not None and not self.radius > 0:
