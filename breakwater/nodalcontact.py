@@ -212,25 +212,25 @@ class NodalContactForces:
 
     def matrix(self) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns, dense (the same on every rank)."""
-        us, um, vs, vm = self._state()
-        law = self._values()
-        dt = float(self.dt.value)
-        _, t_u, t_v = law.nodal(us, um, self._normal, vs, vm, derivatives=True)
-        D = self._weight[:, None, None] * (0.5 * self.beta2 * dt**2 * t_u
-                                           + self.beta1 * dt * t_v)
+        D = self._point_tangents()
         values = (self._sign * D[None]).reshape(-1)[self._flat_keep]
         out = np.bincount(self._flat, weights=values, minlength=self.n * self.n)
         return out.reshape(self.n, self.n)
 
     def _node_tangents(self) -> np.ndarray:
         """W_k = Σ w ∂t/∂y over the points of each node k, shape ``(nodes, gdim, gdim)``."""
+        return np.add.reduceat(self._point_tangents(), self._runs, axis=0)
+
+    def _point_tangents(self) -> np.ndarray:
+        """The weighted tangent w ∂t/∂y at each point, shape ``(points, gdim, gdim)``.
+
+        ∂y = ½β₂Δt² ∂u + β₁Δt ∂v: the step's unknown moves u and v together.
+        """
         us, um, vs, vm = self._state()
-        law = self._values()
         dt = float(self.dt.value)
-        _, t_u, t_v = law.nodal(us, um, self._normal, vs, vm, derivatives=True)
-        D = self._weight[:, None, None] * (0.5 * self.beta2 * dt**2 * t_u
-                                           + self.beta1 * dt * t_v)
-        return np.add.reduceat(D, self._runs, axis=0)
+        _, t_u, t_v = self._values().nodal(us, um, self._normal, vs, vm, derivatives=True)
+        return self._weight[:, None, None] * (0.5 * self.beta2 * dt**2 * t_u
+                                              + self.beta1 * dt * t_v)
 
     def left_product(self, X: np.ndarray) -> np.ndarray:
         """X @ :meth:`matrix` for a dense X of n_I columns, from the matrix's structure.
