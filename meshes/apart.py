@@ -15,6 +15,7 @@ import gmsh
 from mpi4py import MPI
 
 from breakwater.gmshtools import gmsh_session
+from breakwater.parallel import on_rank_zero
 
 __all__ = ["Rectangle", "rectangles"]
 
@@ -59,7 +60,7 @@ def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectan
         The path.
     """
     path = pathlib.Path(path)
-    if comm.rank == 0:
+    def write() -> str:
         with gmsh_session(model="apart"):
             geo = gmsh.model.geo
             groups = []
@@ -81,4 +82,6 @@ def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectan
             gmsh.model.mesh.generate(2)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))
-    return pathlib.Path(comm.bcast(str(path), root=0))
+        return str(path)
+
+    return pathlib.Path(on_rank_zero(comm, write))  # rank 0's path, or its error

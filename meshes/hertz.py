@@ -20,6 +20,7 @@ import gmsh
 from mpi4py import MPI
 
 from breakwater.gmshtools import gmsh_session
+from breakwater.parallel import on_rank_zero
 
 __all__ = ["hertz"]
 
@@ -50,7 +51,7 @@ def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
         The path.
     """
     path = pathlib.Path(path)
-    if comm.rank == 0:
+    def write() -> str:
         with gmsh_session(model="hertz"):
             geo = gmsh.model.geo
             R, θ = radius, math.radians(contact_angle)
@@ -89,4 +90,6 @@ def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
             gmsh.model.mesh.generate(2)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))
-    return pathlib.Path(comm.bcast(str(path), root=0))
+        return str(path)
+
+    return pathlib.Path(on_rank_zero(comm, write))  # rank 0's path, or its error
