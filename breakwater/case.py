@@ -432,10 +432,6 @@ class Case:
                                    f"{suggest(name, loads)} (loads: {', '.join(loads) or 'none'})")
         pairs = [c.name for c in self.contact]
         for q in self.output.pair_probes:
-            if q.pair in pairs and next(c for c in self.contact if c.name == q.pair).general:
-                raise InvalidField(f"output.pair_probes.{q.name}.pair",
-                                   f"'{q.pair}' is a general pair: pair probes need a "
-                                   "conforming pair")
             if q.pair not in pairs:
                 raise InvalidField(f"output.pair_probes.{q.name}.pair",
                                    f"no contact pair '{q.pair}'{suggest(q.pair, pairs)} "

@@ -218,7 +218,10 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
                             "expected one")
         return tuple(float(c) for c in x[0, :model.gdim])
 
-    pair_index = {c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
+    # A conforming pair by its index in model.pairs, a general pair by its name.
+    pair_index: dict[str, int | str] = {
+        c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
+    pair_index.update({c.name: c.name for c in case.contact if c.general})
     o = case.output
     probes = tuple(ProbeSpec(p.name, p.body, where(f"output.probes.{p.name}", p.group, p.point))
                    for p in o.probes)

@@ -12,7 +12,8 @@
 - ``contact.png``: contact length, normal and tangential resultants, Newton iterations;
 - ``static_uy.png``, ``static_syy.png``: static vertical displacement and vertical
   stress (Figs. 16-17);
-- ``static_pressure.png``: static contact pressure along each interface (Fig. 17);
+- ``static_pressure.png``: static contact pressure along each interface (Fig. 17; a
+  general pair's at its slave surface's nodes);
 - ``max_ux_deformed.png``: deformed shape (×20) coloured by σ_yy at the instant of the
   largest horizontal displacement of the first probe (Figs. 20, 22).
 
@@ -188,18 +189,21 @@ def _contours(data: Any, field: str, factor: float, label: str, title: str,
 
 def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
                      ) -> pathlib.Path | None:
-    pairs = sorted(str(k).removeprefix("pair").removesuffix("_x") for k in data.files
-                   if str(k).startswith("pair") and str(k).endswith("_x"))
-    if not pairs:
+    # Conforming pairs (pair<k>_*) and general pairs (surface_<name>_*, on the slave).
+    keys = sorted(str(k).removesuffix("_x") for k in data.files
+                  if str(k).startswith(("pair", "surface_")) and str(k).endswith("_x"))
+    if not keys:
         return None
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
-    for k in pairs:
-        x = data[f"pair{k}_x"]
+    for key in keys:
+        x = data[f"{key}_x"]
         # Abscissa along the interface: x for a horizontal one, else the arc length.
         span = np.ptp(x, axis=0)
         s = x[:, 0] if span[0] >= span[1] else x[:, 1]
-        ax.plot(s, data[f"pair{k}_pressure"], "o-", ms=3, label=f"pair {k}")
+        label = f"pair {key.removeprefix('pair')}" if key.startswith("pair") else \
+            f"contact {key.removeprefix('surface_')}"
+        ax.plot(s, data[f"{key}_pressure"], "o-", ms=3, label=label)
     static = summary.get("static", {})
     mean = static.get("mean_contact_pressure")
     if mean is not None:

@@ -21,6 +21,7 @@ from .ledger import FIELDS
 from .model import ContactModel
 from .probes import Probes
 from .runspec import OutputSpec
+from .surfaceoutputs import surface_state
 from .surfacepair import SurfaceContact
 
 __all__ = ["Monitor", "interface_state", "pair_names"]
@@ -45,13 +46,19 @@ class Monitor:
         output: The probes.
         nodes: Interface nodes of every pair.
 
+    Attributes:
+        surfaces: The general pairs (the stepper's providers).
+        probes: The probes.
+
     """
 
     def __init__(self, model: ContactModel, stepper: GN22, output: OutputSpec,
                  nodes: Sequence[InterfaceNodes]) -> None:
         self.model, self.stepper = model, stepper
         self.nodes = nodes
-        self.probes = Probes(model, output, nodes)
+        self.surfaces = [p for p in getattr(stepper.solver, "providers", ())
+                         if isinstance(p, SurfaceContact)]
+        self.probes = Probes(model, output, nodes, self.surfaces)
         u, v = stepper.u, stepper.v
         self._contact = []
         for p in model.pairs:
@@ -71,9 +78,7 @@ class Monitor:
         for k in range(len(model.pairs)):
             self.columns += [f"contact_length_{k}", f"normal_force_{k}",
                              f"tangential_force_{k}", f"penetration_{k}"]
-        self._surfaces = [p for p in getattr(stepper.solver, "providers", ())
-                          if isinstance(p, SurfaceContact)]
-        for sp in self._surfaces:
+        for sp in self.surfaces:
             self.columns += [f"{sp.spec.name}_{key}" for key in
                              ("force_x", "force_y", "contact_length", "penetration")]
         self.columns += list(FIELDS)
@@ -93,7 +98,7 @@ class Monitor:
         for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
             gap = nd.contact_state(s.u[p.slave].x.array, s.u[p.master].x.array)["gap"]
             r[f"penetration_{k}"] = quality.max_penetration(gap)
-        for sp in self._surfaces:
+        for sp in self.surfaces:
             force = sp.resultant()
             state = sp.state()
             closed = state["gap"] <= 0  # NaN (no projection): open
@@ -106,13 +111,22 @@ class Monitor:
 
 
 def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
-                    u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+                    u: Sequence[fem.Function], surfaces: Sequence[SurfaceContact] = ()
+                    ) -> dict[str, np.ndarray]:
     """Nodal interface data of every pair (same on all ranks; collective).
+
+    Args:
+        model: The contact model.
+        nodes: Interface nodes of every conforming pair.
+        u: The state (one Function per body).
+        surfaces: The general pairs (:attr:`Monitor.surfaces`).
 
     Returns:
         ``pair<k>_x`` node coordinates (sorted), ``pair<k>_normal``, ``pair<k>_gap``
         (normal gap g_n), ``pair<k>_slip`` (2D: along t = (n_y, −n_x)) and
-        ``pair<k>_pressure`` (ε_n ⟨−g_n⟩₊).
+        ``pair<k>_pressure`` (ε_n ⟨−g_n⟩₊); per general pair the same at the slave
+        surface's nodes, ``surface_<name>_x`` ...
+        (:func:`~breakwater.surfaceoutputs.surface_state`).
     """
     data: dict[str, np.ndarray] = {}
     for k, (p, nd) in enumerate(zip(model.pairs, nodes, strict=True)):
@@ -123,6 +137,7 @@ def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
         if model.gdim == 2:
             data[f"pair{k}_slip"] = np.sum(state["slip"] * nd.tangents[:, 0], axis=1)
         data[f"pair{k}_pressure"] = state["pressure"]
+    data.update(surface_state(surfaces, u))
     return data
 
 

@@ -15,7 +15,8 @@ Output files of a run (in the output directory):
 - ``fields_<body>.bp``: displacement, velocity, stress tensor, von Mises and σ_yy stress
   of each body, as discontinuous P2 fields (exact for P2 displacements), for ParaView.
 - ``contact_<pair>.bp``: contact pressure, normal gap, slip, slip velocity and
-  friction traction of each contact pair, as P2 fields on the interface.
+  friction traction of each contact pair, as P2 fields on the interface (a general
+  pair's on its slave surface: :class:`~breakwater.surfaceoutputs.SurfaceFields`).
 - ``static.npz``: the static state (P1 nodal values per body and interface pressures).
 - ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
   probe.
@@ -48,6 +49,8 @@ from .interface import InterfaceNodes
 from .mesh import group_tag
 from .model import ContactModel
 from .parallel import on_rank_zero
+from .surfaceoutputs import SurfaceFields
+from .surfacepair import SurfaceContact
 
 __all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
            "read_history", "snapshot_arrays"]
@@ -307,11 +310,13 @@ class FieldWriter:
 
     """
 
-    def __init__(self, fields: Sequence[BodyFields], interfaces: Sequence[InterfaceFields],
+    def __init__(self, fields: Sequence[BodyFields],
+                 interfaces: Sequence[InterfaceFields | SurfaceFields],
                  directory: pathlib.Path, comm: MPI.Comm) -> None:
         self.fields = list(fields)
         self.interfaces = list(interfaces)
-        files: list[BodyFields | InterfaceFields] = [*self.fields, *self.interfaces]
+        files: list[BodyFields | InterfaceFields | SurfaceFields] = [*self.fields,
+                                                                     *self.interfaces]
         self.paths = [directory / f.filename for f in files]
         # The mesh is the reference configuration: written once (warp by displacement).
         self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
@@ -366,16 +371,20 @@ class RunFiles:
         names: The pairs' names (``contact_<name>.bp``).
         directory: The output folder.
         field_interval: Steps between ParaView outputs (0: none).
+        surfaces: The general pairs (``contact_<name>.bp`` on their slave surfaces).
 
     """
 
     def __init__(self, model: ContactModel, nodes: Sequence[InterfaceNodes],
-                 names: Sequence[str], directory: pathlib.Path, field_interval: int) -> None:
+                 names: Sequence[str], directory: pathlib.Path, field_interval: int,
+                 surfaces: Sequence[SurfaceContact] = ()) -> None:
         self.directory, self.comm, self.interval = directory, model.comm, field_interval
         self.bodies = [BodyFields(model, i) for i in range(len(model.bodies))]
-        self.interfaces = ([InterfaceFields(model, nd, name)
-                            for nd, name in zip(nodes, names, strict=True)]
-                           if field_interval > 0 else [])
+        self.interfaces: list[InterfaceFields | SurfaceFields] = []
+        if field_interval > 0:
+            self.interfaces += [InterfaceFields(model, nd, name)
+                                for nd, name in zip(nodes, names, strict=True)]
+            self.interfaces += [SurfaceFields(model, c) for c in surfaces]
         self.history: HistoryWriter | None = None
         self.writer: FieldWriter | None = None
 

@@ -1,9 +1,9 @@
 """Probes: fields evaluated at points, the same on every rank.
 
 :class:`PointProbe` evaluates one body's field at a point; :class:`PairProbe` gives
-the slip and opening of a contact interface at a point; :class:`Probes` holds the
-probes of a run (``output.probes`` and ``output.pair_probes``) and gives their history
-columns.
+the slip and opening of a conforming contact interface at a point (a general pair's:
+:class:`~breakwater.surfaceoutputs.SurfaceProbe`); :class:`Probes` holds the probes of
+a run (``output.probes`` and ``output.pair_probes``) and gives their history columns.
 """
 
 from __future__ import annotations
@@ -19,6 +19,8 @@ from .errors import MeshError
 from .interface import InterfaceNodes
 from .model import ContactModel
 from .runspec import OutputSpec, PairProbeSpec
+from .surfaceoutputs import SurfaceProbe
+from .surfacepair import SurfaceContact
 
 __all__ = ["PairProbe", "PointProbe", "Probes"]
 
@@ -110,7 +112,7 @@ class PairProbe:
 
     def __init__(self, model: ContactModel, spec: PairProbeSpec,
                  nodes: Sequence[InterfaceNodes]) -> None:
-        if not 0 <= spec.pair < len(model.pairs):
+        if not isinstance(spec.pair, int) or not 0 <= spec.pair < len(model.pairs):
             raise ValueError(f"pair probe '{spec.name}': no contact pair {spec.pair} "
                              f"(the model has {len(model.pairs)})")
         self.name = spec.name
@@ -157,14 +159,27 @@ class Probes:
         model: The contact model.
         output: The probes' specifications.
         nodes: Interface nodes of every pair.
+        surfaces: The general pairs (the stepper's providers), for the pair probes
+            that name one.
 
     """
 
     def __init__(self, model: ContactModel, output: OutputSpec,
-                 nodes: Sequence[InterfaceNodes]) -> None:
+                 nodes: Sequence[InterfaceNodes],
+                 surfaces: Sequence[SurfaceContact] = ()) -> None:
         self._comm = model.comm
         self.points = [PointProbe(model, p.body, p.point, p.name) for p in output.probes]
-        self.pairs = [PairProbe(model, p, nodes) for p in output.pair_probes]
+        general = {c.spec.name: c for c in surfaces}
+        self.pairs: list[PairProbe | SurfaceProbe] = []
+        for q in output.pair_probes:
+            if isinstance(q.pair, str):
+                if q.pair not in general:
+                    raise ValueError(f"pair probe '{q.name}': no general contact pair "
+                                     f"'{q.pair}' (the model has "
+                                     f"{', '.join(general) or 'none'})")
+                self.pairs.append(SurfaceProbe(general[q.pair], q))
+            else:
+                self.pairs.append(PairProbe(model, q, nodes))
         self.columns: list[str] = []
         for p in self.points:
             self.columns += [f"{p.name}_ux", f"{p.name}_uy"]
@@ -183,17 +198,20 @@ class Probes:
 
     def values(self, u: Sequence[fem.Function]) -> dict[str, float]:
         """The probes' columns for the state ``u`` (collective: one reduction for all)."""
-        every = [*self.points, *(q for pp in self.pairs for q in (pp.slave, pp.master))]
-        if not every:
-            return {}
-        values = np.array([p.local_value(u) for p in every])
-        if self._comm.size > 1:
-            self._comm.Allreduce(MPI.IN_PLACE, values, op=MPI.SUM)
+        conforming = [pp for pp in self.pairs if isinstance(pp, PairProbe)]
+        every = [*self.points, *(q for pp in conforming for q in (pp.slave, pp.master))]
         r: dict[str, float] = {}
-        for p, value in zip(self.points, values, strict=False):
-            r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
-        sides = values[len(self.points):]
-        for k, pp in enumerate(self.pairs):
-            r.update({f"{pp.name}_{key}": x
-                      for key, x in pp.from_values(sides[2 * k], sides[2 * k + 1]).items()})
+        if every:
+            values = np.array([p.local_value(u) for p in every])
+            if self._comm.size > 1:
+                self._comm.Allreduce(MPI.IN_PLACE, values, op=MPI.SUM)
+            for p, value in zip(self.points, values, strict=False):
+                r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
+            sides = values[len(self.points):]
+            for k, pp in enumerate(conforming):
+                r.update({f"{pp.name}_{key}": x for key, x in
+                          pp.from_values(sides[2 * k], sides[2 * k + 1]).items()})
+        for sp in self.pairs:
+            if isinstance(sp, SurfaceProbe):
+                r.update({f"{sp.name}_{key}": x for key, x in sp.value(u).items()})
         return r

@@ -266,6 +266,8 @@ class PairInputs:
         young_moduli: Young's moduli (slave, master) (Pa).
         static_penetration: Largest static penetration (m).
         settlement: Static settlement (m), see :func:`settlement`.
+        penetration_column: The history column of the pair's largest penetration
+            (None: ``penetration_<k>``, k the pair's index).
     """
 
     name: str
@@ -274,6 +276,7 @@ class PairInputs:
     young_moduli: tuple[float, float]
     static_penetration: float
     settlement: float
+    penetration_column: str | None = None
 
     def __post_init__(self) -> None:
         a, b = self.young_moduli  # (a list when read back from JSON)

@@ -37,12 +37,14 @@ class PairProbeSpec:
 
     Attributes:
         name: Probe name (e.g. ``"corner_front"``).
-        pair: Index of the contact pair in ``model.pairs``.
-        point: Coordinates of the interface point.
+        pair: Index of the contact pair in ``model.pairs`` (a conforming pair), or the
+            name of a general pair (``model.surface_pairs``).
+        point: Coordinates of the interface point (on the slave surface of a general
+            pair).
     """
 
     name: str
-    pair: int
+    pair: int | str
     point: tuple[float, ...]
 
 

@@ -34,6 +34,7 @@ from .outputs import RunFiles
 from .runspec import OutputSpec, TimeSpec
 from .runstate import RunState
 from .solver import NewtonOptions
+from .surfaceoutputs import quality_inputs as surface_quality
 
 __all__ = ["Session", "Stepped"]
 
@@ -70,7 +71,7 @@ class Stepped:
         self.monitor = Monitor(model, s, output, self.nodes)
         self.peak = sm.PeakSnapshot(model, self.monitor.probes.names)
         self.files = RunFiles(model, self.nodes, pair_names(model), directory,
-                              output.field_interval)
+                              output.field_interval, self.monitor.surfaces)
 
     def functions(self) -> list[list[fem.Function]]:
         """The Functions of each body that a checkpoint saves."""
@@ -167,10 +168,12 @@ class Session:
         out.open_history(x.monitor.columns)
         out.open_fields()
         row = self.record(0.0, st.static_iterations)
-        interface = interface_state(m, x.nodes, s.u)
+        surfaces = x.monitor.surfaces
+        interface = interface_state(m, x.nodes, s.u, surfaces)
         st.static = sm.static_summary(m, row, interface, st.static_iterations)
         st.static.update(init.summary())
-        st.contact = sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface)
+        st.contact = [*sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface),
+                      *surface_quality(m, surfaces, s.u)]
         out.write_snapshot(files.STATIC, s.u, interface, 0.0)
         self.log_quality()
         out.write_fields(0.0, s.u, s.v)
@@ -255,7 +258,8 @@ class Session:
                 x.files.write_fields(t, s.u, s.v)
             x.files.close()
             if x.peak.time is not None:
-                interface = interface_state(self.model, x.nodes, x.peak.u)
+                interface = interface_state(self.model, x.nodes, x.peak.u,
+                                            x.monitor.surfaces)
                 x.files.write_snapshot(files.SNAPSHOT, x.peak.u, interface, x.peak.time)
         return self.summary(finished, error, status)
 

@@ -140,8 +140,9 @@ def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mappin
     for k, c in enumerate(inputs):
         δ, when = None, None
         if steps:
-            j = int(np.argmax([r[f"penetration_{k}"] for r in steps]))
-            δ, when = steps[j][f"penetration_{k}"], steps[j]["t"]
+            column = c.penetration_column or f"penetration_{k}"
+            j = int(np.argmax([r[column] for r in steps]))
+            δ, when = steps[j][column], steps[j]["t"]
         report[c.name] = c.assess(δ, when)
     return report
 
