@@ -313,7 +313,8 @@ class PairProbeCase:
     """``[output.pair_probes.<name>]``: slip and opening of an interface point."""
 
     name: str = setting(key=True, doc="probe name (output column prefix)")
-    pair: str = setting(doc="contact pair (its interface name)")
+    pair: str = setting(doc="contact pair (its interface name; for a general pair the "
+                        "point lies on its slave surface)")
     group: str | None = setting(None, doc="point (0D) physical group holding the point")
     point: tuple[float, ...] | None = setting(None, unit="m", doc="coordinates of the point "
                                               "(instead of group)")
