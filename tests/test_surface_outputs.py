@@ -11,6 +11,7 @@
   integrates to the normal resultant of the history; the snapshots hold the slave
   surface's arrays; the contact-quality report has the conforming pairs' keys.
 - The example case with a pair probe through the command line, figures included.
+- A run killed after its checkpoint resumes to the same probe history and report.
 """
 
 from __future__ import annotations
@@ -286,3 +287,67 @@ def test_example_with_a_pair_probe_and_figures(shared_dir: pathlib.Path) -> None
         summary = json.load(f)
     assert summary["dynamic"]["residual_slip"] == pytest.approx(h["corner_slip"][-1])
     assert "sliding" in summary["contact_quality"]
+
+
+# --- resume -------------------------------------------------------------------------
+
+class _Killed(Exception):
+    """Stands for a kill (not a BreakwaterError: the run does not clean up)."""
+
+
+def test_resume_keeps_the_general_outputs(shared_dir: pathlib.Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run with a general pair's probe, fields and quality report, killed after its
+    checkpoint, resumes to the uninterrupted history of the probe (serially bit for
+    bit; on 2 ranks within the 1e-7 of test_surfacepair's resume test, whose reasons
+    hold here) and the same quality report; the fields written before the kill are
+    set aside as ``contact_c.part1.bp``."""
+    from breakwater import simulation
+
+    mesh = rectangles(shared_dir / "resume.msh", COMM,
+                      [Rectangle("base", -0.1, -0.05, 0.4, 0.05, 20, 2),
+                       Rectangle("block", -0.05, 0.0, WIDTH, HEIGHT, 3, 2)])
+
+    def run(directory: pathlib.Path, **kwargs: object) -> dict:
+        pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", PENALTY,
+                           friction=MU)
+        model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
+                                                     Body("block", MATERIAL)],
+                             fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                             loads=[SurfaceLoad("block_left", (PUSH / HEIGHT, 0.0),
+                                                lambda t: 1.0)],
+                             surface_pairs=[pair])
+        output = OutputSpec(directory, field_interval=4, figures=False, progress=False,
+                            checkpoint_interval=5,
+                            probes=(ProbeSpec("corner", "block", (-0.05, 0.0)),),
+                            pair_probes=(PairProbeSpec("pmid", "c", (0.0, 0.0)),))
+        return simulation.run(model, TimeSpec(dt=4e-3, end_time=0.1), output,
+                              report=False, **kwargs)  # type: ignore[arg-type]
+
+    full = run(shared_dir / "full")
+    solve = GN22.solve
+
+    def killed(self: GN22) -> int:
+        if float(self.t.value) >= 0.07:
+            raise _Killed("killed")
+        return solve(self)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(GN22, "solve", killed)
+        with pytest.raises(_Killed):
+            run(shared_dir / "resumed")
+    resumed = run(shared_dir / "resumed", resume=True)
+    assert resumed["finished"] is True
+    assert (shared_dir / "resumed" / "contact_c.part1.bp").exists()
+    assert (shared_dir / "resumed" / "contact_c.bp").exists()
+    a = read_history(shared_dir / "full" / "history.csv")
+    b = read_history(shared_dir / "resumed" / "history.csv")
+    np.testing.assert_array_equal(a["t"], b["t"])
+    rtol = 1e-12 if COMM.size == 1 else 1e-7
+    for key in ("pmid_slip", "pmid_opening", "pmid_master_ux", "c_penetration"):
+        scale = np.abs(a[key]).max()
+        assert np.abs(a[key] - b[key]).max() <= rtol * scale, key
+    qa, qb = full["contact_quality"]["c"], resumed["contact_quality"]["c"]
+    assert qa["static_penetration"] == qb["static_penetration"]
+    assert qa["element_size"] == qb["element_size"]
+    assert qb["dynamic_penetration"] == pytest.approx(qa["dynamic_penetration"], rel=rtol)
