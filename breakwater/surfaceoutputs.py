@@ -146,7 +146,8 @@ class SlavePoints:
         extent = max(float(np.ptp(s.X.reshape(-1, s.X.shape[2]), axis=0).max()), 1e-300)
         facet, xi = project(x, s.X, FacetGrid(s.X, 1e-6 * extent))
         if facet[0] < 0:
-            raise MeshError(f"pair probe '{name}': point {tuple(point)} is not on the slave "
+            where = tuple(float(c) for c in np.asarray(point).ravel())
+            raise MeshError(f"pair probe '{name}': point {where} is not on the slave "
                             f"surface '{contact.spec.slave_surface}' of contact "
                             f"'{contact.spec.name}'")
         N = shape(xi, s.X.shape[1])[0]
@@ -299,6 +300,12 @@ def surface_state(contacts: Sequence[SurfaceContact], u: Sequence[fem.Function]
 def quality_inputs(model: ContactModel, contacts: Sequence[SurfaceContact],
                    u: Sequence[fem.Function]) -> list[quality.PairInputs]:
     """The static measures of each general pair's contact quality (collective).
+
+    Args:
+        model: The contact model.
+        contacts: The general pairs (the stepper's providers).
+        u: The static state: the stepper's displacements, which the pairs' own
+            integration points (:meth:`SurfaceContact.state`) are measured on too.
 
     As the conforming pairs' (:func:`breakwater.summary.quality_inputs`), on the slave
     surface: h is the mean length of its facets (reference), the static penetration
