@@ -27,7 +27,7 @@ import pathlib
 import numpy as np
 import pytest
 import ufl
-from blocks import two_rectangles
+from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
 from breakwater.case import CaseError, load_case
@@ -382,28 +382,8 @@ def stacked(folder: pathlib.Path) -> pathlib.Path:
 def _write_case(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str) -> pathlib.Path:
     path = folder / f"{name}.toml"
     if COMM.rank == 0:
-        path.write_text(f'''
-mesh.source = "{mesh}"
-mesh.degree = 2
-out_of_plane_length = 0.5
-[bodies.a]
-density = 2000.0
-poisson = 0.25
-young_modulus = 1e9
-[bodies.b]
-density = 2000.0
-poisson = 0.25
-young_modulus = 1e9
-[contact.interface]
-slave = "a"
-master = "b"
-penalty = 1e12
-[fixed.b_bottom]
-[time]
-dt = 1e-4
-end_time = 1e-3
-{loads}
-''')
+        path.write_text(two_block_case(mesh, "mesh.degree = 2\nout_of_plane_length = 0.5",
+                                       loads))
     COMM.barrier()
     return path
 
