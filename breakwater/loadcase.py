@@ -182,10 +182,22 @@ class GodaCase:
     gravity: float = setting(9.81, unit="m/s²", doc="g")
     uplift_group: str | None = setting(None, doc="facet group of the base under the "
                                        "uplift (an interface: its side on the loaded body)")
+    impulsive: bool = setting(False, doc="the extended formula: α* = max(α₂, α_I) in p₁, "
+                              "with Takahashi et al.'s (1994) impulsive coefficient α_I "
+                              "(needs berm_width)")
+    berm_width: float | None = setting(None, unit="m", doc="B_M: width of the berm in "
+                                       "front of the upright section (impulsive only)")
 
     def __post_init__(self) -> None:
         if len(self.factors) != 3:
             raise InvalidField("factors", f"expected 3 values (got {len(self.factors)})")
+        if self.impulsive and self.berm_width is None:
+            raise InvalidField("berm_width", "missing: impulsive = true needs the berm "
+                               "width B_M")
+        if not self.impulsive and self.berm_width is not None:
+            raise InvalidField("berm_width", "is used only with impulsive = true")
+        if self.berm_width is not None and not self.berm_width > 0:
+            raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
         self.pressure()  # the formula's own range checks (ValueError -> InvalidField)
 
     def pressure(self) -> GodaPressure:
@@ -193,7 +205,8 @@ class GodaCase:
         λ1, λ2, λ3 = self.factors
         return goda_pressure(self.wave_height, self.period, self.depth, self.toe_depth,
                              self.berm_depth, self.crest_height, self.angle,
-                             self.breaking_depth, (λ1, λ2, λ3), self.density, self.gravity)
+                             self.breaking_depth, (λ1, λ2, λ3), self.density, self.gravity,
+                             self.impulsive, self.berm_width)
 
     def front(self) -> PressureProfile:
         """The front pressure profile along y (origin at the still water level)."""
@@ -513,6 +526,8 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
                      "p4": g.p4, "uplift_pressure": g.uplift,
                      "horizontal_force_per_length": g.force,
                      "horizontal_moment_per_length": g.moment})
+        if g.alpha_impulsive is not None:
+            info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
         if load.goda.uplift_group is not None:
             _, width = uplift_profile(load.goda, data, (load.group, *load.groups))
             info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),

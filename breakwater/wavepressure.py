@@ -36,6 +36,24 @@ base of width B and its moment M_U about the heel::
     P   = ½ (p₁ + p₃) h' + ½ (p₁ + p₄) h_c*
     M_P = (2p₁ + p₃) h'²/6 + ½ (p₁ + p₄) h' h_c* + (p₁ + 2p₄) h_c*²/6
     U   = ½ p_u B,   M_U = ⅔ U B
+
+The extended formula (opt-in, ``impulsive=True``): Takahashi, Tanimoto & Shimosako (1994)
+"A proposal of impulsive pressure coefficient for design of composite breakwaters",
+Proc. Int. Conf. Hydro-Technical Eng. for Port and Harbor Construction, 489–504 (as
+given in the CEM Part VI-5 and in Takahashi's "Design of vertical breakwaters", PARI
+1996/2002, §4.3) replaces α₂ in p₁ by α* = max(α₂, α_I), the impulsive pressure
+coefficient of a wave breaking on a high or wide berm of width B_M (the berm in front of
+the upright section, at the depth d)::
+
+    α_I  = α_I0 α_I1
+    α_I0 = H_max/d if H_max <= 2d, else 2
+    α_I1 = cos δ₂ / cosh δ₁ if δ₂ <= 0, else 1 / (cosh δ₁ cosh^½ δ₂)
+    δ₁   = 20 δ₁₁ if δ₁₁ <= 0, else 15 δ₁₁
+    δ₂   = 4.9 δ₂₂ if δ₂₂ <= 0, else 3 δ₂₂
+    δ₁₁  = 0.93 (B_M/L − 0.12) + 0.36 (0.4 − d/h)
+    δ₂₂  = −0.36 (B_M/L − 0.12) + 0.93 (0.4 − d/h)
+
+η*, p₃ = α₃ p₁, p₄ and the uplift p_u (which has no α₂) follow as above.
 """
 
 from __future__ import annotations
@@ -43,7 +61,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["GodaPressure", "goda_pressure", "wavelength"]
+__all__ = ["GodaPressure", "goda_pressure", "impulsive_coefficient", "wavelength"]
 
 
 def wavelength(period: float, depth: float, gravity: float = 9.81) -> float:
@@ -72,6 +90,32 @@ def wavelength(period: float, depth: float, gravity: float = 9.81) -> float:
     return 2.0 * math.pi / k
 
 
+def impulsive_coefficient(wave_height: float, depth: float, berm_depth: float,
+                          berm_width: float, wavelength: float) -> float:
+    """Takahashi et al.'s (1994) impulsive pressure coefficient α_I (module docstring).
+
+    Args:
+        wave_height: H_max (m).
+        depth: Water depth h in front of the breakwater (m).
+        berm_depth: d, depth above the armour of the berm (m).
+        berm_width: B_M, width of the berm in front of the upright section (m).
+        wavelength: L at the depth h (m).
+
+    """
+    shape = berm_width / wavelength - 0.12
+    submergence = 0.4 - berm_depth / depth
+    δ11 = 0.93 * shape + 0.36 * submergence
+    δ22 = -0.36 * shape + 0.93 * submergence
+    δ1 = 20.0 * δ11 if δ11 <= 0.0 else 15.0 * δ11
+    δ2 = 4.9 * δ22 if δ22 <= 0.0 else 3.0 * δ22
+    if δ2 <= 0.0:
+        α_i1 = math.cos(δ2) / math.cosh(δ1)
+    else:
+        α_i1 = 1.0 / (math.cosh(δ1) * math.sqrt(math.cosh(δ2)))
+    α_i0 = wave_height / berm_depth if wave_height <= 2.0 * berm_depth else 2.0
+    return α_i0 * α_i1
+
+
 @dataclass(frozen=True)
 class GodaPressure:
     """The result of Goda's formula (SI units: m, Pa, N/m, N m/m).
@@ -85,6 +129,7 @@ class GodaPressure:
         uplift: p_u at the seaward edge of the base (Pa).
         toe_depth: h' (m below the SWL).
         crest_height: h_c (m above the SWL).
+        alpha_impulsive: α_I of the extended formula (None: Goda's formula, α* = α₂).
 
     """
 
@@ -100,6 +145,14 @@ class GodaPressure:
     uplift: float
     toe_depth: float
     crest_height: float
+    alpha_impulsive: float | None = None
+
+    @property
+    def alpha_star(self) -> float:
+        """α* = max(α₂, α_I), the coefficient of p₁ (α₂ without the impulsive term)."""
+        if self.alpha_impulsive is None:
+            return self.alpha2
+        return max(self.alpha2, self.alpha_impulsive)
 
     @property
     def wetted_crest(self) -> float:
@@ -147,7 +200,8 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
                   berm_depth: float, crest_height: float, angle: float = 0.0,
                   breaking_depth: float | None = None,
                   factors: tuple[float, float, float] = (1.0, 1.0, 1.0),
-                  density: float = 1025.0, gravity: float = 9.81) -> GodaPressure:
+                  density: float = 1025.0, gravity: float = 9.81, impulsive: bool = False,
+                  berm_width: float | None = None) -> GodaPressure:
     """Goda's design wave pressures (see the module docstring for the equations).
 
     Args:
@@ -162,6 +216,9 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
         factors: λ₁, λ₂, λ₃.
         density: Water density ρ (kg/m³).
         gravity: g (m/s²).
+        impulsive: The extended formula: α* = max(α₂, α_I) in p₁ (Takahashi et al. 1994).
+        berm_width: B_M, width of the berm in front of the upright section (m); given
+            exactly when ``impulsive``.
 
     Raises:
         ValueError: An input out of range (named in the message).
@@ -186,6 +243,12 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
         raise ValueError(f"angle must be in [0, 90) degrees (got {angle:g})")
     if any(not f >= 0 for f in factors) or len(factors) != 3:
         raise ValueError(f"factors must be three values >= 0 (got {list(factors)})")
+    if impulsive and not (berm_width is not None and berm_width > 0
+                          and math.isfinite(berm_width)):
+        raise ValueError(f"berm_width B_M must be given (> 0) with impulsive "
+                         f"(got {berm_width})")
+    if not impulsive and berm_width is not None:
+        raise ValueError("berm_width is used only with impulsive (the extended formula)")
     λ1, λ2, λ3 = factors
     L = wavelength(period, depth, gravity)
     kh2 = 4.0 * math.pi * depth / L
@@ -194,12 +257,15 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
              2.0 * berm_depth / wave_height)
     cosh = math.cosh(2.0 * math.pi * depth / L)
     α3 = 1.0 - toe_depth / depth * (1.0 - 1.0 / cosh)
+    α_i = (impulsive_coefficient(wave_height, depth, berm_depth, berm_width, L)
+           if berm_width is not None else None)
+    α_star = α2 if α_i is None else max(α2, α_i)
     cb = math.cos(math.radians(angle))
     η = 0.75 * (1.0 + cb) * λ1 * wave_height
     ρgH = density * gravity * wave_height
-    p1 = 0.5 * (1.0 + cb) * (λ1 * α1 + λ2 * α2 * cb**2) * ρgH
+    p1 = 0.5 * (1.0 + cb) * (λ1 * α1 + λ2 * α_star * cb**2) * ρgH
     p4 = p1 * (1.0 - crest_height / η) if η > crest_height else 0.0
     pu = 0.5 * (1.0 + cb) * λ3 * α1 * α3 * ρgH
     return GodaPressure(wavelength=L, alpha1=α1, alpha2=α2, alpha3=α3, eta_star=η, p1=p1,
                         p2=p1 / cosh, p3=α3 * p1, p4=p4, uplift=pu, toe_depth=toe_depth,
-                        crest_height=crest_height)
+                        crest_height=crest_height, alpha_impulsive=α_i)

@@ -5,7 +5,7 @@ or to the left of it (``layout="side"``); they share one conforming interface cu
 Physical names: ``a``, ``b`` (cells); ``interface``; ``a_top``, ``a_left``,
 ``a_right``, ``a_bottom_free``; ``b_bottom``, ``b_left``, ``b_right``, ``b_top_free``
 (facets; free parts exist only when the widths differ). Points: ``a_corner`` (the
-lower-left corner of ``a``).
+lower-left corner of ``a``). :func:`two_block_case` is the case file of such a mesh.
 """
 
 from __future__ import annotations
@@ -153,3 +153,37 @@ def stacked_blocks(path: str | pathlib.Path, comm: MPI.Comm, width: float,
 
     on_rank_zero(comm, build)
     return pathlib.Path(comm.bcast(str(path), root=0))
+
+
+def two_block_case(mesh: str | pathlib.Path, head: str = "", tail: str = "") -> str:
+    """The TOML of a case on a :func:`two_rectangles` mesh (the tests' two-block case).
+
+    Bodies ``a`` and ``b`` (2000 kg/m³, ν = 0.25, E = 1 GPa), frictionless contact of
+    ``a`` (slave) on ``b`` over ``interface`` (penalty 1e12 N/m³), ``b_bottom`` fixed,
+    dt = 1e-4 s to 1e-3 s.
+
+    Args:
+        mesh: The ``.msh`` file (``mesh.source``).
+        head: Top-level keys (before the tables), e.g. ``name = "x"``.
+        tail: Further tables, e.g. ``[loads.…]``.
+    """
+    return f'''{head}
+mesh.source = "{mesh}"
+[bodies.a]
+density = 2000.0
+poisson = 0.25
+young_modulus = 1e9
+[bodies.b]
+density = 2000.0
+poisson = 0.25
+young_modulus = 1e9
+[contact.interface]
+slave = "a"
+master = "b"
+penalty = 1e12
+[fixed.b_bottom]
+[time]
+dt = 1e-4
+end_time = 1e-3
+{tail}
+'''

@@ -22,31 +22,9 @@ from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
 from breakwater.runspec import OutputSpec, TimeSpec
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from blocks import two_rectangles
+from blocks import two_block_case, two_rectangles
 
 COMM = MPI.COMM_WORLD
-
-CASE = """\
-name = "truncated"
-[mesh]
-source = "{mesh}"
-[bodies.a]
-density = 2000.0
-poisson = 0.25
-young_modulus = 1e9
-[bodies.b]
-density = 2000.0
-poisson = 0.25
-young_modulus = 1e9
-[contact.interface]
-slave = "a"
-master = "b"
-penalty = 1e12
-[fixed.b_bottom]
-[time]
-dt = 1e-4
-end_time = 1e-3
-"""
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +60,7 @@ def test_truncated_mesh_exit_2(mesh_path, folder, section, capsys):
     path = _truncated(mesh_path, folder, section)
     case = folder / f"truncated_{section.strip('$')}.toml"
     if COMM.rank == 0:
-        case.write_text(CASE.format(mesh=path))
+        case.write_text(two_block_case(path, 'name = "truncated"'))
     COMM.barrier()
     assert cli.main(["run", str(case), "--out", str(folder / "never"), "--quiet"]) == 2
     err = capsys.readouterr().err
