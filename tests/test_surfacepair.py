@@ -37,7 +37,7 @@ from breakwater.errors import MeshError
 from breakwater.gn22 import GN22, GN22Parameters
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.projection import FacetGrid, closest_point, curve, project
+from breakwater.projection import FacetGrid, closest_point, curve, nearest_end, project
 from breakwater.solver import NewtonOptions
 from breakwater.surfacepair import SurfaceContact, SurfacePair
 
@@ -69,6 +69,18 @@ def test_projection_straight_and_continuation() -> None:
     # Beyond the ends (no facet under the point), or farther than the radius: none.
     facet, _ = project(np.array([[-0.1, 0.05], [1.1, 0.0], [0.4, 0.5]]), nodes, grid)
     np.testing.assert_array_equal(facet, [-1, -1, -1])
+
+
+def test_nearest_end_beyond_the_surface() -> None:
+    """Points past either end of a surface (no projection) take its end vertex within
+    the radius (the friction of a slave node that slid past the master's end)."""
+    nodes = _straight(np.array([0.0, 0.3, 0.5, 1.0]))
+    grid = FacetGrid(nodes, radius=0.2)
+    points = np.array([[-0.05, 0.01], [1.1, -0.02], [1.5, 0.0]])
+    assert np.all(project(points, nodes, grid)[0] == -1)
+    facet, xi = nearest_end(points, nodes, grid)
+    np.testing.assert_array_equal(facet, [0, 2, -1])  # the last: beyond the radius
+    np.testing.assert_array_equal(xi[:2], [-1.0, 1.0])
 
 
 def test_projection_convex_corner_has_none() -> None:
