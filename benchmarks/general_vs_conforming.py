@@ -94,6 +94,7 @@ def _headline(run: dict[str, Any]) -> dict[str, float]:
 
 
 def main() -> None:
+    """Run both cases and print the tables (rank 0)."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="a case override for both runs (e.g. time.end_time=0.05)")
