@@ -368,26 +368,40 @@ class ContactModel:
         return _PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
 
     def _check_surfaces(self, pair: SurfacePair) -> SurfacePair:
-        """A general pair whose surfaces lie on its bodies' boundaries."""
+        """A general pair whose surfaces lie on its bodies' boundaries.
+
+        A surface group may lie on several bodies (a conforming interface shared by the
+        two, or one group naming facets of both): each side of the pair takes the
+        group's facets on its own body (:func:`breakwater.surfacepair.surface_dofs`).
+        """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
                                   ("master", pair.master, pair.master_surface)):
-            self.body(body)
-            found, _ = self._locate(group)
-            if found.spec.name != body:
+            index = self.body(body).index
+            counts = self._facet_counts(group)
+            if counts[index] == 0:
+                found = [b.spec.name for b, c in zip(self.bodies, counts, strict=True) if c]
+                if not found:
+                    raise MeshError(f"contact '{pair.name}': {role} surface '{group}' has "
+                                    "no facet on any body")
                 raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
-                                f"body '{found.spec.name}', not on the {role} '{body}'")
+                                f"body '{', '.join(found)}', not on the {role} '{body}'")
         return pair
+
+    def _facet_counts(self, group: str) -> list[int]:
+        """The number of facets of a facet group on each body (every rank)."""
+        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
+        return [self.comm.allreduce(len(b.facet_tags.find(tag))) for b in self.bodies]
 
     def _locate(self, group: str) -> tuple[_BodyData, np.ndarray]:
         """The body whose boundary holds a facet group, and its facets in the submesh."""
-        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
-        found = [(b, b.facet_tags.find(tag)) for b in self.bodies]
-        counts = [self.comm.allreduce(len(f)) for _, f in found]
+        counts = self._facet_counts(group)
         owners = [i for i, c in enumerate(counts) if c > 0]
         if len(owners) != 1:
             raise MeshError(f"facet group '{group}' must lie on exactly one body "
                             f"(found on {len(owners)})")
-        return found[owners[0]]
+        b = self.bodies[owners[0]]
+        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
+        return b, b.facet_tags.find(tag)
 
     def _build_fixed(self, fixed: Fixed) -> list[fem.DirichletBC]:
         body, facets = self._locate(fixed.group)

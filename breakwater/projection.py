@@ -191,3 +191,39 @@ def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
     facet[point[best]] = cand[best]
     xi_out[point[best]] = np.clip(xi[best], -1, 1)
     return facet, xi_out
+
+
+def nearest_end(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest facet end (vertex) of each point within the search radius.
+
+    For points that have no projection (beyond the end of the surface): the
+    surface's closest point is then a vertex, ``ξ = ±1`` of a facet.
+
+    Args:
+        points: Shape ``(m, gdim)``.
+        nodes: Facet node positions, shape ``(F, nn, gdim)`` (the two vertices first).
+        grid: The candidate search of these facets.
+
+    Returns:
+        The facet of each point (−1: no vertex within the radius) and ξ (±1).
+    """
+    m = len(points)
+    facet = np.full(m, -1, np.int64)
+    xi_out = np.zeros(m)
+    point, cand = grid.candidates(points)
+    if not len(point):
+        return facet, xi_out
+    ends = nodes[cand][:, :2]  # (pairs, 2, gdim)
+    dist = np.sum((ends - points[point][:, None]) ** 2, axis=2)
+    end = np.argmin(dist, axis=1)
+    dist = dist[np.arange(len(end)), end]
+    ok = dist <= grid.radius ** 2
+    point, cand, end, dist = point[ok], cand[ok], end[ok], dist[ok]
+    order = np.lexsort((cand, dist, point))
+    first = np.ones(len(order), bool)
+    first[1:] = point[order][1:] != point[order][:-1]
+    best = order[first]
+    facet[point[best]] = cand[best]
+    xi_out[point[best]] = np.where(end[best] == 0, -1.0, 1.0)
+    return facet, xi_out

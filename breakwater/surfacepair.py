@@ -53,7 +53,7 @@ from .pointkernels import (
     normal_forces,
     unit_tangent,
 )
-from .projection import FacetGrid, closest_point, project, shape
+from .projection import FacetGrid, closest_point, nearest_end, project, shape
 
 if TYPE_CHECKING:
     from .bulk import MonolithicLayout
@@ -250,6 +250,8 @@ class SurfaceContact:
         self._normal_key: np.ndarray | None = None
         self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
+        # The start-of-step projection of the last step solved (see _friction).
+        self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -342,6 +344,9 @@ class SurfaceContact:
     def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The projection of each slave node at the start of the step (cached).
 
+        A node with no projection (beyond the master's end) takes the nearest master
+        vertex within the search radius (ξ̄₀ = ±1).
+
         Returns:
             Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
             and the unit tangent there, in the configuration at the start of the step.
@@ -351,7 +356,13 @@ class SurfaceContact:
         m = self.master
         xm = m.X + u0[self.pos_m]
         points = self.node_X + u0[self.node_pos]
-        facet, xi = project(points, xm, FacetGrid(xm, self.radius))
+        grid = FacetGrid(xm, self.radius)
+        facet, xi = project(points, xm, grid)
+        # A node beyond the master's end (it slid past it) keeps its friction where its
+        # facets' points still press: its master point is the surface's end vertex.
+        beyond = np.flatnonzero(facet < 0)
+        if len(beyond):
+            facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
         N0, dN0, _ = shape(xi, m.X.shape[1])
         t0 = unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
             np.zeros_like(points)
@@ -379,16 +390,28 @@ class SurfaceContact:
                 self.node_of[p["slave_facet"]])
         return self._normal_data
 
-    def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray
-                  ) -> dict[str, np.ndarray] | None:
+    def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
+                  accepted: bool = False) -> dict[str, np.ndarray] | None:
         """The nodal friction forces (None: no slave node in contact).
 
         Per slave node k in contact (λ_k > 0, a projection at the start of the step),
         the force ``−μ λ_k φ(v_T)`` (:class:`forms.ContactLaw`'s friction with the
         nodal normal force λ_k in place of the pressure), with
         ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``.
+
+        Args:
+            u0: Displacements at the start of the step (the projection ξ̄₀).
+            v1: Velocities of the iterate.
+            λ: The slave nodes' normal forces.
+            accepted: At the accepted state: the projection of the step that was
+                accepted (the force the step applied: where the interface sticks,
+                φ(v_T) turns a change of t₀ of 1e-10 into an O(1) change of the
+                force), or, before any step, that of the state itself.
         """
-        facet, N0, t0 = self._frozen(u0)
+        if accepted and self._step_frozen is not None:
+            facet, N0, t0 = self._step_frozen
+        else:
+            facet, N0, t0 = self._frozen(u0)
         k = np.flatnonzero((facet >= 0) & (λ > 0))
         if not len(k):
             return None
@@ -415,6 +438,7 @@ class SurfaceContact:
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = self._add(np.zeros(self.n), pos, kernel(groups))
         if self.spec.friction:
+            self._step_frozen = self._frozen(u0)
             fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
             if fr is not None:
                 self._add(out, fr["pos_s"], -fr["force"])
@@ -552,7 +576,8 @@ class SurfaceContact:
         # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
         out = -kernel(groups)[:, :nn].sum(axis=(0, 1))
         if self.spec.friction:
-            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node),
+                                accepted)
             if fr is not None:
                 out += fr["force"].sum(axis=0)
         return out
@@ -572,7 +597,7 @@ class SurfaceContact:
             u0, u1, v1 = self._state(accepted=True)
             _, groups, _, lam_kernel, node = self._normal(u1, v1)
             lam = self._nodal_forces(lam_kernel, groups, node)
-            fr = self._friction(u0, v1, lam)
+            fr = self._friction(u0, v1, lam, accepted=True)
             if fr is not None:
                 power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
         return energy, power

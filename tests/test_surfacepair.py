@@ -37,7 +37,7 @@ from breakwater.errors import MeshError
 from breakwater.gn22 import GN22, GN22Parameters
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.projection import FacetGrid, closest_point, curve, project
+from breakwater.projection import FacetGrid, closest_point, curve, nearest_end, project
 from breakwater.solver import NewtonOptions
 from breakwater.surfacepair import SurfaceContact, SurfacePair
 
@@ -69,6 +69,18 @@ def test_projection_straight_and_continuation() -> None:
     # Beyond the ends (no facet under the point), or farther than the radius: none.
     facet, _ = project(np.array([[-0.1, 0.05], [1.1, 0.0], [0.4, 0.5]]), nodes, grid)
     np.testing.assert_array_equal(facet, [-1, -1, -1])
+
+
+def test_nearest_end_beyond_the_surface() -> None:
+    """Points past either end of a surface (no projection) take its end vertex within
+    the radius (the friction of a slave node that slid past the master's end)."""
+    nodes = _straight(np.array([0.0, 0.3, 0.5, 1.0]))
+    grid = FacetGrid(nodes, radius=0.2)
+    points = np.array([[-0.05, 0.01], [1.1, -0.02], [1.5, 0.0]])
+    assert np.all(project(points, nodes, grid)[0] == -1)
+    facet, xi = nearest_end(points, nodes, grid)
+    np.testing.assert_array_equal(facet, [0, 2, -1])  # the last: beyond the radius
+    np.testing.assert_array_equal(xi[:2], [-1.0, 1.0])
 
 
 def test_projection_convex_corner_has_none() -> None:
@@ -353,10 +365,12 @@ def test_histories_equal_serial(run, shared_dir: pathlib.Path) -> None:  # type:
     serial = COMM.bcast(serial, root=0)
     np.testing.assert_array_equal(parallel["t"], serial["t"])
     # The kinematics to 1e-9 of their scale (measured 2.6e-10 falling, 2.8e-10 sliding;
-    # the issue asks 1e-10): the gap g_n ~ 6e-8 m is the difference of positions of
-    # 0.1 m, whose round-off (1e-17 m) is 2e-10 of it, and the friction force μλ and
-    # the acceleration inherit it (sliding: the difference grows like t²); the impact
-    # with χ = 1e-10 turns velocity round-off into a horizontal offset of 2.4e-13 m.
+    # the issue asks 1e-10 of the kinematics, which test_kinematics_equal_serial checks
+    # for one state): a partition changes the bulk solve's round-off, and these runs
+    # amplify round-off — serially, perturbing u and v by a relative 1e-16 after each
+    # step moves the same histories by 2.4e-10 (falling) and 3.3e-10 (sliding): the
+    # penalty impact and the stick tangent μλ/χ (χ = 1e-10) do it, not the pair's
+    # evaluation, which is the same on every partition.
     scale = np.abs(serial["x"]).max()
     assert np.abs(parallel["x"] - serial["x"]).max() <= 1e-9 * scale
     # The forces to 1e-7 of their scale: where the interface sticks, the friction law's
@@ -364,6 +378,61 @@ def test_histories_equal_serial(run, shared_dir: pathlib.Path) -> None:  # type:
     # 5e-4 N (measured 3e-4 N against a weight of 392 N; the kinematics are unaffected).
     scale = np.abs(serial["force"]).max()
     assert np.abs(parallel["force"] - serial["force"]).max() <= 1e-7 * scale
+
+
+def _kinematics(comm: MPI.Comm, path: pathlib.Path) -> dict[str, np.ndarray]:
+    """The pair's kinematics and forces for one displacement field, given as a formula.
+
+    A block (element size 1/20 m) 30 mm to the right of where it was meshed, tilted
+    into a base of element size 1/7 m (non-matching: the gap from +10 μm to −30 μm),
+    both strained; the velocities of a slide at 0.1 m/s.
+    """
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5)
+    model = _model(path, comm, [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 7, 2),
+                                Rectangle("block", -0.1, 0.0, 0.2, 0.1, 4, 2)], pair)
+    stepper = GN22(model, 1e-3)
+    stepper.initialise()
+
+    def block(x: np.ndarray) -> np.ndarray:
+        return np.vstack([0.03 + 1e-4 * x[1], -1e-5 * (1 + 20 * x[0]) - 1e-4 * x[1]])
+
+    def base(x: np.ndarray) -> np.ndarray:
+        return np.vstack([1e-5 * np.sin(3 * x[0]), 1e-5 * x[1] * np.cos(2 * x[0])])
+
+    def slide(x: np.ndarray) -> np.ndarray:
+        return np.vstack([np.full(x.shape[1], 0.1), 1e-3 * x[0]])
+
+    stepper.u[0].interpolate(base)
+    stepper.u[1].interpolate(block)
+    stepper.v[1].interpolate(slide)
+    provider = _provider(stepper)
+    out = provider.state()
+    out["resultant"] = provider.resultant()
+    stepper.destroy()
+    return out
+
+
+@pytest.mark.skipif(COMM.size < 2, reason="compares serial and parallel runs")
+def test_kinematics_equal_serial(shared_dir: pathlib.Path) -> None:
+    """For the same displacements the pair's kinematics on 2 ranks equal the serial
+    ones (issue 12: to 1e-10 relative): integration points, projections (master facet
+    and ξ̄), gaps, pressures and the resultant. Every rank gathers the surfaces in one
+    order and evaluates every point the same way; what differs is the last bit of the
+    reference coordinates (dolfinx tabulates the P2 nodes cell by cell): measured
+    5e-14 of the gap's scale, 3e-14 of the resultant, 2e-16 in ξ̄; we ask 1e-12.
+    (The histories above differ by more: a partition changes the bulk solve's
+    round-off, which the dynamics amplifies; see the README.)"""
+    parallel = _kinematics(COMM, shared_dir / "kin_world.msh")
+    serial = None
+    if COMM.rank == 0:
+        serial = _kinematics(MPI.COMM_SELF, shared_dir / "kin_serial.msh")
+    serial = COMM.bcast(serial, root=0)
+    closed = serial["gap"] <= 0
+    assert closed.sum() > 10 and (~closed).sum() > 0  # in contact, with open points
+    np.testing.assert_array_equal(parallel["facet"], serial["facet"])
+    for key in ("x", "xi", "gap", "pressure", "weight", "resultant"):
+        a, b = np.nan_to_num(parallel[key]), np.nan_to_num(serial[key])
+        assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max(), key
 
 
 # --- the case ----------------------------------------------------------------------
