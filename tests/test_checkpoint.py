@@ -148,21 +148,19 @@ def _close(a: Any, b: Any, path: str = "") -> None:
 def _tolerance(column: str) -> float:
     """Relative tolerance of a history column (relative to its largest value).
 
-    1e-12, the issue's. Under MPI, two uninterrupted runs of this model on 2 ranks
-    already differ (measured: 1e-14 of the column's scale, and 1e-8 in the
-    tangential force): the parallel linear algebra does not add in a fixed order from
-    one process to the next (MUMPS's dynamic scheduling is the likely cause). The
-    tangential force of sticking nodes, μp·φ(v_T/χ) with χ = 1e-10 m/s, is fixed only
-    to Newton's tolerance (rtol 1e-9), so it amplifies round-off: there the bound is
-    1e-6. The ledger's balance error and numerical dissipation contain the friction
-    force's work, as sensitive: under MPI they are compared to 1e-8 of the external work
-    (Newton's tolerance, as in test_fastpath.py), and the balance without the numerical
-    entry (what the balance error was before it, see :func:`_with_old_balance`) to 1e-12.
+    Serially 1e-12, the issue's (a resumed run repeats the same operations: bit for
+    bit). Under MPI two uninterrupted runs of this model on 2 ranks already differ: the
+    parallel linear algebra does not add in a fixed order from one process to the next
+    (MUMPS's dynamic scheduling), and the stick tangent μλ/χ (χ = 1e-10 m/s) amplifies
+    that round-off. Measured: 1e-14 of a column's scale on a quiet machine, but up to
+    8e-10 from the first step on, before any checkpoint, when the two cores are shared
+    with other jobs. So under MPI the kinematics and the ledger are compared to 1e-8 (ten
+    times Newton's rtol, 1e-9; the ledger's columns scaled by the external work) and the
+    tangential force of sticking nodes, μp·φ(v_T/χ), fixed only to Newton's tolerance,
+    to 1e-6.
     """
-    if COMM.size > 1 and column.startswith("tangential_force"):
-        return 1e-6
-    if COMM.size > 1 and column in LEDGER_NOISE:
-        return 1e-8
+    if COMM.size > 1:
+        return 1e-6 if column.startswith("tangential_force") else 1e-8
     return 1e-12
 
 
@@ -187,6 +185,12 @@ def _compare(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> float:
     a, b = _with_old_balance(a), _with_old_balance(b)
     worst = 0.0
     for k in a:
+        if COMM.size > 1 and k == "newton_iterations":
+            # Under MPI a step whose residual lands at Newton's tolerance can take one
+            # iteration more or less from one run to the next (the parallel round-off
+            # above moves it by ~1e-14): measured under load, 7 against 6 at one step.
+            assert np.abs(b[k] - a[k]).max() <= 1, k
+            continue
         scale = _scale(a, k)
         np.testing.assert_allclose(b[k], a[k], rtol=0, atol=_tolerance(k) * scale,
                                    err_msg=k)
@@ -205,8 +209,18 @@ def _same_run(reference: tuple[pathlib.Path, dict], directory: pathlib.Path,
     for key in PHYSICS:
         _close(ref[key], summary[key], key)
     timing = ("wall_time", "time_loop")  # wall-clock times differ from run to run
-    solver = {k: v for k, v in summary["solver"].items() if k not in timing}
-    _close({k: v for k, v in ref["solver"].items() if k not in timing}, solver, "solver")
+    # Under MPI the Newton counts may differ by an iteration at a few steps (see
+    # _compare); the history's per-step comparison bounds them.
+    counts = ("newton_iterations", "mean_newton_iterations", "max_newton_iterations")
+    skip = timing + (counts if COMM.size > 1 else ())
+    solver = {k: v for k, v in summary["solver"].items() if k not in skip}
+    _close({k: v for k, v in ref["solver"].items() if k not in skip}, solver, "solver")
+    if COMM.size > 1:
+        steps = summary["solver"]["steps"]
+        assert abs(summary["solver"]["newton_iterations"]
+                   - ref["solver"]["newton_iterations"]) <= max(2, steps // 10)
+        assert abs(summary["solver"]["max_newton_iterations"]
+                   - ref["solver"]["max_newton_iterations"]) <= 1
     return worst
 
 
