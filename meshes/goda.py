@@ -336,14 +336,12 @@ def build_model(
     line = geo.addLine
     base = line(base_left, base_right)
     slopes = [line(base_right, crest_right), line(crest_left, base_left)]
-    if g.conforming:  # the crest beside the caisson, and the shared interface
-        crest = [line(crest_right, corner_rear), line(corner_front, crest_left)]
-        bottom = line(corner_front, corner_rear)
-        crest_loop = [crest[0], -bottom, crest[1]]
-    else:  # the whole crest, and the caisson base apart from it
-        crest = [line(crest_right, crest_left)]
-        bottom = line(corner_front, corner_rear)
-        crest_loop = crest
+    # Conforming: the crest beside the caisson, and the caisson base shared with it.
+    # Separate: the whole crest, and the caisson base apart from it.
+    crest = ([line(crest_right, corner_rear), line(corner_front, crest_left)]
+             if g.conforming else [line(crest_right, crest_left)])
+    bottom = line(corner_front, corner_rear)  # the caisson base
+    crest_loop = [crest[0], -bottom, crest[1]] if g.conforming else crest
     rear, top = line(corner_rear, top_rear), line(top_rear, top_front)
     segments = list(itertools.pairwise(chain))  # top -> down
     front_chain = [line(pa, pb) for (_, pa), (_, pb) in segments]
