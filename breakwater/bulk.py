@@ -103,10 +103,13 @@ class Timings:
     ``factorisation`` (A assembled and factorised, and the interface solves for X),
     ``back_solves`` (z = A⁻¹ r₀), ``bulk_products`` (r₀ and Δa = z − X f_c),
     ``interface_assembly`` (the contact forms), ``newton`` (the rest of the SNES on the
-    interface: dense solves, the convergence test, the slip guard).
+    interface: dense solves, the convergence test, the slip guard), ``contact_search``
+    (the general pairs' integration points cut and projected onto the master: a part of
+    ``interface_assembly``).
     """
 
-    KEYS = ("factorisation", "back_solves", "bulk_products", "interface_assembly", "newton")
+    KEYS = ("factorisation", "back_solves", "bulk_products", "interface_assembly", "newton",
+            "contact_search")
 
     def __init__(self) -> None:
         self.seconds = dict.fromkeys(self.KEYS, 0.0)

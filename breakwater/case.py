@@ -39,7 +39,7 @@ from .errors import CaseError
 from .gmshtools import physical_groups
 from .initial import InitialCase
 from .loadcase import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
-from .meshes.goda import PHYSICAL_GROUPS, GodaGeometry
+from .meshes.goda import GodaGeometry
 from .runspec import TimeSpec
 from .schema import InvalidField, Schema, positive, setting, suggest, to_toml
 
@@ -530,7 +530,7 @@ table's ``file``)."""
 def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     """The named physical groups of the case's mesh (name -> dimension)."""
     if mesh.generated:
-        return {name: dim for name, (dim, _) in PHYSICAL_GROUPS.items()}
+        return {name: dim for name, (dim, _) in mesh.goda.physical_groups.items()}
     path = pathlib.Path(mesh.source)
     if not path.is_file():
         raise InvalidField("mesh.source", f"mesh file not found: {path}")

@@ -236,6 +236,9 @@ class CondensedNewton:
         self.providers += [SurfaceContact(model, p, layout, self.I,
                                           (self.u, self.v, self.a, self.da), dt, beta1, beta2)
                            for p in model.surface_pairs]
+        for p in self.providers:
+            if isinstance(p, SurfaceContact):
+                p.timings = self.timings  # its search time: timings["contact_search"]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]

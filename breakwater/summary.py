@@ -229,7 +229,8 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
     ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``,
     ``cpu`` (the process's CPU time over the loop, all threads) and, for the fast
     solver, ``factorisation``, ``back_solves``, ``bulk_products``,
-    ``interface_assembly`` and ``newton`` (:class:`~breakwater.condensed.Timings`).
+    ``interface_assembly``, ``newton`` and ``contact_search`` (the general pairs' search,
+    a part of ``interface_assembly``; :class:`~breakwater.condensed.Timings`).
     """
     its = iterations
     return {

@@ -56,7 +56,7 @@ from .pointkernels import (
 from .projection import FacetGrid, closest_point, nearest_end, project, shape
 
 if TYPE_CHECKING:
-    from .bulk import MonolithicLayout
+    from .bulk import MonolithicLayout, Timings
     from .model import ContactModel
 
 __all__ = ["SurfaceContact", "SurfacePair", "check_pair_settings", "surface_dofs"]
@@ -240,6 +240,7 @@ class SurfaceContact:
             self._owned.append((local[hit], pos[hit]))
         self.searches = 0
         self.search_seconds = 0.0
+        self.timings: Timings | None = None  # the solver's: search time also added there
         # The slave nodes (friction acts on them): one id per node, by global DOF.
         _, first, self.node_of = np.unique(slave.dofs[..., 0], return_index=True,
                                              return_inverse=True)
@@ -332,7 +333,10 @@ class SurfaceContact:
         points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
         facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius))
         self.searches += 1
-        self.search_seconds += time.perf_counter() - t0
+        elapsed = time.perf_counter() - t0
+        self.search_seconds += elapsed
+        if self.timings is not None:
+            self.timings.seconds["contact_search"] += elapsed
         on = np.flatnonzero(facet >= 0)
         f_s, f_m = point_facet[on], facet[on]
         return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns[on],

@@ -4,7 +4,8 @@ The physical groups travel as cell data ``gmsh:physical`` (and
 ``gmsh:geometrical``), one value per cell of every block; the output has one
 block per cell type (triangles, lines, vertices). Formats other than ``.msh``
 drop the group names: decode the tags with
-:data:`breakwater.meshes.goda.PHYSICAL_GROUPS`.
+:data:`breakwater.meshes.goda.PHYSICAL_GROUPS` (``SEPARATE_PHYSICAL_GROUPS`` for the
+separately meshed model).
 
 Format notes:
     * ``.msh`` output is a verbatim copy (meshio's gmsh 4.1 writer loses the

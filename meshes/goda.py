@@ -4,8 +4,11 @@ Plane strain, SI units (metres), ``x`` horizontal, ``y`` up, origin at the centr
 of the mound base. A rectangular caisson sits centred on the crest of a
 trapezoidal gravel mound; the caisson base and the middle part of the crest are
 one shared gmsh curve (``interface``), so the two bodies have conforming nodes
-there. The struck (seaward) face is the caisson's left face; the pendulum pushes
-in ``+x``.
+there. With ``GodaGeometry(conforming=False)`` the two bodies are meshed apart: the
+caisson base (``caisson_base``) and the whole mound crest (``mound_crest``) are
+distinct curves, coincident in space, with no shared nodes (for a general contact
+pair, :mod:`breakwater.surfacepair`), and each body has its own element size. The
+struck (seaward) face is the caisson's left face; the pendulum pushes in ``+x``.
 
 Physical groups are referred to by name (the module constants below); their
 integer tags are fixed by :data:`PHYSICAL_GROUPS` so that files written by
@@ -39,13 +42,15 @@ CAISSON_FRONT = "caisson_front"
 CAISSON_REAR = "caisson_rear"
 CAISSON_TOP = "caisson_top"
 MOUND_SURFACE = "mound_surface"
+CAISSON_BASE = "caisson_base"  # the separately meshed model only
+MOUND_CREST = "mound_crest"  # the separately meshed model only
 # Points (dim 0).
 GAUGE_TOP = "gauge_top"
 GAUGE_BOTTOM = "gauge_bottom"
 CORNER_FRONT = "corner_front"
 CORNER_REAR = "corner_rear"
 
-#: Physical group name -> (dimension, tag); the same shape as
+#: Physical group name -> (dimension, tag) of the conforming model; the same shape as
 #: ``dolfinx.io.gmsh.MeshData.physical_groups``. Tags are unique across dimensions.
 PHYSICAL_GROUPS: Mapping[str, tuple[int, int]] = MappingProxyType(
     {
@@ -62,6 +67,18 @@ PHYSICAL_GROUPS: Mapping[str, tuple[int, int]] = MappingProxyType(
         GAUGE_BOTTOM: (0, 22),
         CORNER_FRONT: (0, 23),
         CORNER_REAR: (0, 24),
+    }
+)
+
+#: The groups of the separately meshed model (``conforming=False``): no ``interface``;
+#: the caisson base and the mound crest are groups of their own (tags not used by
+#: :data:`PHYSICAL_GROUPS`). ``mound_surface`` is then the two slopes: the crest beside
+#: the caisson belongs to ``mound_crest``, the surface a sliding caisson can reach.
+SEPARATE_PHYSICAL_GROUPS: Mapping[str, tuple[int, int]] = MappingProxyType(
+    {
+        **{k: v for k, v in PHYSICAL_GROUPS.items() if k != INTERFACE},
+        CAISSON_BASE: (1, 18),
+        MOUND_CREST: (1, 19),
     }
 )
 
@@ -106,6 +123,11 @@ class GodaGeometry:
         mound_element_size: Target triangle edge length in the mound at refinement 1.
         caisson_element_size: Target triangle edge length in the caisson (and on
             the interface) at refinement 1.
+        conforming: True: the caisson base and the crest under it are one shared
+            curve (group ``interface``, shared nodes). False: the bodies are meshed
+            apart, each with its own element size, no shared nodes: the caisson
+            base (``caisson_base``) on the whole crest (``mound_crest``), for a
+            general contact pair; ``mound_surface`` is then the slopes.
 
     """
 
@@ -120,6 +142,7 @@ class GodaGeometry:
     gauge_offset_bottom: float = 0.041
     mound_element_size: float = 0.0265
     caisson_element_size: float = 0.029
+    conforming: bool = field(default=True, metadata={"unit": "-"})
 
     def __post_init__(self) -> None:
         """Reject impossible geometries at construction."""
@@ -134,8 +157,12 @@ class GodaGeometry:
                 or the impact patch or a gauge is not inside the front face.
 
         """
+        if not isinstance(self.conforming, bool):
+            raise ValueError(f"conforming must be true or false, got {self.conforming!r}")
         for f in fields(self):
             value = getattr(self, f.name)
+            if f.name == "conforming":
+                continue
             if not (
                 isinstance(value, int | float) and math.isfinite(value) and value > 0
             ):
@@ -160,6 +187,11 @@ class GodaGeometry:
                     f"{name} ({getattr(self, name)}) must be smaller than "
                     f"caisson_height ({self.caisson_height})"
                 )
+
+    @property
+    def physical_groups(self) -> Mapping[str, tuple[int, int]]:
+        """The model's physical groups: name -> (dimension, tag)."""
+        return PHYSICAL_GROUPS if self.conforming else SEPARATE_PHYSICAL_GROUPS
 
     @property
     def base_width(self) -> float:
@@ -261,6 +293,9 @@ def build_model(
         refinement: Element sizes are ``(mound|caisson)_element_size / refinement``.
         order: Geometric order of the elements, 1 (3-node) or 2 (6-node triangles).
 
+    The physical groups are ``geometry.physical_groups`` (:data:`PHYSICAL_GROUPS`,
+    or :data:`SEPARATE_PHYSICAL_GROUPS` for ``conforming=False``).
+
     Raises:
         ValueError: For a non-positive refinement or an order other than 1 or 2.
 
@@ -301,8 +336,12 @@ def build_model(
     line = geo.addLine
     base = line(base_left, base_right)
     slopes = [line(base_right, crest_right), line(crest_left, base_left)]
-    crest = [line(crest_right, corner_rear), line(corner_front, crest_left)]
-    interface = line(corner_front, corner_rear)
+    # Conforming: the crest beside the caisson, and the caisson base shared with it.
+    # Separate: the whole crest, and the caisson base apart from it.
+    crest = ([line(crest_right, corner_rear), line(corner_front, crest_left)]
+             if g.conforming else [line(crest_right, crest_left)])
+    bottom = line(corner_front, corner_rear)  # the caisson base
+    crest_loop = [crest[0], -bottom, crest[1]] if g.conforming else crest
     rear, top = line(corner_rear, top_rear), line(top_rear, top_front)
     segments = list(itertools.pairwise(chain))  # top -> down
     front_chain = [line(pa, pb) for (_, pa), (_, pb) in segments]
@@ -310,28 +349,32 @@ def build_model(
     impact = [c for c, hit in zip(front_chain, on_patch, strict=True) if hit]
     front = [c for c, hit in zip(front_chain, on_patch, strict=True) if not hit]
 
-    mound_loop = [base, slopes[0], crest[0], -interface, crest[1], slopes[1]]
-    caisson_loop = [interface, rear, top, *front_chain]
+    mound_loop = [base, slopes[0], *crest_loop, slopes[1]]
+    caisson_loop = [bottom, rear, top, *front_chain]
     caisson = geo.addPlaneSurface([geo.addCurveLoop(caisson_loop)])
     mound = geo.addPlaneSurface([geo.addCurveLoop(mound_loop)])
     geo.synchronize()
 
+    contact_groups = (
+        {INTERFACE: [bottom], MOUND_SURFACE: [*crest, *slopes]}
+        if g.conforming
+        else {CAISSON_BASE: [bottom], MOUND_CREST: crest, MOUND_SURFACE: slopes}
+    )
     entities = {
         CAISSON: [caisson],
         MOUND: [mound],
-        INTERFACE: [interface],
         BASE: [base],
         IMPACT: impact,
         CAISSON_FRONT: front,
         CAISSON_REAR: [rear],
         CAISSON_TOP: [top],
-        MOUND_SURFACE: [*crest, *slopes],
+        **contact_groups,
         GAUGE_TOP: [front_ids[_nearest(stations, g.gauge_top[1])]],
         GAUGE_BOTTOM: [front_ids[_nearest(stations, g.gauge_bottom[1])]],
         CORNER_FRONT: [corner_front],
         CORNER_REAR: [corner_rear],
     }
-    for name, (dim, tag) in PHYSICAL_GROUPS.items():
+    for name, (dim, tag) in g.physical_groups.items():
         gmsh.model.addPhysicalGroup(dim, entities[name], tag=tag, name=name)
 
     gmsh.model.mesh.generate(2)

@@ -41,7 +41,7 @@ def meshes(folder: pathlib.Path) -> dict[float, pathlib.Path]:
 
 def _cells(mesh, name: str) -> np.ndarray:
     """Connectivity of the cells of physical group `name` (corner nodes first)."""
-    dim, tag = goda.PHYSICAL_GROUPS[name]
+    dim, tag = {**goda.PHYSICAL_GROUPS, **goda.SEPARATE_PHYSICAL_GROUPS}[name]
     blocks = [
         block.data[phys == tag]
         for block, phys in zip(mesh.cells, mesh.cell_data["gmsh:physical"], strict=True)
@@ -267,3 +267,123 @@ def test_gmsh_session_finalises_on_errors():
         assert gmsh.option.getNumber("General.Terminal") == 0  # the default: quiet
         1 / 0  # noqa: B018
     assert not gmsh.isInitialized()
+
+
+# --- the separately meshed model (conforming = False) ---------------------------------
+
+# The caisson finer than the mound, in the ratio of the example
+# (examples/goda_nonmatching.toml): 0.0265 / 0.0156 = 1.70.
+SEPARATE = goda.GodaGeometry(conforming=False, caisson_element_size=0.0156)
+
+
+@pytest.fixture(scope="module")
+def separate(folder: pathlib.Path) -> pathlib.Path:
+    """The separately meshed model (order 2, as the runs use it)."""
+    return goda.generate(folder / "goda_separate.msh", SEPARATE, order=2)
+
+
+def _nodes(mesh, name: str) -> set[int]:
+    return set(_cells(mesh, name).ravel().tolist())
+
+
+def test_separate_groups_present(separate):
+    mesh = export.read(separate)
+    found = {name: (int(dim), int(tag)) for name, (tag, dim) in mesh.field_data.items()}
+    assert found == dict(goda.SEPARATE_PHYSICAL_GROUPS) == dict(SEPARATE.physical_groups)
+    assert goda.INTERFACE not in found
+    assert found.keys() == set(goda.PHYSICAL_GROUPS) - {goda.INTERFACE} | {
+        goda.CAISSON_BASE, goda.MOUND_CREST}
+    for name in found:
+        assert len(_cells(mesh, name)) > 0, name
+    # New tags are not reused from the conforming model (files without names decode).
+    assert not {t for _, t in found.values()} & {
+        goda.PHYSICAL_GROUPS[goda.INTERFACE][1]}
+
+
+def test_separate_bodies_share_no_node(separate):
+    mesh = export.read(separate)
+    caisson, mound = _nodes(mesh, goda.CAISSON), _nodes(mesh, goda.MOUND)
+    assert not caisson & mound
+    # Each group is on its body: facets on the caisson or the mound, points on the caisson.
+    on_caisson = (goda.CAISSON_BASE, goda.IMPACT, goda.CAISSON_FRONT, goda.CAISSON_REAR,
+                  goda.CAISSON_TOP, goda.GAUGE_TOP, goda.GAUGE_BOTTOM, goda.CORNER_FRONT,
+                  goda.CORNER_REAR)
+    for name in on_caisson:
+        assert _nodes(mesh, name) <= caisson, name
+    for name in (goda.MOUND_CREST, goda.MOUND_SURFACE, goda.BASE):
+        assert _nodes(mesh, name) <= mound, name
+    # The caisson base and the crest coincide in space (y = mound height) ...
+    base = mesh.points[sorted(_nodes(mesh, goda.CAISSON_BASE)), :2]
+    crest = mesh.points[sorted(_nodes(mesh, goda.MOUND_CREST)), :2]
+    assert np.abs(base[:, 1] - H_MOUND).max() < 1e-15
+    assert np.abs(crest[:, 1] - H_MOUND).max() < 1e-15
+    assert (base[:, 0].min(), base[:, 0].max()) == pytest.approx(
+        (-B_CAISSON / 2, B_CAISSON / 2), rel=1e-12)
+    assert (crest[:, 0].min(), crest[:, 0].max()) == pytest.approx(
+        (-CREST / 2, CREST / 2), rel=1e-12)
+    # ... but do not match: of the crest nodes under the caisson only the middle one
+    # (x = 0, both curves being divided evenly and symmetrically) is at a base node.
+    x_base, x_crest = base[:, 0], crest[:, 0]
+    nearest = np.abs(x_crest[:, None] - x_base[None, :]).min(axis=1)
+    under = np.abs(x_crest) < B_CAISSON / 2
+    assert under.sum() > 10
+    assert np.count_nonzero(nearest[under] < 1e-6) == 1
+
+
+def test_separate_areas_and_lengths_equal_the_conforming(meshes, separate):
+    conforming, mesh = export.read(meshes[1.0]), export.read(separate)
+    for name in (goda.CAISSON, goda.MOUND):
+        assert _area(mesh, name) == pytest.approx(_area(conforming, name), rel=1e-12)
+    for name in (goda.BASE, goda.IMPACT, goda.CAISSON_FRONT, goda.CAISSON_REAR,
+                 goda.CAISSON_TOP):
+        assert _length(mesh, name) == pytest.approx(_length(conforming, name), rel=1e-12)
+    assert _length(mesh, goda.CAISSON_BASE) == pytest.approx(
+        _length(conforming, goda.INTERFACE), rel=1e-12)
+    # The crest is whole (under the caisson and beside it); the slopes are the rest.
+    slopes = 2 * H_MOUND * math.hypot(1.0, SLOPE)
+    assert _length(mesh, goda.MOUND_CREST) == pytest.approx(CREST, rel=1e-12)
+    assert _length(mesh, goda.MOUND_SURFACE) == pytest.approx(slopes, rel=1e-12)
+    assert _length(mesh, goda.MOUND_CREST) + _length(mesh, goda.MOUND_SURFACE) == (
+        pytest.approx(_length(conforming, goda.INTERFACE)
+                      + _length(conforming, goda.MOUND_SURFACE), rel=1e-12))
+    for name, xy in SEPARATE.named_points().items():
+        (node,) = _cells(mesh, name).ravel()
+        assert tuple(mesh.points[node, :2]) == pytest.approx(xy, rel=1e-12), name
+
+
+def test_separate_element_sizes_independent(separate):
+    # Mean segment lengths of the two contact curves: the sizes asked (the curves are
+    # divided evenly; ceil(length / size) segments), ratio 1.7 as the geometry's sizes.
+    mesh = export.read(separate)
+    n_base = len(_cells(mesh, goda.CAISSON_BASE))
+    n_crest = len(_cells(mesh, goda.MOUND_CREST))
+    assert n_base == math.ceil(B_CAISSON / SEPARATE.caisson_element_size)
+    assert n_crest == math.ceil(CREST / SEPARATE.mound_element_size)
+    ratio = (CREST / n_crest) / (B_CAISSON / n_base)
+    assert ratio == pytest.approx(SEPARATE.mound_element_size
+                                  / SEPARATE.caisson_element_size, rel=0.1)
+
+
+def test_separate_in_dolfinx(separate):
+    # Every facet of caisson_base / mound_crest is on the boundary of its own body only.
+    data = dolfinx.io.gmsh.read_from_msh(separate, COMM, 0, gdim=2)
+    assert data.physical_groups == dict(goda.SEPARATE_PHYSICAL_GROUPS)
+    topology = data.mesh.topology
+    topology.create_connectivity(1, 2)
+    facet_to_cell = topology.connectivity(1, 2)
+    imap = topology.index_map(2)
+    cell_value = np.full(imap.size_local + imap.num_ghosts, -1)
+    cell_value[data.cell_tags.indices] = data.cell_tags.values
+    for group, body in ((goda.CAISSON_BASE, goda.CAISSON), (goda.MOUND_CREST, goda.MOUND)):
+        facets = data.facet_tags.find(data.physical_groups[group].tag)
+        owned = facets[facets < topology.index_map(1).size_local]
+        for facet in owned:
+            assert list(cell_value[facet_to_cell.links(facet)]) == [
+                data.physical_groups[body].tag], group
+        lines = len(_cells(export.read(separate), group))
+        assert COMM.allreduce(len(owned)) == lines
+
+
+def test_conforming_is_a_bool():
+    with pytest.raises(ValueError, match="conforming"):
+        goda.GodaGeometry(conforming=1)  # type: ignore[arg-type]
