@@ -31,6 +31,10 @@ initial velocity. :func:`initial_state` finds it in up to three stages:
 
 Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
 only for the pairs that need it (or for every pair if the frictional Newton fails).
+
+A model with general contact pairs (:mod:`breakwater.surfacepair`) gets its state in
+the same three stages from :func:`breakwater.relaxation.relax` (pseudo-transient
+relaxation with the fast solver: their forces are not UFL forms).
 """
 
 from __future__ import annotations
@@ -49,14 +53,15 @@ from petsc4py import PETSc
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import ConvergenceError
-from .gn22 import _scale, _tangential_stiffness, solve_static
+from .gn22 import force_scale, solve_static, tangential_stiffness
 from .interface import interface_nodes
 from .model import ContactModel, _PairData
 from .schema import setting
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
-__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities"]
+__all__ = ["STICK_BAND", "InitialCase", "InitialState", "creep_velocities", "initial_state",
+           "initial_velocities", "mean_facet_length"]
 
 log = logging.getLogger("breakwater.initial")
 
@@ -94,6 +99,8 @@ class InitialState:
         kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
             place up to t = 0).
         held: Names of the bodies held in place up to t = 0 (released at t = 0).
+        relaxation: With general pairs (:mod:`breakwater.relaxation`): its
+            ``pseudo_steps`` and wall time ``seconds``; else None.
 
     """
 
@@ -102,10 +109,14 @@ class InitialState:
     iterations: int
     kind: str = "frictionless"
     held: list[str] = field(default_factory=list)
+    relaxation: dict[str, float] | None = None
 
     def summary(self) -> dict[str, Any]:
         """The entries of the ``static`` summary that describe how the state was found."""
-        return {"initial_state": self.kind, "held_bodies": list(self.held)}
+        out: dict[str, Any] = {"initial_state": self.kind, "held_bodies": list(self.held)}
+        if self.relaxation is not None:
+            out["relaxation_steps"] = int(self.relaxation["pseudo_steps"])
+        return out
 
 
 @contextlib.contextmanager
@@ -152,6 +163,10 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
             held).
     """
     with _initial_loads(model):
+        if model.surface_pairs:
+            from .relaxation import relax  # it builds on this module
+
+            return relax(model, options)
         try:
             u, its = solve_static(model, options=options)
             state = InitialState(u, initial_velocities(model), its)
@@ -189,8 +204,8 @@ def _solve(model: ContactModel, F: ufl.Form, u: list[fem.Function], options: New
     """Newton on F with the Jacobian-only weak tangential spring of ``solve_static``."""
     F_t = F
     for p in stabilise:
-        F_t += _bonded_term(p, u, model.w, 1e-2 * _tangential_stiffness(model, p))
-    solver = NewtonSolver(model, F, u, "initial", options, _scale(model), precheck=precheck,
+        F_t += _bonded_term(p, u, model.w, 1e-2 * tangential_stiffness(model, p))
+    solver = NewtonSolver(model, F, u, "initial", options, force_scale(model), precheck=precheck,
                           jacobian_of=F_t)
     try:
         return solver.solve()
@@ -229,7 +244,7 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
         try:
             n, τ = _friction_solve(model, u, options, free, k_b, bulk, normal)
             its += n
-            _creep_velocities(model, free, u, v, τ)
+            creep_velocities(model, free, u, v, τ)
         except ConvergenceError as e:
             # No frictional equilibrium on the remaining pairs: hold them all.
             log.debug("no frictional static state (%s): every pair held", e)
@@ -263,7 +278,7 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
     free_ids = {id(p) for p in free}
     # One pseudo time: every free pair's stick band χτ is at most STICK_BAND × its facet
     # length, and the slip guard sees the same velocities v = u/τ for every pair.
-    τ = min(STICK_BAND * _mean_facet_length(model, p) / float(p.law.friction.χ.value)
+    τ = min(STICK_BAND * mean_facet_length(model, p) / float(p.law.friction.χ.value)
             for p in free)
     v = [f / τ for f in u]
     F = bulk
@@ -287,7 +302,7 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
     return _solve(model, F, u, options, free, precheck), τ
 
 
-def _creep_velocities(model: ContactModel, free: Sequence[_PairData],
+def creep_velocities(model: ContactModel, free: Sequence[_PairData],
                       u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
     """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
 
@@ -307,7 +322,7 @@ def _creep_velocities(model: ContactModel, free: Sequence[_PairData],
         v[p.slave].x.scatter_forward()
 
 
-def _mean_facet_length(model: ContactModel, pair: _PairData) -> float:
+def mean_facet_length(model: ContactModel, pair: _PairData) -> float:
     """Mean facet length of a contact interface (m)."""
     length = model.assemble(model.form(1.0 * pair.dS))
     return length / model.comm.allreduce(len(pair.facet_data))
