@@ -446,6 +446,8 @@ class SurfaceContact:
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = np.zeros(n * n)
+        if not len(pos):  # no slave point has a projection: no contact
+            return out.reshape(n, n)
         both = jacobian(partial(normal_and_shares, *kernel.args), groups, cu, cv)
         size = pos.shape[1] * pos.shape[2]
         J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'

@@ -373,10 +373,14 @@ EXAMPLE = pathlib.Path(__file__).parents[1] / "examples" / "sliding_block" / "sl
 
 def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     """The example case (a general pair) runs from its file through the CLI; the block
-    starts to slide: the corner probe's u_x after 20 ms is within 2 % of the rigid
-    block's (F − μN) t²/(2m) (measured 0.2 %; the first steps carry the block settling
-    onto the base from the undeformed state. The full 0.3 s run: 0.02 % at the end of
-    the push, 0.2 s, and 0.4 % at 0.3 s, where the rigid block stops after 7.36 cm)."""
+    slides with the rigid block's acceleration (F − μN)/m: the second difference of the
+    corner probe's u_x over 10-20 ms within 2 % of it (measured 1.4e-4).
+
+    The push is present at t = 0 and friction cannot hold the block, so it is held in
+    the static state and released at t = 0 (:mod:`breakwater.relaxation`): the elastic
+    shear of the held state is released too, and the interface friction is below μN
+    for the first 7 ms (measured), so u_x itself runs ahead of (F − μN) t²/(2m) (by
+    26 % at 20 ms; the acceleration from then on is the rigid block's)."""
     from breakwater import cli
     from breakwater.files import read_history
 
@@ -386,7 +390,10 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     h = read_history(out / "history.csv")
     t, ux = h["t"], h["corner_ux"]
     a = 0.5 * 0.5 * 9.81  # (F − μN)/m with F = 1.5 μN
-    assert abs(ux[-1] / (0.5 * a * t[-1] ** 2) - 1) < 0.02
+    assert t[10] == pytest.approx(0.01) and t[20] == pytest.approx(0.02)
+    second = (ux[20] - 2 * ux[15] + ux[10]) / (t[20] - t[15]) ** 2
+    assert ux[-1] > ux[10] > 0
+    assert abs(second / a - 1) < 0.02
     # The pair's history columns: while the block slides, the friction resultant is
     # μ times the normal one (every contact node slides the same way).
     fx, fy = h["sliding_force_x"][-1], h["sliding_force_y"][-1]
