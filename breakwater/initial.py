@@ -97,7 +97,8 @@ class InitialState:
         v: Initial velocities (one Function per body; zero at rest).
         iterations: Newton iterations of every static solve.
         kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
-            place up to t = 0).
+            place up to t = 0); with general pairs also ``"undeformed"`` (no static
+            state relaxed: :mod:`breakwater.relaxation`).
         held: Names of the bodies held in place up to t = 0 (released at t = 0).
         relaxation: With general pairs (:mod:`breakwater.relaxation`): its
             ``pseudo_steps`` and wall time ``seconds``; else None.

@@ -42,6 +42,12 @@ model with both kinds):
    to t = 0); a warning names each body whose pair carries a tangential resultant
    above μN, and the dynamics, with the real μ, releases it at t = 0 from rest.
 
+If even the held state does not relax (a body that starts too far from its support to
+land within the relaxation: it falls by at most a tenth of the search radius per step
+and a stage stops after :data:`STALL` steps without progress), the run starts from the
+undeformed state at rest (``kind = "undeformed"``), with one warning, and the dynamics
+drops the body.
+
 :func:`relax` is called by :func:`breakwater.initial.initial_state` for models with
 general pairs; a₀ of the stepper's initialisation then vanishes (it includes the
 general pairs' forces).
@@ -373,9 +379,19 @@ def relax(model: ContactModel, options: NewtonOptions | None = None) -> InitialS
                     its += e.iterations
                     log.debug("no frictional static state (%s): every pair held", e)
             if res is None:
-                with r.friction(HELD_FRICTION, HELD_FRICTION):
-                    res = r.stage(True)
-                kind = "held"
+                try:
+                    with r.friction(HELD_FRICTION, HELD_FRICTION):
+                        res = r.stage(True)
+                    kind = "held"
+                except ConvergenceError as e:
+                    # E.g. a body that starts too far above its support to land in the
+                    # relaxation: the dynamics drops it from where it is.
+                    its += e.iterations
+                    if model.comm.rank == 0:
+                        log.warning("initial state: no static equilibrium (%s): the run "
+                                    "starts from the undeformed state at rest", e)
+                    res = _Result([np.zeros_like(f.x.array) for f in r.stepper.u], 0, 0)
+                    kind = "undeformed"
             u = model.functions("u")
             for f, x in zip(u, res.u, strict=True):
                 f.x.array[:] = x
@@ -400,8 +416,9 @@ def relax(model: ContactModel, options: NewtonOptions | None = None) -> InitialS
 def _extent(model: ContactModel, body: int) -> float:
     """The bounding-box diagonal of a body (m)."""
     x = model.bodies[body].submesh.geometry.x[:, : model.gdim]
-    lo = model.comm.allreduce(x.min(axis=0, initial=np.inf), op=MPI.MIN)
-    hi = model.comm.allreduce(x.max(axis=0, initial=-np.inf), op=MPI.MAX)
+    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
+    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
     return float(np.linalg.norm(hi - lo))
 
 

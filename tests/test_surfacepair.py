@@ -20,6 +20,7 @@ bodies meshed separately (:mod:`meshes.apart`), references from formulas:
 from __future__ import annotations
 
 import itertools
+import json
 import pathlib
 
 import numpy as np
@@ -394,6 +395,9 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     second = (ux[20] - 2 * ux[15] + ux[10]) / (t[20] - t[15]) ** 2
     assert ux[-1] > ux[10] > 0
     assert abs(second / a - 1) < 0.02
+    static = json.loads((out / "summary.json").read_text())["static"]
+    assert static["initial_state"] == "held" and static["held_bodies"] == ["block"]
+    assert static["relaxation_steps"] > 0
     # The pair's history columns: while the block slides, the friction resultant is
     # μ times the normal one (every contact node slides the same way).
     fx, fy = h["sliding_force_x"][-1], h["sliding_force_y"][-1]
