@@ -19,8 +19,8 @@ pair (block_bottom on base_top), the paper's χ = 1e-10 m/s, gravity tilted by �
   (Meriam & Kraige, *Engineering Mechanics: Dynamics*, §3/4).
 
 Under ``mpiexec -n 2`` rank 0 repeats the static state serially (on ``COMM_SELF``): it
-must agree to 1e-10 of its scale. E = 1e11 and ε_n = 1e13 N/m³ make the block nearly
-rigid (as tests/test_initial.py).
+must agree to 1e-10 of its scale, or to the positions' round-off. E = 1e11 and
+ε_n = 1e13 N/m³ make the block nearly rigid (as tests/test_initial.py).
 """
 
 from __future__ import annotations
@@ -202,20 +202,29 @@ def test_incline_above_the_friction_angle_is_held_and_released(
 
 @pytest.mark.skipif(COMM.size < 2, reason="compares serial and parallel runs")
 def test_static_state_equal_serial(mesh_path: pathlib.Path, folder: pathlib.Path) -> None:
-    """The static states (θ = 0 and 10°) on 2 ranks equal the serial ones to 1e-10 of
-    their scale (every rank evaluates the same contact points in the same order)."""
+    """The static states (θ = 0 and 10°) on 2 ranks equal the serial ones (every rank
+    evaluates the same contact points in the same order), to 1e-10 of their scale or,
+    where that is smaller, to the round-off of the positions (eps × 0.4 m = 9e-17 m: the
+    displacements of these stiff bodies, ~1e-9 m, are differences of positions of
+    0.1 m, the gap's round-off is 1e-17 m). Measured 5.8e-19 m at θ = 0 and 4.0e-19 m
+    at 10° (6e-10 and 4e-10 of the scale)."""
     for θ in (0.0, BELOW):
-        parallel = _nodal(_model(mesh_path, θ), _static(_model(mesh_path, θ))[0])
+        model = _model(mesh_path, θ)
+        parallel = _nodal(model, _static(model)[0])
         error = None
         if COMM.rank == 0:
             path = _mesh(folder, MPI.COMM_SELF)
             model = _model(path, θ, MPI.COMM_SELF)
             serial = _nodal(model, _static(model)[0])
+            assert all(np.abs(p[:, :2] - s[:, :2]).max() < 1e-12
+                       for p, s in zip(parallel, serial, strict=True))
             scale = max(np.abs(s[:, 2:]).max() for s in serial)
             error = max(np.abs(p[:, 2:] - s[:, 2:]).max()
-                        for p, s in zip(parallel, serial, strict=True)) / scale
-            print(f"\nθ = {θ}°: 2 ranks against serial {error:.2e} of {scale:.3e} m")
-        assert COMM.bcast(error, root=0) < 1e-10
+                        for p, s in zip(parallel, serial, strict=True))
+            print(f"\nθ = {θ}°: 2 ranks against serial {error:.2e} m, {error / scale:.2e} "
+                  f"of the scale {scale:.3e} m")
+            error = error / max(1e-10 * scale, np.finfo(float).eps * 0.4)
+        assert COMM.bcast(error, root=0) < 1.0
 
 
 def _nodal(model: ContactModel, state: InitialState) -> list[np.ndarray]:
@@ -226,5 +235,6 @@ def _nodal(model: ContactModel, state: InitialState) -> list[np.ndarray]:
         x = b.V.tabulate_dof_coordinates()[:n, :2]
         rows = np.concatenate(model.comm.allgather(
             np.hstack([x, u.x.array.reshape(-1, 2)[:n]])))
-        out.append(rows[np.lexsort((rows[:, 1], rows[:, 0]))])
+        key = np.round(rows[:, :2], 10)  # the same order whatever the coordinates' round-off
+        out.append(rows[np.lexsort((key[:, 1], key[:, 0]))])
     return out
