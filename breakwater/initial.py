@@ -54,14 +54,14 @@ from petsc4py import PETSc
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import ConvergenceError
 from .gn22 import force_scale, solve_static, tangential_stiffness
-from .interface import interface_nodes
+from .interface import creep_velocities, interface_nodes, mean_facet_length
 from .model import ContactModel, _PairData
+from .relaxation import relax
 from .schema import setting
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
-__all__ = ["STICK_BAND", "InitialCase", "InitialState", "creep_velocities", "initial_state",
-           "initial_velocities", "mean_facet_length"]
+__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities"]
 
 log = logging.getLogger("breakwater.initial")
 
@@ -165,9 +165,10 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
     """
     with _initial_loads(model):
         if model.surface_pairs:
-            from .relaxation import relax  # it builds on this module
-
-            return relax(model, options)
+            v = initial_velocities(model)
+            r = relax(model, v, STICK_BAND, options)
+            return InitialState(r.u, v, r.iterations, r.kind, r.held,
+                                {"pseudo_steps": r.steps, "seconds": r.seconds})
         try:
             u, its = solve_static(model, options=options)
             state = InitialState(u, initial_velocities(model), its)
@@ -301,29 +302,3 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
             fem_petsc.assign(step, y)
 
     return _solve(model, F, u, options, free, precheck), τ
-
-
-def creep_velocities(model: ContactModel, free: Sequence[_PairData],
-                      u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
-    """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
-
-    With it the velocity law carries at t = 0 exactly the friction of the static state
-    (the quadrature points are the nodes), so that the dynamics starts in equilibrium
-    (a₀ = 0 without damping) instead of from zero friction. These velocities are the
-    law's creep, ≤ χ·(a few) (1e-10 m/s at the paper's χ): the bodies start at rest.
-    """
-    ids = {id(p) for p in free}
-    for nodes in interface_nodes(model):
-        p = nodes.pair
-        if id(p) not in ids:
-            continue
-        us, um = nodes.gather(u[p.slave].x.array, u[p.master].x.array)
-        vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
-        nodes.scatter_slave(vs + nodes.tangential(us - um) / τ, v[p.slave].x.array)
-        v[p.slave].x.scatter_forward()
-
-
-def mean_facet_length(model: ContactModel, pair: _PairData) -> float:
-    """Mean facet length of a contact interface (m)."""
-    length = model.assemble(model.form(1.0 * pair.dS))
-    return length / model.comm.allreduce(len(pair.facet_data))

@@ -18,8 +18,9 @@ contracts by 1/(1 + cω²) per step. c grows ×:data:`GROWTH` per step, up to
 lowest frequencies), from ``c₀ = 0.1 r/|g|`` (r the contact search radius, or the
 interface facet length), so that a body that starts apart moves at most a tenth of the
 search radius per step and cannot fall through its support; c grows only while the
-increments stay below that. Converged when ``max|u − u_k| ≤ TOLERANCE · max|u|``.
-Damping is switched off (a static state carries none).
+increments stay below that. Converged when the static residual at the new iterate,
+``‖M (u − u_k)‖/c``, is below :data:`TOLERANCE` times the load norm ‖f‖. Damping is
+switched off (a static state carries none).
 
 Stages, as :mod:`breakwater.initial` for conforming pairs (and for every pair of a
 model with both kinds):
@@ -30,17 +31,21 @@ model with both kinds):
    :data:`STALL` steps at one c (or that exceeds :data:`MAX_STEPS`) fails.
 2. **Frictional** (if some pair has friction): the friction law acts on the total slip
    from the unloaded state over a pseudo time τ (``v = u/τ``, as ``initial.py`` stage
-   2), with τ such that the stick band χτ is :data:`~breakwater.initial.STICK_BAND`
-   times the interface facet length. The step's velocity is set up for it: with
-   u₀ = u_k, the GN22 start (v₀, a₀) is chosen so that ``c a₁ = u₁ − u_k`` (the mass
-   term above) and ``v₁ = u₁/τ``, and β₁ = ½β₂Δτ_max/τ (τ at c_max; smaller c give a
-   smaller τ, a narrower stick band, until c settles). The slave nodes in contact then
-   start with that slip velocity (the law's creep, a fraction of χ), so that the
-   friction of the static state is carried at t = 0.
+   2), with τ such that the stick band χτ is ``stick_band``
+   (:data:`breakwater.initial.STICK_BAND`) times the interface facet length. The step's
+   velocity is set up for it: with u₀ = u_k, the GN22 start (v₀, a₀) is chosen so that
+   ``c a₁ = u₁ − u_k`` (the mass term above) and ``v₁ = u₁/τ``, and β₁ = ½β₂Δτ_max/τ (τ
+   at c_max; smaller c give a smaller τ, a narrower stick band, until c settles). The
+   slave nodes in contact then start with that slip velocity (the law's creep, a
+   fraction of χ), so that the friction of the static state is carried at t = 0.
 3. **Held** (stage 2 fails, or no friction): every pair's friction coefficient is
    raised to :data:`HELD_FRICTION` for the relaxation (the bodies are held in place up
    to t = 0); a warning names each body whose pair carries a tangential resultant
-   above μN, and the dynamics, with the real μ, releases it at t = 0 from rest.
+   above μN, and the dynamics, with the real μ, releases it at t = 0. Its slave nodes
+   start sliding at :data:`RELEASE` χ along their slip in the held state (1e-8 m/s at
+   the paper's χ: from rest), where the law carries μλ: the first step then sees the
+   friction of sliding (with v = 0 it would see none, a₀ would be F/m instead of
+   (F − μN)/m, and GN22 would keep (1 − β₁)Δt times the difference as a velocity error).
 
 If even the held state does not relax (a body that starts too far from its support to
 land within the relaxation: it falls by at most a tenth of the search radius per step
@@ -69,20 +74,14 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .condensed import CondensedNewton
 from .errors import ConvergenceError
 from .gn22 import GN22, GN22Parameters, force_scale
-from .initial import (
-    STICK_BAND,
-    InitialState,
-    creep_velocities,
-    initial_velocities,
-    mean_facet_length,
-)
+from .interface import creep_velocities, mean_facet_length
 from .mesh import group_tag
 from .model import ContactModel, Damping
 from .solver import NewtonOptions
 from .surfacepair import SurfaceContact
 
 __all__ = ["GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "STALL",
-           "TOLERANCE", "relax"]
+           "TOLERANCE", "Relaxed", "relax"]
 
 log = logging.getLogger("breakwater.relaxation")
 
@@ -127,7 +126,8 @@ class _Result:
 class _Relaxation:
     """The pseudo-transient stepper of a model (see the module docstring)."""
 
-    def __init__(self, model: ContactModel, options: NewtonOptions | None) -> None:
+    def __init__(self, model: ContactModel, options: NewtonOptions | None,
+                 stick_band: float) -> None:
         self.model = m = model
         self.c_max = RATIO / _lowest_frequency_squared(m)
         g = float(np.linalg.norm(m.gravity.value))
@@ -136,7 +136,7 @@ class _Relaxation:
         self.β2 = GN22Parameters().beta2
         friction = _pair_friction(m)
         self.has_friction = any(μ > 0 for μ, _, _ in friction)
-        self.τ = min((STICK_BAND * h / χ for _, χ, h in friction), default=1.0)
+        self.τ = min((stick_band * h / χ for _, χ, h in friction), default=1.0)
         Δτ_max = np.sqrt(2 * self.c_max / self.β2)
         self.β1 = 0.5 * self.β2 * Δτ_max / self.τ
         self.stepper = GN22(m, Δτ_max, GN22Parameters(self.β1, self.β2, allow_conditional=True),
@@ -351,17 +351,46 @@ def _undamped(model: ContactModel) -> Iterator[None]:
         model.damping = saved
 
 
-def relax(model: ContactModel, options: NewtonOptions | None = None) -> InitialState:
+@dataclasses.dataclass
+class Relaxed:
+    """The static state a relaxation found.
+
+    Attributes:
+        u: Displacements (one Function per body).
+        iterations: Newton iterations of every pseudo step.
+        kind: ``"frictionless"``, ``"frictional"``, ``"held"`` or ``"undeformed"``
+            (module docstring).
+        held: Names of the bodies held in place up to t = 0.
+        steps: Pseudo steps, over every stage.
+        seconds: Wall time.
+    """
+
+    u: list[fem.Function]
+    iterations: int
+    kind: str
+    held: list[str]
+    steps: int
+    seconds: float
+
+
+def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
+          options: NewtonOptions | None = None) -> Relaxed:
     """The static initial state of a model with general pairs (collective; module doc).
 
-    Call it with the loads of the initial state at t = 0.
+    Call it with the loads of the initial state at t = 0
+    (:func:`breakwater.initial.initial_state` does).
 
-    Raises:
-        ConvergenceError: Not even the held state relaxed.
+    Args:
+        model: The contact model.
+        v: The initial velocities; the slave nodes' creep (frictional) or release
+            (held) velocities are added to them.
+        stick_band: The frictional state's stick band χτ, as a fraction of the mean
+            slave facet length (:data:`breakwater.initial.STICK_BAND`).
+        options: Newton settings of the pseudo steps.
     """
     t0 = time.perf_counter()
     with _undamped(model):
-        r = _Relaxation(model, options)
+        r = _Relaxation(model, options, stick_band)
         try:
             its, kind, held = 0, "frictionless", []
             try:
@@ -395,7 +424,6 @@ def relax(model: ContactModel, options: NewtonOptions | None = None) -> InitialS
             u = model.functions("u")
             for f, x in zip(u, res.u, strict=True):
                 f.x.array[:] = x
-            v = initial_velocities(model)
             if kind == "frictional":
                 r.creep(v)
             elif kind == "held":
@@ -403,12 +431,10 @@ def relax(model: ContactModel, options: NewtonOptions | None = None) -> InitialS
             steps = r.steps
         finally:
             r.destroy()
-    state = InitialState(u, v, its + res.iterations, kind, held,
-                         {"pseudo_steps": steps, "seconds": time.perf_counter() - t0})
-    assert state.relaxation is not None
+    out = Relaxed(u, its + res.iterations, kind, held, steps, time.perf_counter() - t0)
     log.info("relaxation: %d pseudo steps, %d Newton iterations, %.2f s (%s)", steps,
-             state.iterations, state.relaxation["seconds"], kind)
-    return state
+             out.iterations, out.seconds, kind)
+    return out
 
 
 # --- model estimates -----------------------------------------------------------------
