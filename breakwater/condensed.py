@@ -288,6 +288,17 @@ class CondensedNewton:
         self.bulk.destroy()
         self.layout.vec.destroy()
 
+    def add_surface_forces(self, vec: PETSc.Vec, scale: float = 1.0) -> None:
+        """Add ``scale`` × the general pairs' forces at the accepted state to a vector.
+
+        At (u, v), into the owned entries of a stacked vector (the right-hand side of a₀).
+        """
+        fc = np.zeros(self.n)
+        for p in self.providers:
+            if isinstance(p, SurfaceContact):
+                fc += p.vector(accepted=True)
+        vec.array[self._owned_rows] += scale * fc[self._owned]
+
     # --- the interface problem --------------------------------------------------------
 
     def _set_interface(self, y: np.ndarray) -> None:

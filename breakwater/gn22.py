@@ -91,7 +91,7 @@ def gn22_kinematics(u, v, a, Δa, Δt, β1, β2):
     return u + du, v + dv, a + Δa
 
 
-def _scale(model: ContactModel) -> float:
+def force_scale(model: ContactModel) -> float:
     """A force norm of the problem: ‖f‖ of gravity and loads at t = 0 (else 1)."""
     b = fem_petsc.assemble_vector(model.form(ufl.extract_blocks(model.external_load())),
                                   kind="mpi")
@@ -132,10 +132,9 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
     """
     u = list(u) if u is not None else model.functions("u")
     if model.surface_pairs:
-        # General pairs have no static solve: a body held only by them would make the
-        # stiffness singular, and their forces are not UFL forms. The dynamics starts
-        # from the given (undeformed) state at rest and settles by itself.
-        return u, 0
+        # Their forces are not UFL forms: breakwater.relaxation finds their static state.
+        raise ValueError("general contact pairs: the static state is found by "
+                         "breakwater.initial.initial_state (pseudo-transient relaxation)")
     g = model.gravity.value
     if not any(f.x.array.any() for f in u) and np.any(g):
         # A small penetration along gravity so that every contact starts active.
@@ -145,18 +144,18 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
     F_t = F
     if tangential_stabilisation > 0:
         for p in model.pairs:
-            k_t = tangential_stabilisation * _tangential_stiffness(model, p)
+            k_t = tangential_stabilisation * tangential_stiffness(model, p)
             jump = forms.tangential_part(u[p.slave]("+") - u[p.master]("-"), p.n)
             δw = forms.tangential_part(model.w[p.slave]("+") - model.w[p.master]("-"), p.n)
             F_t += k_t * ufl.dot(jump, δw) * p.dS
-    solver = NewtonSolver(model, F, u, "static", options, _scale(model), jacobian_of=F_t)
+    solver = NewtonSolver(model, F, u, "static", options, force_scale(model), jacobian_of=F_t)
     try:
         return u, solver.solve()
     finally:
         solver.destroy()
 
 
-def _tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
+def tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
     """min(ε_n, E/h) of a pair: the softer body's E over the mean facet length."""
     E = min(model.bodies[i].spec.material.E for i in (pair.slave, pair.master))
     length = model.assemble(model.form(1.0 * pair.dS))
@@ -219,21 +218,25 @@ class GN22:
             self.solver = CondensedNewton(
                 model, state, self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
-                newton, force_scale=_scale(model),
+                newton, force_scale=force_scale(model),
                 guard=self._guard_counted if self.guard else None, contact=contact,
                 surface_guard=flip_guard)
         else:
             self._y = model.functions("step")
             F = model.residual(self.u1, self.v1, self.a1)
             self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
-                                       force_scale=_scale(model),
+                                       force_scale=force_scale(model),
                                        precheck=self._precheck if self.guard else None)
 
     # --- initial state ------------------------------------------------------------
 
     def initialise(self, u0: Sequence[fem.Function] | None = None,
                    v0: Sequence[fem.Function] | None = None) -> None:
-        """Set u₀, v₀ and solve M a₀ = f(t₀) − C v₀ − K u₀ − f_c(u₀, v₀) for a₀."""
+        """Set u₀, v₀ and solve M a₀ = f(t₀) − C v₀ − K u₀ − f_c(u₀, v₀) for a₀.
+
+        f_c includes the general pairs' forces at (u₀, v₀), so that a₀ vanishes in
+        their static state (:mod:`breakwater.relaxation`).
+        """
         for dst, src in ((self.u, u0), (self.v, v0)):
             for f, g in zip(dst, src or [None] * len(dst), strict=True):
                 if g is None:
@@ -252,6 +255,9 @@ class GN22:
         b = fem_petsc.assemble_vector(R, kind="mpi")
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.scale(-1.0)
+        if isinstance(self.solver, CondensedNewton):
+            # The general pairs' forces are not in the UFL residual.
+            self.solver.add_surface_forces(b, -1.0)
         fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
         ksp = PETSc.KSP().create(m.comm)  # type: ignore[arg-type]
         ksp.setOptionsPrefix("breakwater_mass_")

@@ -31,6 +31,10 @@ initial velocity. :func:`initial_state` finds it in up to three stages:
 
 Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
 only for the pairs that need it (or for every pair if the frictional Newton fails).
+
+A model with general contact pairs (:mod:`breakwater.surfacepair`) gets its state in
+the same three stages from :func:`breakwater.relaxation.relax` (pseudo-transient
+relaxation with the fast solver: their forces are not UFL forms).
 """
 
 from __future__ import annotations
@@ -49,9 +53,10 @@ from petsc4py import PETSc
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import ConvergenceError
-from .gn22 import _scale, _tangential_stiffness, solve_static
-from .interface import interface_nodes
+from .gn22 import force_scale, solve_static, tangential_stiffness
+from .interface import creep_velocities, interface_nodes, mean_facet_length
 from .model import ContactModel, _PairData
+from .relaxation import relax
 from .schema import setting
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
@@ -92,8 +97,11 @@ class InitialState:
         v: Initial velocities (one Function per body; zero at rest).
         iterations: Newton iterations of every static solve.
         kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
-            place up to t = 0).
+            place up to t = 0); with general pairs also ``"undeformed"`` (no static
+            state relaxed: :mod:`breakwater.relaxation`).
         held: Names of the bodies held in place up to t = 0 (released at t = 0).
+        relaxation: With general pairs (:mod:`breakwater.relaxation`): its
+            ``pseudo_steps`` and wall time ``seconds``; else None.
 
     """
 
@@ -102,10 +110,14 @@ class InitialState:
     iterations: int
     kind: str = "frictionless"
     held: list[str] = field(default_factory=list)
+    relaxation: dict[str, float] | None = None
 
     def summary(self) -> dict[str, Any]:
         """The entries of the ``static`` summary that describe how the state was found."""
-        return {"initial_state": self.kind, "held_bodies": list(self.held)}
+        out: dict[str, Any] = {"initial_state": self.kind, "held_bodies": list(self.held)}
+        if self.relaxation is not None:
+            out["relaxation_steps"] = int(self.relaxation["pseudo_steps"])
+        return out
 
 
 @contextlib.contextmanager
@@ -152,6 +164,11 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
             held).
     """
     with _initial_loads(model):
+        if model.surface_pairs:
+            v = initial_velocities(model)
+            r = relax(model, v, STICK_BAND, options)
+            return InitialState(r.u, v, r.iterations, r.kind, r.held,
+                                {"pseudo_steps": r.steps, "seconds": r.seconds})
         try:
             u, its = solve_static(model, options=options)
             state = InitialState(u, initial_velocities(model), its)
@@ -189,8 +206,8 @@ def _solve(model: ContactModel, F: ufl.Form, u: list[fem.Function], options: New
     """Newton on F with the Jacobian-only weak tangential spring of ``solve_static``."""
     F_t = F
     for p in stabilise:
-        F_t += _bonded_term(p, u, model.w, 1e-2 * _tangential_stiffness(model, p))
-    solver = NewtonSolver(model, F, u, "initial", options, _scale(model), precheck=precheck,
+        F_t += _bonded_term(p, u, model.w, 1e-2 * tangential_stiffness(model, p))
+    solver = NewtonSolver(model, F, u, "initial", options, force_scale(model), precheck=precheck,
                           jacobian_of=F_t)
     try:
         return solver.solve()
@@ -229,7 +246,7 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
         try:
             n, τ = _friction_solve(model, u, options, free, k_b, bulk, normal)
             its += n
-            _creep_velocities(model, free, u, v, τ)
+            creep_velocities(model, free, u, v, τ)
         except ConvergenceError as e:
             # No frictional equilibrium on the remaining pairs: hold them all.
             log.debug("no frictional static state (%s): every pair held", e)
@@ -263,7 +280,7 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
     free_ids = {id(p) for p in free}
     # One pseudo time: every free pair's stick band χτ is at most STICK_BAND × its facet
     # length, and the slip guard sees the same velocities v = u/τ for every pair.
-    τ = min(STICK_BAND * _mean_facet_length(model, p) / float(p.law.friction.χ.value)
+    τ = min(STICK_BAND * mean_facet_length(model, p) / float(p.law.friction.χ.value)
             for p in free)
     v = [f / τ for f in u]
     F = bulk
@@ -285,29 +302,3 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
             fem_petsc.assign(step, y)
 
     return _solve(model, F, u, options, free, precheck), τ
-
-
-def _creep_velocities(model: ContactModel, free: Sequence[_PairData],
-                      u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
-    """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
-
-    With it the velocity law carries at t = 0 exactly the friction of the static state
-    (the quadrature points are the nodes), so that the dynamics starts in equilibrium
-    (a₀ = 0 without damping) instead of from zero friction. These velocities are the
-    law's creep, ≤ χ·(a few) (1e-10 m/s at the paper's χ): the bodies start at rest.
-    """
-    ids = {id(p) for p in free}
-    for nodes in interface_nodes(model):
-        p = nodes.pair
-        if id(p) not in ids:
-            continue
-        us, um = nodes.gather(u[p.slave].x.array, u[p.master].x.array)
-        vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
-        nodes.scatter_slave(vs + nodes.tangential(us - um) / τ, v[p.slave].x.array)
-        v[p.slave].x.scatter_forward()
-
-
-def _mean_facet_length(model: ContactModel, pair: _PairData) -> float:
-    """Mean facet length of a contact interface (m)."""
-    length = model.assemble(model.form(1.0 * pair.dS))
-    return length / model.comm.allreduce(len(pair.facet_data))

@@ -3,7 +3,9 @@
 On a conforming interface each slave node has a master node at the same place. The
 pairs, their master normals and, at run time, nodal values of both sides are gathered
 on every rank: the interface is small (one dimension below the bulk), and every rank
-then takes the same decisions, whatever the partition.
+then takes the same decisions, whatever the partition. Also the interface helpers of
+the initial state (:mod:`breakwater.initial`, :mod:`breakwater.relaxation`): the mean
+facet length of a pair and the creep velocities of a frictional static state.
 """
 
 from __future__ import annotations
@@ -198,3 +200,29 @@ def _tangent_basis(normal: np.ndarray) -> np.ndarray:
 def interface_nodes(model: ContactModel) -> Sequence[InterfaceNodes]:
     """The node pairs of every contact pair of a model."""
     return [InterfaceNodes(model, p) for p in model.pairs]
+
+
+def creep_velocities(model: ContactModel, free: Sequence[_PairData],
+                      u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
+    """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
+
+    With it the velocity law carries at t = 0 exactly the friction of the static state
+    (the quadrature points are the nodes), so that the dynamics starts in equilibrium
+    (a₀ = 0 without damping) instead of from zero friction. These velocities are the
+    law's creep, ≤ χ·(a few) (1e-10 m/s at the paper's χ): the bodies start at rest.
+    """
+    ids = {id(p) for p in free}
+    for nodes in interface_nodes(model):
+        p = nodes.pair
+        if id(p) not in ids:
+            continue
+        us, um = nodes.gather(u[p.slave].x.array, u[p.master].x.array)
+        vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
+        nodes.scatter_slave(vs + nodes.tangential(us - um) / τ, v[p.slave].x.array)
+        v[p.slave].x.scatter_forward()
+
+
+def mean_facet_length(model: ContactModel, pair: _PairData) -> float:
+    """Mean facet length of a contact interface (m)."""
+    length = model.assemble(model.form(1.0 * pair.dS))
+    return length / model.comm.allreduce(len(pair.facet_data))

@@ -156,9 +156,6 @@ class Session:
                  m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
                  len(m.bodies), len(m.pairs) + len(m.surface_pairs))
         m.set_time(0.0)
-        if m.surface_pairs:
-            log.warning("general contact pairs: no static equilibrium, the run starts from "
-                        "the undeformed state at rest")
         init = initial_state(m)
         st.static_iterations = init.iterations
         log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)

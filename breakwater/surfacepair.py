@@ -436,9 +436,13 @@ class SurfaceContact:
 
     # --- the provider ---------------------------------------------------------------
 
-    def vector(self) -> np.ndarray:
-        """The contact residual at the interface unknowns (the same on every rank)."""
-        u0, u1, v1 = self._state()
+    def vector(self, accepted: bool = False) -> np.ndarray:
+        """The contact residual at the interface unknowns (the same on every rank).
+
+        Args:
+            accepted: At the stepper's accepted state (u, v) instead of the iterate.
+        """
+        u0, u1, v1 = self._state(accepted=accepted)
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = self._add(np.zeros(self.n), pos, kernel(groups))
         if self.spec.friction:
@@ -470,6 +474,8 @@ class SurfaceContact:
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
         out = np.zeros(n * n)
+        if not len(pos):  # no slave point has a projection: no contact
+            return out.reshape(n, n)
         both = jacobian(partial(normal_and_shares, *kernel.args), groups, cu, cv)
         size = pos.shape[1] * pos.shape[2]
         J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
@@ -574,17 +580,40 @@ class SurfaceContact:
             accepted: At the stepper's accepted state (u, v); False: at the current
                 Newton iterate of the step.
         """
+        normal, friction = self.resultants(accepted)
+        return normal + friction
+
+    def resultants(self, accepted: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """The normal (pressure) and friction parts of :meth:`resultant`."""
         u0, u1, v1 = self._state(accepted=accepted)
         kernel, groups, _, lam_kernel, node = self._normal(u1, v1)
         nn = self.slave.X.shape[1]
         # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
-        out = -kernel(groups)[:, :nn].sum(axis=(0, 1))
+        normal = -kernel(groups)[:, :nn].sum(axis=(0, 1))
+        friction = np.zeros_like(normal)
         if self.spec.friction:
             fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node),
                                 accepted)
             if fr is not None:
-                out += fr["force"].sum(axis=0)
-        return out
+                friction = fr["force"].sum(axis=0)
+        return normal, friction
+
+    def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
+        """The slave nodes in contact at the current iterate and their slip velocities.
+
+        Returns:
+            Their interface positions ``(k, gdim)`` (−1: Dirichlet) and ``v_T``, the
+            tangential velocity relative to the master (``(k, gdim)``; none without
+            friction).
+        """
+        if not self.spec.friction:
+            return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
+        u0, u1, v1 = self._state()
+        _, groups, _, lam_kernel, node = self._normal(u1, v1)
+        fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+        if fr is None:
+            return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
+        return fr["pos_s"], fr["v_T"]
 
     def energies(self) -> tuple[float, float]:
         """The penalty energy and the friction power at the accepted state (the ledger).

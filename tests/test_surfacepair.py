@@ -20,6 +20,7 @@ bodies meshed separately (:mod:`meshes.apart`), references from formulas:
 from __future__ import annotations
 
 import itertools
+import json
 import pathlib
 
 import numpy as np
@@ -442,10 +443,14 @@ EXAMPLE = pathlib.Path(__file__).parents[1] / "examples" / "sliding_block" / "sl
 
 def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     """The example case (a general pair) runs from its file through the CLI; the block
-    starts to slide: the corner probe's u_x after 20 ms is within 2 % of the rigid
-    block's (F − μN) t²/(2m) (measured 0.2 %; the first steps carry the block settling
-    onto the base from the undeformed state. The full 0.3 s run: 0.02 % at the end of
-    the push, 0.2 s, and 0.4 % at 0.3 s, where the rigid block stops after 7.36 cm)."""
+    starts at rest on the base (the frictionless static state: the push is not in the
+    initial state) and slides with the rigid block's acceleration (F − μN)/m: the second
+    difference of the corner probe's u_x over 10-20 ms within 2 % of it (measured 2e-4).
+
+    u_x itself runs ahead of (F − μN) t²/(2m), by 8 % at 20 ms: the regularised law
+    carries no friction at rest, so GN22 starts from a₀ = F/m and keeps (1 − β₁)Δt
+    (F/m − (F − μN)/m) = 2e-3 m/s as a velocity offset (+0.8 % at the end of the push,
+    0.2 s, and +1.2 % at 0.3 s, where the rigid block stops after 7.36 cm)."""
     from breakwater import cli
     from breakwater.files import read_history
 
@@ -455,7 +460,13 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     h = read_history(out / "history.csv")
     t, ux = h["t"], h["corner_ux"]
     a = 0.5 * 0.5 * 9.81  # (F − μN)/m with F = 1.5 μN
-    assert abs(ux[-1] / (0.5 * a * t[-1] ** 2) - 1) < 0.02
+    assert t[10] == pytest.approx(0.01) and t[20] == pytest.approx(0.02)
+    second = (ux[20] - 2 * ux[15] + ux[10]) / (t[20] - t[15]) ** 2
+    assert ux[-1] > ux[10] > 0
+    assert abs(second / a - 1) < 0.02
+    static = json.loads((out / "summary.json").read_text())["static"]
+    assert static["initial_state"] == "frictionless" and static["held_bodies"] == []
+    assert static["relaxation_steps"] > 0
     # The pair's history columns: while the block slides, the friction resultant is
     # μ times the normal one (every contact node slides the same way).
     fx, fy = h["sliding_force_x"][-1], h["sliding_force_y"][-1]
