@@ -144,10 +144,9 @@ def pushed(folder: pathlib.Path) -> pathlib.Path:
 
 def test_pair_probe_of_a_sliding_block(pushed: pathlib.Path) -> None:
     """The probe's sides are the point probes (round-off); its slip is the slave's
-    displacement less the master material point's, and follows the rigid block's
-    (F − μN) t²/(2m) to 2 % after 0.02 s (the first steps settle the block placed at
-    zero gap; measured 1.7e-3), over more than 5 master elements (0.1 m; measured
-    0.132 m); its opening at the middle of the bottom is −(N/w)/ε_n: the pressure
+    displacement less the master material point's, and grows at the rigid block's
+    acceleration (F − μN)/m to 2 % after 0.02 s, over more than 5 master elements (0.1 m);
+    its opening at the middle of the bottom is −(N/w)/ε_n: the pressure
     under the pushed block varies linearly (friction's moment: from 0.1 to 1.96 times
     the mean, measured), so its mean is at the middle; within 2 % once the vertical
     transient has died out (t > 0.15 s, as in test_surfacepair.test_finite_sliding;
@@ -164,9 +163,14 @@ def test_pair_probe_of_a_sliding_block(pushed: pathlib.Path) -> None:
                                    rtol=1e-12, atol=1e-18)
     # The base's material point under the middle at t = 0 is the base's point (0, 0).
     np.testing.assert_allclose(h["pmid_master_ux"], h["base_mid_ux"], rtol=1e-12, atol=1e-18)
-    ref = (PUSH - MU * WEIGHT) * t**2 / (2 * MASS)
+    # The push acts at t = 0, so the block is held in its static state and released
+    # (breakwater.relaxation): the slip then grows at the rigid block's acceleration
+    # (F − μN)/m. Its start carries GN22's first-step velocity error (a₀ of the
+    # regularised law, README "general pairs"), so the acceleration is compared: a
+    # quadratic fitted to the slip after 0.02 s, within 2 %.
     early = t > 0.02
-    assert np.abs(h["pmid_slip"][early] / ref[early] - 1).max() < 0.02
+    acceleration = 2 * np.polyfit(t[early], h["pmid_slip"][early], 2)[0]
+    assert acceleration == pytest.approx((PUSH - MU * WEIGHT) / MASS, rel=0.02)
     assert h["pmid_slip"][-1] > 5 * 0.02
     late = t > 0.15
     δ = WEIGHT / WIDTH / PENALTY
@@ -255,10 +259,19 @@ def test_snapshots_and_quality_of_a_general_pair(pushed: pathlib.Path) -> None:
     steps = h["c_penetration"][1:]
     assert q["dynamic_penetration"] == pytest.approx(steps.max(), rel=1e-12)
     assert q["time_of_dynamic_penetration"] == pytest.approx(h["t"][1:][np.argmax(steps)])
-    # The run starts undeformed: a static penetration at round-off is none.
-    static = h["c_penetration"][0]
-    assert q["static_penetration"] == (static if static > 1e-12 * 0.4 else 0.0)
-    assert q["verdict"] == "ok"
+    # The run starts from its static state (breakwater.relaxation): the static
+    # penetration is the first row's, and the verdict follows the report's criteria
+    # (breakwater.quality): this stiff block on a stiff base settles by about its own
+    # penetration, so the penalty is too soft by the settlement criterion.
+    assert q["static_penetration"] == pytest.approx(h["c_penetration"][0], rel=1e-12)
+    soft = (max(q["static_penetration"], q["dynamic_penetration"])
+            > quality.MAX_PENETRATION_OVER_H * q["element_size"]
+            or q["static_penetration_over_settlement"]
+            > quality.MAX_PENETRATION_OVER_SETTLEMENT)
+    stiff = max(q["penalty_h_over_E"].values()) > quality.MAX_STIFFNESS_RATIO
+    assert q["verdict"] == {(False, False): "ok", (True, False): "too soft",
+                            (False, True): "too stiff"}[(soft, stiff)]
+    assert soft and not stiff
 
 
 # --- the example through the command line ----------------------------------------
