@@ -15,8 +15,8 @@ case runs twice through the CLI, each in its own output folder:
 - ``general``: the same pair made general on the same group, ``slave_surface =
   master_surface = "interface"`` (each side takes the group's facets on its own body).
   Calibration with a general pair is a case error, so both runs take the mound's shear
-  modulus from the conforming calibration, G = 2.27789e6 Pa (refinement 1); pair
-  probes need a conforming pair, so the general run has none.
+  modulus from the conforming calibration, G = 2.27789e6 Pa (refinement 1); the
+  general run drops the pair probes, the corners being measured as below.
 
 The slip and opening at the caisson's base corners are measured the same way in both
 runs, from point probes of both bodies at ``corner_front`` and ``corner_rear``
@@ -26,10 +26,8 @@ pair probes check them. Printed: a Markdown table of the headline results (summa
 ``dynamic``: peak and residual u_x per gauge, time of the largest u_x, residual slip
 and largest uplift) with the relative differences, and the solver's figures.
 
-The general pair has no static initial state yet: its run starts from the undeformed
-state at rest and settles under gravity during the first steps (the conforming run
-starts from its static equilibrium). Until the static state is merged, the differences
-carry that settling.
+Both runs start from their static state (the general one from
+:mod:`breakwater.relaxation`). The results are in the README ("general pairs").
 """
 
 from __future__ import annotations
