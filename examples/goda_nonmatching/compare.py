@@ -10,7 +10,8 @@ DIR``), then writes beside this script ``comparison.md`` (the headline results o
 ``summary.json`` side by side with their relative differences, and the solver's cost)
 and ``gauges.png`` (the two gauge histories overlaid).
 
-The non-matching case measures its corners with point probes: its corner slip and opening are computed from point probes on both sides of the corner,
+The non-matching case measures its corners with point probes: its corner slip and
+opening are computed from point probes on both sides of the corner,
 slip = u_x(caisson) − u_x(mound) and opening = u_y(caisson) − u_y(mound), the pair
 probes' definitions on this horizontal interface (``breakwater/probes.py``: slave
 minus master along t = (n_y, −n_x) and n = +y); for the conforming run they are the
