@@ -30,8 +30,10 @@ model with both kinds):
    slides by the same amount every step, and a stage whose increments do not halve over
    :data:`STALL` steps at one c (or that exceeds :data:`MAX_STEPS`) fails.
    1b. **Nearly frictionless** (if stage 1 fails and some pair has friction): every
-   pair's friction coefficient set to :data:`RESIDUAL_FRICTION` for the relaxation
-   (stage 2's law). The closest-point kinematics press along the *deformed* master
+   pair's friction coefficient set to :data:`RESIDUAL_FRICTION` for stage 1's steps
+   (from rest: the friction acts on each step's slip increment, so it vanishes as the
+   increments do, but arrests the rigid drift at the law's creep). The closest-point
+   kinematics press along the *deformed* master
    normal, so a frictionless body on a deformed support carries a tangential
    out-of-balance of the discretisation (1e-6 of the load on the Goda caisson, whose
    crest the caisson deforms unevenly) and its rigid tangential mode slides away; a
@@ -427,12 +429,14 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                 # The deformed normals leave a tangential out-of-balance of the order of
                 # the discretisation (1e-6 of the load on the Goda case meshed
                 # conforming): without friction the rigid tangential mode then drifts
-                # away. A friction coefficient of RESIDUAL_FRICTION holds it, and the
-                # state is the frictionless one to that fraction of μp; the dynamics
-                # starts at rest from it, as from the frictionless state.
+                # away. A friction coefficient of RESIDUAL_FRICTION on each step's slip
+                # increment arrests it (stage 1's steps from rest; the stage-2 law on the
+                # total slip let the caisson slide off during the settling at
+                # refinement 2); the state is the frictionless one to that fraction of
+                # μp, and the dynamics starts at rest from it.
                 try:
                     with r.friction(RESIDUAL_FRICTION):
-                        res = r.stage(True)
+                        res = r.stage(False)
                 except ConvergenceError as e:
                     its += e.iterations
                     log.debug("no nearly frictionless static state (%s)", e)
