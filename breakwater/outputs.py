@@ -43,13 +43,11 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from .checkpoint import match_nodes
 from .files import HISTORY, atomic_savez, atomic_write_text, read_history
 from .interface import InterfaceNodes
-from .mesh import group_tag
 from .model import ContactModel
 from .parallel import on_rank_zero
-from .surfaceoutputs import SurfaceFields
+from .surfaceoutputs import SurfaceFields, group_fields
 from .surfacepair import SurfaceContact
 
 __all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
@@ -263,29 +261,14 @@ class InterfaceFields:
 
     """
 
-    SCALARS = ("pressure", "gap")
-    VECTORS = ("slip", "slip_velocity", "friction_traction")
-
     def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
         self.filename = f"contact_{name}.bp"
         self.nodes = nodes
         self.slave, self.master = nodes.pair.slave, nodes.pair.master
-        msh, gdim = model.mesh, model.gdim
-        fdim = msh.topology.dim - 1
-        assert model.mesh_data.facet_tags is not None
-        facets = model.mesh_data.facet_tags.find(
-            group_tag(model.mesh_data, nodes.pair.spec.interface, fdim))
-        sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
         degree = model.bodies[self.slave].V.ufl_element().embedded_superdegree
-        S = fem.functionspace(sub, ("Lagrange", degree))
-        V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
-        self.values = {k: fem.Function(S, name=k) for k in self.SCALARS}
-        self.values.update({k: fem.Function(V, name=k) for k in self.VECTORS})
+        self.values, self._index = group_fields(model, nodes.pair.spec.interface, degree,
+                                                nodes.x)
         self.functions = list(self.values.values())
-        # The blocked space has the scalar space's dof layout: one index per node.
-        x = S.tabulate_dof_coordinates()[:, :gdim]
-        extent = max(float(np.ptp(nodes.x, axis=0).max()), 1e-300)
-        self._index = match_nodes(nodes.x, x, 1e-8 * extent)
 
     def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
                ) -> None:

@@ -183,14 +183,21 @@ def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
     stationary = np.abs(np.sum(r * dx, axis=1)) <= 1e-10 * np.sum(dx * dx, axis=1)
     ok = (np.abs(xi) <= 1 + tol) & (dist <= grid.radius ** 2) & stationary
     point, cand, xi, dist = point[ok], cand[ok], xi[ok], dist[ok]
-    # The nearest projection of each point (ties: the lowest facet index).
-    order = np.lexsort((cand, dist, point))
-    first = np.ones(len(order), bool)
-    first[1:] = point[order][1:] != point[order][:-1]
-    best = order[first]
+    best = _nearest_per_point(point, cand, dist)
     facet[point[best]] = cand[best]
     xi_out[point[best]] = np.clip(xi[best], -1, 1)
     return facet, xi_out
+
+
+def _nearest_per_point(point: np.ndarray, cand: np.ndarray, dist: np.ndarray) -> np.ndarray:
+    """The index of each point's nearest (point, facet, squared distance) triple.
+
+    Ties go to the lowest facet index.
+    """
+    order = np.lexsort((cand, dist, point))
+    first = np.ones(len(order), bool)
+    first[1:] = point[order][1:] != point[order][:-1]
+    return order[first]
 
 
 def nearest_end(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid
@@ -220,10 +227,7 @@ def nearest_end(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid
     dist = dist[np.arange(len(end)), end]
     ok = dist <= grid.radius ** 2
     point, cand, end, dist = point[ok], cand[ok], end[ok], dist[ok]
-    order = np.lexsort((cand, dist, point))
-    first = np.ones(len(order), bool)
-    first[1:] = point[order][1:] != point[order][:-1]
-    best = order[first]
+    best = _nearest_per_point(point, cand, dist)
     facet[point[best]] = cand[best]
     xi_out[point[best]] = np.where(end[best] == 0, -1.0, 1.0)
     return facet, xi_out

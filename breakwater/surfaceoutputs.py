@@ -224,6 +224,40 @@ class SurfaceProbe:
                 "master_ux": float(um[0]), "master_uy": float(um[1])}
 
 
+SCALARS = ("pressure", "gap")
+"""The scalar contact fields written for ParaView (conforming and general pairs)."""
+VECTORS = ("slip", "slip_velocity", "friction_traction")
+"""The vector contact fields written for ParaView."""
+
+
+def group_fields(model: ContactModel, group: str, degree: int, nodes: np.ndarray
+                 ) -> tuple[dict[str, fem.Function], np.ndarray]:
+    """The contact fields as P_degree Functions on the submesh of a facet group.
+
+    Also returns the index of each of ``nodes`` among their (scalar) dofs. The fields
+    are :data:`SCALARS` and :data:`VECTORS`.
+
+    Args:
+        model: The contact model.
+        group: The facet group (gmsh physical name).
+        degree: The Lagrange degree of the fields.
+        nodes: The points where the contact state is evaluated, shape ``(n, gdim)``.
+    """
+    msh, gdim = model.mesh, model.gdim
+    fdim = msh.topology.dim - 1
+    assert model.mesh_data.facet_tags is not None
+    facets = model.mesh_data.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
+    S = fem.functionspace(sub, ("Lagrange", degree))
+    V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
+    values = {k: fem.Function(S, name=k) for k in SCALARS}
+    values.update({k: fem.Function(V, name=k) for k in VECTORS})
+    # The blocked space has the scalar space's dof layout: one index per node.
+    x = S.tabulate_dof_coordinates()[:, :gdim]
+    extent = max(float(np.ptp(nodes, axis=0).max()), 1e-300) if len(nodes) else 1.0
+    return values, match_nodes(nodes, x, 1e-8 * extent)
+
+
 class SurfaceFields:
     """The contact state of a general pair as P_k fields on its slave surface (ParaView).
 
@@ -239,30 +273,15 @@ class SurfaceFields:
         contact: The general pair.
     """
 
-    SCALARS = ("pressure", "gap")
-    VECTORS = ("slip", "slip_velocity", "friction_traction")
-
     def __init__(self, model: ContactModel, contact: SurfaceContact) -> None:
         spec = contact.spec
         self.filename = f"contact_{spec.name}.bp"
         self.contact = contact
         self.points = SlavePoints.nodes(contact)
-        msh, gdim = model.mesh, model.gdim
-        fdim = msh.topology.dim - 1
-        assert model.mesh_data.facet_tags is not None
-        facets = model.mesh_data.facet_tags.find(
-            group_tag(model.mesh_data, spec.slave_surface, fdim))
-        sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
         degree = model.body(spec.slave).V.ufl_element().embedded_superdegree
-        S = fem.functionspace(sub, ("Lagrange", degree))
-        V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
-        self.values = {k: fem.Function(S, name=k) for k in self.SCALARS}
-        self.values.update({k: fem.Function(V, name=k) for k in self.VECTORS})
+        self.values, self._index = group_fields(model, spec.slave_surface, degree,
+                                                self.points.X)
         self.functions = list(self.values.values())
-        x = S.tabulate_dof_coordinates()[:, :gdim]
-        nodes = self.points.X
-        extent = max(float(np.ptp(nodes, axis=0).max()), 1e-300) if len(nodes) else 1.0
-        self._index = match_nodes(nodes, x, 1e-8 * extent)
 
     def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
                ) -> None:

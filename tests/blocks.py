@@ -11,11 +11,15 @@ lower-left corner of ``a``). :func:`two_block_case` is the case file of such a m
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Callable
+from typing import Any
 
 import gmsh
+import pytest
 from breakwater.meshes import gmsh_session
 from mpi4py import MPI
 
+from breakwater.gn22 import GN22
 from breakwater.parallel import on_rank_zero
 
 
@@ -187,3 +191,23 @@ dt = 1e-4
 end_time = 1e-3
 {tail}
 '''
+
+
+class Killed(Exception):
+    """Stands for a kill (not a BreakwaterError: the run does not clean up)."""
+
+
+def run_killed_at(run: Callable[[pathlib.Path], Any], directory: pathlib.Path, t: float,
+                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """``run(directory)``, killed (:class:`Killed`) at the first step from time ``t``."""
+    solve = GN22.solve
+
+    def killed(self: GN22) -> int:
+        if float(self.t.value) >= t:
+            raise Killed("killed")
+        return solve(self)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(GN22, "solve", killed)
+        with pytest.raises(Killed):
+            run(directory)

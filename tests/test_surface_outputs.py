@@ -21,6 +21,7 @@ import pathlib
 
 import numpy as np
 import pytest
+from blocks import run_killed_at
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
@@ -304,10 +305,6 @@ def test_example_with_a_pair_probe_and_figures(shared_dir: pathlib.Path) -> None
 
 # --- resume -------------------------------------------------------------------------
 
-class _Killed(Exception):
-    """Stands for a kill (not a BreakwaterError: the run does not clean up)."""
-
-
 def test_resume_keeps_the_general_outputs(shared_dir: pathlib.Path,
                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """A run with a general pair's probe, fields and quality report, killed after its
@@ -338,17 +335,7 @@ def test_resume_keeps_the_general_outputs(shared_dir: pathlib.Path,
                               report=False, **kwargs)  # type: ignore[arg-type]
 
     full = run(shared_dir / "full")
-    solve = GN22.solve
-
-    def killed(self: GN22) -> int:
-        if float(self.t.value) >= 0.07:
-            raise _Killed("killed")
-        return solve(self)
-
-    with monkeypatch.context() as mp:
-        mp.setattr(GN22, "solve", killed)
-        with pytest.raises(_Killed):
-            run(shared_dir / "resumed")
+    run_killed_at(run, shared_dir / "resumed", 0.07, monkeypatch)
     resumed = run(shared_dir / "resumed", resume=True)
     assert resumed["finished"] is True
     assert (shared_dir / "resumed" / "contact_c.part1.bp").exists()

@@ -25,6 +25,7 @@ import pathlib
 
 import numpy as np
 import pytest
+from blocks import run_killed_at
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
@@ -475,10 +476,6 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     assert 0 < h["sliding_penetration"][-1] < 1e-6
 
 
-class _Killed(Exception):
-    """Stands for a kill (not a BreakwaterError: the run does not clean up)."""
-
-
 def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """A run with a general pair killed after its checkpoint resumes to the history of
@@ -508,17 +505,7 @@ def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
 
     full = run(shared_dir / "full")
     assert full["finished"] is True
-    solve = GN22.solve
-
-    def killed(self: GN22) -> int:
-        if float(self.t.value) >= 0.0225:
-            raise _Killed("killed")
-        return solve(self)
-
-    with monkeypatch.context() as mp:
-        mp.setattr(GN22, "solve", killed)
-        with pytest.raises(_Killed):
-            run(shared_dir / "resumed")
+    run_killed_at(run, shared_dir / "resumed", 0.0225, monkeypatch)
     resumed = run(shared_dir / "resumed", resume=True)
     assert resumed["finished"] is True
     assert [r["t"] for r in resumed["resumed_from"]] == pytest.approx([0.02])
