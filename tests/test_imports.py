@@ -81,7 +81,7 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 def test_the_graph_is_read() -> None:
     # The reader sees module-level, function-level and aliased imports.
     graph = import_graph(PACKAGE)
-    assert "files" in graph["checkpoint"] and "checkpoint" in graph["outputs"]
+    assert "files" in graph["checkpoint"] and "checkpoint" in graph["surfaceoutputs"]
     assert "figures" in graph["simulation"]  # imported inside a function
     assert "checkpoint" in graph["simulation"]  # from . import checkpoint as ckpt
     # casebuild names the case's types under TYPE_CHECKING only: not an edge.
