@@ -1,32 +1,46 @@
-"""The Goda case with the conforming pair and with a general pair on the same mesh.
+r"""The Goda case with the conforming pair and with general pairs on the same mesh.
 
-Run on purpose, never in CI (two full Goda runs, about 1-2 min)::
+Run on purpose, never in CI (a conforming run of 6 s and general runs of 2-3 min each)::
 
     .venv/bin/python benchmarks/general_vs_conforming.py
-    .venv/bin/python benchmarks/general_vs_conforming.py --set time.end_time=0.05
+    .venv/bin/python benchmarks/general_vs_conforming.py --variant nodes-small
+    .venv/bin/python benchmarks/general_vs_conforming.py --set mesh.refinement=2 \
+        --set bodies.mound.shear_modulus=2.30835e6
     .venv/bin/mpiexec -n 2 .venv/bin/python benchmarks/general_vs_conforming.py
 
 Issue 12, item 5: on the conforming Goda mesh the general path (closest-point
-kinematics, segment-to-segment integration: :mod:`breakwater.surfacepair`) should give
-the headline results of the conforming (node-to-node) path within 0.5 %. The built-in
-case runs twice through the CLI, each in its own output folder:
+kinematics: :mod:`breakwater.surfacepair`) should give the headline results of the
+conforming (node-to-node) path within 0.5 %. The built-in case runs through the CLI,
+each run in its own output folder:
 
 - ``conforming``: the case as it is (``[contact.interface]``, the shared facet group);
-- ``general``: the same pair made general on the same group, ``slave_surface =
-  master_surface = "interface"`` (each side takes the group's facets on its own body).
-  Calibration with a general pair is a case error, so both runs take the mound's shear
-  modulus from the conforming calibration, G = 2.27789e6 Pa (refinement 1); the
-  general run drops the pair probes, the corners being measured as below.
+- general runs, the same pair made general on the same mesh (``slave_surface =
+  "interface"``; each side takes a group's facets on its own body), one per variant
+  (:data:`VARIANTS`):
 
-The slip and opening at the caisson's base corners are measured the same way in both
-runs, from point probes of both bodies at ``corner_front`` and ``corner_rear``
+  - ``segments``: the general pair's defaults (segment-to-segment Gauss integration,
+    the current normal), master surface the shared group;
+  - ``nodes``: node-to-segment (the slave nodes with Simpson weights, the conforming
+    pair's quadrature), master surface the shared group and the crest beyond it
+    (``mound_surface``), so that the caisson's corners sliding past the end of the
+    shared group stay on the mound;
+  - ``nodes-small``: as ``nodes`` with ``rotations = "small"`` (the reference
+    normal, as the conforming pair's).
+
+Calibration with a general pair is a case error, so every run takes the mound's shear
+modulus from the conforming calibration, G = 2.27789e6 Pa (refinement 1; pass the
+calibrated value of another refinement with ``--set``); the general runs drop the
+pair probes, the corners being measured as below.
+
+The slip and opening at the caisson's base corners are measured the same way in every
+run, from point probes of both bodies at ``corner_front`` and ``corner_rear``
 (slave minus master; the crest is horizontal, so the slip is the u_x jump and the
 opening the u_y jump, as the pair probes' ``slip``/``opening``); the conforming run's
 pair probes check them. Printed: a Markdown table of the headline results (summary.json
 ``dynamic``: peak and residual u_x per gauge, time of the largest u_x, residual slip
-and largest uplift) with the relative differences, and the solver's figures.
+and largest uplift) with the relative differences, and the solvers' figures.
 
-Both runs start from their static state (the general one from
+Every run starts from its static state (the general ones from
 :mod:`breakwater.relaxation`). The results are in the README ("general pairs").
 """
 
@@ -52,8 +66,15 @@ COMMON = ["calibration.enabled=false", f"bodies.mound.shear_modulus={G_MOUND}",
           "output.figures=false", "output.field_interval=0",
           *(f'output.probes.{c}_{b}={{body="{b}", group="{c}"}}'
             for c in CORNERS for b in ("caisson", "mound"))]
-GENERAL = ['contact.interface.slave_surface="interface"',
-           'contact.interface.master_surface="interface"', "output.pair_probes={}"]
+GENERAL = ['contact.interface.slave_surface="interface"', "output.pair_probes={}"]
+VARIANTS = {
+    "segments": ['contact.interface.master_surface="interface"'],
+    "nodes": ['contact.interface.master_surface=["interface", "mound_surface"]',
+              'contact.interface.integration="nodes"'],
+    "nodes-small": ['contact.interface.master_surface=["interface", "mound_surface"]',
+                    'contact.interface.integration="nodes"',
+                    'contact.interface.rotations="small"'],
+}
 
 
 def _run(name: str, out: pathlib.Path, extra: list[str]) -> dict[str, Any]:
@@ -92,10 +113,12 @@ def _headline(run: dict[str, Any]) -> dict[str, float]:
 
 
 def main() -> None:
-    """Run both cases and print the tables (rank 0)."""
+    """Run the cases and print the tables (rank 0)."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="a case override for both runs (e.g. time.end_time=0.05)")
+                        help="a case override for every run (e.g. time.end_time=0.05)")
+    parser.add_argument("--variant", action="append", choices=list(VARIANTS),
+                        help="a general run to make (default: all)")
     parser.add_argument("--out", type=pathlib.Path, default=None,
                         help="output folder (default: a temporary one)")
     args = parser.parse_args()
@@ -103,7 +126,8 @@ def main() -> None:
     tmp = tempfile.mkdtemp(prefix="general_vs_conforming_") if comm.rank == 0 else None
     out = args.out or pathlib.Path(comm.bcast(tmp, root=0))
     conforming = _run("conforming", out, args.set)
-    general = _run("general", out, [*args.set, *GENERAL])
+    general = {v: _run(v, out, [*args.set, *GENERAL, *VARIANTS[v]])
+               for v in args.variant or VARIANTS}
     if comm.rank > 0:
         return
     # The corner probes reproduce the conforming run's pair probes.
@@ -113,20 +137,24 @@ def main() -> None:
         1e-9 * max(abs(d["residual_slip"]), 1e-12), (check["corner_front_slip"][-1], d)
     assert abs(max(check[f"{c}_opening"].max() for c in CORNERS) - d["max_uplift"]) <= \
         1e-9 * max(abs(d["max_uplift"]), 1e-12)
-    a, b = _headline(conforming), _headline(general)
-    print(f"Goda case, conforming mesh, G_mound = {G_MOUND} Pa; outputs in {out}\n")
-    print("| result | conforming | general | relative difference |")
-    print("|---|---|---|---|")
+    a = _headline(conforming)
+    rows = {v: _headline(run) for v, run in general.items()}
+    print(f"Goda case, conforming mesh, overrides {COMMON[:2] + args.set}; "
+          f"outputs in {out}\n")
+    print("| result | conforming | " + " | ".join(general) + " |")
+    print("|---|---|" + "---|" * len(general))
     for key, x in a.items():
-        y = b[key]
-        rel = (y - x) / abs(x) if x else float("nan")
-        print(f"| {key} | {x:.6g} | {y:.6g} | {rel:+.2%} |")
-    print("\n| solver | conforming | general |\n|---|---|---|")
-    sa, sb = conforming["summary"]["solver"], general["summary"]["solver"]
+        cells = [f"{rows[v][key]:.6g} ({(rows[v][key] - x) / abs(x):+.2%})" if x
+                 else f"{rows[v][key]:.6g}" for v in general]
+        print(f"| {key} | {x:.6g} | " + " | ".join(cells) + " |")
+    print("\n| solver | conforming | " + " | ".join(general) + " |")
+    print("|---|---|" + "---|" * len(general))
     for key in ("steps", "newton_iterations", "max_newton_iterations", "cutbacks",
                 "wall_time"):
-        if key in sa:
-            print(f"| {key} | {sa[key]} | {sb.get(key)} |")
+        cells = [conforming["summary"]["solver"].get(key),
+                 *(run["summary"]["solver"].get(key) for run in general.values())]
+        print(f"| {key} | " + " | ".join(f"{c:.4g}" if isinstance(c, float) else str(c)
+                                         for c in cells) + " |")
 
 
 if __name__ == "__main__":

@@ -181,9 +181,19 @@ class ContactCase:
     gap: float = setting(0.0, unit="m", doc="initial normal gap g₀ (conforming pairs)")
     slave_surface: str | None = setting(None, doc="general pair: facet group on the slave's "
                                         "boundary (its integration points are projected)")
-    master_surface: str | None = setting(None, doc="general pair: facet group on the "
-                                         "master's boundary")
+    master_surface: str | tuple[str, ...] | None = setting(
+        None, doc="general pair: facet group on the master's boundary, or an array of "
+        "them (one surface, e.g. a shared interface and the crest beyond it)")
     points: int = setting(3, doc="general pair: Gauss points per integration segment")
+    integration: Literal["segments", "gauss", "nodes"] = setting(
+        "segments", doc="general pair: the slave's integration points: segments "
+        "(segment-to-segment, `points` Gauss points per segment), gauss (`points` per "
+        "slave facet) or nodes (the slave nodes, Simpson weights: the conforming pair's "
+        "quadrature)")
+    rotations: Literal["finite", "small"] = setting(
+        "finite", doc="general pair: the normal of the current master surface at the "
+        "projection (finite, eq. 7) or of the reference one (small: the linear bodies' "
+        "small rotations, as a conforming pair; finite sliding kept)")
 
     def __post_init__(self) -> None:
         if (self.slave_surface is None) != (self.master_surface is None):
@@ -195,6 +205,8 @@ class ContactCase:
                                "(remove gap)")
         if self.points < 1:
             raise InvalidField("points", f"must be >= 1 (got {self.points})")
+        if self.master_surface == ():
+            raise InvalidField("master_surface", "needs at least one facet group")
         positive(self.penalty, "penalty")
         positive(self.friction, "friction", strict=False)
         positive(self.regularisation, "regularisation")
@@ -565,7 +577,11 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
     for c in case.contact:
         if c.general:
             need(c.slave_surface or "", 1, f"contact.{c.name}.slave_surface")
-            need(c.master_surface or "", 1, f"contact.{c.name}.master_surface")
+            if isinstance(c.master_surface, tuple):
+                for k, group in enumerate(c.master_surface):
+                    need(group, 1, f"contact.{c.name}.master_surface[{k}]")
+            else:
+                need(c.master_surface or "", 1, f"contact.{c.name}.master_surface")
         else:
             need(c.name, 1, f"contact.{c.name}")
     for f in case.fixed:

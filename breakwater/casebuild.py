@@ -118,7 +118,8 @@ def build_model(case: Case, data: gmshio.MeshData,
                          c.regularisation, c.gap) for c in case.contact if not c.general]
     surface_pairs = [SurfacePair(c.name, c.slave, c.master, c.slave_surface or "",
                                  c.master_surface or "", c.penalty, c.friction,
-                                 c.regularisation, c.points)
+                                 c.regularisation, c.points, c.integration,
+                                 c.rotations)
                      for c in case.contact if c.general]
     fixed = [Fixed(f.name, tuple(f.components)) for f in case.fixed]
     loads: list[SurfaceLoad] = []

@@ -375,7 +375,7 @@ class ContactModel:
         group's facets on its own body (:func:`breakwater.surfacepair.surface_dofs`).
         """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
-                                  ("master", pair.master, pair.master_surface)):
+                                  *(("master", pair.master, g) for g in pair.master_groups)):
             index = self.body(body).index
             counts = self._facet_counts(group)
             if counts[index] == 0:
@@ -386,6 +386,12 @@ class ContactModel:
                 raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
                                 f"body '{', '.join(found)}', not on the {role} '{body}'")
         return pair
+
+    def surface_facets(self, body: str, groups: Sequence[str]) -> np.ndarray:
+        """A body's facets (its submesh's, ghosts included) in any of several groups."""
+        b, fdim = self.body(body), self.mesh.topology.dim - 1
+        found = [b.facet_tags.find(group_tag(self.mesh_data, g, fdim)) for g in groups]
+        return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int32)
 
     def _facet_counts(self, group: str) -> list[int]:
         """The number of facets of a facet group on each body (every rank)."""

@@ -30,21 +30,26 @@ def unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
 
 
 def _contact_point(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
-                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int
+                   groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int,
+                   reference: np.ndarray | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄)."""
+    """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄).
+
+    The normal is the current master facet's at the projection, or with ``reference``
+    (the master facets' reference node positions) the reference facet's there.
+    """
     (xs, _), (xm, _) = groups
     x_s = np.einsum("kn,knd->kd", Ns, xs)
     xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
     N, dN, _ = shape(xi, xm.shape[1])
-    t = unit_tangent(dN, xm)
+    t = unit_tangent(dN, xm if reference is None else reference)
     n = np.stack([t[:, 1], -t[:, 0]], axis=1)
     return x_s, N, n, law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n)
 
 
 def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,
-                  groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2
-                  ) -> np.ndarray:
+                  groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int = 2,
+                  reference: np.ndarray | None = None) -> np.ndarray:
     """Nodal residual of the normal pressure at contact points (real or complex).
 
     The point ``x_s = Σ N_s x_k`` of the slave facet is projected onto the master facet
@@ -60,11 +65,14 @@ def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight:
         groups: ``[(x, v)]`` of the slave facet and of the master facet (oriented:
             ``(t_y, −t_x)`` is outward), each ``(K, nn, gdim)``.
         refine: Newton steps of the projection.
+        reference: The master facets' reference nodes ``(K, nn, gdim)``: n̄ is the
+            reference surface's normal at the projection (small rotations); None: the
+            current surface's (eq. 7).
 
     Returns:
         ``(K, 2 nn, gdim)``: the residual on the slave's nodes, then on the master's.
     """
-    _, N, _, traction = _contact_point(law, Ns, xi, groups, refine)
+    _, N, _, traction = _contact_point(law, Ns, xi, groups, refine, reference)
     traction = traction * weight[:, None]
     return np.concatenate([-Ns[:, :, None] * traction[:, None, :],
                            N[:, :, None] * traction[:, None, :]], axis=1)
@@ -72,22 +80,22 @@ def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight:
 
 def nodal_normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
                         weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-                        refine: int = 2) -> np.ndarray:
+                        refine: int = 2, reference: np.ndarray | None = None) -> np.ndarray:
     """Each point's share ``p w N_k`` of its slave nodes' normal forces, ``(K, nn)``.
 
     Summed over the points, ``λ_k = ∫ p N_k``: the normal force of slave node k
     consistent with the integrated pressure (as :func:`normal_forces`).
     """
-    _, _, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    _, _, n, traction = _contact_point(law, Ns, xi, groups, refine, reference)
     p = np.sum(traction * n, axis=1)
     return (p * weight)[:, None] * Ns
 
 
 def normal_and_shares(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
                        weight: np.ndarray, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-                       refine: int = 2) -> np.ndarray:
+                       refine: int = 2, reference: np.ndarray | None = None) -> np.ndarray:
     """:func:`normal_forces` and :func:`nodal_normal_forces` side by side, ``(K, ·)``."""
-    _, N, n, traction = _contact_point(law, Ns, xi, groups, refine)
+    _, N, n, traction = _contact_point(law, Ns, xi, groups, refine, reference)
     tw = traction * weight[:, None]
     forces = np.concatenate([-Ns[:, :, None] * tw[:, None, :], N[:, :, None] * tw[:, None, :]],
                             axis=1)

@@ -76,7 +76,7 @@ import contextlib
 import dataclasses
 import logging
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from dolfinx import fem
@@ -87,7 +87,6 @@ from .condensed import CondensedNewton
 from .errors import ConvergenceError
 from .gn22 import GN22, GN22Parameters, force_scale
 from .interface import creep_velocities, mean_facet_length
-from .mesh import group_tag
 from .model import ContactModel, Damping
 from .solver import NewtonOptions
 from .surfacepair import SurfaceContact
@@ -502,11 +501,12 @@ def _lowest_frequency_squared(model: ContactModel) -> float:
     return min(out)
 
 
-def _facet_lengths(model: ContactModel, body: str, group: str) -> tuple[float, float]:
-    """Mean and largest facet length of a body's facet group (m)."""
+def _facet_lengths(model: ContactModel, body: str, groups: Sequence[str]
+                   ) -> tuple[float, float]:
+    """Mean and largest facet length of a body's facet groups (m)."""
     b = model.body(body)
     fdim = model.mesh.topology.dim - 1
-    facets = b.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    facets = model.surface_facets(body, groups)
     facets = facets[facets < b.submesh.topology.index_map(fdim).size_local]
     h = b.submesh.h(fdim, facets)
     comm = model.comm
@@ -518,14 +518,14 @@ def _facet_lengths(model: ContactModel, body: str, group: str) -> tuple[float, f
 def _reach(model: ContactModel) -> float:
     """The smallest contact search radius (general pairs) or interface facet length (m)."""
     out = [p.radius if p.radius is not None else
-           _facet_lengths(model, p.master, p.master_surface)[1] for p in model.surface_pairs]
+           _facet_lengths(model, p.master, p.master_groups)[1] for p in model.surface_pairs]
     out += [mean_facet_length(model, p) for p in model.pairs]
     return min(out)
 
 
 def _pair_friction(model: ContactModel) -> list[tuple[float, float, float]]:
     """(μ, χ, mean slave facet length) of every pair."""
-    out = [(p.friction, p.regularisation, _facet_lengths(model, p.slave, p.slave_surface)[0])
+    out = [(p.friction, p.regularisation, _facet_lengths(model, p.slave, (p.slave_surface,))[0])
            for p in model.surface_pairs]
     out += [(float(p.law.friction.μ.value), float(p.law.friction.χ.value),
              mean_facet_length(model, p)) for p in model.pairs]

@@ -7,8 +7,8 @@ A :class:`Schema` reads a tree of frozen dataclasses (the root: a whole case,
   (:meth:`Schema.reference` prints them); ``tuple[Item, ...]`` of a dataclass with a
   ``key`` field is a *named collection*, a table of tables keyed by the item's name;
 - every value is checked against its annotation (``float``, ``int``, ``bool``,
-  ``str``, ``Literal``, tuples, optional and nested dataclasses) and unknown keys are
-  rejected with the closest valid key;
+  ``str``, ``Literal``, tuples, unions such as ``str | tuple[str, ...]``, optional and
+  nested dataclasses) and unknown keys are rejected with the closest valid key;
 - ``extends = "<built-in name>"`` or ``"<file>"`` starts from another file, merged
   table by table; ``key=value`` overrides (``--set``) change any field by its dotted
   path (an entry of a named collection by its name or its index);
@@ -102,12 +102,21 @@ def _keyed_item(tp: Any) -> type | None:
 
 
 def _optional(tp: Any) -> Any:
-    """``X`` for ``X | None``, else None."""
+    """``X`` for ``X | None`` (``X`` may be a union itself), else None."""
     if typing.get_origin(tp) in (typing.Union, types.UnionType):
         args = [a for a in typing.get_args(tp) if a is not type(None)]
         if len(args) == 1:
             return args[0]
+        if len(args) < len(typing.get_args(tp)):
+            return typing.Union[tuple(args)]  # noqa: UP007  (built from a list)
     return None
+
+
+def _alternatives(tp: Any) -> tuple[Any, ...]:
+    """The members of a union without None (``str | tuple[str, ...]``), else ()."""
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        return typing.get_args(tp)
+    return ()
 
 
 def _type_name(tp: Any) -> str:
@@ -126,6 +135,8 @@ def _type_name(tp: Any) -> str:
         return " | ".join(f'"{a}"' for a in typing.get_args(tp))
     if typing.get_origin(tp) is tuple:
         return f"array of {_type_name(typing.get_args(tp)[0])}"
+    if _alternatives(tp):
+        return " or ".join(_type_name(a) for a in _alternatives(tp))
     if dataclasses.is_dataclass(tp):
         return "table"
     return str(tp)
@@ -360,6 +371,16 @@ class Schema:
             return tuple(self._convert(elem, v, f"{path}[{i}]") for i, v in enumerate(value))
         if dataclasses.is_dataclass(tp):
             return self.build(tp, value, path)  # type: ignore[arg-type]
+        if _alternatives(tp):  # an array: the array member; else the first that takes it
+            arrays = [m for m in _alternatives(tp) if typing.get_origin(m) is tuple]
+            if isinstance(value, list) and arrays:
+                return self._convert(arrays[0], value, path)
+            for member in _alternatives(tp):
+                try:
+                    return self._convert(member, value, path)
+                except InvalidField:
+                    continue
+            raise InvalidField(path, f"expected a {want}, got {_describe(value)}")
         raise TypeError(f"unsupported field type {tp!r}")  # pragma: no cover
 
     def suggest_key(self, word: str, valid: Sequence[str]) -> str:

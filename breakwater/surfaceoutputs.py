@@ -11,6 +11,8 @@ interface unknowns (gathered on every rank, so every rank computes the same numb
   the end of the master surface, beyond a convex corner, or farther than the search
   radius) measures it to the master material point under it in the reference
   configuration, along the master's current normal there; its pressure is zero.
+  With ``rotations = "small"`` the normal is the reference surface's, as in the
+  residual.
 - ``pressure`` ε_n⟨−g_n⟩₊, ``slip_velocity`` v_T = (I − n̄⊗n̄)(v_s − v̄_m) relative
   to the master material point under the projection, and ``friction_traction``
   −μ p v_T/sqrt(|v_T|² + χ²) on the slave: the pair's law (:class:`forms.ContactLaw`)
@@ -186,6 +188,8 @@ class SlavePoints:
             xi[on] = np.real(closest_point(xs[on], xm[facet[on]], xi[on], iterations=2,
                                            tol=0.0))
         x_bar, dx, _ = curve(xm[facet], xi)
+        if c.small_rotations:  # the reference surface's normal, as the residual's
+            dx = curve(m.X[facet], xi)[1]
         n = _normal(dx)
         v_bar = np.einsum("kn,knd->kd", shape(xi, m.X.shape[1])[0], v[c.pos_m[facet]])
         law = c.law

@@ -14,8 +14,13 @@ every point's projection stays within one master facet over a segment and the
 integrand is smooth there; on a flat patch the integration is exact (the patch test).
 The cuts move with the bodies but are held fixed in the linearisation, which stays
 exact: the integrand is continuous across a cut, so the derivatives of the cut
-positions cancel between the two segments. ``segmented = False`` gives plain
-Gauss-point-to-segment integration (Gauss points per slave facet). The master surface
+positions cancel between the two segments. ``integration = "gauss"`` gives plain
+Gauss-point-to-segment integration (Gauss points per slave facet), ``"nodes"`` the
+node-to-segment scheme (the slave nodes with Gauss–Lobatto weights, the conforming
+pair's quadrature: on a conforming interface it is that pair with closest-point
+kinematics). The master surface may join several facet groups (a crest that
+continues beyond the slave, so that a slave corner sliding past the end of a shared
+group still finds it). The master surface
 is the exact current image of the master facets (the P2 displacement makes each facet a
 quadratic curve, its three nodes the closure DOFs). The slave receives ``−∫ t_s N_s``
 and the master ``+∫ t_s N̄_m`` at the projection (action and reaction).
@@ -44,7 +49,6 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from .mesh import group_tag
 from .pointkernels import (
     H,
     jacobian,
@@ -59,7 +63,10 @@ if TYPE_CHECKING:
     from .bulk import MonolithicLayout, Timings
     from .model import ContactModel
 
-__all__ = ["SurfaceContact", "SurfacePair", "check_pair_settings", "surface_dofs"]
+__all__ = ["INTEGRATIONS", "SurfaceContact", "SurfacePair", "check_pair_settings",
+           "surface_dofs"]
+
+INTEGRATIONS = ("segments", "gauss", "nodes")
 
 
 def check_pair_settings(penalty: float, friction: float, regularisation: float, slave: str,
@@ -79,6 +86,12 @@ def check_pair_settings(penalty: float, friction: float, regularisation: float, 
         raise ValueError("a contact pair needs two different bodies")
 
 
+# A slave facet's nodes in closure order (the vertices, then the mid-edge node) on
+# [−1, 1] and their Gauss–Lobatto weights: the trapezoidal rule (P1), Simpson's (P2).
+_NODES = {2: np.array([-1.0, 1.0]), 3: np.array([-1.0, 1.0, 0.0])}
+_LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
+
+
 @dataclass(frozen=True)
 class SurfacePair:
     """Penalty contact with regularised Coulomb friction between two surfaces.
@@ -92,10 +105,18 @@ class SurfacePair:
         penalty: Normal penalty ε_n (N/m³).
         friction: Coulomb coefficient μ (-).
         regularisation: Regularisation velocity χ (m/s).
-        points: Gauss points per integration segment.
-        segmented: Cut each slave facet where the master facets' vertices project onto
-            it (segment-to-segment integration: exact on a flat patch); False: one
-            segment per slave facet (Gauss-point-to-segment).
+        points: Gauss points per integration segment (``segments``, ``gauss``).
+        integration: The slave's integration points: ``segments`` (each slave facet
+            cut where the master facets' vertices project onto it, ``points`` Gauss
+            points per segment: segment-to-segment, exact on a flat patch),
+            ``gauss`` (``points`` Gauss points per slave facet: Gauss-point-to-segment)
+            or ``nodes`` (the slave facet's nodes with Gauss–Lobatto weights,
+            Simpson's on a P2 facet: node-to-segment, the conforming pair's
+            quadrature).
+        rotations: ``finite``: the normal and tangent of the current master surface
+            at the projection (eq. 7); ``small``: those of the reference surface there
+            (the bodies' small rotations, as the conforming pair's fixed normal; the
+            projection, the gap and the slip still follow the current surfaces).
         radius: Search radius (m): a point farther from the master surface has no
             projection (out of contact); None: the longest master facet.
     """
@@ -104,12 +125,13 @@ class SurfacePair:
     slave: str
     master: str
     slave_surface: str
-    master_surface: str
+    master_surface: str | tuple[str, ...]
     penalty: float
     friction: float = 0.0
     regularisation: float = 1e-10
     points: int = 3
-    segmented: bool = True
+    integration: str = "segments"
+    rotations: str = "finite"
     radius: float | None = None
 
     gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
@@ -119,8 +141,22 @@ class SurfacePair:
                             self.master)
         if not self.points >= 1:
             raise ValueError(f"points per facet must be >= 1 (got {self.points})")
+        if self.integration not in INTEGRATIONS:
+            raise ValueError(f"integration must be one of {', '.join(INTEGRATIONS)} "
+                             f"(got {self.integration!r})")
+        if self.rotations not in ("finite", "small"):
+            raise ValueError(f"rotations must be finite or small (got {self.rotations!r})")
+        if not self.master_groups:
+            raise ValueError("a master surface needs at least one facet group")
         if self.radius is not None and not self.radius > 0:
             raise ValueError(f"search radius must be > 0 (got {self.radius})")
+
+
+    @property
+    def master_groups(self) -> tuple[str, ...]:
+        """The facet groups of the master surface (one or several)."""
+        m = self.master_surface
+        return (m,) if isinstance(m, str) else tuple(m)
 
 
 @dataclass
@@ -139,16 +175,17 @@ class _Surface:
     interior: np.ndarray
 
 
-def _surface(model: ContactModel, layout: MonolithicLayout, body: int, group: str) -> _Surface:
-    """The facets of a body's facet group (collective)."""
-    b = model.bodies[body]
+def _surface(model: ContactModel, layout: MonolithicLayout, body: str,
+             groups: Sequence[str]) -> _Surface:
+    """The facets of a body's facet groups (collective)."""
+    b = model.body(body)
     V, sub = b.V, b.submesh
     tdim = sub.topology.dim
     fdim, gdim = tdim - 1, model.gdim
     sub.topology.create_connectivity(fdim, tdim)
     sub.topology.create_connectivity(tdim, fdim)
     f2c, c2f = sub.topology.connectivity(fdim, tdim), sub.topology.connectivity(tdim, fdim)
-    facets = b.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    facets = model.surface_facets(body, groups)
     facets = facets[facets < sub.topology.index_map(fdim).size_local]
     closure = V.dofmap.dof_layout.entity_closure_dofs
     coords = V.tabulate_dof_coordinates()[:, :gdim]
@@ -163,7 +200,7 @@ def _surface(model: ContactModel, layout: MonolithicLayout, body: int, group: st
         cell = V.dofmap.cell_dofs(c)
         blocks = cell[closure(fdim, local)]
         X[k] = coords[blocks]
-        dofs[k] = layout.global_index[body][(blocks[:, None] * bs + np.arange(gdim))]
+        dofs[k] = layout.global_index[b.index][(blocks[:, None] * bs + np.arange(gdim))]
         interior[k] = coords[cell].mean(axis=0)
     X, dofs, interior = (np.concatenate(model.comm.allgather(a)) for a in (X, dofs, interior))
     mid = X.mean(axis=1)
@@ -176,11 +213,11 @@ def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
     fdim = model.mesh.topology.dim - 1
     out = []
     for spec in model.surface_pairs:
-        for name, group in ((spec.slave, spec.slave_surface),
-                            (spec.master, spec.master_surface)):
+        for name, groups in ((spec.slave, (spec.slave_surface,)),
+                             (spec.master, spec.master_groups)):
             b = model.body(name)
-            blocks = fem.locate_dofs_topological(
-                b.V, fdim, b.facet_tags.find(group_tag(model.mesh_data, group, fdim)))
+            blocks = fem.locate_dofs_topological(b.V, fdim,
+                                                 model.surface_facets(name, groups))
             bs = b.V.dofmap.index_map_bs
             out.append(layout.global_index[b.index][(blocks[:, None] * bs
                                                      + np.arange(bs)).ravel()])
@@ -207,13 +244,13 @@ class SurfaceContact:
                               Sequence[fem.Function], Sequence[fem.Function]],
                  dt: fem.Constant, beta1: float, beta2: float) -> None:
         self.spec, self.comm = spec, model.comm
+        self.small_rotations = spec.rotations == "small"
         self.law = forms.ContactLaw.of(spec)
         self.n = n = len(interface)
         self.u, self.v, self.a, self.da = state
         self.dt, self.beta1, self.beta2 = dt, beta1, beta2
-        s, m = model.body(spec.slave).index, model.body(spec.master).index
-        slave = _surface(model, layout, s, spec.slave_surface)
-        master = _surface(model, layout, m, spec.master_surface)
+        slave = _surface(model, layout, spec.slave, (spec.slave_surface,))
+        master = _surface(model, layout, spec.master, spec.master_groups)
         # Orient each master facet so that (t_y, −t_x) points out of its cell.
         mid = master.X.mean(axis=1)
         chord = master.X[:, 1] - master.X[:, 0]
@@ -291,14 +328,21 @@ class SurfaceContact:
         """The slave integration points: (slave facet, ξ, weight) of each.
 
         Each slave facet is cut where the master facets' vertices project onto it
-        (current configuration, ``segmented``), or not at all; each segment carries
-        the Gauss rule. The weight is the reference length.
+        (current configuration, ``segments``), or not at all (``gauss``); each segment
+        carries the Gauss rule. With ``nodes``: the facet's nodes, Gauss–Lobatto
+        weights. The weight is the reference length.
         """
         s = self.slave
         n_f, nn = s.X.shape[:2]
+        if self.spec.integration == "nodes":
+            point_facet = np.repeat(np.arange(n_f), nn)
+            xi = np.tile(_NODES[nn], n_f)
+            _, dN, _ = shape(xi, nn)
+            jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
+            return point_facet, xi, np.tile(_LOBATTO[nn], n_f) * jac
         facet = [np.arange(n_f), np.arange(n_f)]
         cut = [-np.ones(n_f), np.ones(n_f)]
-        if self.spec.segmented and len(xm) and n_f:
+        if self.spec.integration == "segments" and len(xm) and n_f:
             vertices = xm[:, :2].reshape(-1, xm.shape[2])
             on, xi = project(vertices, xs, FacetGrid(xs, self.radius))
             inside = (on >= 0) & (np.abs(xi) < 1 - 1e-12)
@@ -368,7 +412,8 @@ class SurfaceContact:
         if len(beyond):
             facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
         N0, dN0, _ = shape(xi, m.X.shape[1])
-        t0 = unit_tangent(dN0, xm[np.maximum(facet, 0)]) if len(m.X) else \
+        surface = m.X if self.small_rotations else xm
+        t0 = unit_tangent(dN0, surface[np.maximum(facet, 0)]) if len(m.X) else \
             np.zeros_like(points)
         self._frozen_key = u0.copy()
         self._frozen_data = (facet, N0, t0)
@@ -388,10 +433,12 @@ class SurfaceContact:
             return self._normal_data
         p = self._points(u1, v1)
         self._normal_key = key
-        self._normal_data = (partial(normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
-                [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
-                partial(nodal_normal_forces, self.law, p["Ns"], p["xi"], p["weight"]),
-                self.node_of[p["slave_facet"]])
+        args = (self.law, p["Ns"], p["xi"], p["weight"])
+        small = {"reference": self.master.X[p["facet"]]} if self.small_rotations else {}
+        self._normal_data = (partial(normal_forces, *args, **small),
+                             [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
+                             partial(nodal_normal_forces, *args, **small),
+                             self.node_of[p["slave_facet"]])
         return self._normal_data
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
@@ -476,7 +523,8 @@ class SurfaceContact:
         out = np.zeros(n * n)
         if not len(pos):  # no slave point has a projection: no contact
             return out.reshape(n, n)
-        both = jacobian(partial(normal_and_shares, *kernel.args), groups, cu, cv)
+        both = jacobian(partial(normal_and_shares, *kernel.args, **kernel.keywords), groups,
+                        cu, cv)
         size = pos.shape[1] * pos.shape[2]
         J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
         rows = pos.reshape(len(J), -1)
@@ -654,7 +702,8 @@ class SurfaceContact:
             x_s = np.einsum("kn,knd->kd", p["Ns"], p["xs"])
             xi = closest_point(x_s, p["xm"], p["xi"], iterations=2, tol=0.0)
             N, dN, _ = shape(xi, p["xm"].shape[1])
-            t = unit_tangent(dN, p["xm"])
+            t = unit_tangent(dN, self.master.X[p["facet"]] if self.small_rotations
+                             else p["xm"])
             n = np.stack([t[:, 1], -t[:, 0]], axis=1)
             gap = self.law.gap(x_s, np.einsum("kn,knd->kd", N, p["xm"]), n)
             i = p["index"]

@@ -81,6 +81,25 @@ def test_resolved_round_trip(tmp_path):
     assert again.name == "goda"  # the name is written, not taken from the file name
 
 
+def test_general_pair_master_of_several_groups_round_trip(tmp_path):
+    """A general pair's master surface as a string or an array of groups, its
+    integration and rotations: read, validated against the mesh, written back."""
+    general = ['contact.interface.slave_surface="interface"', "output.pair_probes={}",
+               "calibration.enabled=false", "bodies.mound.shear_modulus=2.3e6"]
+    one = load_case(None, [*general, 'contact.interface.master_surface="interface"'])
+    assert one.contact[0].master_surface == "interface"
+    assert one.contact[0].integration == "segments" and one.contact[0].rotations == "finite"
+    case = load_case(None, [*general, 'contact.interface.integration="nodes"',
+                            'contact.interface.rotations="small"',
+                            'contact.interface.master_surface=["interface", "mound_surface"]'])
+    c = case.contact[0]
+    assert c.master_surface == ("interface", "mound_surface")
+    assert (c.integration, c.rotations) == ("nodes", "small")
+    data = case.resolved()
+    assert data["contact"]["interface"]["master_surface"] == ["interface", "mound_surface"]
+    assert load_case(write(tmp_path / "r.toml", data)).resolved() == data
+
+
 def test_resolved_user_mesh_round_trip(tmp_path):
     msh = generate(tmp_path / "m.msh", comm=MPI.COMM_SELF)
     case = load_case(None, [f'mesh.source="{msh}"'])
@@ -439,6 +458,7 @@ def test_reference_lists_every_key():
         assert f"`{key}`" in text
     assert "| `time.dt` | number | s | required |" in text
     assert "| `bodies.<name>.density` | number | kg/m³ | required |" in text
+    assert "| `contact.<name>.master_surface` | string or array of string | - | — |" in text
 
 
 # --- build --------------------------------------------------------------------------

@@ -35,10 +35,12 @@ import ufl
 from breakwater.meshes.apart import Rectangle, rectangles
 from dolfinx import fem
 
+from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.errors import MeshError
 from breakwater.gn22 import GN22, GN22Parameters
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
+from breakwater.pointkernels import normal_forces
 from breakwater.projection import FacetGrid, closest_point, curve, nearest_end, project
 from breakwater.solver import NewtonOptions
 from breakwater.surfacepair import SurfaceContact, SurfacePair
@@ -138,6 +140,31 @@ def test_grid_candidates_are_complete() -> None:
     assert {(int(i), int(j)) for i, j in zip(*np.nonzero(inside), strict=True)} <= found
 
 
+def test_small_rotations_take_the_reference_normal() -> None:
+    """A master facet turned rigidly by θ, a slave point 1e-3 m inside it along its
+    current normal: with the current normal (``rotations = "finite"``, eq. 7) the
+    traction is ε_n·1e-3 along that normal; with the reference one (``"small"``) it
+    is along the unturned normal, g_n = −1e-3 cos θ (the offset on the reference
+    normal). Exact to round-off (1e-12 relative)."""
+    θ, ε = 0.1, 1e10
+    turn = np.array([[np.cos(θ), -np.sin(θ)], [np.sin(θ), np.cos(θ)]])
+    reference = _straight([-1.0, 1.0])  # (1, 3, 2): the facet along x
+    current = reference @ turn.T
+    n_current = turn @ np.array([0.0, -1.0])  # (t_y, −t_x) of the turned tangent
+    x_s = current[0, 2] - 1e-3 * n_current  # 1e-3 behind the master's surface
+    slave = np.repeat(x_s[None, None], 3, axis=1)  # a P2 slave facet collapsed on x_s
+    law = forms.ContactLaw.of(SurfacePair("c", "a", "b", "s", "m", ε))
+    Ns, xi, w = np.array([[0.0, 0.0, 1.0]]), np.zeros(1), np.ones(1)
+    groups = [(slave, np.zeros_like(slave)), (current, np.zeros_like(current))]
+    finite = -normal_forces(law, Ns, xi, w, groups)[0, :3].sum(axis=0)
+    small = -normal_forces(law, Ns, xi, w, groups, reference=reference)[0, :3].sum(axis=0)
+    # The traction on the slave: p along the master's outward normal n̄ (p ≥ 0 pushes
+    # the slave out: t_s = p n̄).
+    assert np.allclose(finite, ε * 1e-3 * n_current, rtol=1e-12, atol=0)
+    assert np.allclose(small, ε * 1e-3 * np.cos(θ) * np.array([0.0, -1.0]), rtol=1e-12,
+                       atol=1e-12 * ε * 1e-3)
+
+
 # --- models ------------------------------------------------------------------------
 
 def _model(path: pathlib.Path, comm: MPI.Comm, bodies: list[Rectangle], pair: SurfacePair,
@@ -153,10 +180,16 @@ def _provider(stepper: GN22) -> SurfaceContact:
     return provider
 
 
-def test_jacobian_matches_finite_differences(shared_dir: pathlib.Path) -> None:
+@pytest.mark.parametrize("options", [{}, {"integration": "nodes", "rotations": "small"},
+                                     {"integration": "gauss"}],
+                         ids=["segments-finite", "nodes-small", "gauss-finite"])
+def test_jacobian_matches_finite_differences(options: dict[str, str],
+                                             shared_dir: pathlib.Path) -> None:
     """The complex-step Jacobian (normal and friction parts) against central differences
-    of the residual, on a block pressed into a base and sliding on it."""
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5)
+    of the residual, on a block pressed into a base and sliding on it, for each
+    integration and both normals (current; reference: small rotations)."""
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5,
+                       **options)  # type: ignore[arg-type]
     model = _model(shared_dir / "jac.msh", COMM,
                    [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 5, 2),
                     Rectangle("block", -0.1, 0.0, 0.2, 0.1, 3, 2)], pair,
