@@ -27,7 +27,7 @@ from petsc4py import PETSc
 
 from .mesh import group_tag
 from .model import ContactModel
-from .surfacepair import surface_dofs
+from .surfaces import surface_dofs
 
 __all__ = ["BulkOperators", "MonolithicLayout", "Timings", "body_index", "interface_dofs"]
 

@@ -22,7 +22,7 @@ from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
 from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
 from .runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
-from .surfacepair import SurfacePair
+from .surfaces import SurfacePair
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio

@@ -30,7 +30,7 @@ from .errors import MeshError
 from .loadfields import TractionField
 from .mesh import group_tag
 from .runspec import InitialSpec
-from .surfacepair import SurfacePair, check_pair_settings
+from .surfaces import SurfacePair, check_pair_settings
 
 
 @dataclass(frozen=True)
@@ -372,7 +372,7 @@ class ContactModel:
 
         A surface group may lie on several bodies (a conforming interface shared by the
         two, or one group naming facets of both): each side of the pair takes the
-        group's facets on its own body (:func:`breakwater.surfacepair.surface_dofs`).
+        group's facets on its own body (:func:`breakwater.surfaces.surface_dofs`).
         """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
                                   *(("master", pair.master, g) for g in pair.master_groups)):

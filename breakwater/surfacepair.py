@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -58,170 +57,18 @@ from .pointkernels import (
     unit_tangent,
 )
 from .projection import FacetGrid, closest_point, nearest_end, project, shape
+from .surfaces import SurfacePair, gather_surface
 
 if TYPE_CHECKING:
     from .bulk import MonolithicLayout, Timings
     from .model import ContactModel
 
-__all__ = ["INTEGRATIONS", "SurfaceContact", "SurfacePair", "check_pair_settings",
-           "surface_dofs"]
-
-INTEGRATIONS = ("segments", "gauss", "nodes")
-
-
-def check_pair_settings(penalty: float, friction: float, regularisation: float, slave: str,
-                        master: str) -> None:
-    """Check the law's settings and bodies of a contact pair (conforming or general).
-
-    Raises:
-        ValueError: A setting out of range, or the same body on both sides.
-    """
-    if not penalty > 0:
-        raise ValueError(f"contact penalty must be > 0 (got {penalty})")
-    if not friction >= 0:
-        raise ValueError(f"friction coefficient must be >= 0 (got {friction})")
-    if not regularisation > 0:
-        raise ValueError(f"regularisation must be > 0 (got {regularisation})")
-    if slave == master:
-        raise ValueError("a contact pair needs two different bodies")
-
+__all__ = ["SurfaceContact"]
 
 # A slave facet's nodes in closure order (the vertices, then the mid-edge node) on
 # [−1, 1] and their Gauss–Lobatto weights: the trapezoidal rule (P1), Simpson's (P2).
 _NODES = {2: np.array([-1.0, 1.0]), 3: np.array([-1.0, 1.0, 0.0])}
 _LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
-
-
-@dataclass(frozen=True)
-class SurfacePair:
-    """Penalty contact with regularised Coulomb friction between two surfaces.
-
-    Attributes:
-        name: The pair's name (the case's ``[contact.NAME]``).
-        slave: Body whose integration points are projected.
-        master: Body whose surface (and outward normal) they are projected on.
-        slave_surface: Facet group on the slave's boundary.
-        master_surface: Facet group on the master's boundary.
-        penalty: Normal penalty ε_n (N/m³).
-        friction: Coulomb coefficient μ (-).
-        regularisation: Regularisation velocity χ (m/s).
-        points: Gauss points per integration segment (``segments``, ``gauss``).
-        integration: The slave's integration points: ``segments`` (each slave facet
-            cut where the master facets' vertices project onto it, ``points`` Gauss
-            points per segment: segment-to-segment, exact on a flat patch),
-            ``gauss`` (``points`` Gauss points per slave facet: Gauss-point-to-segment)
-            or ``nodes`` (the slave facet's nodes with Gauss–Lobatto weights,
-            Simpson's on a P2 facet: node-to-segment, the conforming pair's
-            quadrature).
-        rotations: ``finite``: the normal and tangent of the current master surface
-            at the projection (eq. 7); ``small``: those of the reference surface there
-            (the bodies' small rotations, as the conforming pair's fixed normal; the
-            projection, the gap and the slip still follow the current surfaces).
-        radius: Search radius (m): a point farther from the master surface has no
-            projection (out of contact); None: the longest master facet.
-    """
-
-    name: str
-    slave: str
-    master: str
-    slave_surface: str
-    master_surface: str | tuple[str, ...]
-    penalty: float
-    friction: float = 0.0
-    regularisation: float = 1e-10
-    points: int = 3
-    integration: str = "segments"
-    rotations: str = "finite"
-    radius: float | None = None
-
-    gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
-
-    def __post_init__(self) -> None:
-        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
-                            self.master)
-        if not self.points >= 1:
-            raise ValueError(f"points per facet must be >= 1 (got {self.points})")
-        if self.integration not in INTEGRATIONS:
-            raise ValueError(f"integration must be one of {', '.join(INTEGRATIONS)} "
-                             f"(got {self.integration!r})")
-        if self.rotations not in ("finite", "small"):
-            raise ValueError(f"rotations must be finite or small (got {self.rotations!r})")
-        if not self.master_groups:
-            raise ValueError("a master surface needs at least one facet group")
-        if self.radius is not None and not self.radius > 0:
-            raise ValueError(f"search radius must be > 0 (got {self.radius})")
-
-
-    @property
-    def master_groups(self) -> tuple[str, ...]:
-        """The facet groups of the master surface (one or several)."""
-        m = self.master_surface
-        return (m,) if isinstance(m, str) else tuple(m)
-
-
-@dataclass
-class _Surface:
-    """The facets of one surface, gathered on every rank and sorted by coordinates.
-
-    Attributes:
-        X: Reference node coordinates, ``(F, nn, gdim)`` (closure order: the two
-            vertices, then the mid-edge node).
-        dofs: Global stacked indices of the nodes' components, ``(F, nn, gdim)``.
-        interior: A point inside each facet's cell, ``(F, gdim)``.
-    """
-
-    X: np.ndarray
-    dofs: np.ndarray
-    interior: np.ndarray
-
-
-def _surface(model: ContactModel, layout: MonolithicLayout, body: str,
-             groups: Sequence[str]) -> _Surface:
-    """The facets of a body's facet groups (collective)."""
-    b = model.body(body)
-    V, sub = b.V, b.submesh
-    tdim = sub.topology.dim
-    fdim, gdim = tdim - 1, model.gdim
-    sub.topology.create_connectivity(fdim, tdim)
-    sub.topology.create_connectivity(tdim, fdim)
-    f2c, c2f = sub.topology.connectivity(fdim, tdim), sub.topology.connectivity(tdim, fdim)
-    facets = model.surface_facets(body, groups)
-    facets = facets[facets < sub.topology.index_map(fdim).size_local]
-    closure = V.dofmap.dof_layout.entity_closure_dofs
-    coords = V.tabulate_dof_coordinates()[:, :gdim]
-    bs = V.dofmap.index_map_bs
-    nn = len(closure(fdim, 0))
-    X = np.zeros((len(facets), nn, gdim))
-    dofs = np.zeros((len(facets), nn, gdim), np.int64)
-    interior = np.zeros((len(facets), gdim))
-    for k, f in enumerate(facets):
-        c = f2c.links(f)[0]
-        local = int(np.flatnonzero(c2f.links(c) == f)[0])
-        cell = V.dofmap.cell_dofs(c)
-        blocks = cell[closure(fdim, local)]
-        X[k] = coords[blocks]
-        dofs[k] = layout.global_index[b.index][(blocks[:, None] * bs + np.arange(gdim))]
-        interior[k] = coords[cell].mean(axis=0)
-    X, dofs, interior = (np.concatenate(model.comm.allgather(a)) for a in (X, dofs, interior))
-    mid = X.mean(axis=1)
-    order = np.lexsort(mid.T[::-1])
-    return _Surface(X[order], dofs[order], interior[order])
-
-
-def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
-    """Global stacked indices of the DOFs of every general pair's two surfaces (local)."""
-    fdim = model.mesh.topology.dim - 1
-    out = []
-    for spec in model.surface_pairs:
-        for name, groups in ((spec.slave, (spec.slave_surface,)),
-                             (spec.master, spec.master_groups)):
-            b = model.body(name)
-            blocks = fem.locate_dofs_topological(b.V, fdim,
-                                                 model.surface_facets(name, groups))
-            bs = b.V.dofmap.index_map_bs
-            out.append(layout.global_index[b.index][(blocks[:, None] * bs
-                                                     + np.arange(bs)).ravel()])
-    return np.concatenate(out) if out else np.zeros(0, np.int64)
 
 
 class SurfaceContact:
@@ -249,8 +96,8 @@ class SurfaceContact:
         self.n = n = len(interface)
         self.u, self.v, self.a, self.da = state
         self.dt, self.beta1, self.beta2 = dt, beta1, beta2
-        slave = _surface(model, layout, spec.slave, (spec.slave_surface,))
-        master = _surface(model, layout, spec.master, spec.master_groups)
+        slave = gather_surface(model, layout, spec.slave, (spec.slave_surface,))
+        master = gather_surface(model, layout, spec.master, spec.master_groups)
         # Orient each master facet so that (t_y, −t_x) points out of its cell.
         mid = master.X.mean(axis=1)
         chord = master.X[:, 1] - master.X[:, 0]

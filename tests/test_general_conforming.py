@@ -29,7 +29,8 @@ from breakwater.errors import MeshError
 from breakwater.gn22 import GN22
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.surfacepair import SurfaceContact, SurfacePair
+from breakwater.surfacepair import SurfaceContact
+from breakwater.surfaces import SurfacePair
 
 COMM = MPI.COMM_WORLD
 MATERIAL = Material(density=2000.0, poisson=0.25, young_modulus=1e9)

@@ -42,7 +42,8 @@ from breakwater.errors import ConvergenceError
 from breakwater.gn22 import GN22, GN22Parameters
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.surfacepair import SurfaceContact, SurfacePair
+from breakwater.surfacepair import SurfaceContact
+from breakwater.surfaces import SurfacePair
 
 COMM = MPI.COMM_WORLD
 R, E, NU = 1.0, 1e9, 0.25

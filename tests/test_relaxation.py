@@ -44,7 +44,8 @@ from breakwater.gn22 import GN22
 from breakwater.initial import InitialState, initial_state
 from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Fixed, Material
-from breakwater.surfacepair import SurfaceContact, SurfacePair
+from breakwater.surfacepair import SurfaceContact
+from breakwater.surfaces import SurfacePair
 
 COMM = MPI.COMM_WORLD
 

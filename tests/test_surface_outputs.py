@@ -38,7 +38,8 @@ from breakwater.model import Body, ContactModel, Damping, Fixed, Material, Surfa
 from breakwater.probes import PointProbe
 from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.surfaceoutputs import SlavePoints, SurfaceProbe, interface_values
-from breakwater.surfacepair import SurfaceContact, SurfacePair
+from breakwater.surfacepair import SurfaceContact
+from breakwater.surfaces import SurfacePair
 
 COMM = MPI.COMM_WORLD
 G = 9.81

@@ -43,7 +43,8 @@ from breakwater.model import Body, ContactModel, Damping, Fixed, Material, Surfa
 from breakwater.pointkernels import normal_forces
 from breakwater.projection import FacetGrid, closest_point, curve, nearest_end, project
 from breakwater.solver import NewtonOptions
-from breakwater.surfacepair import SurfaceContact, SurfacePair
+from breakwater.surfacepair import SurfaceContact
+from breakwater.surfaces import SurfacePair
 
 COMM = MPI.COMM_WORLD
 G = 9.81
