@@ -64,7 +64,7 @@ from petsc4py import PETSc
 from . import checkpoint as ckpt
 from . import files
 from .console import Progress, StopSignal, rank_zero_logging
-from .errors import BreakwaterError, ConvergenceError
+from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
 from .runspec import OutputSpec, TimeSpec
@@ -264,6 +264,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         log.error("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
         if stopped:
             raise RunInterrupted(summary["error"], summary) from error
+        if isinstance(error, CaseError | MeshError):  # an input found bad once built
+            raise error  # (a pair probe off its slave surface): exit 2, as before a run
         raise SimulationFailed(summary["error"], summary) from error
 
 

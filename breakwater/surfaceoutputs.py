@@ -42,7 +42,6 @@ from typing import Any
 import dolfinx
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
 from . import forms, quality  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .checkpoint import match_nodes
@@ -53,26 +52,11 @@ from .projection import FacetGrid, closest_point, curve, project, shape
 from .runspec import PairProbeSpec
 from .surfacepair import SurfaceContact
 
-__all__ = ["ROUND_OFF", "SlavePoints", "SurfaceFields", "SurfaceProbe", "interface_values",
+__all__ = ["ROUND_OFF", "SlavePoints", "SurfaceFields", "SurfaceProbe",
            "quality_inputs", "surface_state"]
 
 ROUND_OFF = 1e-12
 """A static penetration below this fraction of the surfaces' extent is round-off."""
-
-
-def interface_values(contact: SurfaceContact, functions: Sequence[fem.Function]
-                     ) -> np.ndarray:
-    """Values of one Function per body at the pair's interface unknowns (collective).
-
-    Returns:
-        Shape ``(n + 1,)``, the same on every rank, with a trailing 0 (the value at
-        the Dirichlet entries, position −1).
-    """
-    out = np.zeros(contact.n + 1)
-    for f, (local, pos) in zip(functions, contact._owned, strict=True):
-        out[pos] = f.x.array[local]
-    contact.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-    return out
 
 
 def _normal(tangent: np.ndarray) -> np.ndarray:
@@ -159,13 +143,15 @@ class SlavePoints:
         """The points' contact state (see the module doc).
 
         Args:
-            u: Displacements at the interface unknowns (:func:`interface_values`).
+            u: Displacements at the interface unknowns
+                (:meth:`~breakwater.surfacepair.SurfaceContact.interface_values`).
             v: Velocities there (None: at rest).
 
         Returns:
             ``x`` (current position), ``u_slave``, ``u_master`` (at X̄₀), ``normal``
-            (the master's current normal), ``gap``, ``pressure``, ``slip`` (vector),
-            ``slip_t`` (along t₀), ``slip_velocity`` and ``friction_traction``.
+            (the master's normal at the projection, the pair's), ``gap``, ``pressure``,
+            ``slip`` (vector), ``slip_t`` (along t₀), ``slip_velocity`` and
+            ``friction_traction``.
         """
         c = self.contact
         m = c.master
@@ -221,7 +207,7 @@ class SurfaceProbe:
 
     def value(self, u: Sequence[fem.Function]) -> dict[str, float]:
         """Slip, opening and both sides' displacements for the state ``u`` (collective)."""
-        s = self.points.evaluate(interface_values(self.contact, u))
+        s = self.points.evaluate(self.contact.interface_values(u))
         us, um = s["u_slave"][0], s["u_master"][0]
         return {"slip": float(s["slip_t"][0]), "opening": float(s["gap"][0]),
                 "slave_ux": float(us[0]), "slave_uy": float(us[1]),
@@ -290,8 +276,8 @@ class SurfaceFields:
     def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
                ) -> None:
         """Evaluate the fields of the state ``(u, v)`` (one Function per body; collective)."""
-        state = self.points.evaluate(interface_values(self.contact, u),
-                                     None if v is None else interface_values(self.contact, v))
+        state = self.points.evaluate(self.contact.interface_values(u),
+                                     None if v is None else self.contact.interface_values(v))
         for k, f in self.values.items():
             shape_ = (len(self._index), f.function_space.dofmap.index_map_bs)
             f.x.array.reshape(shape_)[:] = state[k][self._index].reshape(shape_)
@@ -309,7 +295,7 @@ def surface_state(contacts: Sequence[SurfaceContact], u: Sequence[fem.Function]
     data: dict[str, np.ndarray] = {}
     for c in contacts:
         points = SlavePoints.nodes(c)
-        state = points.evaluate(interface_values(c, u))
+        state = points.evaluate(c.interface_values(u))
         order = np.lexsort(points.X.T[::-1])
         key = f"surface_{c.spec.name}"
         data[f"{key}_x"] = points.X[order]
@@ -350,7 +336,7 @@ def quality_inputs(model: ContactModel, contacts: Sequence[SurfaceContact],
         penetration = float(-state["gap"][closed].min(initial=0.0))
         facets = max(len(c.slave.X), 1)
         points = SlavePoints.nodes(c)
-        nodal = points.evaluate(interface_values(c, u))
+        nodal = points.evaluate(c.interface_values(u))
         inputs.append(quality.PairInputs(
             name=spec.name, penalty=spec.penalty,
             element_size=float(state["weight"].sum()) / facets,

@@ -170,6 +170,19 @@ class SurfaceContact:
         return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
                 v + dt * a + self.beta1 * dt * da)
 
+    def interface_values(self, functions: Sequence[fem.Function]) -> np.ndarray:
+        """Values of one Function per body at the pair's interface unknowns (collective).
+
+        Returns:
+            Shape ``(n + 1,)``, the same on every rank, with a trailing 0 (the value at
+            the Dirichlet entries, position −1).
+        """
+        out = np.zeros(self.n + 1)
+        for f, (local, pos) in zip(functions, self._owned, strict=True):
+            out[pos] = f.x.array[local]
+        self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out
+
     def _integration(self, xs: np.ndarray, xm: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The slave integration points: (slave facet, ξ, weight) of each.

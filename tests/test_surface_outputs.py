@@ -37,7 +37,7 @@ from breakwater.mesh import read_mesh
 from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
 from breakwater.probes import PointProbe
 from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
-from breakwater.surfaceoutputs import SlavePoints, SurfaceProbe, interface_values
+from breakwater.surfaceoutputs import SlavePoints, SurfaceProbe
 from breakwater.surfacepair import SurfaceContact
 from breakwater.surfaces import SurfacePair
 
@@ -88,7 +88,7 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
         assert abs(value["opening"] - (us[1] - um[1])) <= 1.01 * θ * d
     # The nodal fields: the same definitions at every slave node.
     nodes = SlavePoints.nodes(contact)
-    state = nodes.evaluate(interface_values(contact, stepper.u))
+    state = nodes.evaluate(contact.interface_values(stepper.u))
     np.testing.assert_allclose(state["slip"], np.broadcast_to([d, 0.0], state["slip"].shape),
                                rtol=1e-12, atol=1e-18)
     np.testing.assert_allclose(state["gap"], gap(nodes.X[:, 0]), rtol=1e-12)
@@ -302,6 +302,18 @@ def test_example_with_a_pair_probe_and_figures(shared_dir: pathlib.Path) -> None
         summary = json.load(f)
     assert summary["dynamic"]["residual_slip"] == pytest.approx(h["corner_slip"][-1])
     assert "sliding" in summary["contact_quality"]
+
+
+def test_pair_probe_off_the_slave_surface_is_an_input_error(shared_dir: pathlib.Path
+                                                            ) -> None:
+    """A pair probe of a general pair is placed once the pair is built (after the
+    static state): a point off its slave surface still exits 2 (a bad input, as the
+    case errors found before a run), with the message, not 1 (a failed run)."""
+    from breakwater import cli
+
+    assert cli.main(["run", str(EXAMPLE), "--out", str(shared_dir / "off"), "--no-progress",
+                     "--quiet", "--set", "time.end_time=0.005", "--set",
+                     'output.pair_probes.corner={pair="sliding", point=[5.0, 5.0]}']) == 2
 
 
 # --- resume -------------------------------------------------------------------------
