@@ -52,7 +52,8 @@ class SurfacePair:
         slave: Body whose integration points are projected.
         master: Body whose surface (and outward normal) they are projected on.
         slave_surface: Facet group on the slave's boundary.
-        master_surface: Facet group on the master's boundary.
+        master_surface: Facet group on the master's boundary, or several making one
+            surface (:attr:`master_groups`).
         penalty: Normal penalty ε_n (N/m³).
         friction: Coulomb coefficient μ (-).
         regularisation: Regularisation velocity χ (m/s).
