@@ -10,6 +10,7 @@ included. Used by :class:`breakwater.surfacepair.SurfaceContact`.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -103,27 +104,32 @@ def normal_and_shares(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
     return np.concatenate([forces.reshape(len(Ns), -1), shares], axis=1)
 
 
-def jacobian(kernel: Any, groups: Sequence[tuple[np.ndarray, np.ndarray]],
-              cu: float, cv: float) -> np.ndarray:
+def jacobian(kernel: partial[np.ndarray], groups: Sequence[tuple[np.ndarray, np.ndarray]],
+             cu: float, cv: float) -> np.ndarray:
     """∂kernel/∂Δa per point by complex steps, ``(K, outputs, local)``.
 
     Each local DOF (group, node, component) is stepped in x by ``i h cu`` and in v
-    by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa).
+    by ``i h cv`` (x and v of GN22 move by cu and cv per unit Δa). The steps are taken
+    in one batched evaluation: the kernel (a ``partial`` whose per-point arguments
+    have K rows) runs once on ``local`` copies of the points, copy j stepped in DOF j.
     """
-    cx = [(x.astype(complex), v.astype(complex)) for x, v in groups]
-    K, nn, gdim = cx[0][0].shape
-    local = len(cx) * nn * gdim
-    J: np.ndarray | None = None
+    K, nn, gdim = groups[0][0].shape
+    local = len(groups) * nn * gdim
+    if not K:
+        return np.zeros((0, 0, 0))
+
+    def tile(a: Any) -> Any:
+        per_point = isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == K
+        return np.tile(a, (local,) + (1,) * (a.ndim - 1)) if per_point else a
+
+    batched = partial(kernel.func, *map(tile, kernel.args),
+                      **{k: tile(a) for k, a in kernel.keywords.items()})
+    cx = [(tile(x).astype(complex), tile(v).astype(complex)) for x, v in groups]
     for j in range(local):
         group, rest = divmod(j, nn * gdim)
         node, comp = divmod(rest, gdim)
         x, v = cx[group]
-        x[:, node, comp] += 1j * H * cu
-        v[:, node, comp] += 1j * H * cv
-        column = kernel(cx).reshape(K, -1).imag / H
-        if J is None:
-            J = np.zeros((K, column.shape[1], local))
-        J[:, :, j] = column
-        x[:, node, comp] = x[:, node, comp].real
-        v[:, node, comp] = v[:, node, comp].real
-    return J if J is not None else np.zeros((K, 0, 0))
+        x[j * K:(j + 1) * K, node, comp] += 1j * H * cu
+        v[j * K:(j + 1) * K, node, comp] += 1j * H * cv
+    columns = batched(cx).reshape(local, K, -1).imag / H
+    return np.ascontiguousarray(columns.transpose(1, 2, 0))
