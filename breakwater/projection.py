@@ -40,17 +40,18 @@ def shape(xi: Any, nn: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         N, N', N'' each of shape ``(m, nn)``.
     """
     xi = np.asarray(xi)
-    one = np.ones_like(xi)
-    if nn == 2:
-        N = np.stack([0.5 * (1 - xi), 0.5 * (1 + xi)], axis=-1)
-        dN = np.stack([-0.5 * one, 0.5 * one], axis=-1)
-        d2N = np.zeros_like(N)
-    elif nn == 3:
-        N = np.stack([0.5 * xi * (xi - 1), 0.5 * xi * (xi + 1), 1 - xi * xi], axis=-1)
-        dN = np.stack([xi - 0.5, xi + 0.5, -2 * xi], axis=-1)
-        d2N = np.stack([one, one, -2 * one], axis=-1)
-    else:
+    if nn not in (2, 3):
         raise ValueError(f"facets of {nn} nodes are not supported (2 or 3)")
+    N, dN, d2N = (np.empty((*xi.shape, nn), dtype=np.result_type(xi, float))
+                  for _ in range(3))
+    if nn == 2:
+        N[..., 0], N[..., 1] = 0.5 * (1 - xi), 0.5 * (1 + xi)
+        dN[..., 0], dN[..., 1] = -0.5, 0.5
+        d2N[...] = 0.0
+    else:
+        N[..., 0], N[..., 1], N[..., 2] = 0.5 * xi * (xi - 1), 0.5 * xi * (xi + 1), 1 - xi * xi
+        dN[..., 0], dN[..., 1], dN[..., 2] = xi - 0.5, xi + 0.5, -2 * xi
+        d2N[..., :2], d2N[..., 2] = 1.0, -2.0
     return N, dN, d2N
 
 

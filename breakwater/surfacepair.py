@@ -141,6 +141,7 @@ class SurfaceContact:
         self._frozen_key: np.ndarray | None = None
         self._normal_key: np.ndarray | None = None
         self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
+        self._normal_points: dict[str, Any]  # the _points of _normal_key
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
         # The start-of-step projection of the last step solved (see _friction).
         self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -300,7 +301,7 @@ class SurfaceContact:
         if self._normal_key is not None and np.array_equal(self._normal_key, key):
             return self._normal_data
         p = self._points(u1, v1)
-        self._normal_key = key
+        self._normal_key, self._normal_points = key, p
         args = (self.law, p["Ns"], p["xi"], p["weight"])
         small = {"reference": self.master.X[p["facet"]]} if self.small_rotations else {}
         self._normal_data = (partial(normal_forces, *args, **small),
@@ -560,7 +561,8 @@ class SurfaceContact:
             none), ``xi`` (its local coordinate).
         """
         _, u1, v1 = self._state(accepted=accepted)
-        p = self._points(u1, v1)
+        self._normal(u1, v1)  # the points of this state (cached: the search once)
+        p = self._normal_points
         points = p["all_x"]
         total = len(points)
         out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
