@@ -77,6 +77,33 @@ _LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
 _EDGE = 1e-3
 
 
+class _Entries:
+    """Entries of a dense n × n matrix, collected and summed once (:meth:`matrix`)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.flat: list[np.ndarray] = []
+        self.values: list[np.ndarray] = []
+
+    def add(self, flat: np.ndarray, values: np.ndarray) -> None:
+        """A[flat] += values (flat row-major indices)."""
+        self.flat.append(flat.ravel())
+        self.values.append(values.ravel())
+
+    def block(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
+        """A[rows, cols] += block per point (Dirichlet entries, −1, skipped)."""
+        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
+        self.add((rows[:, :, None] * self.n + cols[:, None, :])[keep], block[keep])
+
+    def matrix(self) -> np.ndarray:
+        """The sum, ``(n, n)``."""
+        n = self.n
+        if not self.flat:
+            return np.zeros((n, n))
+        return np.bincount(np.concatenate(self.flat), weights=np.concatenate(self.values),
+                           minlength=n * n).reshape(n, n)
+
+
 class SurfaceContact:
     """One general pair as a provider of the fast solver's interface (see the module doc).
 
@@ -389,21 +416,21 @@ class SurfaceContact:
         n = self.n
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
-        out = np.zeros(n * n)
+        out = _Entries(n)
         if not len(pos):  # no slave point has a projection: no contact
-            return out.reshape(n, n)
+            return out.matrix()
         both = jacobian(partial(normal_and_shares, *kernel.args, **kernel.keywords), groups,
                         cu, cv)
         size = pos.shape[1] * pos.shape[2]
         J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
         rows = pos.reshape(len(J), -1)
-        self._add_block(out, rows, rows, J)
+        out.block(rows, rows, J)
         if not self.spec.friction:
-            return out.reshape(n, n)
+            return out.matrix()
         lam = self._nodal_forces(lam_kernel, groups, node)
         fr = self._friction(u0, v1, lam)
         if fr is None:
-            return out.reshape(n, n)
+            return out.matrix()
         # dλ/dΔa (slave nodes × interface), from the points' shares.
         cols = np.broadcast_to(rows[:, None, :], Jl.shape)
         nodes = np.broadcast_to(node[:, :, None], Jl.shape)
@@ -430,23 +457,15 @@ class SurfaceContact:
             rr = np.broadcast_to(rp[:, :, None], vals.shape)
             cc = np.broadcast_to(np.arange(n)[None, None, :], vals.shape)
             ok = rr >= 0
-            out += np.bincount((rr * n + cc)[ok], weights=vals[ok], minlength=n * n)
+            out.add((rr * n + cc)[ok], vals[ok])
         # v_T part: slave node columns (B), master f₀ node columns (−N0_j B).
         col_pos = row_pos
         col_sign = np.concatenate([np.ones((len(k), 1)), -N0], axis=1)
         for r in range(row_pos.shape[1]):
             for c in range(col_pos.shape[1]):
                 block = (sign[:, r] * col_sign[:, c])[:, None, None] * B
-                self._add_block(out, row_pos[:, r, :], col_pos[:, c, :], block)
-        return out.reshape(n, n)
-
-    def _add_block(self, out: np.ndarray, rows: np.ndarray, cols: np.ndarray,
-                   block: np.ndarray) -> None:
-        """out[rows, cols] += block per point (flat out; Dirichlet entries skipped)."""
-        n = self.n
-        flat = rows[:, :, None] * n + cols[:, None, :]
-        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
-        out += np.bincount(flat[keep], weights=block[keep], minlength=n * n)
+                out.block(row_pos[:, r, :], col_pos[:, c, :], block)
+        return out.matrix()
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
         """Newton's slip guard (:mod:`breakwater.slipguard`) at the slave nodes.
