@@ -449,14 +449,16 @@ def test_histories_equal_serial(run, shared_dir: pathlib.Path) -> None:  # type:
     assert np.abs(parallel["force"] - serial["force"]).max() <= 1e-7 * scale
 
 
-def _kinematics(comm: MPI.Comm, path: pathlib.Path) -> dict[str, np.ndarray]:
+def _kinematics(comm: MPI.Comm, path: pathlib.Path, **options: str
+                ) -> dict[str, np.ndarray]:
     """The pair's kinematics and forces for one displacement field, given as a formula.
 
     A block (element size 1/20 m) 30 mm to the right of where it was meshed, tilted
     into a base of element size 1/7 m (non-matching: the gap from +10 μm to −30 μm),
     both strained; the velocities of a slide at 0.1 m/s.
     """
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5)
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5,
+                       **options)  # type: ignore[arg-type]
     model = _model(path, comm, [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 7, 2),
                                 Rectangle("block", -0.1, 0.0, 0.2, 0.1, 4, 2)], pair)
     stepper = GN22(model, 1e-3)
@@ -482,7 +484,9 @@ def _kinematics(comm: MPI.Comm, path: pathlib.Path) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.skipif(COMM.size < 2, reason="compares serial and parallel runs")
-def test_kinematics_equal_serial(shared_dir: pathlib.Path) -> None:
+@pytest.mark.parametrize("options", [{}, {"integration": "nodes", "rotations": "small"}],
+                         ids=["segments-finite", "nodes-small"])
+def test_kinematics_equal_serial(options: dict[str, str], shared_dir: pathlib.Path) -> None:
     """For the same displacements the pair's kinematics on 2 ranks equal the serial
     ones (issue 12: to 1e-10 relative): integration points, projections (master facet
     and ξ̄), gaps, pressures and the resultant. Every rank gathers the surfaces in one
@@ -491,13 +495,13 @@ def test_kinematics_equal_serial(shared_dir: pathlib.Path) -> None:
     5e-14 of the gap's scale, 3e-14 of the resultant, 2e-16 in ξ̄; we ask 1e-12.
     (The histories above differ by more: a partition changes the bulk solve's
     round-off, which the dynamics amplifies; see the README.)"""
-    parallel = _kinematics(COMM, shared_dir / "kin_world.msh")
+    parallel = _kinematics(COMM, shared_dir / "kin_world.msh", **options)
     serial = None
     if COMM.rank == 0:
-        serial = _kinematics(MPI.COMM_SELF, shared_dir / "kin_serial.msh")
+        serial = _kinematics(MPI.COMM_SELF, shared_dir / "kin_serial.msh", **options)
     serial = COMM.bcast(serial, root=0)
     closed = serial["gap"] <= 0
-    assert closed.sum() > 10 and (~closed).sum() > 0  # in contact, with open points
+    assert closed.sum() > 5 and (~closed).sum() > 0  # in contact, with open points
     np.testing.assert_array_equal(parallel["facet"], serial["facet"])
     for key in ("x", "xi", "gap", "pressure", "weight", "resultant"):
         a, b = np.nan_to_num(parallel[key]), np.nan_to_num(serial[key])
