@@ -4,7 +4,8 @@ Vectorised over points, written with analytic NumPy operations only (no ``abs``,
 active set decided on real parts by :mod:`forms.contact`), so that they run in complex
 arithmetic: :func:`jacobian` differentiates any of them by complex steps, exactly (no
 cancellation), the projection's Newton (:func:`breakwater.projection.closest_point`)
-included. Used by :class:`breakwater.surfacepair.SurfaceContact`.
+included; :class:`DenseEntries` sums their per-point blocks into the interface matrix.
+Used by :class:`breakwater.surfacepair.SurfaceContact`.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .projection import closest_point, shape
 
-__all__ = ["jacobian", "nodal_normal_forces", "normal_and_shares", "normal_forces",
+__all__ = ["DenseEntries", "jacobian", "nodal_normal_forces", "normal_and_shares", "normal_forces",
            "unit_tangent"]
 
 H = 1e-20  # complex step (no cancellation: any tiny step is exact to round-off)
@@ -133,3 +134,30 @@ def jacobian(kernel: partial[np.ndarray], groups: Sequence[tuple[np.ndarray, np.
         v[j * K:(j + 1) * K, node, comp] += 1j * H * cv
     columns = batched(cx).reshape(local, K, -1).imag / H
     return np.ascontiguousarray(columns.transpose(1, 2, 0))
+
+
+class DenseEntries:
+    """Entries of a dense n × n matrix, collected and summed once (:meth:`matrix`)."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.flat: list[np.ndarray] = []
+        self.values: list[np.ndarray] = []
+
+    def add(self, flat: np.ndarray, values: np.ndarray) -> None:
+        """A[flat] += values (flat row-major indices)."""
+        self.flat.append(flat.ravel())
+        self.values.append(values.ravel())
+
+    def block(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
+        """A[rows, cols] += block per point (Dirichlet entries, −1, skipped)."""
+        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
+        self.add((rows[:, :, None] * self.n + cols[:, None, :])[keep], block[keep])
+
+    def matrix(self) -> np.ndarray:
+        """The sum, ``(n, n)``."""
+        n = self.n
+        if not self.flat:
+            return np.zeros((n, n))
+        return np.bincount(np.concatenate(self.flat), weights=np.concatenate(self.values),
+                           minlength=n * n).reshape(n, n)

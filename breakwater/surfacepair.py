@@ -49,6 +49,7 @@ from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .pointkernels import (
+    DenseEntries,
     H,
     jacobian,
     nodal_normal_forces,
@@ -75,33 +76,6 @@ _LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
 # and back between Newton iterates, and a node carrying its lumped force in and out of
 # contact 2-cycles Newton. Gauss points lie inside the slave facets: 1e-9 (round-off).
 _EDGE = 1e-3
-
-
-class _Entries:
-    """Entries of a dense n × n matrix, collected and summed once (:meth:`matrix`)."""
-
-    def __init__(self, n: int) -> None:
-        self.n = n
-        self.flat: list[np.ndarray] = []
-        self.values: list[np.ndarray] = []
-
-    def add(self, flat: np.ndarray, values: np.ndarray) -> None:
-        """A[flat] += values (flat row-major indices)."""
-        self.flat.append(flat.ravel())
-        self.values.append(values.ravel())
-
-    def block(self, rows: np.ndarray, cols: np.ndarray, block: np.ndarray) -> None:
-        """A[rows, cols] += block per point (Dirichlet entries, −1, skipped)."""
-        keep = (rows[:, :, None] >= 0) & (cols[:, None, :] >= 0)
-        self.add((rows[:, :, None] * self.n + cols[:, None, :])[keep], block[keep])
-
-    def matrix(self) -> np.ndarray:
-        """The sum, ``(n, n)``."""
-        n = self.n
-        if not self.flat:
-            return np.zeros((n, n))
-        return np.bincount(np.concatenate(self.flat), weights=np.concatenate(self.values),
-                           minlength=n * n).reshape(n, n)
 
 
 class SurfaceContact:
@@ -416,7 +390,7 @@ class SurfaceContact:
         n = self.n
         u0, u1, v1 = self._state()
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
-        out = _Entries(n)
+        out = DenseEntries(n)
         if not len(pos):  # no slave point has a projection: no contact
             return out.matrix()
         both = jacobian(partial(normal_and_shares, *kernel.args, **kernel.keywords), groups,
