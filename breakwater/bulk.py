@@ -342,7 +342,7 @@ def _plain_products(mat: PETSc.Mat) -> None:
     0.27 ms for M x at refinement 3 (23,422 DOFs, 528k nonzeros), measured back to back.
     The factorisation (MUMPS) does not use them.
     """
-    mat.setOption(PETSc.Mat.Option.USE_INODES, False)
+    mat.setOption(PETSc.Mat.Option.USE_INODES, False)  # type: ignore[arg-type]
 
 
 def _body_force(body, gravity, w):  # type: ignore[no-untyped-def]
