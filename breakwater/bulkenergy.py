@@ -119,11 +119,12 @@ class MatrixTerms:
         self.alpha, self.beta = m.damping.alpha, m.damping.beta
         self.beta1, self.beta2 = stepper.params.beta1, stepper.params.beta2
         numerical_on = not self.beta1 == self.beta2 == 0.5
-        # The columns each matrix multiplies (only those some term needs).
+        # The columns each matrix multiplies (only those some term needs), by name.
         self._columns = {
-            "M": ["v", *(["v̄"] if self.alpha or numerical_on else []),
-                  *(["Δa"] if numerical_on else [])],
-            "K": ["u", *(["v̄"] if self.beta else [])]}
+            "M": {c: k for k, c in enumerate(
+                ["v", *(["v̄"] if self.alpha or numerical_on else []),
+                 *(["Δa"] if numerical_on else [])])},
+            "K": {c: k for k, c in enumerate(["u", *(["v̄"] if self.beta else [])])}}
         n = int(self.offsets[-1])
         self._in: dict[str, PETSc.Mat] = {}
         self._out: dict[str, PETSc.Mat] = {}
@@ -141,50 +142,64 @@ class MatrixTerms:
             assert a is not None
             self._amplitudes.append(a)
         self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
-        self._x: dict[str, np.ndarray] = {}
 
-    def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
-        """The owned entries of one Function per body, stacked."""
-        out = np.empty(int(self.offsets[-1]))
+    def _fill(self, functions: Sequence[fem.Function], out: np.ndarray) -> np.ndarray:
+        """The owned entries of one Function per body, stacked into ``out`` (returned)."""
         for f, lo, hi in zip(functions, self.offsets[:-1], self.offsets[1:], strict=True):
             out[lo:hi] = f.x.array[: hi - lo]
         return out
 
-    def _products(self, x: dict[str, np.ndarray]) -> dict[str, dict[str, np.ndarray]]:
-        """M x and K x of the named vectors, one batched product per matrix."""
-        out: dict[str, dict[str, np.ndarray]] = {}
+    def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
+        """The owned entries of one Function per body, stacked."""
+        return self._fill(functions, np.empty(int(self.offsets[-1])))
+
+    def _products(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray],
+                                 dict[str, np.ndarray]]:
+        """The vectors (owned entries) and their products with M and K, by name.
+
+        Each matrix multiplies its columns (the vectors written into its dense input
+        block) in one pass (``MatMatMult``).
+        """
+        s = self.stepper
+        X = {k: self._in[k].getDenseArray() for k in ("M", "K")}
+        cm, ck = self._columns["M"], self._columns["K"]
+        x = {"v": self._fill(s.v, X["M"][:, cm["v"]]), "u": self._fill(s.u, X["K"][:, ck["u"]])}
+        if "v̄" in cm or "v̄" in ck:
+            x["v̄"] = v̄ = self._owned(self.v0)
+            v̄ += x["v"]
+            v̄ *= 0.5
+            for name, cols in (("M", cm), ("K", ck)):
+                if "v̄" in cols:
+                    X[name][:, cols["v̄"]] = v̄
+        if "Δa" in cm:
+            x["Δa"] = self._fill(s.da, X["M"][:, cm["Δa"]])
+        products = []
         for name, A in (("M", self.bulk.M), ("K", self.bulk.K)):
-            cols = self._columns[name]
-            X, Y = self._in[name], self._out[name]
-            X.getDenseArray()[:] = np.column_stack([x[c] for c in cols])
-            A.matMult(X, Y)
-            y = Y.getDenseArray(readonly=True)
-            out[name] = {c: y[:, k] for k, c in enumerate(cols)}
-        return out
+            A.matMult(self._in[name], self._out[name])
+            y = self._out[name].getDenseArray(readonly=True)
+            products.append({c: y[:, k] for c, k in self._columns[name].items()})
+        return x, products[0], products[1]
 
     def local(self, step: bool) -> np.ndarray:
         """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
         s = self.stepper
-        u, v = self._owned(s.u), self._owned(s.v)
-        x = {"u": u, "v": v, "v̄": 0.5 * (self._owned(self.v0) + v),
-             "Δa": self._owned(s.da)}
-        p = self._products(x)
-        Mx, Kx = p["M"], p["K"]
+        x, Mx, Kx = self._products()
+        u, v = x["u"], x["v"]
         out = np.zeros(len(TERMS))
         out[0] = 0.5 * _dot(v, Mx["v"])
         out[1] = 0.5 * _dot(u, Kx["u"])
         if not step:
             return out
-        v̄, Δa = x["v̄"], x["Δa"]
         if self.alpha:
-            out[2] += self.alpha * _dot(v̄, Mx["v̄"])
+            out[2] += self.alpha * _dot(x["v̄"], Mx["v̄"])
         if self.beta:
-            out[2] += self.beta * _dot(v̄, Kx["v̄"])
+            out[2] += self.beta * _dot(x["v̄"], Kx["v̄"])
         amplitudes = np.array([1.0, *(0.5 * (float(a0.value) + float(a1.value))
                                       for a0, a1 in zip(self.amp0, self._amplitudes,
                                                         strict=True))])
         out[3] = _dot(np.einsum("ij,j->i", self._loads, amplitudes), u - self._owned(self.u0))
         if "Δa" in Mx:
+            Δa = x["Δa"]
             k1, k2, k3, k4 = numerical.bulk_coefficients(float(s.dt.value), self.beta1,
                                                          self.beta2, self.alpha, self.beta)
             out[4] = k1 * _dot(Δa, Mx["v̄"]) + _dot(Mx["Δa"], k2 * self._owned(s.a) + k3 * Δa)
