@@ -208,6 +208,15 @@ class BulkOperators:
             rows.append(self.layout.owned_local(body, dofs))
         return np.unique(np.concatenate(rows)) if rows else np.zeros(0, np.int64)
 
+    @property
+    def load_vectors(self) -> list[tuple[fem.Constant | None, PETSc.Vec]]:
+        """Gravity's load vector (amplitude None: 1), then each load's at unit amplitude.
+
+        F(t) = Σ amplitude_k(t) f_k, the loads in the model's order with their
+        amplitude Constants (the energy ledger's external work).
+        """
+        return self._loads
+
     def load(self, out: PETSc.Vec) -> None:
         """F at the loads' current amplitudes (the model's ``set_time``)."""
         out.zeroEntries()

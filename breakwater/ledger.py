@@ -24,11 +24,12 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import dolfinx
+import numpy as np
 from dolfinx import fem
 
-from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from . import forms, numerical  # type: ignore[attr-defined]  # breakwater.forms: forms/
+from .bulkenergy import MatrixTerms, bulk_terms
 from .gn22 import GN22
-from .numerical import NumericalDissipation
 from .surfacepair import SurfaceContact
 
 FIELDS = ("kinetic", "strain", "penalty", "rayleigh_dissipation", "friction_dissipation",
@@ -65,37 +66,36 @@ class EnergyLedger:
 
     Call :meth:`record` once after ``initialise`` and once after every step (right
     after ``update``: the numerical entry reads the step's ``Δa`` and ``Δt``).
+
+    The terms over the whole mesh (kinetic, strain, Rayleigh, external work, the bulk
+    numerical dissipation) come from :mod:`breakwater.bulkenergy`: on the fast solver
+    from its cached M, K and load vectors, on the reference solver from UFL forms; the
+    interface terms are forms over the contact facets (and the general pairs' own).
+
+    Args:
+        stepper: The stepper.
+        source: Where the whole-mesh terms come from: ``auto``, ``forms`` or
+            ``matrices`` (:data:`~breakwater.bulkenergy.SOURCES`).
     """
 
-    def __init__(self, stepper: GN22) -> None:
+    def __init__(self, stepper: GN22, source: str = "auto") -> None:
         self.stepper = s = stepper
         m = s.model
         self.u0, self.v0 = m.functions("u_prev"), m.functions("v_prev")
-        bodies = list(enumerate(m.bodies))
-        v̄ = [0.5 * (a + b) for a, b in zip(s.v, self.v0, strict=True)]
-        Δu = [a - b for a, b in zip(s.u, self.u0, strict=True)]
-        self._stored = [
-            m.form(sum(forms.kinetic_energy(b.ρ, s.v[i], b.dx) for i, b in bodies)),
-            m.form(sum(forms.strain_energy(s.u[i], b.λ, b.μ, b.dx) for i, b in bodies)),
-            m.form(sum(forms.penalty_energy(p.law, s.u[p.slave]("+"), s.u[p.master]("-"), p.n,
-                                            p.dS) for p in m.pairs))
-            if m.pairs else None,
-        ]
-        self._rayleigh = m.form(sum(forms.rayleigh_power(m.α, m.β, b.ρ, v̄[i], b.λ, b.μ, b.dx)
-                                    for i, b in bodies))
         self._amp0 = [fem.Constant(m.mesh, dolfinx.default_scalar_type(0.0)) for _ in m.loads]
-        work = sum(forms.external_power(b.ρ, m.gravity, Δu[i], b.dx) for i, b in bodies)
-        for ld, a0 in zip(m.loads, self._amp0, strict=True):
-            t̄ = 0.5 * (a0 + ld.amplitude) * ld.unit
-            work += forms.surface_traction(t̄, Δu[ld.body], ld.ds)
-        self._work = m.form(work)
+        # The whole-mesh terms: the fast solver's cached M, K, or UFL forms.
+        self.bulk = bulk_terms(s, self.u0, self.v0, self._amp0, source)
+        # The interface terms: forms over the contact facets.
+        self._penalty = m.form(sum(
+            forms.penalty_energy(p.law, s.u[p.slave]("+"), s.u[p.master]("-"), p.n, p.dS)
+            for p in m.pairs)) if m.pairs else None
         self._friction = [
             m.form(sum(forms.friction_power(p.law, u[p.slave]("+"), u[p.master]("-"),
                                             v[p.slave]("+"), v[p.master]("-"), p.n, p.dS)
                        for p in m.pairs))
             if m.pairs else None
             for u, v in ((s.u, s.v), (self.u0, self.v0))]
-        self._numerical = NumericalDissipation(s, self.u0, self.v0)
+        self._contact = numerical.contact_form(s, self.u0, self.v0)
         # General pairs (breakwater.surfacepair): their penalty energy and friction
         # power come from the pairs themselves, at the accepted state.
         self._surfaces = [p for p in getattr(s.solver, "providers", ())
@@ -129,11 +129,12 @@ class EnergyLedger:
         s, m = self.stepper, self.stepper.model
         t = float(s.t.value)
         first = self.reference is None
-        # Every form at once (one reduction); the step's terms from the second row on.
-        values = m.assemble_many(self._stored if first else
-                                 [*self._stored, self._rayleigh, *self._friction, self._work,
-                                  *self._numerical.compiled])
-        kin, strain, pen = (float(x) for x in values[:3])
+        # Every term at once (one reduction); the step's terms from the second row on.
+        values = m.reduce(np.concatenate([
+            self.bulk.local(not first),
+            m.assemble_local([self._penalty] if first else
+                             [self._penalty, *self._friction, self._contact])]))
+        kin, strain, rayleigh, work, bulk, pen = (float(x) for x in values[:6])
         surface = [sp.energies() for sp in self._surfaces]
         pen += sum(e for e, _ in surface)
         power = sum(p for _, p in surface)
@@ -141,7 +142,7 @@ class EnergyLedger:
         if self.reference is None:
             self.reference = kin + strain + pen
         else:
-            rayleigh, friction1, friction0, work, bulk, contact = (float(x) for x in values[3:])
+            friction1, friction0, contact = (float(x) for x in values[6:])
             Δt = t - self._t0
             r.rayleigh_dissipation += Δt * rayleigh
             r.friction_dissipation += 0.5 * Δt * (friction1 + friction0 + power
@@ -161,3 +162,8 @@ class EnergyLedger:
         self._t0 = t
         self._surface_power = power
         return Energies(**r.as_dict())
+
+    def destroy(self) -> None:
+        """Free the PETSc objects of the bulk terms now (collective)."""
+        if isinstance(self.bulk, MatrixTerms):
+            self.bulk.destroy()

@@ -559,15 +559,24 @@ class ContactModel:
         The same numbers as :meth:`assemble` of each, with one reduction for all and
         dolfinx's C++ assembler called directly (per-step outputs).
         """
+        return self.reduce(self.assemble_local(compiled))
+
+    @staticmethod
+    def assemble_local(compiled: Sequence[fem.Form | None]) -> np.ndarray:
+        """Compiled scalar forms (None: 0), this rank's share: not summed over the ranks."""
         cpp = dolfinx.cpp.fem
         out = np.zeros(len(compiled))
         for k, c in enumerate(compiled):
             if c is not None:
                 f = c._cpp_object
                 out[k] = cpp.assemble_scalar(f, cpp.pack_constants(f), cpp.pack_coefficients(f))
-        if self.comm.size > 1:
-            self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
+
+    def reduce(self, local: np.ndarray) -> np.ndarray:
+        """Sum an array of this rank's shares over the ranks (one reduction, in place)."""
+        if self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, local, op=MPI.SUM)
+        return local
 
     def weight(self) -> list[float]:
         """Weight |g| ∫ρ of each body (N, or N/m in plane strain)."""

@@ -261,8 +261,9 @@ class Session:
         return self.summary(finished, error, status)
 
     def close(self) -> None:
-        """Free the stepper's PETSc objects (collective; the summary is written first)."""
+        """Free the stepper's and the ledger's PETSc objects (collective; after the summary)."""
         if self.stepped is not None:
+            self.stepped.ledger.destroy()
             self.stepped.stepper.destroy()
 
     def wall_time(self) -> float:

@@ -84,7 +84,7 @@ API_SECTIONS = {
     "The physics core": ["breakwater.model", "breakwater.interface", "breakwater.gn22",
                          "breakwater.initial",
                          "breakwater.slipguard", "breakwater.solver", "breakwater.ledger",
-                         "breakwater.numerical",
+                         "breakwater.numerical", "breakwater.bulkenergy",
                          "breakwater.probes"],
     "The fast step solver": ["breakwater.bulk", "breakwater.condensed",
                              "breakwater.nodalcontact"],
