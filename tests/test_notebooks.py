@@ -25,6 +25,7 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 NOTEBOOKS = pathlib.Path(__file__).resolve().parents[1] / "notebooks"
 GODA = "01_goda_paper_figures.py"
 VARIANT = "02_user_variant.py"
+GENERAL = "03_general_contact.py"
 
 # 30 steps of the default Δt = 0.1 ms (the pulse lasts 2 ms: the impact is inside the
 # run), on the mesh of refinement 0.7 (72 + 272 triangles): a few seconds per run.
@@ -38,7 +39,7 @@ serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
 
 def test_sources_are_the_notebooks() -> None:
     """Every notebook of the folder is a ``NN_name.py`` source; no generator, no .ipynb."""
-    assert sorted(p.name for p in NOTEBOOKS.glob("[0-9]*.py")) == [GODA, VARIANT]
+    assert sorted(p.name for p in NOTEBOOKS.glob("[0-9]*.py")) == [GODA, VARIANT, GENERAL]
     assert not (NOTEBOOKS / "make_notebooks.py").exists()
 
 
@@ -47,7 +48,7 @@ def _canonical(text: str) -> str:
     return re.sub(r"(?m)^#\s+jupytext_version: .*\n", "", text)
 
 
-@pytest.mark.parametrize("name", [GODA, VARIANT])
+@pytest.mark.parametrize("name", [GODA, VARIANT, GENERAL])
 def test_source_is_a_percent_notebook(name: str) -> None:
     import jupytext
     import nbformat
@@ -181,3 +182,32 @@ def test_user_variant(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> 
                  "measured/record_and_profile.png"):
         assert (out / name).is_file(), name
     assert len(_outputs(nb, "image/png")) >= 5
+
+
+@pytest.mark.serial
+@serial_only
+def test_general_contact(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import tomllib
+
+    nb, out, _ = _execute(GENERAL, kernel, "general_out", monkeypatch)
+    assert not _outputs(nb, "error")
+    # The sliding block example ran from its case file, with its general pair.
+    block = json.loads((out / "block" / "summary.json").read_text(encoding="utf-8"))
+    assert block["finished"] and block["error"] is None
+    case = tomllib.loads((out / "block" / "case.toml").read_text(encoding="utf-8"))
+    assert case["contact"]["sliding"]["master_surface"] == "base_top"
+    # The Goda case both ways: the general run is the conforming mesh's interface made a
+    # general pair with the settings the notebook names, on the conforming run's gravel.
+    conforming = _check_run(out / "conforming", figures=False)
+    general = json.loads((out / "general" / "summary.json").read_text(encoding="utf-8"))
+    assert general["finished"] and general["error"] is None
+    case = tomllib.loads((out / "general" / "case.toml").read_text(encoding="utf-8"))
+    pair = case["contact"]["interface"]
+    assert pair["master_surface"] == ["interface", "mound_surface"]
+    assert (pair["integration"], pair["rotations"]) == ("nodes", "small")
+    assert case["bodies"]["mound"]["shear_modulus"] == \
+        conforming["calibration"]["shear_modulus"]
+    assert len(_outputs(nb, "image/png")) >= 4
+    tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
+    assert any("Newton iterations" in t for t in tables)
+
