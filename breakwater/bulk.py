@@ -88,9 +88,16 @@ class MonolithicLayout:
 
     def assign(self, functions: Sequence[fem.Function], vec: PETSc.Vec) -> None:
         """Copy the owned entries of one Function per body into a stacked vector."""
-        out = vec.array
+        self.fill(functions, vec.array)
+
+    def fill(self, functions: Sequence[fem.Function], out: np.ndarray) -> np.ndarray:
+        """Copy the owned entries of one Function per body into ``out`` (returned).
+
+        ``out``: the owned part of a stacked vector, or any array of that length.
+        """
         for f, lo, hi in zip(functions, self.offsets[:-1], self.offsets[1:], strict=True):
             out[lo:hi] = f.x.array[: hi - lo]
+        return out
 
     def owned_local(self, body: int, dofs: np.ndarray) -> np.ndarray:
         """Positions in the stacked vector's owned array of owned body-local DOFs."""

@@ -59,6 +59,10 @@ class BulkTerms(Protocol):
         """
         ...
 
+    def destroy(self) -> None:
+        """Free the PETSc objects it holds (collective)."""
+        ...
+
 
 class FormTerms:
     """The bulk terms as UFL scalar forms over the bodies.
@@ -94,6 +98,9 @@ class FormTerms:
             return self.model.assemble_local([*self._stored, *self._step])
         return np.concatenate([self.model.assemble_local(self._stored), np.zeros(3)])
 
+    def destroy(self) -> None:
+        """Nothing to free (the forms hold no PETSc object)."""
+
 
 class MatrixTerms:
     """The bulk terms from the fast solver's cached M, K and load vectors.
@@ -115,7 +122,6 @@ class MatrixTerms:
         m = stepper.model
         self.bulk = bulk = solver.bulk
         self.layout = solver.layout
-        self.offsets = self.layout.offsets
         self.alpha, self.beta = m.damping.alpha, m.damping.beta
         self.beta1, self.beta2 = stepper.params.beta1, stepper.params.beta2
         numerical_on = not self.beta1 == self.beta2 == 0.5
@@ -125,7 +131,7 @@ class MatrixTerms:
                 ["v", *(["v̄"] if self.alpha or numerical_on else []),
                  *(["Δa"] if numerical_on else [])])},
             "K": {c: k for k, c in enumerate(["u", *(["v̄"] if self.beta else [])])}}
-        n = int(self.offsets[-1])
+        n = int(self.layout.offsets[-1])
         self._in: dict[str, PETSc.Mat] = {}
         self._out: dict[str, PETSc.Mat] = {}
         for name, A in (("M", bulk.M), ("K", bulk.K)):
@@ -143,15 +149,9 @@ class MatrixTerms:
             self._amplitudes.append(a)
         self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
 
-    def _fill(self, functions: Sequence[fem.Function], out: np.ndarray) -> np.ndarray:
-        """The owned entries of one Function per body, stacked into ``out`` (returned)."""
-        for f, lo, hi in zip(functions, self.offsets[:-1], self.offsets[1:], strict=True):
-            out[lo:hi] = f.x.array[: hi - lo]
-        return out
-
     def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
         """The owned entries of one Function per body, stacked."""
-        return self._fill(functions, np.empty(int(self.offsets[-1])))
+        return self.layout.fill(functions, np.empty(int(self.layout.offsets[-1])))
 
     def _products(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray],
                                  dict[str, np.ndarray]]:
@@ -163,7 +163,8 @@ class MatrixTerms:
         s = self.stepper
         X = {k: self._in[k].getDenseArray() for k in ("M", "K")}
         cm, ck = self._columns["M"], self._columns["K"]
-        x = {"v": self._fill(s.v, X["M"][:, cm["v"]]), "u": self._fill(s.u, X["K"][:, ck["u"]])}
+        x = {"v": self.layout.fill(s.v, X["M"][:, cm["v"]]),
+             "u": self.layout.fill(s.u, X["K"][:, ck["u"]])}
         if "v̄" in cm or "v̄" in ck:
             x["v̄"] = v̄ = self._owned(self.v0)
             v̄ += x["v"]
@@ -172,7 +173,7 @@ class MatrixTerms:
                 if "v̄" in cols:
                     X[name][:, cols["v̄"]] = v̄
         if "Δa" in cm:
-            x["Δa"] = self._fill(s.da, X["M"][:, cm["Δa"]])
+            x["Δa"] = self.layout.fill(s.da, X["M"][:, cm["Δa"]])
         products = []
         for name, A in (("M", self.bulk.M), ("K", self.bulk.K)):
             A.matMult(self._in[name], self._out[name])

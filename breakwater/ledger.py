@@ -28,7 +28,7 @@ import numpy as np
 from dolfinx import fem
 
 from . import forms, numerical  # type: ignore[attr-defined]  # breakwater.forms: forms/
-from .bulkenergy import MatrixTerms, bulk_terms
+from .bulkenergy import bulk_terms
 from .gn22 import GN22
 from .surfacepair import SurfaceContact
 
@@ -165,5 +165,4 @@ class EnergyLedger:
 
     def destroy(self) -> None:
         """Free the PETSc objects of the bulk terms now (collective)."""
-        if isinstance(self.bulk, MatrixTerms):
-            self.bulk.destroy()
+        self.bulk.destroy()
