@@ -19,8 +19,8 @@ import numpy as np
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .projection import closest_point, shape
 
-__all__ = ["DenseEntries", "jacobian", "nodal_normal_forces", "normal_and_shares", "normal_forces",
-           "unit_tangent"]
+__all__ = ["DenseEntries", "contact_geometry", "jacobian", "nodal_normal_forces",
+           "normal_and_shares", "normal_forces", "unit_tangent"]
 
 H = 1e-20  # complex step (no cancellation: any tiny step is exact to round-off)
 
@@ -31,22 +31,42 @@ def unit_tangent(dN: np.ndarray, nodes: np.ndarray) -> np.ndarray:
     return t / np.sqrt(np.sum(t * t, axis=1))[:, None]
 
 
+def contact_geometry(Ns: np.ndarray, xi: np.ndarray, xs: np.ndarray, xm: np.ndarray,
+                     refine: int, reference: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Slave points, their projections and the master's normal there (real or complex).
+
+    Args:
+        Ns: Slave shape functions at each point, ``(K, nn)``.
+        xi: The projection's local coordinate on the master facet (Newton's start).
+        xs: The slave facets' node positions, ``(K, nn, gdim)``.
+        xm: The master facets' node positions (oriented: ``(t_y, −t_x)`` is outward).
+        refine: Newton steps of the projection (``tol`` 0: always that many).
+        reference: The master facets' reference node positions: n̄ is the reference
+            facet's normal at the projection (small rotations); None: the current one's.
+
+    Returns:
+        ``x_s``, ξ̄, the master shape functions N̄ at ξ̄, the projection x̄ and n̄.
+    """
+    x_s = np.einsum("kn,knd->kd", Ns, xs)
+    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
+    N, dN, _ = shape(xi, xm.shape[1])
+    t = unit_tangent(dN, xm if reference is None else reference)
+    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+    return x_s, xi, N, np.einsum("kn,knd->kd", N, xm), n
+
+
 def _contact_point(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray,
                    groups: Sequence[tuple[np.ndarray, np.ndarray]], refine: int,
                    reference: np.ndarray | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Projection, normal and pressure at contact points: (x_s, N̄, n̄, traction p n̄).
 
-    The normal is the current master facet's at the projection, or with ``reference``
-    (the master facets' reference node positions) the reference facet's there.
+    The geometry is :func:`contact_geometry`'s.
     """
     (xs, _), (xm, _) = groups
-    x_s = np.einsum("kn,knd->kd", Ns, xs)
-    xi = closest_point(x_s, xm, xi, iterations=refine, tol=0.0)
-    N, dN, _ = shape(xi, xm.shape[1])
-    t = unit_tangent(dN, xm if reference is None else reference)
-    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-    return x_s, N, n, law.traction(x_s, np.einsum("kn,knd->kd", N, xm), n)
+    x_s, _, N, x_bar, n = contact_geometry(Ns, xi, xs, xm, refine, reference)
+    return x_s, N, n, law.traction(x_s, x_bar, n)
 
 
 def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight: np.ndarray,

@@ -51,13 +51,14 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .pointkernels import (
     DenseEntries,
     H,
+    contact_geometry,
     jacobian,
     nodal_normal_forces,
     normal_and_shares,
     normal_forces,
     unit_tangent,
 )
-from .projection import FacetGrid, closest_point, nearest_end, project, shape
+from .projection import FacetGrid, nearest_end, project, shape
 from .surfaces import SurfacePair, gather_surface
 
 if TYPE_CHECKING:
@@ -165,12 +166,7 @@ class SurfaceContact:
             y: Δa at the interface unknowns; None: read from the Δa Functions.
             accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
-        out = np.zeros((4, self.n + 1))
-        for k, fns in enumerate((self.u, self.v, self.a, self.da)):
-            for f, (local, pos) in zip(fns, self._owned, strict=True):
-                out[k, pos] = f.x.array[local]
-        self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        u, v, a, da = out
+        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
         if accepted:
             return u, u, v
         if y is not None:
@@ -186,9 +182,17 @@ class SurfaceContact:
             Shape ``(n + 1,)``, the same on every rank, with a trailing 0 (the value at
             the Dirichlet entries, position −1).
         """
-        out = np.zeros(self.n + 1)
-        for f, (local, pos) in zip(functions, self._owned, strict=True):
-            out[pos] = f.x.array[local]
+        return self._values(functions)[0]
+
+    def _values(self, *fields: Sequence[fem.Function]) -> np.ndarray:
+        """:meth:`interface_values` of several fields, ``(len(fields), n + 1)``.
+
+        One reduction for all the fields.
+        """
+        out = np.zeros((len(fields), self.n + 1))
+        for k, functions in enumerate(fields):
+            for f, (local, pos) in zip(functions, self._owned, strict=True):
+                out[k, pos] = f.x.array[local]
         self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
@@ -304,12 +308,20 @@ class SurfaceContact:
         p = self._points(u1, v1)
         self._normal_key, self._normal_points = key, p
         args = (self.law, p["Ns"], p["xi"], p["weight"])
-        small = {"reference": self.master.X[p["facet"]]} if self.small_rotations else {}
-        self._normal_data = (partial(normal_forces, *args, **small),
+        reference = self._reference(p)
+        self._normal_data = (partial(normal_forces, *args, reference=reference),
                              [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
-                             partial(nodal_normal_forces, *args, **small),
+                             partial(nodal_normal_forces, *args, reference=reference),
                              self.node_of[p["slave_facet"]])
         return self._normal_data
+
+    def _reference(self, points: dict[str, Any]) -> np.ndarray | None:
+        """The kernels' ``reference`` for the points of :meth:`_points`.
+
+        Their master facets in the reference configuration (``rotations = "small"``),
+        or None: the current ones.
+        """
+        return self.master.X[points["facet"]] if self.small_rotations else None
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -562,13 +574,9 @@ class SurfaceContact:
                                "gap": np.full(total, np.nan), "pressure": np.zeros(total),
                                "facet": np.full(total, -1), "xi": np.zeros(total)}
         if len(p["index"]):
-            x_s = np.einsum("kn,knd->kd", p["Ns"], p["xs"])
-            xi = closest_point(x_s, p["xm"], p["xi"], iterations=2, tol=0.0)
-            N, dN, _ = shape(xi, p["xm"].shape[1])
-            t = unit_tangent(dN, self.master.X[p["facet"]] if self.small_rotations
-                             else p["xm"])
-            n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-            gap = self.law.gap(x_s, np.einsum("kn,knd->kd", N, p["xm"]), n)
+            x_s, xi, _, x_bar, n = contact_geometry(p["Ns"], p["xi"], p["xs"], p["xm"], 2,
+                                                    self._reference(p))
+            gap = self.law.gap(x_s, x_bar, n)
             i = p["index"]
             out["gap"][i] = gap
             out["pressure"][i] = self.law.normal.pressure(gap)
