@@ -113,6 +113,24 @@ PUSH = 1.5 * MU * WEIGHT
 END = 0.3
 
 
+def _pushed_mesh(path: pathlib.Path) -> pathlib.Path:
+    """A 0.4 m base (20 elements) under the block (3 elements), meshed apart."""
+    return rectangles(path, COMM, [Rectangle("base", -0.1, -0.05, 0.4, 0.05, 20, 2),
+                                   Rectangle("block", -0.05, 0.0, WIDTH, HEIGHT, 3, 2)])
+
+
+def _pushed_block(mesh: pathlib.Path, damping: Damping | None = None) -> ContactModel:
+    """The block on the base (general pair, μ = MU), gravity, pushed by PUSH from t = 0."""
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", PENALTY,
+                       friction=MU)
+    return ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
+                                                Body("block", MATERIAL)],
+                        fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                        loads=[SurfaceLoad("block_left", (PUSH / HEIGHT, 0.0),
+                                           lambda t: 1.0)],
+                        damping=damping, surface_pairs=[pair])
+
+
 @pytest.fixture(scope="module")
 def pushed(folder: pathlib.Path) -> pathlib.Path:
     """A 0.1 m × 0.05 m block (3 elements) pushed by 1.5 μN along a 0.4 m base (20
@@ -120,17 +138,7 @@ def pushed(folder: pathlib.Path) -> pathlib.Path:
     master node at the start) and at its left corner."""
     from breakwater import simulation
 
-    mesh = rectangles(folder / "pushed.msh", COMM,
-                      [Rectangle("base", -0.1, -0.05, 0.4, 0.05, 20, 2),
-                       Rectangle("block", -0.05, 0.0, WIDTH, HEIGHT, 3, 2)])
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", PENALTY,
-                       friction=MU)
-    model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
-                                                 Body("block", MATERIAL)],
-                         fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
-                         loads=[SurfaceLoad("block_left", (PUSH / HEIGHT, 0.0),
-                                            lambda t: 1.0)],
-                         damping=Damping(0.0, 1e-4), surface_pairs=[pair])
+    model = _pushed_block(_pushed_mesh(folder / "pushed.msh"), Damping(0.0, 1e-4))
     out = folder / "pushed"
     output = OutputSpec(out, field_interval=15, figures=False, progress=False,
                         probes=(ProbeSpec("mid", "block", (0.0, 0.0)),
@@ -327,19 +335,10 @@ def test_resume_keeps_the_general_outputs(shared_dir: pathlib.Path,
     set aside as ``contact_c.part1.bp``."""
     from breakwater import simulation
 
-    mesh = rectangles(shared_dir / "resume.msh", COMM,
-                      [Rectangle("base", -0.1, -0.05, 0.4, 0.05, 20, 2),
-                       Rectangle("block", -0.05, 0.0, WIDTH, HEIGHT, 3, 2)])
+    mesh = _pushed_mesh(shared_dir / "resume.msh")
 
     def run(directory: pathlib.Path, **kwargs: object) -> dict:
-        pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", PENALTY,
-                           friction=MU)
-        model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
-                                                     Body("block", MATERIAL)],
-                             fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
-                             loads=[SurfaceLoad("block_left", (PUSH / HEIGHT, 0.0),
-                                                lambda t: 1.0)],
-                             surface_pairs=[pair])
+        model = _pushed_block(mesh)
         output = OutputSpec(directory, field_interval=4, figures=False, progress=False,
                             checkpoint_interval=5,
                             probes=(ProbeSpec("corner", "block", (-0.05, 0.0)),),
