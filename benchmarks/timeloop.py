@@ -185,6 +185,9 @@ def main() -> None:
     say = print if comm.rank == 0 else (lambda *a, **k: None)
     # As the fast solver sets it under MPI, for the floor too (the same BLAS threads).
     single_threaded_blas(comm)
+    # The machine's load and the process's CPU set, recorded with the figures: wall times
+    # on a shared machine, or with fewer cores than ranks, are not comparable.
+    load_start = os.getloadavg()
     records = []
     for r in args.refinements:
         base = [f"mesh.refinement={r}"]
@@ -227,11 +230,19 @@ def main() -> None:
                 + "-".join(f"{r:g}" for r in args.refinements) + args.suffix)
         meta = {"date": datetime.date.today().isoformat(), "ranks": comm.size,
                 "machine": f"{platform.machine()}, {os.cpu_count()} cores",
-                "python": platform.python_version()}
+                "python": platform.python_version(),
+                "cpus_used": len(os.sched_getaffinity(0)),
+                "blas_threads_env": os.environ.get("OPENBLAS_NUM_THREADS"),
+                "load_average": {"start": load_start, "end": os.getloadavg()}}
         (args.out / f"{stem}.json").write_text(json.dumps({**meta, "runs": records}, indent=1))
         (args.out / f"{stem}.md").write_text(
             f"# Time-loop benchmark, {meta['date']}, {comm.size} rank(s)\n\n"
-            f"Machine: {meta['machine']}. Times in seconds unless stated; the reference path's "
+            f"Machine: {meta['machine']}; this process on {meta['cpus_used']} of them"
+            + (f", OPENBLAS_NUM_THREADS={meta['blas_threads_env']}"
+               if meta["blas_threads_env"] else "")
+            + f"; load average (1 min) {meta['load_average']['start'][0]:.2f} at the start, "
+            f"{meta['load_average']['end'][0]:.2f} at the end.\n"
+            "Times in seconds unless stated; the reference path's "
             "split has only the outputs, and its solve (assembly, factorisation and Newton at "
             "every iteration) is the rest.\n"
             "The floor is one factorisation of A plus one back-solve per step, timed in the "
