@@ -273,7 +273,7 @@ class BulkOperators:
         # the grouping: the row sums differ from it in the last bit, and the predictor's
         # products feed the state, whose 2-rank equality (tests/test_mpi.py) the χ = 1e-10
         # stick tangent holds to 5e-11 with it and 3.6e-10 without (2026-11-23).
-        A.setOption(PETSc.Mat.Option.USE_INODES, False)
+        A.setOption(PETSc.Mat.Option.USE_INODES, False)  # type: ignore[arg-type]
         ksp = PETSc.KSP().create(self.model.comm)  # type: ignore[arg-type]
         ksp.setOptionsPrefix(self.model.options_prefix("bulk"))
         ksp.setOperators(A)
