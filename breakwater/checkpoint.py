@@ -93,14 +93,46 @@ def _digest(data: Any) -> str:
 
 
 def case_fingerprint(resolved_case: Mapping[str, Any]) -> str:
-    """SHA-256 of a resolved case (the content of ``case.toml``).
+    """SHA-256 of a resolved case (the content of ``case.toml``) and of the files it reads.
 
     ``output.directory`` is left out, so a folder can be moved and resumed from its
-    new place; floats count to 12 significant digits (see :func:`_canonical`).
+    new place; floats count to 12 significant digits (see :func:`_canonical`). The
+    contents of the mesh file and of the load tables' CSV files count, not only their
+    paths: a table edited in place is another case.
     """
     data = _canonical(resolved_case)
     data.get("output", {}).pop("directory", None)
+    data["file_contents"] = {path: _file_digest(path) for path in _input_files(data)}
     return _digest(data)
+
+
+def _input_files(resolved_case: Mapping[str, Any]) -> list[str]:
+    """The paths of the files a resolved case reads: its mesh file, its load tables."""
+    paths = []
+    source = resolved_case.get("mesh", {}).get("source")
+    if source is not None and source != "goda":
+        paths.append(str(source))
+    for load in resolved_case.get("loads", {}).values():
+        table = load.get("table") if isinstance(load, Mapping) else None
+        if isinstance(table, Mapping) and table.get("file") is not None:
+            paths.append(str(table["file"]))
+    return paths
+
+
+_DIGESTS: dict[tuple[str, int, int], str] = {}
+"""File digests by (path, size, modification time): a study's cases share their files."""
+
+
+def _file_digest(path: str) -> str:
+    """SHA-256 of a file's contents ("missing" when it cannot be read)."""
+    try:
+        stat = pathlib.Path(path).stat()
+        key = (path, stat.st_size, stat.st_mtime_ns)
+        if key not in _DIGESTS:
+            _DIGESTS[key] = hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
+        return _DIGESTS[key]
+    except OSError:
+        return "missing"
 
 
 def model_fingerprint(model: Any, time: Any, output: Any) -> str:

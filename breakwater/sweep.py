@@ -20,12 +20,12 @@
   the figures of :mod:`breakwater.sweepplots`.
 
 A case counts as finished only when its ``sweep_case.json`` says ``finished`` for the
-same case (fingerprint of the resolved case) and its ``summary.json`` agrees; a rerun
-skips those and runs the others again (a killed case resumes from its checkpoint when
-it has one, otherwise starts afresh in an emptied folder). SIGTERM or SIGINT stops the
-study (:class:`~breakwater.console.StopSignal`, as a run; a second signal kills):
-the running cases stop at their next step (``interrupted``, with a checkpoint when the
-case makes them), no new case starts.
+same case (fingerprint of the resolved case and of the files it reads) and its
+``summary.json`` agrees; a rerun skips those and runs the others again (a killed case
+resumes from its checkpoint when it has one, otherwise starts afresh in an emptied
+folder). SIGTERM or SIGINT stops the study (:class:`~breakwater.console.StopSignal`, as
+a run; a second signal kills): the running cases stop at their next step
+(``interrupted``, with a checkpoint when the case makes them), no new case starts.
 """
 
 from __future__ import annotations

@@ -31,6 +31,7 @@ from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
 from breakwater.case import CaseError, load_case
+from breakwater.checkpoint import case_fingerprint
 from breakwater.errors import MeshError
 from breakwater.gn22 import GN22, solve_static
 from breakwater.loadcase import load_summary
@@ -679,6 +680,46 @@ enabled = false
     # A disabled load is not built; the Goda load gives its front and its uplift.
     model = case.build_model(case.read_mesh(COMM, folder / "out"))
     assert [ld.spec.group for ld in model.loads] == ["a_left", "interface", "a_right"]
+
+
+def test_fingerprint_follows_the_table_contents(stacked, folder):
+    # A table edited in place is another case: a resume (checkpoint) and a study's rerun
+    # (the finished cases it skips) compare case fingerprints, which hash the contents
+    # of the files a case reads, not only their paths.
+    table = folder / "record3.csv"
+
+    def write(text: str) -> None:
+        if COMM.rank == 0:
+            table.write_text(text)
+        COMM.barrier()
+
+    mesh = folder / "fingerprint.msh"  # a copy: the test edits it
+    if COMM.rank == 0:
+        mesh.write_bytes(stacked.read_bytes())
+    write("0,0\n1,1\n")
+    path = _write_case(folder, mesh, GODA_TOML + '''
+[loads.push]
+group = "a_right"
+traction = -10.0
+time_function = "table"
+table = { file = "record3.csv", hold_last = true }
+''', "fingerprint")
+
+    def fingerprint() -> str:
+        return case_fingerprint(load_case(path).resolved())
+
+    first = fingerprint()
+    assert fingerprint() == first
+    write("0,0\n1,2.5\n")  # another size too: a new digest whatever the clock's resolution
+    assert fingerprint() != first
+    write("0,0\n1,1\n")
+    assert fingerprint() == first
+    # The mesh file counts the same way (the case reads it too).
+    if COMM.rank == 0:
+        with mesh.open("a") as f:
+            f.write("\n")
+    COMM.barrier()
+    assert fingerprint() != first
 
 
 def test_interface_load_needs_its_side(block):
