@@ -6,6 +6,8 @@ Physical names: ``a``, ``b`` (cells); ``interface``; ``a_top``, ``a_left``,
 ``a_right``, ``a_bottom_free``; ``b_bottom``, ``b_left``, ``b_right``, ``b_top_free``
 (facets; free parts exist only when the widths differ). Points: ``a_corner`` (the
 lower-left corner of ``a``). :func:`two_block_case` is the case file of such a mesh.
+:func:`stacked_blocks` meshes rectangles stacked bottom up; :func:`three_blocks` is the
+model of three of them that several tests share.
 """
 
 from __future__ import annotations
@@ -20,6 +22,16 @@ from breakwater.meshes import gmsh_session
 from mpi4py import MPI
 
 from breakwater.gn22 import GN22
+from breakwater.mesh import read_mesh
+from breakwater.model import (
+    Body,
+    ContactModel,
+    ContactPair,
+    Damping,
+    Fixed,
+    Material,
+    SurfaceLoad,
+)
 from breakwater.parallel import on_rank_zero
 
 
@@ -157,6 +169,37 @@ def stacked_blocks(path: str | pathlib.Path, comm: MPI.Comm, width: float,
 
     on_rank_zero(comm, build)
     return pathlib.Path(comm.bcast(str(path), root=0))
+
+
+#: The three stacked blocks of :func:`three_blocks` (m, bottom up) and their densities.
+THREE_WIDTH, THREE_HEIGHTS = 0.4, (0.2, 0.15, 0.1)
+THREE_DENSITIES = (1800.0, 2300.0, 2500.0)
+
+
+def three_blocks(path: str | pathlib.Path, comm: MPI.Comm, young_modulus: float,
+                 penalty: float) -> ContactModel:
+    """Three stacked blocks on a :func:`stacked_blocks` mesh of ``THREE_*`` sizes.
+
+    Gravity, Rayleigh damping (α = 5 1/s, β = 1e-6 s), the base fixed, μ = 0.3 on
+    ``joint0`` and 0.6 on ``joint1``, and a triangular pulse on the top block's left side
+    (``left2``) over 4 ms whose peak force is 1.5 × 0.6 × the top block's weight: it
+    slides on ``joint1``.
+    """
+    g = 9.81
+    w2 = THREE_DENSITIES[2] * g * THREE_WIDTH * THREE_HEIGHTS[2]
+
+    def pulse(t: float) -> float:
+        s = t / 4e-3
+        return 1.5 * 0.6 * w2 / THREE_HEIGHTS[2] * max(0.0, 1.0 - abs(2.0 * s - 1.0)) \
+            if 0 <= s <= 1 else 0.0
+
+    bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=young_modulus))
+              for k, ρ in enumerate(THREE_DENSITIES)]
+    return ContactModel(read_mesh(path, comm), bodies,
+                        [ContactPair("joint0", "block1", "block0", penalty, friction=0.3),
+                         ContactPair("joint1", "block2", "block1", penalty, friction=0.6)],
+                        [Fixed("base")], [SurfaceLoad("left2", (1.0, 0.0), pulse)],
+                        gravity=(0.0, -g), damping=Damping(alpha=5.0, beta=1e-6))
 
 
 def two_block_case(mesh: str | pathlib.Path, head: str = "", tail: str = "") -> str:

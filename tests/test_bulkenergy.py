@@ -23,7 +23,7 @@ import pathlib
 
 import numpy as np
 import pytest
-from blocks import stacked_blocks
+from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks
 from mpi4py import MPI
 
 from breakwater.case import load_case
@@ -35,10 +35,8 @@ from breakwater.model import (
     Body,
     ContactModel,
     ContactPair,
-    Damping,
     Fixed,
     Material,
-    SurfaceLoad,
 )
 from breakwater.solver import NewtonOptions
 
@@ -101,23 +99,8 @@ def test_blocks_ledger_from_matrices_equals_forms(folder: pathlib.Path,
     # Three stacked blocks (two frictional pairs, the top block sliding on joint1 under a
     # pulse, the base fixed: Dirichlet rows), Rayleigh damping with both coefficients;
     # at β₁ = β₂ = ½ the bulk numerical dissipation vanishes and MΔa is not formed.
-    widths, heights, g = 0.4, (0.2, 0.15, 0.1), 9.81
-    densities = (1800.0, 2300.0, 2500.0)
-    w2 = densities[2] * g * widths * heights[2]
-    path = stacked_blocks(folder / "three.msh", COMM, widths, heights, h=0.05)
-
-    def pulse(t: float) -> float:
-        s = t / 4e-3
-        return 1.5 * 0.6 * w2 / heights[2] * max(0.0, 1.0 - abs(2.0 * s - 1.0)) \
-            if 0 <= s <= 1 else 0.0
-
-    bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=1e11))
-              for k, ρ in enumerate(densities)]
-    model = ContactModel(read_mesh(path, COMM), bodies,
-                         [ContactPair("joint0", "block1", "block0", 1e13, friction=0.3),
-                          ContactPair("joint1", "block2", "block1", 1e13, friction=0.6)],
-                         [Fixed("base")], [SurfaceLoad("left2", (1.0, 0.0), pulse)],
-                         gravity=(0.0, -g), damping=Damping(alpha=5.0, beta=1e-6))
+    path = stacked_blocks(folder / "three.msh", COMM, THREE_WIDTH, THREE_HEIGHTS, h=0.05)
+    model = three_blocks(path, COMM, young_modulus=1e11, penalty=1e13)
     model.set_time(0.0)
     init = initial_state(model)
     stepper = GN22(model, 1e-4, GN22Parameters(*betas))

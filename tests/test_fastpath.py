@@ -17,7 +17,7 @@ import pathlib
 import numpy as np
 import pytest
 import ufl
-from blocks import stacked_blocks, two_rectangles
+from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks, two_rectangles
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
@@ -35,7 +35,6 @@ from breakwater.model import (
     Damping,
     Fixed,
     Material,
-    SurfaceLoad,
 )
 from breakwater.runspec import OutputSpec, PairProbeSpec, TimeSpec
 
@@ -129,30 +128,15 @@ def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
 def test_blocks_fast_equals_reference(folder: pathlib.Path, shared_dir: pathlib.Path) -> None:
     # The three blocks of test_bodies.py, with Rayleigh damping: two pairs, the top
     # block sliding on joint1 under a pulse of 1.5 μ₁ W₂, joint0 sticking.
-    widths, heights, g = 0.4, (0.2, 0.15, 0.1), 9.81
-    densities = (1800.0, 2300.0, 2500.0)
-    w2 = densities[2] * g * widths * heights[2]
-    path = stacked_blocks(folder / "three.msh", COMM, widths, heights, h=0.05)
-
-    def pulse(t: float) -> float:
-        s = t / 4e-3
-        return 1.5 * 0.6 * w2 / heights[2] * max(0.0, 1.0 - abs(2.0 * s - 1.0)) \
-            if 0 <= s <= 1 else 0.0
-
+    path = stacked_blocks(folder / "three.msh", COMM, THREE_WIDTH, THREE_HEIGHTS, h=0.05)
     histories = {}
     for solver in ("fast", "reference"):
-        bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=1e11))
-                  for k, ρ in enumerate(densities)]
-        model = ContactModel(read_mesh(path, COMM), bodies,
-                             [ContactPair("joint0", "block1", "block0", 1e13, friction=0.3),
-                              ContactPair("joint1", "block2", "block1", 1e13, friction=0.6)],
-                             [Fixed("base")], [SurfaceLoad("left2", (1.0, 0.0), pulse)],
-                             gravity=(0.0, -g), damping=Damping(alpha=5.0, beta=1e-6))
-        y0, y1 = heights[0], heights[0] + heights[1]
+        model = three_blocks(path, COMM, young_modulus=1e11, penalty=1e13)
+        y0, y1 = THREE_HEIGHTS[0], THREE_HEIGHTS[0] + THREE_HEIGHTS[1]
         output = OutputSpec(shared_dir / solver, field_interval=0, figures=False,
                             progress=False,
-                            pair_probes=(PairProbeSpec("corner0", 0, (-widths / 2, y0)),
-                                         PairProbeSpec("corner1", 1, (-widths / 2, y1))))
+                            pair_probes=(PairProbeSpec("corner0", 0, (-THREE_WIDTH / 2, y0)),
+                                         PairProbeSpec("corner1", 1, (-THREE_WIDTH / 2, y1))))
         summary = simulation.run(model, TimeSpec(dt=1e-4, end_time=6e-3, solver=solver),
                                  output, report=False)
         assert summary["finished"]
