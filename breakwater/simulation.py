@@ -234,9 +234,13 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM or SIGINT.
         CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
-    if fingerprint is None:
-        fingerprint = (ckpt.case_fingerprint(resolved_case) if resolved_case is not None
-                       else ckpt.model_fingerprint(model, time, output))
+    if fingerprint is None and resolved_case is not None:
+        # Rank 0's: every rank then resumes or refuses the same checkpoint, even when
+        # an input file changes while the ranks read it.
+        fingerprint = model.comm.bcast(ckpt.case_fingerprint(resolved_case)
+                                       if model.comm.rank == 0 else None, root=0)
+    elif fingerprint is None:
+        fingerprint = ckpt.model_fingerprint(model, time, output)
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:

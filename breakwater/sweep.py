@@ -335,7 +335,9 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     # the cases itself (cheap, and no large broadcast).
     on_rank_zero(comm, lambda: bool(check_points(study, folder)))
     points, cases = check_points(study, folder)
-    fingerprints = [checkpoint.case_fingerprint(c.resolved()) for c in cases]
+    # Rank 0's fingerprints: every group then skips and resumes the same cases.
+    fingerprints = comm.bcast([checkpoint.case_fingerprint(c.resolved()) for c in cases]
+                              if comm.rank == 0 else None, root=0)
     keys = study.keys
 
     def pending() -> list[int]:

@@ -1,32 +1,24 @@
-"""Test-suite set-up shared by every test file: MPI hygiene and quiet extra ranks."""
+"""Test-suite set-up shared by every test file: MPI hygiene, quiet extra ranks, and the
+guards of :mod:`mpi_harness` (a failure on one rank fails the test on every rank; a time
+limit per test, ``@pytest.mark.timeout(seconds)``)."""
 
 from __future__ import annotations
 
 import gc
 import pathlib
-import sys
 
 import pytest
 from mpi4py import MPI
+from mpi_harness import (  # noqa: F401  (the plugin's hooks, registered from here)
+    pytest_configure,
+    pytest_runtest_logreport,
+    pytest_runtest_makereport,
+    pytest_runtest_protocol,
+)
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx when present)
 
-
-@pytest.hookimpl(trylast=True)
-def pytest_configure(config: pytest.Config) -> None:
-    """Only rank 0 reports, so nothing is printed twice under mpiexec."""
-    if MPI.COMM_WORLD.rank > 0:
-        reporter = config.pluginmanager.getplugin("terminalreporter")
-        if reporter is not None:
-            config.pluginmanager.unregister(reporter)
-
-
-def pytest_runtest_logreport(report: pytest.TestReport) -> None:
-    """A failure on a rank other than 0 (whose report is silenced) is shown all the same."""
-    if MPI.COMM_WORLD.rank > 0 and report.failed:
-        sys.stderr.write(f"\n[rank {MPI.COMM_WORLD.rank}] FAILED {report.nodeid} "
-                         f"({report.when})\n{report.longreprtext}\n")
-
+# --- fixtures -------------------------------------------------------------------------
 
 @pytest.fixture(autouse=True)
 def _collect_and_sync():

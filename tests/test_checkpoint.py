@@ -129,20 +129,42 @@ def _crashed(mesh_path: pathlib.Path, directory: pathlib.Path,
             _run(mesh_path, directory, **kwargs)
 
 
-def _close(a: Any, b: Any, path: str = "") -> None:
-    """Nested summaries equal, numbers to 1e-12 relative."""
+def _siblings(values: Any) -> float:
+    """The largest |float| among a summary table's (or list's) own entries."""
+    items = values.values() if isinstance(values, dict) else values
+    return max((abs(v) for v in items if isinstance(v, float)), default=0.0)
+
+
+def _close(a: Any, b: Any, path: str = "", scale: float = 0.0) -> None:
+    """Nested summaries equal: serially to 1e-12 relative (bit for bit, in fact: the
+    same operations in the same order); under MPI to :data:`MPI_SUMMARY` of the value's
+    scale, the largest of |value| and its siblings' |values| in the same table (the
+    energies of ``energy.final`` scale its balance error, as the external work scales
+    the ledger's noise columns in :func:`_scale`)."""
     if isinstance(a, dict):
         assert isinstance(b, dict) and set(a) == set(b), path
         for k in a:
-            _close(a[k], b[k], f"{path}.{k}")
+            _close(a[k], b[k], f"{path}.{k}", _siblings(a))
     elif isinstance(a, list):
         assert isinstance(b, list) and len(a) == len(b), path
         for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _close(x, y, f"{path}[{i}]")
+            _close(x, y, f"{path}[{i}]", _siblings(a))
     elif isinstance(a, float) and isinstance(b, float):
-        assert b == pytest.approx(a, rel=1e-12, abs=0), path
+        if COMM.size == 1:
+            assert b == pytest.approx(a, rel=1e-12, abs=0), path
+        else:
+            assert abs(b - a) <= MPI_SUMMARY * max(abs(a), scale), (path, a, b)
     else:
         assert a == b, path
+
+
+MPI_SUMMARY = 1e-8
+"""Under MPI, a resumed run's summary equals the uninterrupted run's to this fraction
+of each value's scale: the summary is made of the history's values (peaks, residuals,
+energies), which agree to 1e-8 of their column's scale under MPI (see :func:`_tolerance`:
+summation order in the parallel reductions and MUMPS, amplified by the stick tangent up
+to Newton's tolerance). The issue's measurement: 2.6e-10 of ``dynamic.peak_ux.top.value``
+on a busy machine."""
 
 
 def _tolerance(column: str) -> float:

@@ -689,6 +689,10 @@ def test_fingerprint_follows_the_table_contents(stacked, folder):
     table = folder / "record3.csv"
 
     def write(text: str) -> None:
+        # Every rank has hashed the table before rank 0 edits it: without the first
+        # barrier, rank 0 edited the table while rank 1, on a busy machine, was still
+        # computing its previous fingerprint (which then hashed the new contents).
+        COMM.barrier()
         if COMM.rank == 0:
             table.write_text(text)
         COMM.barrier()
@@ -715,6 +719,7 @@ table = { file = "record3.csv", hold_last = true }
     write("0,0\n1,1\n")
     assert fingerprint() == first
     # The mesh file counts the same way (the case reads it too).
+    COMM.barrier()
     if COMM.rank == 0:
         with mesh.open("a") as f:
             f.write("\n")
