@@ -39,6 +39,7 @@ import logging
 import math
 import pathlib
 import shutil
+import signal
 import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -50,6 +51,7 @@ from mpi4py import MPI
 from . import checkpoint, files, simulation  # importing PETSc is collective: at import
 from .console import StopSignal
 from .errors import CaseError
+from .gmshtools import settle_signal_handlers
 from .parallel import on_rank_zero
 from .studyfile import Point, Study, check_points, toml_literal
 
@@ -281,7 +283,15 @@ def _record(point: Point, fingerprint: str, status: str, error: str | None = Non
 # --- the study ---------------------------------------------------------------------------
 
 class _Counter:
-    """The next case number, shared by every rank (an MPI window on rank 0)."""
+    """The next case number, shared by every rank (an MPI window on rank 0).
+
+    It also carries a stop request to every group: :meth:`stop` raises the counter to
+    ``signum * STOP_UNIT`` at least, so that no group takes a case any more (the number
+    it takes is past the last case) and :meth:`stopped` tells the running cases of the
+    other groups to stop (their runs poll it, :class:`StopSignal`).
+    """
+
+    STOP_UNIT = 1 << 40
 
     def __init__(self, comm: MPI.Intracomm) -> None:
         size = MPI.INT64_T.Get_size()
@@ -292,15 +302,27 @@ class _Counter:
             self.win.Unlock(0)
         comm.Barrier()
 
-    def next(self) -> int:
-        """Take the next number (atomically)."""
+    def _fetch_add(self, amount: int, op: MPI.Op = MPI.SUM) -> int:
         import numpy as np
 
-        one, got = np.ones(1, dtype=np.int64), np.zeros(1, dtype=np.int64)
+        add, got = np.full(1, amount, dtype=np.int64), np.zeros(1, dtype=np.int64)
         self.win.Lock(0, MPI.LOCK_SHARED)
-        self.win.Fetch_and_op(one, got, 0, 0, MPI.SUM)
+        self.win.Fetch_and_op(add, got, 0, 0, op)
         self.win.Unlock(0)
         return int(got[0])
+
+    def next(self) -> int:
+        """Take the next number (atomically)."""
+        return self._fetch_add(1)
+
+    def stop(self, signum: int) -> None:
+        """Ask every group to stop (any rank, any number of times: the first counts)."""
+        if not self.stopped():
+            self._fetch_add(signum * self.STOP_UNIT, MPI.MAX)
+
+    def stopped(self) -> int:
+        """The signal a group stopped on (0: none)."""
+        return self._fetch_add(0, MPI.NO_OP) // self.STOP_UNIT
 
     def free(self) -> None:
         self.win.Free()
@@ -353,8 +375,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             f"-> {folder}")
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
+    signum = 0
+    settle_signal_handlers()  # gmsh's first initialisation, before the signals are caught
     try:
-        with StopSignal() as stop:
+        with StopSignal(poll=counter.stopped, post=counter.stop) as stop:
             while True:
                 if group.allreduce(stop.received, op=MPI.MAX):
                     break
@@ -371,8 +395,13 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                         f"{tail}")
                 if record["status"] == "interrupted":
                     break
+            # A signal caught by a rank stops the others (``post``, when the rank finds
+            # it: no new case starts anywhere, the running cases stop at their next step
+            # as they poll the counter): the ranks agree.
+            signum = stop.received
     finally:
         comm.Barrier()
+        signum = comm.allreduce(signum, op=MPI.MAX)
         counter.free()
         group.Free()
 
@@ -394,6 +423,11 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             print(f"breakwater: warning: the figures of the study could not be drawn: "
                   f"{_one_line(e)}", file=sys.stderr, flush=True)
             drawn = []
+        if signum:
+            print(f"breakwater: study '{study.name}' interrupted by "
+                  f"{signal.Signals(signum).name}: {outcome.finished}/{outcome.total} "
+                  f"finished, {outcome.interrupted} interrupted, {outcome.not_run} pending "
+                  "(run the study again to go on)", file=sys.stderr, flush=True)
         say(f"study '{study.name}': {outcome.finished}/{outcome.total} finished"
             + (f", {outcome.failed} failed" if outcome.failed else "")
             + (f", {outcome.interrupted} interrupted" if outcome.interrupted else "")
