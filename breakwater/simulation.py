@@ -159,9 +159,9 @@ def _loop(r: Session, stop: StopSignal) -> None:
     s = x.stepper
     step, interval = st.step, output.checkpoint_interval
     show = output.progress if output.progress is not None else sys.stderr.isatty()
-    log.info("time stepping to t = %g s with dt = %g s: %d steps × %d unknowns = %.3g "
-             "(work estimate)", time.end_time, time.dt, r.work["steps_planned"],
+    log.info("work estimate: %d steps × %d unknowns = %.3g", r.work["steps_planned"],
              r.work["dofs"], r.work["estimate"])
+    log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
     clock = _LoopClock(st.time_loop, getattr(s.solver, "timings", None))
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
                   step.t) as progress, clock:
