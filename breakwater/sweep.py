@@ -24,8 +24,12 @@ same case (fingerprint of the resolved case and of the files it reads) and its
 ``summary.json`` agrees; a rerun skips those and runs the others again (a killed case
 resumes from its checkpoint when it has one, otherwise starts afresh in an emptied
 folder). SIGTERM or SIGINT stops the study (:class:`~breakwater.console.StopSignal`, as
-a run; a second signal kills): the running cases stop at their next step
-(``interrupted``, with a checkpoint when the case makes them), no new case starts.
+a run; a second signal kills), at any moment, a case's meshing included: the running
+cases stop at their next step (``interrupted``, with a checkpoint when the case makes
+them), no new case starts, the others stay ``pending``; the study says so in one line
+and exits 1. Under ``mpiexec`` the rank that finds the signal posts it in the shared
+counter, so that every group stops (the ranks agree) even when the signal reached only
+one of them.
 """
 
 from __future__ import annotations
