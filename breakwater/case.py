@@ -70,6 +70,7 @@ __all__ = [
     "TimeCase",
     "builtin_case",
     "case_reference",
+    "is_file_value",
     "load_case",
 ]
 
@@ -97,6 +98,9 @@ class MeshCase:
                           "triangles, as the paper)")
     goda: GodaGeometry = setting(_GODA_GEOMETRY, unit="m",  # noqa: RUF009 (a field() with docs)
                                  doc="goda only: dimensions of the model (see below)")
+    max_elements: int = setting(1_000_000, doc="goda only: refuse a mesh of more triangles "
+                                "(estimated before meshing: each body's area over its "
+                                "element's); refinement 9 makes about 49000")
 
     def __post_init__(self) -> None:
         if not (self.refinement > 0 and math.isfinite(self.refinement)):
@@ -105,6 +109,18 @@ class MeshCase:
             raise InvalidField("degree", f"must be 1 or 2 (got {self.degree})")
         if not self.source:
             raise InvalidField("source", 'must be "goda" or a mesh file')
+        positive(self.max_elements, "max_elements")
+        if self.generated:
+            coarse = self.goda.coarse_elements(self.refinement)
+            if coarse is not None:
+                raise InvalidField("refinement", f"{self.refinement:g}: {coarse}")
+            estimate = self.goda.estimated_elements(self.refinement)
+            if estimate > self.max_elements:
+                raise InvalidField("max_elements", f"refinement {self.refinement:g} with "
+                                   "the mesh.goda dimensions and element sizes makes "
+                                   f"about {estimate:.3g} triangles, above the limit "
+                                   f"{self.max_elements} (raise mesh.max_elements to mesh "
+                                   "it)")
 
     @property
     def generated(self) -> bool:
@@ -476,6 +492,7 @@ class Case:
         if not self.mesh.generated:
             del data["mesh"]["goda"]
             del data["mesh"]["refinement"]
+            del data["mesh"]["max_elements"]
         data["output"]["directory"] = str(self.output_directory)
         return data
 
@@ -535,6 +552,16 @@ _SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA,),
                                                    "loads.*.table.file": ()})
 """The TOML form of a case (``mesh.source`` is a path unless it is "goda"; so is a load
 table's ``file``)."""
+
+
+def is_file_value(key: str, value: Any) -> bool:
+    """Whether ``value`` of the dotted case key ``key`` names a file.
+
+    Such values (``mesh.source`` unless "goda", a load table's ``file``) are resolved
+    against the file that gives them.
+    """
+    names = _SCHEMA._path_key(key)
+    return names is not None and isinstance(value, str) and value not in names
 
 
 # --- physical groups of the mesh ------------------------------------------------------

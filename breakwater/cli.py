@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 from . import __version__
 from .errors import BreakwaterError, CaseError, MeshError
 from .parallel import on_rank_zero, shared_tempdir
+from .studyfile import MAX_POINTS
 
 if TYPE_CHECKING:
     from .case import Case
@@ -177,7 +178,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     from .studyfile import load_study
     from .sweep import run_study
 
-    study = load_study(args.study, args.set or [])
+    study = load_study(args.study, args.set or [], max_points=args.max_points)
     if not args.verbose:  # the cases' own messages: one line per case instead
         logging.getLogger("breakwater").setLevel(logging.CRITICAL)
     outcome = run_study(study, args.out, ranks_per_case=args.ranks_per_case,
@@ -270,6 +271,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="ranks of each group running a case (must divide the number of "
                         "ranks; default 1)")
+    p.add_argument("--max-points", type=int, default=MAX_POINTS, metavar="N",
+                   help=f"refuse a study of more points (default {MAX_POINTS}): every "
+                        "point's case is read before the study starts, and each runs")
     p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("show-case", parents=[common], help="print the resolved case",

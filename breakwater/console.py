@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from mpi4py import MPI
@@ -106,26 +108,80 @@ class StopSignal:
     second SIGTERM or SIGINT kills the process at once (for SIGINT the operating
     system's default, not Python's KeyboardInterrupt). Installed only from the main
     thread.
+
+    StopSignals nest (a study's around each of its runs): a signal sets the flag of
+    every StopSignal in effect, and one entered after a signal starts with the flag set
+    (and installs nothing, so that a second signal still kills). Before, a run entered
+    after the study had caught a signal (while its case was being built) started with
+    a clear flag and ran to its end.
+
+    Args:
+        poll: Also asked by :attr:`received` (at most once a second): a signal number
+            when a stop was requested elsewhere (another group of a study), else 0.
+        post: Called once with the signal number when this StopSignal, or one nested
+            in it, is found to have received one (to tell the others, e.g. the other
+            groups of a study).
     """
 
     SIGNALS = (signal.SIGTERM, signal.SIGINT)
+    _active: list[StopSignal] = []  # noqa: RUF012 (the StopSignals in effect, outermost first)
+    POLL_SECONDS = 1.0
 
-    def __init__(self) -> None:
-        self.received = 0
+    def __init__(self, poll: Callable[[], int] | None = None,
+                 post: Callable[[int], None] | None = None) -> None:
+        self._received = 0
         self._previous: dict[int, Any] = {}
+        self._poll, self._post, self._posted = poll, post, False
+        self._polled = -math.inf
+        self._outer: StopSignal | None = None
+
+    @property
+    def received(self) -> int:
+        """The signal received (0: none), here or (``poll``) elsewhere."""
+        if not self._received and self._poll is not None:
+            now = time.monotonic()
+            if now - self._polled >= self.POLL_SECONDS:
+                self._polled = now
+                self._received = self._poll()
+        if not self._received and self._outer is not None:
+            self._received = self._outer.received
+        if self._received:
+            outer: StopSignal | None = self
+            while outer is not None:
+                if outer._post is not None and not outer._posted:
+                    outer._posted = True
+                    outer._post(self._received)
+                outer = outer._outer
+        return self._received
+
+    @received.setter
+    def received(self, signum: int) -> None:
+        self._received = signum
 
     def _handle(self, signum: int, frame: object) -> None:
-        self.received = signum
+        for active in self._active:
+            active._received = active._received or signum
         for sig in self.SIGNALS:
             signal.signal(sig, signal.SIG_DFL)
 
     def __enter__(self) -> StopSignal:
-        if threading.current_thread() is threading.main_thread():
+        self._outer = self._active[-1] if self._active else None
+        if self._outer is not None:
+            self._received = self._outer.received
+        self._active.append(self)
+        if not self._received and threading.current_thread() is threading.main_thread():
             for sig in self.SIGNALS:
                 self._previous[sig] = signal.signal(sig, self._handle)
         return self
 
     def __exit__(self, *exc: object) -> None:
+        if self in self._active:
+            self._active.remove(self)
+        outer = self._active[-1] if self._active else None
         for sig, previous in self._previous.items():
-            signal.signal(sig, previous)
+            # After a signal, the outer StopSignal's handler stays off: a second kills.
+            signal.signal(sig, signal.SIG_DFL if self._received and outer is not None
+                          else previous)
         self._previous.clear()
+        if outer is not None and self._received:
+            outer._received = outer._received or self._received

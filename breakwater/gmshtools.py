@@ -5,18 +5,32 @@ scripts, reading their group names) goes through :func:`gmsh_session`: it initia
 gmsh without reading the user's configuration files and without a terminal, and
 finalises it on exit, even on errors. Inside a session the caller already opened, it
 works in a fresh model and leaves the caller's model and options as it found them.
+
+``gmsh.initialize`` installs gmsh's own C-level handlers of SIGTERM and SIGINT (even
+with ``interruptible=False``), and ``gmsh.finalize`` leaves them: a SIGTERM then
+killed the process outright instead of reaching Python's handler (a run or a study
+stopping cleanly, :class:`~breakwater.console.StopSignal`). The session reinstalls
+Python's handlers after initialising gmsh. Only the first initialisation of a process
+touches the handlers: :func:`settle_signal_handlers` does it before a study starts
+catching the signals.
 """
 
 from __future__ import annotations
 
 import pathlib
+import signal
+import threading
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from types import MappingProxyType
 
 import gmsh  # type: ignore[import-untyped]
 
-__all__ = ["QUIET", "gmsh_session", "physical_groups"]
+__all__ = ["QUIET", "gmsh_session", "physical_groups", "restore_python_handlers",
+           "settle_signal_handlers"]
+
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
+"""The signals whose handlers gmsh replaces and the session gives back to Python."""
 
 QUIET: Mapping[str, float] = MappingProxyType({"General.Terminal": 0})
 """gmsh options of a session that prints nothing."""
@@ -39,7 +53,7 @@ def gmsh_session(options: Mapping[str, float] = QUIET, model: str = "breakwater"
     options = {**QUIET, **options}
     owner = not gmsh.isInitialized()
     if owner:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
+        _initialize()
     previous = None if owner else gmsh.model.getCurrent()
     saved = {name: gmsh.option.getNumber(name) for name in options}
     for name, value in options.items():
@@ -56,6 +70,45 @@ def gmsh_session(options: Mapping[str, float] = QUIET, model: str = "breakwater"
                 gmsh.option.setNumber(name, value)
             if previous is not None:
                 gmsh.model.setCurrent(previous)
+
+
+_initialised_once = False
+
+
+def _initialize() -> None:
+    """``gmsh.initialize``, then Python's handlers of the stop signals back."""
+    global _initialised_once
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    _initialised_once = True
+    restore_python_handlers()
+
+
+def settle_signal_handlers() -> None:
+    """Initialise gmsh once in this process, before SIGTERM and SIGINT are caught.
+
+    Only the first ``gmsh.initialize`` of a process touches the signal handlers (its
+    own, then the default action, for about 10 ms); a signal then, even blocked in
+    the main thread, reaches another thread (OpenBLAS's) and kills the process. Called
+    before a study starts catching the signals; later sessions leave them alone.
+    """
+    if not _initialised_once and not gmsh.isInitialized():
+        _initialize()
+        gmsh.finalize()
+        restore_python_handlers()
+
+
+def restore_python_handlers() -> None:
+    """Reinstall Python's handlers of SIGTERM and SIGINT (after gmsh replaced them).
+
+    ``signal.getsignal`` still reports Python's handler after gmsh replaced it in C;
+    setting it again puts Python's C-level handler back. Only the main thread can.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for sig in STOP_SIGNALS:
+        handler = signal.getsignal(sig)
+        if handler is not None:
+            signal.signal(sig, handler)
 
 
 def physical_groups(path: pathlib.Path) -> dict[str, int]:

@@ -7,13 +7,19 @@ these frozen dataclasses, built by the case layer (:mod:`breakwater.case`).
 
 from __future__ import annotations
 
+import math
 import pathlib
 from dataclasses import dataclass
 from typing import Literal
 
 from .schema import InvalidField, positive, setting
 
-__all__ = ["InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec", "TimeSpec"]
+__all__ = ["MAX_CUTBACKS", "InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec",
+           "TimeSpec"]
+
+MAX_CUTBACKS = 20
+"""Largest ``time.max_cutbacks``: Δt·2⁻²⁰ ≈ 1e-6 Δt (each cut-back retries a failing
+step with a full Newton solve; 2000 of them ran for hours on one step)."""
 
 
 @dataclass(frozen=True)
@@ -74,7 +80,13 @@ class TimeSpec:
     allow_conditional: bool = setting(False, doc="accept β₁ < ½ or β₂ < β₁ (not "
                                       "unconditionally stable)")
     max_cutbacks: int = setting(4, doc="a failing step is retried with Δt/2, up to this "
-                                "many times")
+                                f"many times (at most {MAX_CUTBACKS})")
+    min_dt: float | None = setting(None, unit="s", doc="floor on the step of a cut-back: "
+                                   "a step that fails and whose half is below it fails "
+                                   "the run (default: none beyond max_cutbacks halvings)")
+    max_steps: int = setting(1_000_000, doc="refuse a case of more steps (end_time / dt); "
+                             "a run that needs more (cut-backs) fails when it has taken "
+                             "them")
     newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance")
     newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
                                  "the load-vector norm")
@@ -102,9 +114,38 @@ class TimeSpec:
                                    f"{self.beta1:g} is not unconditionally stable (set "
                                    "time.allow_conditional = true to insist)")
         positive(self.max_cutbacks, "max_cutbacks", strict=False)
+        if self.max_cutbacks > MAX_CUTBACKS:
+            raise InvalidField("max_cutbacks", f"must be <= {MAX_CUTBACKS} (got "
+                               f"{self.max_cutbacks}): each cut-back retries the failing "
+                               f"step with Δt/2 (set time.min_dt for a floor on Δt)")
+        if self.min_dt is not None:
+            positive(self.min_dt, "min_dt")
+            if self.min_dt > self.dt:
+                raise InvalidField("min_dt", f"must be <= dt ({self.min_dt:g} > "
+                                   f"{self.dt:g})")
+        positive(self.max_steps, "max_steps")
+        if self.planned_steps > self.max_steps:
+            raise InvalidField("end_time", f"end_time / dt = {self.end_time:g} / "
+                               f"{self.dt:g} = {self.planned_steps:.4g} steps, above the "
+                               f"limit time.max_steps = {self.max_steps} (raise "
+                               "time.max_steps to run it)")
         positive(self.newton_rtol, "newton_rtol")
         positive(self.newton_atol, "newton_atol")
         positive(self.newton_max_it, "newton_max_it")
+
+    @property
+    def planned_steps(self) -> int:
+        """The steps from 0 to ``end_time`` without cut-backs (the last one may be short)."""
+        return math.ceil(self.end_time / self.dt * (1.0 - 1e-9))
+
+    @property
+    def dt_floor(self) -> float:
+        """The smallest step a cut-back may take: ``min_dt``, else 0.
+
+        Without ``min_dt`` the step is bounded by ``max_cutbacks`` halvings:
+        ``dt·2^-max_cutbacks`` at least, but for a short last step.
+        """
+        return self.min_dt if self.min_dt is not None else 0.0
 
 
 @dataclass(frozen=True)

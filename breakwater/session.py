@@ -142,6 +142,13 @@ class Session:
         self.stepped: Stepped | None = None
         self.checkpointed: dict[str, Any] | None = None
         self._warned: set[tuple[str, str]] = set()
+        # The work of the run, estimated before it starts: steps × unknowns.
+        dofs = sum(b.V.dofmap.index_map.size_global * b.V.dofmap.index_map_bs
+                   for b in model.bodies)
+        self.work = {"steps_planned": time.planned_steps, "dofs": int(dofs),
+                     "estimate": time.planned_steps * int(dofs),
+                     "max_steps": time.max_steps, "max_cutbacks": time.max_cutbacks,
+                     "min_dt": time.min_dt}
 
     def start(self) -> None:
         """Find the initial state, start the stepper from it (collective).
@@ -306,9 +313,10 @@ class Session:
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))
-        return sm.run_summary(
+        return {**sm.run_summary(
             case_name=self.output.case_name, finished=finished, status=status, error=error,
             time=self.time, state=st, rows=self.rows,
             probes=x.monitor.probes if x is not None else None,
             contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
-            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra)
+            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra),
+            "work": self.work}

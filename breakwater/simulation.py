@@ -159,6 +159,8 @@ def _loop(r: Session, stop: StopSignal) -> None:
     s = x.stepper
     step, interval = st.step, output.checkpoint_interval
     show = output.progress if output.progress is not None else sys.stderr.isatty()
+    log.info("work estimate: %d steps × %d unknowns = %.3g", r.work["steps_planned"],
+             r.work["dofs"], r.work["estimate"])
     log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
     clock = _LoopClock(st.time_loop, getattr(s.solver, "timings", None))
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
@@ -166,6 +168,11 @@ def _loop(r: Session, stop: StopSignal) -> None:
         while not step.finished:
             _check_stop(r, stop)
             t, trial = step.t, step.propose()
+            if st.steps >= time.max_steps:
+                raise SimulationFailed(
+                    f"t = {t:.6g} s, dt = {trial:.3g} s: {st.steps} steps taken (the limit "
+                    f"time.max_steps; cut-backs made the steps smaller) before end_time = "
+                    f"{time.end_time:g} s (raise time.max_steps to go on)")
             try:
                 s.stage(trial)
                 its = s.solve()
@@ -176,9 +183,12 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 st.failed_steps += 1
                 st.failed_iterations += getattr(e, "iterations", 0)
                 if not step.reject():
+                    floor = (f", and dt/2 = {0.5 * trial:.3g} s would be below time.min_dt "
+                             f"= {time.min_dt:.3g} s" if step.halvings < time.max_cutbacks
+                             else "")
                     raise SimulationFailed(
                         f"step from t = {t:.6g} s with dt = {trial:.3g} s did not "
-                        f"converge after {step.halvings} cut-backs: {e}") from e
+                        f"converge after {step.halvings} cut-backs{floor}: {e}") from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
                             t, e, step.h, step.halvings, time.max_cutbacks)
                 continue
@@ -265,7 +275,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if isinstance(error, KeyboardInterrupt):
             raise error
         stopped = isinstance(error, _Stop)
-        log.error("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
+        # Info, not error: the caller reports the exception (the command line prints
+        # its one line; with --quiet the reason is not printed twice).
+        log.info("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
         if stopped:
             raise RunInterrupted(summary["error"], summary) from error
         if isinstance(error, CaseError | MeshError):  # an input found bad once built

@@ -32,6 +32,7 @@ class StepSize:
         dt: The nominal step (s).
         end_time: The time to reach (s).
         max_cutbacks: Halvings of ``dt`` allowed at once.
+        floor: No cut-back makes the step smaller than this (s; 0: no floor).
         t: The time reached: the exactly rounded sum of ``accepted``.
         h: The current step size.
         halvings: Halvings of ``dt`` in effect (``h = dt / 2**halvings``, or what
@@ -46,6 +47,7 @@ class StepSize:
     dt: float
     end_time: float
     max_cutbacks: int
+    floor: float = 0.0
     t: float = 0.0
     h: float = math.nan
     halvings: int = 0
@@ -84,11 +86,12 @@ class StepSize:
 
         Returns:
             True when the step is to be retried with ``h`` halved; False when
-            ``max_cutbacks`` halvings are in effect already (nothing changes).
+            ``max_cutbacks`` halvings are in effect already, or half the step would be
+            below ``floor`` (nothing changes).
         """
-        if self.halvings >= self.max_cutbacks:
-            return False
         trial = self.propose()
+        if self.halvings >= self.max_cutbacks or 0.5 * trial < self.floor * (1 - 1e-9):
+            return False
         self.halvings += 1
         self.cutbacks += 1
         self.h = 0.5 * trial

@@ -34,6 +34,14 @@ absent, not all); samples draw each key in file order, point after point, from
 logarithm uniform; ``choice``: one of a list). Derived keys are set after the varied
 ones (a table lookup matches a number to 1e-9 relative).
 
+File paths in a study (``base``, and the values of case keys that name files:
+``mesh.source``, ``loads.<name>.table.file``) are relative to the study file, as in a
+case file; ``--set`` values on the command line are relative to the working directory.
+
+A study has at most ``max_points`` points (:data:`MAX_POINTS`; ``sweep --max-points N``
+raises it), counted before any is drawn: every point's case is read before the study
+starts (tens of milliseconds each) and each runs a case.
+
 Every problem is a one-line :class:`~breakwater.errors.CaseError` naming the file;
 :func:`check_points` reads every point's case before anything runs and names each bad
 point with its error.
@@ -49,7 +57,7 @@ import pathlib
 import re
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
@@ -65,6 +73,8 @@ TOP_KEYS = ("name", "description", "base", "set", "grid", "zip", "samples", "der
 DERIVED_KEYS = ("from", "key", "table", "interpolate")
 FIGURE_KEYS = ("x", "y", "reference", "reference_label")
 DISTRIBUTIONS = ("uniform", "log_uniform", "choice")
+MAX_POINTS = 1000
+"""Default limit on the points of a study (``sweep --max-points``)."""
 RESERVED = ("output.directory", "name")
 """Case keys a study may not set: the sweep names each case's folder."""
 
@@ -200,15 +210,22 @@ class _Reader:
                 raise self.error(f"{name}.{key}", "expected a non-empty list of values")
         return out
 
+    def sample_count(self, table: Any) -> int:
+        """``samples.count``, checked."""
+        if not isinstance(table, Mapping):
+            raise self.error("samples", "expected a table")
+        count = table.get("count")
+        if not isinstance(count, int) or isinstance(count, bool) or count < 1:
+            raise self.error("samples.count", f"expected an integer >= 1 (got {count!r})")
+        return count
+
     def samples(self, table: Any) -> list[dict[str, Any]]:
         import numpy as np
 
-        if not isinstance(table, Mapping):
-            raise self.error("samples", "expected a table")
+        count = self.sample_count(table)
         table = dict(table)
-        count, seed = table.pop("count", None), table.pop("seed", 0)
-        if not isinstance(count, int) or isinstance(count, bool) or count < 1:
-            raise self.error("samples.count", f"expected an integer >= 1 (got {count!r})")
+        del table["count"]
+        seed = table.pop("seed", 0)
         if not isinstance(seed, int) or isinstance(seed, bool):
             raise self.error("samples.seed", f"expected an integer (got {seed!r})")
         specs = _flatten(table, leaf=lambda v: not any(isinstance(x, Mapping)
@@ -297,13 +314,15 @@ class _Reader:
         return out
 
 
-def load_study(path: str | pathlib.Path, overrides: Sequence[str] = ()) -> Study:
+def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
+               max_points: int = MAX_POINTS) -> Study:
     """Read a study file into its points (the cases are not read: :func:`check_points`).
 
     Args:
         path: The study file.
         overrides: ``key=value`` case overrides added to ``[set]`` (``--set``); a key
             the study varies may not be given.
+        max_points: Refuse a study of more points (counted before any is drawn).
 
     Raises:
         CaseError: One line naming the file and the problem.
@@ -347,6 +366,13 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = ()) -> Study
     lengths = {len(v) for v in zipped.values()}
     if len(lengths) > 1:
         raise r.error("zip", f"the lists have different lengths ({sorted(lengths)})")
+    n_points = math.prod(len(v) for v in grid.values()) * (lengths.pop() if lengths else 1)
+    if "samples" in data:
+        n_points *= r.sample_count(data["samples"])
+    if n_points > max_points:
+        raise r.error("", f"{n_points:.4g} points, above the limit of {max_points} (every "
+                      "point's case is read before the study starts, and each runs; "
+                      "sweep --max-points N raises the limit)")
     samples = r.samples(data["samples"]) if "samples" in data else []
     derived = r.derived(data.get("derived", []))
     varied = [*grid, *zipped, *(samples[0] if samples else {})]
@@ -402,11 +428,26 @@ def with_derived(study: Study, point: Point) -> Point:
     return Point(point.index, values)
 
 
+def _relative_to_study(study: Study, values: Mapping[str, Any]) -> dict[str, Any]:
+    """The values, file paths (``mesh.source``, a table's ``file``) resolved.
+
+    Against the study file's folder; ``--set`` values (kept as text) are left to the
+    working directory.
+    """
+    from .case import is_file_value
+
+    folder = study.path.parent
+    return {k: str((folder / v).resolve()) if not isinstance(v, _Literal)
+            and is_file_value(k, v) else v for k, v in values.items()}
+
+
 def case_of(study: Study, point: Point, folder: pathlib.Path) -> Case:
     """The case of a point (its derived values included), output in ``folder``."""
     from .case import load_case
 
-    overrides = [*_fixed_overrides(study), *point.overrides(),
+    fixed = replace(study, fixed=_relative_to_study(study, study.fixed))
+    values = Point(point.index, _relative_to_study(study, point.values))
+    overrides = [*_fixed_overrides(fixed), *values.overrides(),
                  f"output.directory={toml_literal(str(folder))}"]
     return load_case(study.base, overrides)
 

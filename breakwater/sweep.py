@@ -24,8 +24,12 @@ same case (fingerprint of the resolved case and of the files it reads) and its
 ``summary.json`` agrees; a rerun skips those and runs the others again (a killed case
 resumes from its checkpoint when it has one, otherwise starts afresh in an emptied
 folder). SIGTERM or SIGINT stops the study (:class:`~breakwater.console.StopSignal`, as
-a run; a second signal kills): the running cases stop at their next step
-(``interrupted``, with a checkpoint when the case makes them), no new case starts.
+a run; a second signal kills), at any moment, a case's meshing included: the running
+cases stop at their next step (``interrupted``, with a checkpoint when the case makes
+them), no new case starts, the others stay ``pending``; the study says so in one line
+and exits 1. Under ``mpiexec`` the rank that finds the signal posts it in the shared
+counter, so that every group stops (the ranks agree) even when the signal reached only
+one of them.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ import logging
 import math
 import pathlib
 import shutil
+import signal
 import sys
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -50,6 +55,7 @@ from mpi4py import MPI
 from . import checkpoint, files, simulation  # importing PETSc is collective: at import
 from .console import StopSignal
 from .errors import CaseError
+from .gmshtools import settle_signal_handlers
 from .parallel import on_rank_zero
 from .studyfile import Point, Study, check_points, toml_literal
 
@@ -281,7 +287,15 @@ def _record(point: Point, fingerprint: str, status: str, error: str | None = Non
 # --- the study ---------------------------------------------------------------------------
 
 class _Counter:
-    """The next case number, shared by every rank (an MPI window on rank 0)."""
+    """The next case number, shared by every rank (an MPI window on rank 0).
+
+    It also carries a stop request to every group: :meth:`stop` raises the counter to
+    ``signum * STOP_UNIT`` at least, so that no group takes a case any more (the number
+    it takes is past the last case) and :meth:`stopped` tells the running cases of the
+    other groups to stop (their runs poll it, :class:`StopSignal`).
+    """
+
+    STOP_UNIT = 1 << 40
 
     def __init__(self, comm: MPI.Intracomm) -> None:
         size = MPI.INT64_T.Get_size()
@@ -292,15 +306,27 @@ class _Counter:
             self.win.Unlock(0)
         comm.Barrier()
 
-    def next(self) -> int:
-        """Take the next number (atomically)."""
+    def _fetch_add(self, amount: int, op: MPI.Op = MPI.SUM) -> int:
         import numpy as np
 
-        one, got = np.ones(1, dtype=np.int64), np.zeros(1, dtype=np.int64)
+        add, got = np.full(1, amount, dtype=np.int64), np.zeros(1, dtype=np.int64)
         self.win.Lock(0, MPI.LOCK_SHARED)
-        self.win.Fetch_and_op(one, got, 0, 0, MPI.SUM)
+        self.win.Fetch_and_op(add, got, 0, 0, op)
         self.win.Unlock(0)
         return int(got[0])
+
+    def next(self) -> int:
+        """Take the next number (atomically)."""
+        return self._fetch_add(1)
+
+    def stop(self, signum: int) -> None:
+        """Ask every group to stop (any rank, any number of times: the first counts)."""
+        if not self.stopped():
+            self._fetch_add(signum * self.STOP_UNIT, MPI.MAX)
+
+    def stopped(self) -> int:
+        """The signal a group stopped on (0: none)."""
+        return self._fetch_add(0, MPI.NO_OP) // self.STOP_UNIT
 
     def free(self) -> None:
         self.win.Free()
@@ -355,8 +381,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             f"-> {folder}")
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
+    signum = 0
+    settle_signal_handlers()  # gmsh's first initialisation, before the signals are caught
     try:
-        with StopSignal() as stop:
+        with StopSignal(poll=counter.stopped, post=counter.stop) as stop:
             while True:
                 if group.allreduce(stop.received, op=MPI.MAX):
                     break
@@ -373,8 +401,13 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                         f"{tail}")
                 if record["status"] == "interrupted":
                     break
+            # A signal caught by a rank stops the others (``post``, when the rank finds
+            # it: no new case starts anywhere, the running cases stop at their next step
+            # as they poll the counter): the ranks agree.
+            signum = stop.received
     finally:
         comm.Barrier()
+        signum = comm.allreduce(signum, op=MPI.MAX)
         counter.free()
         group.Free()
 
@@ -396,6 +429,11 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             print(f"breakwater: warning: the figures of the study could not be drawn: "
                   f"{_one_line(e)}", file=sys.stderr, flush=True)
             drawn = []
+        if signum:
+            print(f"breakwater: study '{study.name}' interrupted by "
+                  f"{signal.Signals(signum).name}: {outcome.finished}/{outcome.total} "
+                  f"finished, {outcome.interrupted} interrupted, {outcome.not_run} pending "
+                  "(run the study again to go on)", file=sys.stderr, flush=True)
         say(f"study '{study.name}': {outcome.finished}/{outcome.total} finished"
             + (f", {outcome.failed} failed" if outcome.failed else "")
             + (f", {outcome.interrupted} interrupted" if outcome.interrupted else "")

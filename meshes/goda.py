@@ -101,6 +101,11 @@ _OPTIONS: Mapping[str, float] = MappingProxyType(
 )
 _MODEL_NAME = "breakwater-goda"
 
+SLOPE_RANGE = (0.5, 20.0)
+"""Mound side slopes accepted (horizontal run per unit rise): no gravel mound stands
+steeper than 1:0.5 (63°), and 1:20 is no mound; gmsh took 7 s to mesh slope 300 and did
+not finish slope 600 in minutes (the mound 230 m wide, 0.19 m high)."""
+
 
 @dataclass(frozen=True)
 class GodaGeometry:
@@ -169,6 +174,12 @@ class GodaGeometry:
                 raise ValueError(
                     f"{f.name} must be a positive finite number, got {value!r}"
                 )
+        low_slope, high_slope = SLOPE_RANGE
+        if not low_slope <= self.slope <= high_slope:
+            raise ValueError(
+                f"slope must be between {low_slope:g} and {high_slope:g} (horizontal run "
+                f"per unit rise; got {self.slope:g})"
+            )
         if self.caisson_width >= self.crest_width:
             raise ValueError(
                 f"caisson_width ({self.caisson_width}) must be smaller than "
@@ -187,6 +198,36 @@ class GodaGeometry:
                     f"{name} ({getattr(self, name)}) must be smaller than "
                     f"caisson_height ({self.caisson_height})"
                 )
+
+    def estimated_elements(self, refinement: float = 1.0) -> float:
+        """The number of triangles gmsh makes at this refinement, estimated before meshing.
+
+        Each body's area over the area of an equilateral triangle of its element size:
+        within 0.6 to 1.3 of gmsh's count (measured: 715 against 601 at refinement 1,
+        48764 against 48687 at refinement 9, 1732 against 1551 at slope 10).
+        """
+        mound = 0.5 * (self.crest_width + self.base_width) * self.mound_height
+        caisson = self.caisson_width * self.caisson_height
+        triangle = math.sqrt(3.0) / 4.0
+        return (mound / (triangle * (self.mound_element_size / refinement) ** 2)
+                + caisson / (triangle * (self.caisson_element_size / refinement) ** 2))
+
+    def coarse_elements(self, refinement: float = 1.0) -> str | None:
+        """Why the element sizes at this refinement are too large, or None.
+
+        An element larger than its body's height (or the caisson's width) leaves the
+        body one element across: no bending, no contact pressure distribution.
+        """
+        for name, size, body, extent in (
+            ("mound_element_size", self.mound_element_size, "mound height",
+             self.mound_height),
+            ("caisson_element_size", self.caisson_element_size, "caisson's smaller side",
+             min(self.caisson_width, self.caisson_height)),
+        ):
+            if size / refinement > extent:
+                return (f"{name} / refinement = {size / refinement:.4g} m is larger than "
+                        f"the {body} ({extent:g} m)")
+        return None
 
     @property
     def physical_groups(self) -> Mapping[str, tuple[int, int]]:

@@ -15,6 +15,7 @@ import math
 
 import pytest
 
+from breakwater.errors import CaseError
 from breakwater.quality import PairInputs
 from breakwater.runspec import TimeSpec
 from breakwater.runstate import RunState
@@ -67,6 +68,34 @@ def test_reject_halves_until_no_cutback_is_left() -> None:
     assert step.reject() is False  # max_cutbacks halvings in effect: nothing changes
     assert dataclasses.asdict(step) == before
     assert step.t == 0.0 and step.accepted == [0.0]
+
+
+def test_floor_stops_the_cutbacks() -> None:
+    # time.min_dt: no cut-back below the floor, whatever max_cutbacks allows.
+    step = StepSize(dt=1.0, end_time=100.0, max_cutbacks=20, floor=0.25)
+    assert step.reject() is True and step.h == 0.5
+    assert step.reject() is True and step.h == 0.25
+    before = dataclasses.asdict(step)
+    assert step.reject() is False  # 0.125 < floor: nothing changes
+    assert dataclasses.asdict(step) == before
+    time = TimeSpec(dt=1e-4, end_time=0.1, max_cutbacks=20, min_dt=2.5e-5)
+    assert RunState.start(time).step.floor == 2.5e-5
+    assert TimeSpec(dt=1e-4, end_time=0.1).dt_floor == 0.0  # max_cutbacks halvings only
+
+
+def test_limits_of_the_time_settings() -> None:
+    """Refused: more steps than time.max_steps, more than 20 cut-backs, min_dt > dt."""
+    assert TimeSpec(dt=1e-4, end_time=100.0).planned_steps == 1_000_000  # at the limit
+    assert TimeSpec(dt=0.1, end_time=0.35).planned_steps == 4  # a short last step
+    assert TimeSpec(dt=0.1, end_time=0.3).planned_steps == 3  # 0.3 / 0.1 = 2.9999999999999996
+    with pytest.raises(CaseError, match=r"end_time: .* = 1\.5e\+10 steps, above the limit "
+                       r"time\.max_steps = 1000000"):
+        TimeSpec(dt=1e-11, end_time=0.15)
+    assert TimeSpec(dt=1e-11, end_time=0.15, max_steps=2 * 10**10).planned_steps > 1e10
+    with pytest.raises(CaseError, match=r"max_cutbacks: must be <= 20 \(got 2000\)"):
+        TimeSpec(dt=1e-4, end_time=0.1, max_cutbacks=2000)
+    with pytest.raises(CaseError, match=r"min_dt: must be <= dt"):
+        TimeSpec(dt=1e-4, end_time=0.1, min_dt=1e-3)
 
 
 def test_grows_back_after_grow_after_steps() -> None:

@@ -143,6 +143,44 @@ def test_bad_study_through_main(path, shared_dir, capsys):
     assert not any(out.glob("case-*"))  # nothing ran
 
 
+def test_max_points_flag(shared_dir, capsys):
+    """The limit on points is counted before any point is drawn; --max-points raises it."""
+    big = BAD / "s1_five_million_samples.toml"
+    start = time.perf_counter()
+    with pytest.raises(CaseError, match="5e\\+06 points, above the limit of 1000"):
+        load_study(big)
+    assert time.perf_counter() - start < 1.0  # not 5 million draws
+    path = study_file(shared_dir, '[grid]\n"contact.interface.friction" = [0.5, 0.6, 0.7]\n')
+    assert cli.main(["sweep", str(path), "--out", str(shared_dir / "out"),
+                     "--max-points", "2"]) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and "3 points, above the limit of 2" in err, err
+        assert "--max-points N raises the limit" in err
+    assert len(load_study(path, max_points=3).points) == 3
+
+
+def test_paths_relative_to_the_study_file(shared_dir, monkeypatch):
+    """A mesh named in a study ([set] or [grid]) is found beside the study file, not in
+    the working directory (before: 'mesh file not found' from any other folder)."""
+    sub = shared_dir / "studies"
+    if COMM.rank == 0:
+        sub.mkdir()
+    COMM.barrier()
+    assert cli.main(["mesh", "--out", str(sub / "goda.msh"), "--quiet"]) == 0
+    body = '"mesh.source" = "goda.msh"\n[grid]\n"time.dt" = [1e-4, 5e-5]\n'  # in [set]
+    fixed = study_file(sub, body, name="fixed.toml")
+    varied = study_file(sub, '[grid]\n"mesh.source" = ["goda.msh", "goda"]\n',
+                        name="varied.toml")
+    monkeypatch.chdir(shared_dir)  # another folder than the study's
+    mesh = str((sub / "goda.msh").resolve())
+    _, cases = check_points(load_study(fixed), shared_dir / "out")
+    assert [c.mesh.source for c in cases] == [mesh, mesh]
+    points, cases = check_points(load_study(varied), shared_dir / "out")
+    assert [c.mesh.source for c in cases] == [mesh, "goda"]
+    assert points[0].values["mesh.source"] == "goda.msh"  # the table shows what was given
+
+
 def test_examples_are_valid(tmp_path):
     bolts = load_study(EXAMPLES / "bolt_heights.toml")
     points, cases = check_points(bolts, tmp_path)

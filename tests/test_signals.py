@@ -1,0 +1,180 @@
+"""SIGTERM and SIGINT: a run and a study stop cleanly, whatever they are doing.
+
+- gmsh replaces the C-level handlers of SIGTERM and SIGINT when it initialises (even
+  with ``interruptible=False``) and leaves them on finalising: a SIGTERM while a case
+  was meshed or read, or in the second after, killed the process outright. The gmsh
+  session of breakwater gives the signals back to Python.
+- A study's :class:`~breakwater.console.StopSignal` and the one of each run nest: a
+  signal caught while a case was being built reached only the study's, and the run
+  started afterwards went on to its end.
+- Under ``mpiexec``, a group that stops tells the others through the study's shared
+  counter: no new case starts.
+
+The process tests run the command line in a subprocess (serially, marked ``serial``),
+one of them under a real ``mpiexec -n 2``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import pathlib
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+from mpi4py import MPI
+
+from breakwater.console import StopSignal
+
+COMM = MPI.COMM_WORLD
+ROOT = pathlib.Path(__file__).parents[1]
+
+STUDY = '''base = "goda"
+[set]
+"time.end_time" = {end}
+"output.field_interval" = 0
+"output.figures" = false
+"output.checkpoint_interval" = 1
+[grid]
+"contact.interface.friction" = {values}
+'''
+
+
+def test_nested_stop_signals_share_the_signal():
+    """A StopSignal entered after a signal (a run after its case was built) stops too."""
+    with StopSignal() as outer:
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.05)  # the handler runs between bytecodes of the main thread
+        assert outer.received == signal.SIGTERM
+        # The second signal would kill: the handler is the default one again, and the
+        # inner StopSignal installs none.
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+        with StopSignal() as inner:
+            assert inner.received == signal.SIGTERM
+            assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL
+    with StopSignal() as outer, StopSignal() as inner:  # a signal during the run:
+        os.kill(os.getpid(), signal.SIGINT)  # the study sees it too
+        time.sleep(0.05)
+        assert inner.received == outer.received == signal.SIGINT
+    assert signal.getsignal(signal.SIGINT) == signal.default_int_handler
+
+
+def test_stop_signal_polls_the_other_groups():
+    """``poll`` (the study's shared counter) stops a StopSignal and the runs inside it."""
+    asked = []
+
+    def poll() -> int:
+        asked.append(1)
+        return int(signal.SIGTERM) if len(asked) > 1 else 0
+
+    with StopSignal(poll=poll) as outer:
+        assert outer.received == 0
+        outer._polled -= StopSignal.POLL_SECONDS  # a second later
+        with StopSignal() as inner:
+            assert inner.received == signal.SIGTERM
+
+
+@pytest.mark.serial
+def test_gmsh_leaves_the_signals_to_python():
+    """SIGTERM inside and after a gmsh session reaches Python's handler (no kill)."""
+    if COMM.size > 1:
+        pytest.skip("subprocess test")
+    script = textwrap.dedent('''
+        import os, signal, time
+        import gmsh
+        from breakwater.gmshtools import gmsh_session
+        got = []
+        signal.signal(signal.SIGTERM, lambda s, f: got.append(s))
+        with gmsh_session():
+            gmsh.model.geo.addPoint(0, 0, 0)
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.05)
+        print(len(got))
+    ''')
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=60, cwd=ROOT)
+    # Without the fix: killed by the first SIGTERM (-15), nothing printed.
+    assert done.returncode == 0, done
+    assert done.stdout.strip() == "2"
+
+
+def _statuses(out: pathlib.Path) -> dict[str, str]:
+    with open(out / "sweep.csv", newline="") as f:
+        return {row["case"]: row["status"] for row in csv.DictReader(f)}
+
+
+def _sigterm_when_built(command: list[str], out: pathlib.Path, cases: int,
+                        timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """Start the study; SIGTERM as soon as ``cases`` case folders exist (being built)."""
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=ROOT)
+    start = time.monotonic()
+    while time.monotonic() - start < timeout:
+        if len(list(out.glob("case-*/sweep_case.json"))) >= cases:
+            break
+        if proc.poll() is not None:
+            break
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGTERM)
+    stdout, stderr = proc.communicate(timeout=timeout)
+    return subprocess.CompletedProcess(command, proc.returncode, stdout, stderr)
+
+
+@pytest.mark.serial
+def test_study_stops_on_sigterm_while_a_case_is_built(tmp_path):
+    """SIGTERM while the first case is meshed: it stops with its checkpoint, exit 1.
+
+    Before: gmsh's handler killed the study (exit -15, the case left ``running``), or
+    the run started after the signal went on to its end and the study went on.
+    """
+    if COMM.size > 1:
+        pytest.skip("subprocess test")
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY.format(end=0.003, values="[0.5, 0.6, 0.7]"))
+    out = tmp_path / "out"
+    done = _sigterm_when_built([sys.executable, "-m", "breakwater", "sweep", str(study),
+                                "--out", str(out), "--quiet"], out, 1)
+    assert done.returncode == 1, done
+    assert "interrupted by SIGTERM" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr
+    statuses = _statuses(out)
+    assert statuses == {"0": "interrupted", "1": "pending", "2": "pending"}, statuses
+    first = next(out.glob("case-0000*"))
+    record = json.loads((first / "sweep_case.json").read_text())
+    assert record["status"] == "interrupted"
+    assert json.loads((first / "summary.json").read_text())["status"] == "interrupted"
+    assert (first / "checkpoint").exists() or any(first.glob("checkpoint*")), \
+        sorted(p.name for p in first.iterdir())
+    assert not any(out.glob("case-0001*"))  # no new case started
+
+
+@pytest.mark.serial
+def test_study_stops_every_group_under_mpiexec(tmp_path):
+    """``mpiexec -n 2`` with groups of one rank: SIGTERM to the job stops both groups,
+    the cases they run are interrupted and no further case starts."""
+    if COMM.size > 1:
+        pytest.skip("subprocess test")
+    mpiexec = shutil.which("mpiexec", path=str(pathlib.Path(sys.executable).parent)) \
+        or shutil.which("mpiexec")
+    if mpiexec is None:
+        pytest.skip("no mpiexec")
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY.format(end=0.003, values="[0.5, 0.6, 0.7, 0.8]"))
+    out = tmp_path / "out"
+    done = _sigterm_when_built([mpiexec, "-n", "2", sys.executable, "-m", "breakwater",
+                                "sweep", str(study), "--out", str(out), "--quiet"], out, 2)
+    assert done.returncode != 0, done
+    assert "Traceback" not in done.stderr, done.stderr
+    statuses = _statuses(out)
+    assert statuses["2"] == statuses["3"] == "pending", statuses
+    assert not any(out.glob("case-0002*")) and not any(out.glob("case-0003*"))
+    for case in ("0", "1"):  # stopped, not run to their end
+        assert statuses[case] == "interrupted", (statuses, done)
