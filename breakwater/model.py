@@ -322,6 +322,7 @@ class ContactModel:
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
+        self._fixed: list[tuple[str, int, tuple[int, ...]]] = []  # group, body, components
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self._load_data: list[tuple[int, np.ndarray]] = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
@@ -420,7 +421,13 @@ class ContactModel:
             Vc = body.V.sub(c)
             dofs = fem.locate_dofs_topological(Vc, fdim, facets)
             bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
+        self._fixed.append((fixed.group, body.index, tuple(comps)))
         return bcs
+
+    def fixed_on(self, body: str) -> list[tuple[str, tuple[int, ...]]]:
+        """The fixed boundaries on a body: (facet group, displacement components held)."""
+        index = self.body(body).index
+        return [(group, comps) for group, i, comps in self._fixed if i == index]
 
     def _build_load(self, k: int, load: SurfaceLoad) -> _LoadData:
         """The load's measure: one-sided facet integrals on the loaded body.
