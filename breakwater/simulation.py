@@ -261,7 +261,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if isinstance(error, KeyboardInterrupt):
             raise error
         stopped = isinstance(error, _Stop)
-        log.error("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
+        # The exception carries the reason (the command line prints it as its one error
+        # line; the report and summary.json say it too): not logged a second time.
+        log.debug("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
         if stopped:
             raise RunInterrupted(summary["error"], summary) from error
         if isinstance(error, CaseError | MeshError):  # an input found bad once built
