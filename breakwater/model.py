@@ -29,6 +29,7 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .errors import MeshError
 from .loadfields import TractionField
 from .mesh import group_tag
+from .penetration import initial_overlap
 from .runspec import InitialSpec
 from .surfaces import SurfacePair, check_pair_settings
 
@@ -386,6 +387,9 @@ class ContactModel:
                                     "no facet on any body")
                 raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
                                 f"body '{', '.join(found)}', not on the {role} '{body}'")
+        why = initial_overlap(self, pair)
+        if why is not None:
+            raise MeshError(why)
         return pair
 
     def surface_facets(self, body: str, groups: Sequence[str]) -> np.ndarray:

@@ -64,7 +64,7 @@ from petsc4py import PETSc
 from . import checkpoint as ckpt
 from . import files
 from .console import Progress, StopSignal, rank_zero_logging
-from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError
+from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError, PenetrationError
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
 from .runspec import OutputSpec, TimeSpec
@@ -176,9 +176,11 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 st.failed_steps += 1
                 st.failed_iterations += getattr(e, "iterations", 0)
                 if not step.reject():
+                    what = "was rejected" if isinstance(e, PenetrationError) else \
+                        "did not converge"
                     raise SimulationFailed(
-                        f"step from t = {t:.6g} s with dt = {trial:.3g} s did not "
-                        f"converge after {step.halvings} cut-backs: {e}") from e
+                        f"step from t = {t:.6g} s with dt = {trial:.3g} s {what} after "
+                        f"{step.halvings} cut-backs: {e}") from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
                             t, e, step.h, step.halvings, time.max_cutbacks)
                 continue
