@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from mpi4py import MPI
 
 from .errors import CaseError, MeshError
+from .initial import velocity_conflict
 from .loadcase import load_summary, surface_loads
 from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
@@ -142,6 +143,11 @@ def build_model(case: Case, data: gmshio.MeshData,
                              if any(b.initial_velocity)),
             loads=None if names is None else tuple(k for k, name in enumerate(owner)
                                                    if name in names))
+        for b in case.bodies:
+            why = velocity_conflict(model, b.name, b.initial_velocity) \
+                if any(b.initial_velocity) else None
+            if why is not None:
+                raise CaseError(f"bodies.{b.name}.initial_velocity: {why}")
     return model
 
 

@@ -50,7 +50,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from .bulk import BulkOperators, MonolithicLayout, Timings, _Factorisation, interface_dofs
-from .errors import ConvergenceError
+from .errors import ConvergenceError, PenetrationError
 from .model import ContactModel
 from .parallel import single_threaded_blas
 from .solver import NewtonOptions, snes_reason
@@ -441,6 +441,7 @@ class CondensedNewton:
                 raise ConvergenceError(
                     f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
                     f"iterations, residual {self.snes.getFunctionNorm():.3e})", reason, its)
+            self._check_penetration(its)
         self.iterations += its
         with T("bulk_products"):
             # The last residual evaluation was at the solution: f_c(y) is at hand.
@@ -453,6 +454,21 @@ class CondensedNewton:
             out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             fem_petsc.assign(out, self.da)
         return its
+
+    def _check_penetration(self, its: int) -> None:
+        """Reject a converged step that leaves a general pair's slave node unseen.
+
+        Raises:
+            PenetrationError: :meth:`SurfaceContact.penetration` of some pair (the same
+                decision on every rank: every rank holds the same interface values).
+        """
+        with self.timings("interface_assembly"):
+            y = self._x.getArray(readonly=True)
+            for p in self.providers:
+                if isinstance(p, SurfaceContact):
+                    why = p.penetration(y)
+                    if why is not None:
+                        raise PenetrationError(why, 0, its)
 
     def _interface_array(self, *owned: np.ndarray) -> list[np.ndarray]:
         """Owned stacked arrays at the interface unknowns, on every rank (one reduction)."""

@@ -28,3 +28,11 @@ class ConvergenceError(BreakwaterError):
         super().__init__(message)
         self.reason = reason
         self.iterations = iterations
+
+
+class PenetrationError(ConvergenceError):
+    """A step leaves a general pair's slave node beyond what its contact search sees.
+
+    See :mod:`breakwater.penetration`: the step is rejected and cut back like a step
+    that did not converge.
+    """

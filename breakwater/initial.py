@@ -61,7 +61,8 @@ from .schema import setting
 from .slipguard import SlipGuard
 from .solver import NewtonOptions, NewtonSolver
 
-__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities"]
+__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities",
+           "velocity_conflict"]
 
 log = logging.getLogger("breakwater.initial")
 
@@ -136,12 +137,43 @@ def _initial_loads(model: ContactModel) -> Iterator[None]:
             ld.amplitude.value = value
 
 
+_AXES = "xyz"
+
+
+def velocity_conflict(model: ContactModel, body: str, velocity: Sequence[float]) -> str | None:
+    """Why a uniform initial velocity contradicts a body's fixed boundaries (None: it does not).
+
+    A fixed boundary holds its displacement components at zero for all time, so their
+    velocity is zero at t = 0 too: a uniform velocity with a component along a fixed one
+    starts the body with a velocity jump at that boundary (the stepper zeroes the fixed
+    DOFs' increments, and the energy ledger counts a kinetic energy that no force put
+    in). A component along a free direction (a roller) is consistent.
+    """
+    for group, comps in model.fixed_on(body):
+        held = [c for c in comps if velocity[c] != 0.0]
+        if held:
+            axes = ", ".join(_AXES[c] for c in held)
+            shown = ", ".join(f"{x:g}" for x in velocity)
+            return (f"body '{body}' is fixed in {axes} on '{group}', so its initial velocity "
+                    f"[{shown}] m/s cannot have a {axes} component (give it only along the "
+                    "free components, or remove the fixed boundary)")
+    return None
+
+
 def initial_velocities(model: ContactModel) -> list[fem.Function]:
-    """The bodies' uniform initial velocities (``model.initial.velocities``; else zero)."""
+    """The bodies' uniform initial velocities (``model.initial.velocities``; else zero).
+
+    Raises:
+        ValueError: A velocity along a component that a fixed boundary of the body holds
+            (:func:`velocity_conflict`).
+    """
     v = model.functions("v_initial")
     for f, b in zip(v, model.bodies, strict=True):
         vel = model.initial.velocity(b.spec.name)
         if vel is not None:
+            why = velocity_conflict(model, b.spec.name, vel)
+            if why is not None:
+                raise ValueError(why)
             f.x.array.reshape(-1, model.gdim)[:] = np.asarray(vel, dtype=float)
     return v
 

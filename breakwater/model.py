@@ -29,6 +29,7 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .errors import MeshError
 from .loadfields import TractionField
 from .mesh import group_tag
+from .penetration import initial_overlap
 from .runspec import InitialSpec
 from .surfaces import SurfacePair, check_pair_settings
 
@@ -322,6 +323,7 @@ class ContactModel:
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
+        self._fixed: list[tuple[str, int, tuple[int, ...]]] = []  # group, body, components
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self._load_data: list[tuple[int, np.ndarray]] = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
@@ -385,6 +387,9 @@ class ContactModel:
                                     "no facet on any body")
                 raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
                                 f"body '{', '.join(found)}', not on the {role} '{body}'")
+        why = initial_overlap(self, pair)
+        if why is not None:
+            raise MeshError(why)
         return pair
 
     def surface_facets(self, body: str, groups: Sequence[str]) -> np.ndarray:
@@ -420,7 +425,13 @@ class ContactModel:
             Vc = body.V.sub(c)
             dofs = fem.locate_dofs_topological(Vc, fdim, facets)
             bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
+        self._fixed.append((fixed.group, body.index, tuple(comps)))
         return bcs
+
+    def fixed_on(self, body: str) -> list[tuple[str, tuple[int, ...]]]:
+        """The fixed boundaries on a body: (facet group, displacement components held)."""
+        index = self.body(body).index
+        return [(group, comps) for group, i, comps in self._fixed if i == index]
 
     def _build_load(self, k: int, load: SurfaceLoad) -> _LoadData:
         """The load's measure: one-sided facet integrals on the loaded body.

@@ -64,7 +64,7 @@ from petsc4py import PETSc
 from . import checkpoint as ckpt
 from . import files
 from .console import Progress, StopSignal, rank_zero_logging
-from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError
+from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError, PenetrationError
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
 from .runspec import OutputSpec, TimeSpec
@@ -186,9 +186,11 @@ def _loop(r: Session, stop: StopSignal) -> None:
                     floor = (f", and dt/2 = {0.5 * trial:.3g} s would be below time.min_dt "
                              f"= {time.min_dt:.3g} s" if step.halvings < time.max_cutbacks
                              else "")
+                    what = "was rejected" if isinstance(e, PenetrationError) else \
+                        "did not converge"
                     raise SimulationFailed(
-                        f"step from t = {t:.6g} s with dt = {trial:.3g} s did not "
-                        f"converge after {step.halvings} cut-backs{floor}: {e}") from e
+                        f"step from t = {t:.6g} s with dt = {trial:.3g} s {what} after "
+                        f"{step.halvings} cut-backs{floor}: {e}") from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
                             t, e, step.h, step.halvings, time.max_cutbacks)
                 continue
@@ -275,9 +277,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if isinstance(error, KeyboardInterrupt):
             raise error
         stopped = isinstance(error, _Stop)
-        # Info, not error: the caller reports the exception (the command line prints
-        # its one line; with --quiet the reason is not printed twice).
-        log.info("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
+        # The exception carries the reason (the command line prints it as its one error
+        # line; the report and summary.json say it too): not logged a second time.
+        log.debug("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
         if stopped:
             raise RunInterrupted(summary["error"], summary) from error
         if isinstance(error, CaseError | MeshError):  # an input found bad once built

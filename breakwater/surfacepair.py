@@ -48,6 +48,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from .penetration import StepCheck, allowed_depth, search_radius
 from .pointkernels import (
     DenseEntries,
     H,
@@ -120,9 +121,7 @@ class SurfaceContact:
         self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
         # The Gauss rule of each integration segment on [−1, 1].
         self._gauss = np.polynomial.legendre.leggauss(spec.points)
-        lengths = np.linalg.norm(master.X[:, 1] - master.X[:, 0], axis=1)
-        self.radius = spec.radius if spec.radius is not None else \
-            float(lengths.max()) if len(lengths) else 1.0
+        self.radius = search_radius(spec, master)
         # Owned entries of each body at the interface unknowns (for the reduction).
         self._owned = []
         for i, gi in enumerate(layout.global_index):
@@ -145,8 +144,11 @@ class SurfaceContact:
         self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
         self._normal_points: dict[str, Any]  # the _points of _normal_key
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
+        self._frozen_projected = np.zeros(0, bool)  # of _frozen_data: not a nearest end
         # The start-of-step projection of the last step solved (see _friction).
         self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.step_check = StepCheck(spec, self.radius, allowed_depth(master, self.radius),
+                                    self.node_X, self.node_pos, master.X, self.pos_m)
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -283,6 +285,7 @@ class SurfaceContact:
         # A node beyond the master's end (it slid past it) keeps its friction where its
         # facets' points still press: its master point is the surface's end vertex.
         beyond = np.flatnonzero(facet < 0)
+        self._frozen_projected = facet >= 0
         if len(beyond):
             facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
         N0, dN0, _ = shape(xi, m.X.shape[1])
@@ -494,6 +497,19 @@ class SurfaceContact:
         along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
         step[pos[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
         return int(fix.sum())
+
+    def penetration(self, y: np.ndarray) -> str | None:
+        """Why the step's solution Δa = y leaves a slave node beyond what the search sees.
+
+        :class:`breakwater.penetration.StepCheck` (None: it does not); the same on every
+        rank.
+        """
+        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
+        da[:-1] = y
+        dt = float(self.dt.value)
+        # u₁ as GN22.update computes it (gn22_kinematics): the next step's u₀ bit for bit.
+        u1 = u + (dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da)
+        return self.step_check(u, u1, lambda: (*self._frozen(u), self._frozen_projected))
 
     def resultant(self, accepted: bool = True) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).

@@ -127,9 +127,12 @@ class Surface:
     interior: np.ndarray
 
 
-def gather_surface(model: ContactModel, layout: MonolithicLayout, body: str,
+def gather_surface(model: ContactModel, layout: MonolithicLayout | None, body: str,
                    groups: Sequence[str]) -> Surface:
-    """The facets of a body's facet groups (collective)."""
+    """The facets of a body's facet groups (collective).
+
+    Without a layout the DOFs are −1 (the geometry only).
+    """
     b = model.body(body)
     V, sub = b.V, b.submesh
     tdim = sub.topology.dim
@@ -152,7 +155,8 @@ def gather_surface(model: ContactModel, layout: MonolithicLayout, body: str,
         cell = V.dofmap.cell_dofs(c)
         blocks = cell[closure(fdim, local)]
         X[k] = coords[blocks]
-        dofs[k] = layout.global_index[b.index][(blocks[:, None] * bs + np.arange(gdim))]
+        dofs[k] = -1 if layout is None else \
+            layout.global_index[b.index][(blocks[:, None] * bs + np.arange(gdim))]
         interior[k] = coords[cell].mean(axis=0)
     X, dofs, interior = (np.concatenate(model.comm.allgather(a)) for a in (X, dofs, interior))
     mid = X.mean(axis=1)

@@ -185,3 +185,28 @@ def test_loads_of_the_initial_state(mesh_path):
     state = initial_state(model)
     assert state.kind == "frictionless" and state.held == []
     assert float(model.loads[0].amplitude.value) == push  # restored after the static solve
+
+
+def test_initial_velocity_against_a_fixed_boundary(mesh_path):
+    # A fixed boundary holds its components at zero for all time, so their velocity is
+    # zero at t = 0 too: a uniform initial velocity of the body along a fixed component
+    # is refused (it ran, the ledger then counting a kinetic energy no force put in),
+    # one along a free component (a roller) is kept.
+    from breakwater.initial import initial_velocities, velocity_conflict
+    from breakwater.runspec import InitialSpec
+
+    mat = Material(ρ, ν, young_modulus=E)
+    roller = ContactModel(read_mesh(mesh_path, COMM), [Body("a", mat), Body("b", mat)],
+                          [ContactPair("interface", "a", "b", penalty=PENALTY)],
+                          [Fixed("b_bottom", (1,))], gravity=(0.0, -g))
+    assert roller.fixed_on("b") == [("b_bottom", (1,))] and roller.fixed_on("a") == []
+    assert velocity_conflict(roller, "b", (1.0, 0.0)) is None
+    assert velocity_conflict(roller, "a", (0.0, -1.0)) is None
+    why = velocity_conflict(roller, "b", (1.0, -0.5))
+    assert why is not None and "body 'b' is fixed in y on 'b_bottom'" in why
+    roller.initial = InitialSpec(velocities=(("b", (1.0, 0.0)),))
+    v = initial_velocities(roller)
+    assert np.all(v[1].x.array.reshape(-1, 2)[:, 0] == 1.0)
+    roller.initial = InitialSpec(velocities=(("b", (0.0, -0.5)),))
+    with pytest.raises(ValueError, match="fixed in y on 'b_bottom'"):
+        initial_velocities(roller)

@@ -48,6 +48,9 @@ STUDY = '''base = "goda"
 
 def test_nested_stop_signals_share_the_signal():
     """A StopSignal entered after a signal (a run after its case was built) stops too."""
+    # What SIGINT's handler was (Python's default_int_handler, or SIG_IGN in a job
+    # started in the background by a non-interactive shell): the StopSignals put it back.
+    before = signal.getsignal(signal.SIGINT)
     with StopSignal() as outer:
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(0.05)  # the handler runs between bytecodes of the main thread
@@ -62,7 +65,7 @@ def test_nested_stop_signals_share_the_signal():
         os.kill(os.getpid(), signal.SIGINT)  # the study sees it too
         time.sleep(0.05)
         assert inner.received == outer.received == signal.SIGINT
-    assert signal.getsignal(signal.SIGINT) == signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) == before
 
 
 def test_stop_signal_polls_the_other_groups():
