@@ -86,7 +86,7 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .condensed import CondensedNewton
 from .errors import ConvergenceError
 from .gn22 import GN22, GN22Parameters, force_scale
-from .interface import creep_velocities, mean_facet_length
+from .interface import RELEASE, creep_velocities, mean_facet_length
 from .model import ContactModel, Damping
 from .solver import NewtonOptions
 from .surfacepair import SurfaceContact
@@ -112,9 +112,6 @@ state removes; it slides by the same amount at every step."""
 
 RESIDUAL_FRICTION = 1e-4
 """Friction coefficient of the nearly frictionless stage (1b in the module doc)."""
-
-RELEASE = 100.0
-"""Slip speed of a released body's slave nodes at t = 0, in units of χ (module doc)."""
 
 MAX_STEPS = 100
 """Pseudo steps allowed per stage."""
