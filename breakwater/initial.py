@@ -27,7 +27,17 @@ initial velocity. :func:`initial_state` finds it in up to three stages:
 3. **Held.** A body on a pair that cannot hold it (no frictional equilibrium, e.g. a
    block on an incline steeper than the friction angle) is held in place up to t = 0
    by the bonding spring, with one warning naming it; at t = 0 the dynamics releases
-   it (the spring is not in the dynamic residual) and it slides from rest.
+   it (the spring is not in the dynamic residual) and it slides from rest. It is
+   released in the state of incipient sliding (:func:`_release`): its pair's slave
+   nodes slip at :data:`~breakwater.interface.RELEASE` χ along the sliding direction
+   (the law then carries μp at t = 0), and its displacements are those of the body
+   sliding as a rigid one with the acceleration that leaves (μN rather than the bonded
+   shear at the interface, the inertia of that acceleration in the body). The stepper's
+   a₀ is then that acceleration and GN22, exact for a constant acceleration, gives
+   the rigid block's ½ a t² whatever Δt. Released at rest from the held state, the
+   first step saw no friction (v = 0: a₀ frictionless, of which GN22 keeps
+   (1 − β₁)Δt as a velocity error, +1.4 % of the slide at Δt = 1e-3) and the bonded
+   shear's elastic release reversed slip velocities for a few steps.
 
 Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
 only for the pairs that need it (or for every pair if the frictional Newton fails).
@@ -54,7 +64,7 @@ from petsc4py import PETSc
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from .errors import ConvergenceError
 from .gn22 import force_scale, solve_static, tangential_stiffness
-from .interface import creep_velocities, interface_nodes, mean_facet_length
+from .interface import creep_velocities, interface_nodes, mean_facet_length, release_velocities
 from .model import ContactModel, _PairData
 from .relaxation import relax
 from .schema import setting
@@ -224,13 +234,17 @@ def _bonded_term(pair: _PairData, u: Sequence, w: Sequence, k: float) -> ufl.For
 
 
 def _resultants(model: ContactModel, pair: _PairData, u: Sequence[fem.Function],
-                k: float) -> tuple[float, float]:
-    """Normal resultant ∫p and tangential resultant |∫k Δu_T| of a bonded pair (N/m)."""
+                k: float) -> tuple[float, np.ndarray]:
+    """Normal resultant ∫p and tangential resultant ∫k Δu_T of a bonded pair (N/m).
+
+    The tangential resultant is the spring's pull on the master: the direction in
+    which the shear pushes the slave.
+    """
     us, um = u[pair.slave]("+"), u[pair.master]("-")
     normal = model.assemble(model.form(pair.law.pressure(us, um, pair.n) * pair.dS))
     t_T = k * forms.tangential_part(us - um, pair.n)
     shear = [model.assemble(model.form(t_T[i] * pair.dS)) for i in range(model.gdim)]
-    return normal, float(np.linalg.norm(shear))
+    return normal, np.array(shear)
 
 
 def _solve(model: ContactModel, F: ufl.Form, u: list[fem.Function], options: NewtonOptions | None,
@@ -266,13 +280,14 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
     # The pairs that friction cannot hold: bonded tangential resultant above μN.
     hold = []
     for p, k in zip(pairs, k_b, strict=True):
-        N, T = _resultants(model, p, u, k)
-        μ = float(p.law.friction.μ.value)
+        N, shear = _resultants(model, p, u, k)
+        T, μ = float(np.linalg.norm(shear)), float(p.law.friction.μ.value)
         if T - μ * N > 1e-6 * max(N, T):
-            hold.append((p, N, T, μ))
+            hold.append((p, N, shear, μ))
     held_pairs = {id(p) for p, *_ in hold}
     free = [p for p in pairs if id(p) not in held_pairs]
     v = initial_velocities(model)
+    τ = 0.0
     if free:
         u_bonded = [f.x.array.copy() for f in u]
         try:
@@ -286,11 +301,14 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
             for f, x in zip(u, u_bonded, strict=True):
                 f.x.array[:] = x
             for p in free:
-                N, T = _resultants(model, p, u, BONDING * float(p.ε_n.value))
-                hold.append((p, N, T, float(p.law.friction.μ.value)))
+                N, shear = _resultants(model, p, u, BONDING * float(p.ε_n.value))
+                hold.append((p, N, shear, float(p.law.friction.μ.value)))
             free = []
+    if hold:
+        its += _release(model, u, v, options, [(p, d) for p, _, d, _ in hold], free, τ)
     held: list[str] = []
-    for p, N, T, μ in hold:
+    for p, N, shear, μ in hold:
+        T = float(np.linalg.norm(shear))
         body = model.bodies[p.slave].spec.name
         if model.comm.rank == 0:
             log.warning("initial state: body '%s' cannot be held by friction on '%s' "
@@ -334,3 +352,84 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
             fem_petsc.assign(step, y)
 
     return _solve(model, F, u, options, free, precheck), τ
+
+
+def _release(model: ContactModel, u: list[fem.Function], v: list[fem.Function],
+             options: NewtonOptions | None, held: Sequence[tuple[_PairData, np.ndarray]],
+             free: Sequence[_PairData], τ: float) -> int:
+    """Stage 3's start: the held bodies in the state of incipient sliding (collective).
+
+    Each held pair's slave nodes get the slip velocity :data:`~breakwater.interface.
+    RELEASE` χ along the body's sliding direction d (the held pairs' shear
+    resultant), so that the law carries the friction of sliding, μp, at t = 0. The
+    displacements are then solved for the state in which the body slides as a rigid
+    one: the held pairs carry that friction, each held slave body has the uniform
+    acceleration α d, α from the body's resultant along d (updated at every Newton
+    iterate, so that the residual never drives its free rigid mode along d, which the
+    Jacobian holds with the weak spring of :func:`_solve`), the free pairs keep the
+    law of stage 2. The dynamics then starts in that motion: ``GN22.initialise``'s a₀
+    is α d on the body, and a rigid block slides ½ α t² from t = 0. From the held
+    state instead (its bonded shear, not μp), an elastic body starts with the wave of
+    the shear's release, whose slip-velocity reversals carry less than μN for the
+    first steps. If the Newton fails, the held state is kept (with the velocities).
+
+    Returns:
+        The Newton iterations.
+    """
+    bodies: dict[int, np.ndarray] = {}
+    for p, shear in held:
+        bodies[p.slave] = bodies.get(p.slave, 0.0) + shear
+    pairs = [p for p, _ in held]
+    release_velocities(model, pairs, [bodies[p.slave] / np.linalg.norm(bodies[p.slave])
+                                      for p in pairs], v)
+    held_ids = {id(p) for p in pairs}
+    v_τ = [f / τ for f in u] if free else None
+    F = model.bulk_residual(u)
+    traction = []
+    for p in model.pairs:
+        t = model.traction(p, u, v if id(p) in held_ids else v_τ)
+        traction.append(t)
+        F += forms.contact_residual(t, model.w[p.slave]("+"), model.w[p.master]("-"), p.dS)
+    updates = []
+    for i, shear in bodies.items():
+        b = model.bodies[i]
+        d = fem.Constant(model.mesh, np.asarray(shear / np.linalg.norm(shear)))
+        a = fem.Constant(model.mesh, np.zeros(model.gdim))
+        F += forms.inertia(b.ρ, a, model.w[i], b.dx)
+        # The body's resultant along d without its inertia: gravity, loads, contacts.
+        force = forms.body_force(b.ρ, model.gravity, d, b.dx)
+        for ld in model.loads:
+            if ld.body == i:
+                force += forms.surface_traction(ld.traction, d, ld.ds)
+        for p, t in zip(model.pairs, traction, strict=True):
+            if i in (p.slave, p.master):
+                force += (1.0 if i == p.slave else -1.0) * ufl.dot(t, d) * p.dS
+        mass = model.assemble(model.form(b.ρ * b.dx))
+        updates.append((a, d, model.form(force), mass))
+
+    def accelerate() -> None:
+        for a, d, force, mass in updates:
+            a.value = model.assemble(force) / mass * d.value
+
+    guard = SlipGuard([n for n in interface_nodes(model) if id(n.pair) not in held_ids])
+    step = model.functions("release_step")
+
+    def precheck(x: PETSc.Vec, y: PETSc.Vec) -> None:
+        y.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        fem_petsc.assign(x, u)
+        accelerate()
+        if free:
+            fem_petsc.assign(y, step)
+            if guard([f.x.array / τ for f in u], [f.x.array for f in step], 1.0 / τ):
+                fem_petsc.assign(step, y)
+
+    accelerate()
+    held_state = [f.x.array.copy() for f in u]
+    try:
+        return _solve(model, F, u, options, pairs, precheck)
+    except (ConvergenceError, PETSc.Error) as e:
+        log.debug("no state of incipient sliding (%s): released from the held state", e)
+        for f, x in zip(u, held_state, strict=True):
+            f.x.array[:] = x
+        return getattr(e, "iterations", 0)

@@ -22,6 +22,10 @@ from .errors import MeshError
 from .mesh import group_tag
 from .model import ContactModel, _PairData
 
+RELEASE = 100.0
+"""Slip speed of a released body's slave nodes at t = 0, in units of χ: the law then
+carries μp to 5e-5 (:func:`release_velocities`, :mod:`breakwater.relaxation`)."""
+
 
 def _owned_interface_blocks(V: fem.FunctionSpace, facets: np.ndarray) -> np.ndarray:
     fdim = V.mesh.topology.dim - 1
@@ -219,6 +223,32 @@ def creep_velocities(model: ContactModel, free: Sequence[_PairData],
         us, um = nodes.gather(u[p.slave].x.array, u[p.master].x.array)
         vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
         nodes.scatter_slave(vs + nodes.tangential(us - um) / τ, v[p.slave].x.array)
+        v[p.slave].x.scatter_forward()
+
+
+def release_velocities(model: ContactModel, held: Sequence[_PairData],
+                       directions: Sequence[np.ndarray], v: Sequence[fem.Function],
+                       speed: float = RELEASE) -> None:
+    """Start the held pairs' slave nodes sliding: ``v += speed·χ·d`` (collective).
+
+    ``d`` is the unit tangential part at each node of the pair's sliding direction
+    (``directions``, one vector per pair: the direction in which the held state's
+    shear pushes the slave body). At ``speed`` ≫ 1 the regularised law carries
+    μp(1 − 1/(2 speed²)) against ``d`` at t = 0, the friction of sliding, instead of
+    none at v = 0. Where the pair is open it carries none either way.
+    """
+    ids = {id(p): d for p, d in zip(held, directions, strict=True)}
+    for nodes in interface_nodes(model):
+        p = nodes.pair
+        if id(p) not in ids:
+            continue
+        d = nodes.tangential(np.broadcast_to(ids[id(p)], (nodes.size, nodes.gdim)))
+        size = np.linalg.norm(d, axis=1)
+        keep = size > 1e-12
+        χ = float(p.law.friction.χ.value)
+        vs, _ = nodes.gather(v[p.slave].x.array, v[p.master].x.array)
+        vs[keep] += speed * χ * d[keep] / size[keep, None]
+        nodes.scatter_slave(vs, v[p.slave].x.array)
         v[p.slave].x.scatter_forward()
 
 

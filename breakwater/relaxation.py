@@ -53,11 +53,18 @@ model with both kinds):
 3. **Held** (stage 2 fails, or no friction): every pair's friction coefficient is
    raised to :data:`HELD_FRICTION` for the relaxation (the bodies are held in place up
    to t = 0); a warning names each body whose pair carries a tangential resultant
-   above μN, and the dynamics, with the real μ, releases it at t = 0. Its slave nodes
-   start sliding at :data:`RELEASE` χ along their slip in the held state (1e-8 m/s at
-   the paper's χ: from rest), where the law carries μλ: the first step then sees the
-   friction of sliding (with v = 0 it would see none, a₀ would be F/m instead of
-   (F − μN)/m, and GN22 would keep (1 − β₁)Δt times the difference as a velocity error).
+   above μN, and the dynamics, with the real μ, releases it at t = 0. It is released
+   in the state of incipient sliding (:meth:`_Relaxation.slide`; models with general
+   pairs only): pseudo steps with the real μ from the held state, in the frame of the
+   body's acceleration α d (d its sliding direction, α from its resultant along d),
+   so that its pairs carry the friction of sliding and its deformation is that of the
+   sliding body, not the held state's shear (whose release, in an elastic body,
+   reversed slip velocities at the first steps: +1.3 % of the slide of a pushed block
+   with E = 1e9 at Δt = 1e-3). Its slave nodes then start sliding at :data:`RELEASE` χ
+   along their tangent in the sliding direction (1e-8 m/s at the paper's χ: from
+   rest), where the law carries μλ: the first step sees the friction of sliding
+   (with v = 0 it would see none, a₀ would be F/m instead of (F − μN)/m, and GN22
+   would keep (1 − β₁)Δt times the difference as a velocity error).
 
 If even the held state does not relax (a body that starts too far from its support to
 land within the relaxation: it falls by at most a tenth of the search radius per step
@@ -86,7 +93,7 @@ from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to fo
 from .condensed import CondensedNewton
 from .errors import ConvergenceError
 from .gn22 import GN22, GN22Parameters, force_scale
-from .interface import creep_velocities, mean_facet_length
+from .interface import RELEASE, creep_velocities, mean_facet_length
 from .model import ContactModel, Damping
 from .solver import NewtonOptions
 from .surfacepair import SurfaceContact
@@ -112,9 +119,6 @@ state removes; it slides by the same amount at every step."""
 
 RESIDUAL_FRICTION = 1e-4
 """Friction coefficient of the nearly frictionless stage (1b in the module doc)."""
-
-RELEASE = 100.0
-"""Slip speed of a released body's slave nodes at t = 0, in units of χ (module doc)."""
 
 MAX_STEPS = 100
 """Pseudo steps allowed per stage."""
@@ -163,6 +167,7 @@ class _Relaxation:
         self.scale = force_scale(m)
         self.steps = 0
         self.c = self.c_max  # c of the last converged step
+        self.sliding: dict[int, np.ndarray] = {}  # held slave body → its sliding direction
 
     def destroy(self) -> None:
         """Free the stepper's PETSc objects."""
@@ -289,6 +294,68 @@ class _Relaxation:
         raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
                                f"{k} steps)", -1, its)
 
+    # --- the held bodies released -------------------------------------------------
+
+    def slide(self) -> int:
+        """Relax the held bodies (:attr:`sliding`) into the state of incipient sliding.
+
+        The held stage's friction (μ = :data:`HELD_FRICTION`) carries the bonded shear;
+        released, the body slides with the friction μλ and the acceleration α d (d the
+        sliding direction, α from its resultant). Pseudo steps with the real μ from the
+        held state, each started with a₀ = α d and v₀ = −½Δτ α d on the body (so that
+        u₁ − u_k = c Δa: the static residual of the stage, in the frame of the body's
+        acceleration, and v₁ ≈ ½Δτ α d, far above χ: the friction of sliding), α updated
+        after each step from the body's resultant along d. As :func:`breakwater.initial.
+        _release` for conforming pairs: GN22 then starts in the motion of sliding.
+
+        Returns:
+            The Newton iterations.
+
+        Raises:
+            ConvergenceError: A step failed or the steps did not converge.
+        """
+        m, s = self.model, self.stepper
+        c, its = self.c / GROWTH**2, 0
+        bodies = []
+        for i, total in self.sliding.items():
+            b = m.bodies[i]
+            d = total / np.linalg.norm(total)
+            dc = fem.Constant(m.mesh, d)
+            force = forms.body_force(b.ρ, m.gravity, dc, b.dx)
+            for ld in m.loads:
+                if ld.body == i:
+                    force += forms.surface_traction(ld.traction, dc, ld.ds)
+            ext = m.assemble(m.form(force))
+            mass = m.assemble(m.form(b.ρ * b.dx))
+            slaves = [p for p in self.providers if m.body(p.spec.slave).index == i]
+            # At first the held state's pressure with the friction of sliding against d.
+            contact = 0.0
+            for p in slaves:
+                normal, _ = p.resultants(accepted=True)
+                contact += float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
+            bodies.append([i, d, ext, mass, slaves, (ext + contact) / mass])
+        with self.friction(None):
+            for k in range(1, MAX_STEPS + 1):
+                self._start(c, False)
+                Δτ = float(s.dt.value)
+                for i, d, _, _, _, α in bodies:
+                    s.v[i].x.array.reshape(-1, m.gdim)[:] = -0.5 * Δτ * α * d
+                    s.a[i].x.array.reshape(-1, m.gdim)[:] = α * d
+                its += s.solve()
+                for body in bodies:
+                    i, d, ext, mass, slaves, _ = body
+                    contact = sum(float(p.resultant(accepted=False) @ d) for p in slaves)
+                    body[5] = (ext + contact) / mass
+                inc, residual = self._advance(c)
+                self.steps += 1
+                log.debug("sliding step %d: max|Δu| = %.3e m, residual %.3e, α = %s", k, inc,
+                          residual / self.scale, [b[5] for b in bodies])
+                if residual <= TOLERANCE * self.scale:
+                    return its
+                c = min(c * GROWTH, self.c)
+        raise ConvergenceError(f"relaxation: no state of incipient sliding after {k} steps",
+                               -1, its)
+
     # --- after a stage --------------------------------------------------------------
 
     def _rest(self) -> None:
@@ -323,33 +390,28 @@ class _Relaxation:
             τ = 0.5 * self.β2 * float(s.dt.value) / self.β1  # τ of the last step
             creep_velocities(self.model, self.model.pairs, u, v, τ)
 
-    def held(self, v: list[fem.Function]) -> list[str]:
+    def held(self) -> list[str]:
         """The slave bodies whose pair's tangential resultant exceeds μN (held state).
 
-        Their slave nodes in contact get the velocity :data:`RELEASE` χ (added to
-        ``v``) along their slip in the held state, the direction they slide in once
-        released: the law then carries the sliding friction μλ at t = 0 (to 5e-5), so
-        that a₀ is the sliding acceleration rather than that without friction.
+        Each is named in a warning; :attr:`sliding` gets its sliding direction (against
+        the held friction), for :meth:`slide` and :meth:`release`.
         """
         out = []
+        self.sliding = {}
         self._rest()
         with self.friction(HELD_FRICTION, HELD_FRICTION):
             forces = [p.resultants(accepted=False) for p in self.providers]
-            slips = [p.slip_velocities() for p in self.providers]
-        y = np.zeros(self.solver.n)
-        for p, (normal, friction), (pos, v_T) in zip(self.providers, forces, slips,
-                                                      strict=True):
+        for p, (normal, friction) in zip(self.providers, forces, strict=True):
             N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
             μ = p.spec.friction
             if T - μ * N > 1e-6 * max(N, T):
-                size = np.linalg.norm(v_T, axis=1)[:, None]
-                keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
-                y[pos[keep]] = RELEASE * p.spec.regularisation * v_T[keep] / size[keep]
                 if self.model.comm.rank == 0:
                     log.warning("initial state: body '%s' cannot be held by friction on '%s' "
                                 "(tangential force %.4g N/m, μN = %.4g N/m): held in place up "
                                 "to t = 0 and released at t = 0", p.spec.slave, p.spec.name,
                                 T, μ * N)
+                index = self.model.body(p.spec.slave).index
+                self.sliding[index] = self.sliding.get(index, 0.0) - friction
                 if p.spec.slave not in out:
                     out.append(p.spec.slave)
         if not out:  # the conforming pairs' bodies (not checked one by one)
@@ -360,8 +422,30 @@ class _Relaxation:
                                 "'%s': held in place up to t = 0 and released at t = 0",
                                 body, pair.spec.interface)
                 out.append(body)
-        self._add_slave_velocities(v, y)
         return out
+
+    def release(self, v: list[fem.Function]) -> None:
+        """Start the held bodies' slave nodes in contact sliding (added to ``v``).
+
+        Each gets the velocity :data:`RELEASE` χ along its tangent, in the body's
+        sliding direction: the law then carries the sliding friction μλ at t = 0 (to
+        5e-5), so that a₀ is the sliding acceleration rather than that without friction.
+        """
+        self._rest()
+        y = np.zeros(self.solver.n)
+        for p in self.providers:
+            d = self.sliding.get(self.model.body(p.spec.slave).index)
+            if d is None:
+                continue
+            pos, v_T = p.slip_velocities()
+            size = np.linalg.norm(v_T, axis=1)[:, None]
+            keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
+            unit = v_T[keep] / size[keep]
+            # Along the node's tangent, turned to the sliding direction (a node's own
+            # slip in the held state may point the other way).
+            unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
+            y[pos[keep]] = RELEASE * p.spec.regularisation * unit
+        self._add_slave_velocities(v, y)
 
 
 @contextlib.contextmanager
@@ -466,7 +550,19 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
             if kind == "frictional":
                 r.creep(v)
             elif kind == "held":
-                held = r.held(v)
+                held = r.held()
+                if r.sliding and not model.pairs:
+                    u_held = [f.x.array.copy() for f in r.stepper.u]
+                    try:
+                        its += r.slide()
+                        for f, g in zip(u, r.stepper.u, strict=True):
+                            f.x.array[:] = g.x.array
+                    except ConvergenceError as e:
+                        its += e.iterations
+                        log.debug("released from the held state (%s)", e)
+                        for f, x in zip(r.stepper.u, u_held, strict=True):
+                            f.x.array[:] = x
+                r.release(v)
             steps = r.steps
         finally:
             r.destroy()

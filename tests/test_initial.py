@@ -149,9 +149,11 @@ def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, ca
         assert len(warnings) == 1 and "body 'a' cannot be held" in warnings[0]
     else:
         assert warnings == []
-    # 2 %: the rigid limit (tests/test_friction.py: 0.3 % at E = 1e11) and GN22's first
-    # order start (β1 = 0.6: an offset of order (β1 − ½) Δt a t). Measured +0.72 %.
-    assert slide == pytest.approx(reference, rel=0.02)
+    # Released in the state of incipient sliding (tests/test_release.py): GN22 is exact
+    # for the constant acceleration, the slide is the rigid block's but for the release
+    # speed 100χ (1e-9 m). Measured +3e-7 (+0.72 % when released from the held state at
+    # rest: no friction at the first step); 1e-4 bounds it.
+    assert slide == pytest.approx(reference, rel=1e-4)
     # It slides from rest: the whole block, every node with the mean to 1e-3.
     assert np.ptp(r["slip"][-1]) < 1e-3 * slide
     # The initial state agrees across partitions to 1e-22 m and the reference solver's
