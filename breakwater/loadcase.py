@@ -90,7 +90,10 @@ class TableCase:
     """``[loads.<name>.table]``: a tabulated history of the load factor."""
 
     file: str | None = setting(None, doc="CSV file of t, value rows (s, -), relative to "
-                               "the case file (a header line and # comments are skipped)")
+                               "the case file: a first row without numbers (a header), "
+                               "# comments and blank rows are skipped; separators , ; tab "
+                               "or blanks, decimal commas with ; or tab, UTF-8 (with or "
+                               "without BOM) or UTF-16 (see breakwater.loads.read_table)")
     points: tuple[tuple[float, ...], ...] | None = setting(None, doc="inline [t, value] "
                                                            "pairs (instead of file)")
     hold_last: bool = setting(False, doc="hold the last value after the table ends (else "

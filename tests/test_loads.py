@@ -76,13 +76,66 @@ def test_table_through_pulse_knots_is_the_pulse():
 
 def test_read_table(tmp_path):
     path = tmp_path / "record.csv"
-    path.write_text("# a pressure record\nt,p\n0.0, 0.0\n\n0.5 1e3  # peak\n1.0;0\n")
+    path.write_text("# a pressure record\nt,p\n0.0, 0.0\n\n0.5 1e3  # peak\n1.0,0\n")
     assert read_table(path) == ((0.0, 0.5, 1.0), (0.0, 1e3, 0.0))
     path.write_text("0,0\n1,2,3\n")
     with pytest.raises(ValueError, match="line 2"):
         read_table(path)
     with pytest.raises(OSError, match="not found"):
         read_table(tmp_path / "missing.csv")
+
+
+# What spreadsheet programs write: every table holds the rows t = 0, 0.5, 1 with the
+# values 0.25, 1.5, 0 (the first row is data, not a header, wherever there is no header).
+SPREADSHEET_TABLES = {
+    # Excel "CSV UTF-8": a byte-order mark, CRLF (the BOM used to make the first cell
+    # non-numeric, and the first row was dropped as a header: the load was 1.5 at t = 0).
+    "utf8_bom": b"\xef\xbb\xbf0,0.25\r\n0.5,1.5\r\n1,0\r\n",
+    "utf8_bom_header": b"\xef\xbb\xbft (s),F (-)\r\n0,0.25\r\n0.5,1.5\r\n1,0\r\n",
+    # Quoted cells (a "bad" first cell for a blank/comma split).
+    "quoted": b'"0","0.25"\n"0.5","1.5"\n"1","0"\n',
+    # A European Excel: ";" between cells, decimal commas.
+    "semicolon_decimal_comma": b"t;F\r\n0;0,25\r\n0,5;1,5\r\n1;0\r\n",
+    # Trailing empty cells, rows of empty cells, blank lines.
+    "trailing_empty": b"t,F,,\n0,0.25,,\n,,\n\n0.5,1.5,,\n1,0,,\n",
+    # Excel "Unicode text": UTF-16 with its mark, tabs, (here) decimal commas.
+    "utf16_tabs": "t\tF\n0\t0,25\n0,5\t1,5\n1\t0\n".encode("utf-16"),
+    # Old Mac line ends (CR only).
+    "cr": b"0,0.25\r0.5,1.5\r1,0\r",
+}
+
+
+@pytest.mark.parametrize("name", SPREADSHEET_TABLES)
+def test_read_table_as_spreadsheets_write_it(tmp_path, name):
+    # Fails before the fix for utf8_bom and quoted (first row lost), trailing_empty
+    # (the empty cells), semicolon_decimal_comma and utf16_tabs (4 cells).
+    path = tmp_path / f"{name}.csv"
+    path.write_bytes(SPREADSHEET_TABLES[name])
+    assert read_table(path) == ((0.0, 0.5, 1.0), (0.25, 1.5, 0.0))
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    # A first row with a number in it is data: a bad cell is refused, not a header.
+    (b"O.0,0.25\n0.5,1.5\n", "bad.csv line 1: expected two numbers t, value ('O.0' is not"),
+    (b"0s,0.25\n0.5,1.5\n", "bad.csv line 1: expected two numbers t, value ('0s' is not"),
+    # One separator per file: "0,5" in a ";" file is one cell, not t = 0, value = 5.
+    (b"0;0\n0,5\n1;1\n", "bad.csv line 2: expected two numbers t, value (got 1 cell"),
+    (b"0;0\n0,5;1.5\n", "bad.csv line 2: '1.5' has a decimal point, '0,5' (line 2) a "
+                        "decimal comma"),
+    (b"0,,1\n1,2\n", "bad.csv line 1: expected two numbers t, value (got 3 cells"),
+    (b"t,F\ns,-\n0,1\n1,2\n", "bad.csv line 2: expected two numbers t, value (no number: "
+                              "only the first row may be a header"),
+    (b"0,0\n1,nan\n", "bad.csv line 2: expected two numbers t, value ('nan' is not a number"),
+    (b"0,0\n1,1_000\n", "bad.csv line 2: expected two numbers t, value ('1_000' is not"),
+    (b"0,0\n1,1\n1,2\n", "bad.csv line 3: t = 1 does not increase (line 2 has t = 1)"),
+    (b"t,F\n0,1\n", "bad.csv: a table needs at least two data rows (found 1)"),
+])
+def test_read_table_refuses_in_one_line(tmp_path, text, message):
+    path = tmp_path / "bad.csv"
+    path.write_bytes(text)
+    with pytest.raises(ValueError) as info:
+        read_table(path)
+    assert message in str(info.value) and "\n" not in str(info.value)
 
 
 # --- Goda's formula ---------------------------------------------------------------------
@@ -521,6 +574,24 @@ table.file = "record.csv"
         load_case(case_path := folder / "tabled.toml", ["time.end_time=3e-3"])
     assert case_path.is_file()
 
+
+
+def test_table_from_a_spreadsheet_through_the_case(stacked, folder):
+    # Excel's "CSV UTF-8" (byte-order mark, CRLF, no header): the first row is data, so the
+    # load is 0.25 (not 1.5) at t = 0. Before the fix the BOM made the first cell
+    # non-numeric, the row was taken as a header and the load started at 1.5.
+    record = folder / "excel.csv"
+    if COMM.rank == 0:
+        record.write_bytes(SPREADSHEET_TABLES["utf8_bom"])
+    loads = """
+[loads.push]
+group = "a_left"
+traction = 1000.0
+time_function = "table"
+table = { file = "excel.csv", hold_last = true }
+"""
+    f = load_case(_write_case(folder, stacked, loads, "excel")).loads[0].time_factor()
+    assert [f(0.0), f(0.25), f(0.5), f(1.0)] == pytest.approx([0.25, 0.875, 1.5, 0.0])
 
 # --- dynamics: a block pushed sideways on a base with friction ------------------------------
 
