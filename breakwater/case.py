@@ -453,7 +453,7 @@ class Case:
         for ld in self.loads:
             if ld.body is not None:
                 body(ld.body, f"loads.{ld.name}.body")
-            ld.check_duration(self.time.end_time)
+            ld.check_time(self.time.end_time, self.time.dt)
         loads = [ld.name for ld in self.loads]
         for name in self.initial.loads or ():
             if name not in loads:

@@ -19,6 +19,7 @@ from mpi4py import MPI
 from .errors import CaseError, MeshError
 from .initial import velocity_conflict
 from .loadcase import load_summary, surface_loads
+from .loadchecks import face_problems, pulse_warning
 from .mesh import group_points, group_tag, mesh_geo
 from .mesh import read_mesh as _read_msh
 from .model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
@@ -210,6 +211,20 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
         raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
+    for ld in case.loads:
+        if not ld.enabled:
+            continue
+        error, warning = face_problems(ld, model)
+        if error is not None:
+            raise CaseError(error)
+        t = case.time
+        pulse, sampled = pulse_warning(ld, t.dt, t.end_time, t.beta1)
+        if sampled:
+            extra["loads"][ld.name]["sampled"] = sampled
+        # Logged when the run starts (not again when it resumes), kept in the summary.
+        lines = [line for line in (warning, pulse) if line is not None]
+        if lines:
+            extra["loads"][ld.name]["warnings"] = lines
 
     def where(name: str, group: str | None, point: tuple[float, ...] | None
               ) -> tuple[float, ...]:

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
+from .loadchecks import RESOLVED_STEPS
 from .loadfields import Pressure, PressureProfile, TractionField
 from .loads import (
     STANDARD_GRAVITY,
@@ -90,7 +91,10 @@ class TableCase:
     """``[loads.<name>.table]``: a tabulated history of the load factor."""
 
     file: str | None = setting(None, doc="CSV file of t, value rows (s, -), relative to "
-                               "the case file (a header line and # comments are skipped)")
+                               "the case file: a first row without numbers (a header), "
+                               "# comments and blank rows are skipped; separators , ; tab "
+                               "or blanks, decimal commas with ; or tab, UTF-8 (with or "
+                               "without BOM) or UTF-16 (see breakwater.loads.read_table)")
     points: tuple[tuple[float, ...], ...] | None = setting(None, doc="inline [t, value] "
                                                            "pairs (instead of file)")
     hold_last: bool = setting(False, doc="hold the last value after the table ends (else "
@@ -355,6 +359,39 @@ class LoadCase:
                                    f"the table ends at t = {end:g} s, before time.end_time "
                                    f"= {end_time:g} s (extend it or set hold_last = true)")
 
+    def check_time(self, end_time: float, dt: float) -> None:
+        """Refuse a load that never acts before ``end_time``, or a pulse no step can sample.
+
+        Raises:
+            InvalidField: A table that ends too early (:meth:`check_duration`); a load
+                that starts at or after the end time (a table: whose first point is
+                there: before it, its first value would act from t = 0); a pulse not
+                longer than the time step (sampled at the step ends, it applies nothing,
+                or a multiple of its impulse).
+
+        """
+        self.check_duration(end_time)
+        if not self.enabled:
+            return
+        where = f"loads.{self.name}"
+        if self.kind == "table":
+            assert self.table is not None
+            first = self.table.history(self.start).times[0] + self.start
+            if first >= end_time:
+                raise InvalidField(f"{where}.table", f"the table's first point is at t = "
+                                   f"{first:g} s, at or after time.end_time = {end_time:g} "
+                                   "s: only its first value would act, held from t = 0")
+        elif self.start >= end_time:
+            raise InvalidField(f"{where}.start", f"the load starts at t = {self.start:g} s, "
+                               f"at or after time.end_time = {end_time:g} s: it never acts "
+                               "(set enabled = false to keep it off)")
+        if self.kind == "pulse" and not self.duration > dt:
+            raise InvalidField(f"{where}.duration", f"the pulse lasts {self.duration:g} s, "
+                               f"not more than time.dt = {dt:g} s: sampled at the step ends "
+                               "it applies nothing or a multiple of its impulse (set "
+                               f"time.dt <= {self.duration / RESOLVED_STEPS:.3g} s)")
+
+
 
 # --- model loads on a mesh -----------------------------------------------------------
 
@@ -437,7 +474,8 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
     groups = (load.group, *load.groups)
     if load.kind == "pulse":
         pulse = load.pulse(out_of_plane_length, load.length(data))
-        return [SurfaceLoad(g, load.direction, pulse, body=load.body) for g in groups]
+        return [SurfaceLoad(g, load.direction, pulse, body=load.body, name=load.name)
+                for g in groups]
     factor = load.time_factor()
     d = load.direction
     field: TractionField | None = None
@@ -454,11 +492,11 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
         assert load.goda is not None
         field = load.goda.front()
     direction = (t * d[0], t * d[1]) if field is None else ()
-    loads = [SurfaceLoad(g, direction, factor, field, load.body) for g in groups]
+    loads = [SurfaceLoad(g, direction, factor, field, load.body, load.name) for g in groups]
     if load.goda is not None and load.goda.uplift_group is not None:
         profile, _ = uplift_profile(load.goda, data, groups)
         body = load.body or _owner(data, load.group)
-        loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body))
+        loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body, load.name))
     return loads
 
 
@@ -503,6 +541,7 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
             "start": load.start,
             "peak_traction": pulse.maximum,
             "peak_force_per_length": pulse.maximum * h,
+            "direction": list(load.direction),
         })
         if load.pendulum is not None:
             info["impact_velocity"] = load.pendulum.velocity

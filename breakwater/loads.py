@@ -30,8 +30,11 @@ other shapes are integrated to O(Δt²) (or O(Δt) at the jumps of the rectangle
 from __future__ import annotations
 
 import bisect
+import codecs
+import csv
 import math
 import pathlib
+import re
 from dataclasses import dataclass
 from typing import Literal
 
@@ -231,40 +234,118 @@ class Table:
         return values[k - 1] + (values[k] - values[k - 1]) * (τ - t0) / (t1 - t0)
 
 
-def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Read a CSV history: rows ``t, value`` (commas or blanks between them).
+# Cells of a table row: a number with a decimal point or a decimal comma (strict: no
+# "nan", "inf", "1_000", thousands separators or units).
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+# Between the cells of a file without ";" or tabs: a comma and/or blanks.
+_COMMA_OR_BLANKS = re.compile(r"\s*,\s*|\s+")
 
-    Blank lines and ``#`` comments are skipped, and so is a first line that is not
-    numeric (a header such as ``t,value``).
+
+def _decode(raw: bytes) -> str:
+    """The text of a table file: UTF-16 with its byte-order mark, else UTF-8 (BOM dropped).
+
+    Bytes that are not UTF-8 (a header in a legacy code page, e.g. "°C") become U+FFFD:
+    they cannot make a number, so a data row holding one is refused, never misread.
+    """
+    if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return raw.decode("utf-16", errors="replace")
+    return raw.decode("utf-8-sig", errors="replace").replace("\ufeff", "")
+
+
+def _separator(lines: list[str]) -> str:
+    """The file's cell separator: ``;`` or a tab if any row has one, else commas/blanks."""
+    if any(";" in line for line in lines):
+        return ";"
+    if any("\t" in line for line in lines):
+        return "\t"
+    return ","
+
+
+def _cells(text: str, separator: str) -> list[str]:
+    """The cells of a row, unquoted, trailing empty cells (what spreadsheets write) removed."""
+    if '"' in text:  # quoted cells ("0,5" or "t (s)"): the csv module's rules
+        cells = [c.strip() for c in next(csv.reader([text], delimiter=separator,
+                                                    skipinitialspace=True))]
+    elif separator == ",":
+        cells = _COMMA_OR_BLANKS.split(text)
+    else:
+        cells = [c.strip() for c in text.split(separator)]
+    while cells and not cells[-1]:
+        cells.pop()
+    return cells
+
+
+def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Read a CSV history: rows ``t, value``, as spreadsheets write them.
+
+    - Encoding: UTF-8, with or without a byte-order mark (Excel's "CSV UTF-8"), or
+      UTF-16 with its mark (Excel's "Unicode text"); any line ends (LF, CRLF, CR).
+    - Separator, one per file: ``;`` if a row has one, else a tab if a row has one,
+      else a comma and/or blanks. Trailing empty cells (``0,1,,``) are dropped; a row
+      of empty cells (``,,``), a blank line and ``#`` comments are skipped.
+    - Decimal commas (``0,5;1,2``) are read in ``;``- or tab-separated files; a file
+      mixing decimal commas and decimal points is refused (``1.000`` would be 1 or
+      1000).
+    - Header: the first row is skipped only when none of its cells is a number (``t,
+      value``); a first row with a number in it is data, and a bad one is refused.
 
     Raises:
         OSError: The file cannot be read (the message names it).
-        ValueError: A row is not two numbers (the message names the line).
+        ValueError: A row is not two numbers, the times do not increase, or fewer than
+            two rows (the message names the file and the line).
 
     """
     if not path.is_file():
         raise OSError(f"file not found: {path}")
+    lines = [line.split("#", 1)[0] for line in _decode(path.read_bytes()).splitlines()]
+    separator = _separator(lines)
     times: list[float] = []
     values: list[float] = []
+    rows: list[int] = []
+    decimal: tuple[str, str, int] | None = None  # the file's decimal mark, cell, line
     header_allowed = True
-    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
-        text = line.split("#", 1)[0].strip()
-        if not text:
+    for number, line in enumerate(lines, start=1):
+        cells = _cells(line.strip(), separator)
+        if not cells:
             continue
-        cells = [c for c in text.replace(",", " ").replace(";", " ").split() if c]
-        try:
-            if len(cells) != 2:
-                raise ValueError
-            t, v = float(cells[0]), float(cells[1])
-        except ValueError:
-            if header_allowed:
-                header_allowed = False
+        where = f"{path.name} line {number}"
+        numeric = [bool(_NUMBER.fullmatch(c)) for c in cells]
+        if header_allowed:
+            header_allowed = False
+            if not any(numeric):
+                continue  # the header: no number in it
+        if len(cells) != 2 or not all(numeric):
+            bad = next((c for c, ok in zip(cells, numeric, strict=True) if not ok), None)
+            named = {";": "';'", "\t": "a tab"}.get(separator)
+            why = (f"got {len(cells)} cell{'s' * (len(cells) != 1)}"
+                   + (f", the file's separator being {named}" if named else "")
+                   if len(cells) != 2 else
+                   "no number: only the first row may be a header, comment others out "
+                   "with #" if not any(numeric) else
+                   "an empty cell" if bad == "" else f"{bad!r} is not a number")
+            raise ValueError(f"{where}: expected two numbers t, value ({why}: "
+                             f"{line.strip()!r})")
+        for cell in cells:
+            mark = "," if "," in cell else "." if "." in cell else None
+            if mark is None:
                 continue
-            raise ValueError(f"{path.name} line {number}: expected two numbers t, value "
-                             f"(got {text!r})") from None
-        header_allowed = False
+            if decimal is None:
+                decimal = (mark, cell, number)
+            elif mark != decimal[0]:
+                raise ValueError(f"{where}: {cell!r} has a decimal "
+                                 f"{'comma' if mark == ',' else 'point'}, {decimal[1]!r} "
+                                 f"(line {decimal[2]}) a decimal "
+                                 f"{'comma' if decimal[0] == ',' else 'point'}: use one "
+                                 "throughout")
+        t, v = (float(c.replace(",", ".")) for c in cells)
+        if times and not t > times[-1]:
+            raise ValueError(f"{where}: t = {t:g} does not increase (line {rows[-1]} has "
+                             f"t = {times[-1]:g})")
         times.append(t)
         values.append(v)
-    if not times:
-        raise ValueError(f"{path.name}: no data rows")
+        rows.append(number)
+    if len(times) < 2:
+        raise ValueError(f"{path.name}: a table needs at least two data rows (found "
+                         f"{len(times)})")
     return tuple(times), tuple(values)
+

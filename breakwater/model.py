@@ -161,6 +161,7 @@ class SurfaceLoad:
             outward normal of the body (:mod:`breakwater.loadfields`); None: the
             constant ``direction``.
         body: The body loaded; None: the one body whose boundary holds the group.
+        name: The load of the case it comes from (the summary's applied loads).
 
     """
 
@@ -169,6 +170,7 @@ class SurfaceLoad:
     amplitude: Callable[[float], float]
     field: TractionField | None = None
     body: str | None = None
+    name: str | None = None
 
     def unit_traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr
                       ) -> ufl.core.expr.Expr:

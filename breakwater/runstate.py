@@ -58,6 +58,8 @@ class RunState:
             the wall time of its parts: ``outputs``
             (history rows, ledger, fields, checkpoints) and, for the fast solver, the
             parts of :class:`~breakwater.condensed.Timings`; summed over resumed parts.
+        applied_loads: The sums of the loads applied so far
+            (:class:`~breakwater.appliedloads.AppliedLoads`).
 
     """
 
@@ -78,6 +80,7 @@ class RunState:
     ledger: dict[str, Any] = field(default_factory=dict)
     snapshot: dict[str, Any] = field(default_factory=dict)
     time_loop: dict[str, float] = field(default_factory=dict)
+    applied_loads: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
     def start(cls, time: TimeSpec) -> RunState:

@@ -12,6 +12,7 @@ and at the end :meth:`Session.finish`. The bookkeeping a checkpoint saves is
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 import pathlib
@@ -23,6 +24,7 @@ from dolfinx import fem
 
 from . import files, runstate
 from . import summary as sm
+from .appliedloads import AppliedLoads, applied_warnings, compare
 from .checkpoint import CheckpointError
 from .gn22 import GN22, GN22Parameters
 from .initial import initial_state
@@ -141,6 +143,7 @@ class Session:
         self.rows: list[dict[str, float]] = []
         self.stepped: Stepped | None = None
         self.checkpointed: dict[str, Any] | None = None
+        self.applied: AppliedLoads | None = None
         self._warned: set[tuple[str, str]] = set()
         # The work of the run, estimated before it starts: steps × unknowns.
         dofs = sum(b.V.dofmap.index_map.size_global * b.V.dofmap.index_map_bs
@@ -162,11 +165,15 @@ class Session:
         log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
                  m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
                  len(m.bodies), len(m.pairs) + len(m.surface_pairs))
+        for info in self.extra.get("loads", {}).values():
+            for line in info.get("warnings", ()):
+                log.warning("%s", line)  # the case's loads (breakwater.loadchecks)
         m.set_time(0.0)
         init = initial_state(m)
         st.static_iterations = init.iterations
         log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
         self.stepped = x = Stepped(m, self.time, self.output, self.directory)
+        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
         s, out = x.stepper, x.files
         s.initialise(init.u, init.v)
         out.open_history(x.monitor.columns)
@@ -204,6 +211,7 @@ class Session:
             raise CheckpointError("the checkpoint's history columns are not the run's")
         saved.restore_fields(x.functions())
         st = self.state = saved.state
+        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
         x.resume(st)
         t = st.step.t
         try:
@@ -228,6 +236,8 @@ class Session:
         assert self.stepped is not None
         row = self.stepped.record(dt, iterations)
         self.rows.append(row)
+        if self.applied is not None:
+            self.applied.record(float(self.stepped.stepper.t.value))
         return row
 
     def checkpoint(self) -> None:
@@ -265,7 +275,11 @@ class Session:
                 interface = interface_state(self.model, x.nodes, x.peak.u,
                                             x.monitor.surfaces)
                 x.files.write_snapshot(files.SNAPSHOT, x.peak.u, interface, x.peak.time)
-        return self.summary(finished, error, status)
+        summary = self.summary(finished, error, status)
+        if finished:
+            for line in applied_warnings(summary.get("loads", {})):
+                log.warning("%s", line)
+        return summary
 
     def close(self) -> None:
         """Free the stepper's and the ledger's PETSc objects (collective; after the summary)."""
@@ -318,5 +332,13 @@ class Session:
             time=self.time, state=st, rows=self.rows,
             probes=x.monitor.probes if x is not None else None,
             contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
-            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm, extra=self.extra),
-            "work": self.work}
+            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm,
+            extra=self._extra()), "work": self.work}
+
+    def _extra(self) -> dict[str, Any]:
+        """``extra_summary`` with the loads applied so far (requested against applied)."""
+        extra = copy.deepcopy(self.extra)
+        if self.applied is not None:
+            sm.merge(extra, {"loads": self.applied.summary()})
+            sm.merge(extra, {"loads": compare(extra["loads"])})
+        return extra

@@ -333,9 +333,11 @@ Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
 
 # --- property-based tests of the parser ----------------------------------------------
 
-# Valid ranges of some numeric fields (all satisfy the physical checks).
+# Valid ranges of some numeric fields (all satisfy the physical checks; the goda case's
+# pulse, 2 ms, must last longer than the time step of 1e-4 s: LoadCase.check_time).
 NUMERIC = {
-    "time.dt": st.floats(1.5e-7, 1e-2),  # end_time 0.15 s: at most time.max_steps = 1e6
+    # end_time 0.15 s: at most time.max_steps = 1e6 steps
+    "time.dt": st.floats(1.5e-7, 1.9e-3),
     "time.end_time": st.floats(0.02, 10.0),
     "bodies.mound.density": st.floats(1.0, 1e5),
     "bodies.caisson.shear_modulus": st.floats(1.0, 1e12),
@@ -343,7 +345,7 @@ NUMERIC = {
     "contact.interface.friction": st.floats(0.0, 5.0),
     "contact.interface.penalty": st.floats(1e-3, 1e15),
     "damping.beta": st.floats(0.0, 1.0),
-    "loads.impact.duration": st.floats(1e-6, 1.0),
+    "loads.impact.duration": st.floats(1.1e-4, 1.0),
     "output.field_interval": st.integers(0, 10**6),
     "time.newton_max_it": st.integers(1, 1000),
 }

@@ -76,13 +76,66 @@ def test_table_through_pulse_knots_is_the_pulse():
 
 def test_read_table(tmp_path):
     path = tmp_path / "record.csv"
-    path.write_text("# a pressure record\nt,p\n0.0, 0.0\n\n0.5 1e3  # peak\n1.0;0\n")
+    path.write_text("# a pressure record\nt,p\n0.0, 0.0\n\n0.5 1e3  # peak\n1.0,0\n")
     assert read_table(path) == ((0.0, 0.5, 1.0), (0.0, 1e3, 0.0))
     path.write_text("0,0\n1,2,3\n")
     with pytest.raises(ValueError, match="line 2"):
         read_table(path)
     with pytest.raises(OSError, match="not found"):
         read_table(tmp_path / "missing.csv")
+
+
+# What spreadsheet programs write: every table holds the rows t = 0, 0.5, 1 with the
+# values 0.25, 1.5, 0 (the first row is data, not a header, wherever there is no header).
+SPREADSHEET_TABLES = {
+    # Excel "CSV UTF-8": a byte-order mark, CRLF (the BOM used to make the first cell
+    # non-numeric, and the first row was dropped as a header: the load was 1.5 at t = 0).
+    "utf8_bom": b"\xef\xbb\xbf0,0.25\r\n0.5,1.5\r\n1,0\r\n",
+    "utf8_bom_header": b"\xef\xbb\xbft (s),F (-)\r\n0,0.25\r\n0.5,1.5\r\n1,0\r\n",
+    # Quoted cells (a "bad" first cell for a blank/comma split).
+    "quoted": b'"0","0.25"\n"0.5","1.5"\n"1","0"\n',
+    # A European Excel: ";" between cells, decimal commas.
+    "semicolon_decimal_comma": b"t;F\r\n0;0,25\r\n0,5;1,5\r\n1;0\r\n",
+    # Trailing empty cells, rows of empty cells, blank lines.
+    "trailing_empty": b"t,F,,\n0,0.25,,\n,,\n\n0.5,1.5,,\n1,0,,\n",
+    # Excel "Unicode text": UTF-16 with its mark, tabs, (here) decimal commas.
+    "utf16_tabs": "t\tF\n0\t0,25\n0,5\t1,5\n1\t0\n".encode("utf-16"),
+    # Old Mac line ends (CR only).
+    "cr": b"0,0.25\r0.5,1.5\r1,0\r",
+}
+
+
+@pytest.mark.parametrize("name", SPREADSHEET_TABLES)
+def test_read_table_as_spreadsheets_write_it(tmp_path, name):
+    # Fails before the fix for utf8_bom and quoted (first row lost), trailing_empty
+    # (the empty cells), semicolon_decimal_comma and utf16_tabs (4 cells).
+    path = tmp_path / f"{name}.csv"
+    path.write_bytes(SPREADSHEET_TABLES[name])
+    assert read_table(path) == ((0.0, 0.5, 1.0), (0.25, 1.5, 0.0))
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    # A first row with a number in it is data: a bad cell is refused, not a header.
+    (b"O.0,0.25\n0.5,1.5\n", "bad.csv line 1: expected two numbers t, value ('O.0' is not"),
+    (b"0s,0.25\n0.5,1.5\n", "bad.csv line 1: expected two numbers t, value ('0s' is not"),
+    # One separator per file: "0,5" in a ";" file is one cell, not t = 0, value = 5.
+    (b"0;0\n0,5\n1;1\n", "bad.csv line 2: expected two numbers t, value (got 1 cell"),
+    (b"0;0\n0,5;1.5\n", "bad.csv line 2: '1.5' has a decimal point, '0,5' (line 2) a "
+                        "decimal comma"),
+    (b"0,,1\n1,2\n", "bad.csv line 1: expected two numbers t, value (got 3 cells"),
+    (b"t,F\ns,-\n0,1\n1,2\n", "bad.csv line 2: expected two numbers t, value (no number: "
+                              "only the first row may be a header"),
+    (b"0,0\n1,nan\n", "bad.csv line 2: expected two numbers t, value ('nan' is not a number"),
+    (b"0,0\n1,1_000\n", "bad.csv line 2: expected two numbers t, value ('1_000' is not"),
+    (b"0,0\n1,1\n1,2\n", "bad.csv line 3: t = 1 does not increase (line 2 has t = 1)"),
+    (b"t,F\n0,1\n", "bad.csv: a table needs at least two data rows (found 1)"),
+])
+def test_read_table_refuses_in_one_line(tmp_path, text, message):
+    path = tmp_path / "bad.csv"
+    path.write_bytes(text)
+    with pytest.raises(ValueError) as info:
+        read_table(path)
+    assert message in str(info.value) and "\n" not in str(info.value)
 
 
 # --- Goda's formula ---------------------------------------------------------------------
@@ -522,6 +575,24 @@ table.file = "record.csv"
     assert case_path.is_file()
 
 
+
+def test_table_from_a_spreadsheet_through_the_case(stacked, folder):
+    # Excel's "CSV UTF-8" (byte-order mark, CRLF, no header): the first row is data, so the
+    # load is 0.25 (not 1.5) at t = 0. Before the fix the BOM made the first cell
+    # non-numeric, the row was taken as a header and the load started at 1.5.
+    record = folder / "excel.csv"
+    if COMM.rank == 0:
+        record.write_bytes(SPREADSHEET_TABLES["utf8_bom"])
+    loads = """
+[loads.push]
+group = "a_left"
+traction = 1000.0
+time_function = "table"
+table = { file = "excel.csv", hold_last = true }
+"""
+    f = load_case(_write_case(folder, stacked, loads, "excel")).loads[0].time_factor()
+    assert [f(0.0), f(0.25), f(0.5), f(1.0)] == pytest.approx([0.25, 0.875, 1.5, 0.0])
+
 # --- dynamics: a block pushed sideways on a base with friction ------------------------------
 
 # As tests/test_friction.py: a stiff block (W × H) on a stiff base of the same width, under
@@ -793,3 +864,123 @@ def test_design_wave_example_reads():
     assert g.wavelength == pytest.approx(2.21, abs=0.005)
     factor = wave.time_factor()
     assert factor(0.0) == 0.0 and factor(0.01) == 2.5 and factor(case.time.end_time) == 0.0
+
+
+# --- what the run applied (breakwater.appliedloads) and loads that never act ----------------
+
+def _run_case(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str,
+              end_time: float) -> dict:
+    from breakwater import simulation
+
+    path = _write_case(folder, mesh, loads + f'\n[output]\nfigures = false\n'
+                       f'directory = "{folder / name}"\n', name)
+    built = load_case(path, [f"time.end_time={end_time!r}"]).build(COMM)
+    return simulation.run(built.model, built.time, built.output,
+                          extra_summary=built.extra, report=False)
+
+
+def test_applied_impulse_of_a_resolved_triangle(stacked, folder):
+    # A triangular pulse of I = 0.02 N s (real structure, out_of_plane_length 0.5 m) on
+    # a_left (h = AH = 0.1 m): peak traction 2I/(0.5 h D), and the analytic impulse per
+    # length ½ · peak · D · h = I / 0.5 = 0.04 N s/m along x. Start (1e-4), peak (6e-4)
+    # and end (1.1e-3) are step ends (dt = 1e-4): GN22's momentum rule at a constant Δt,
+    # Δt Σ F(t_n), is then exact for the piecewise-linear pulse, and the unit resultant
+    # ∫ (1, 0) ds = (h, 0) is exact on straight facets: only round-off remains (the step
+    # ends are sums of 1e-4, a few ulp off the kinks): 1e-9. Before the fix the summary
+    # had no applied impulse at all.
+    loads = '''
+[loads.hit]
+group = "a_left"
+impulse = 0.02
+start = 1e-4
+duration = 1e-3
+'''
+    s = _run_case(folder, stacked, loads, "applied_triangle", 1.3e-3)
+    hit = s["loads"]["hit"]
+    peak = 2 * 0.02 / (0.5 * AH * 1e-3)
+    assert hit["peak_traction"] == pytest.approx(peak, rel=1e-12)
+    analytic = 0.5 * peak * 1e-3 * AH
+    applied = hit["applied"]
+    assert applied["impulse_per_length"][0] == pytest.approx(analytic, rel=1e-9)
+    assert abs(applied["impulse_per_length"][1]) < 1e-12 * analytic
+    assert applied["impulse_ratio"] == pytest.approx(1.0, rel=1e-9)
+    # The peak at 6e-4 is a step end: sampled whole.
+    assert applied["peak_force_per_length"] == pytest.approx(peak * AH, rel=1e-9)
+    assert applied["time_of_peak"] == pytest.approx(6e-4, rel=1e-9)
+    assert hit["sampled"]["impulse_ratio"] == pytest.approx(1.0, rel=1e-9)
+
+
+def test_applied_impulse_of_an_under_resolved_pulse(stacked, folder, caplog):
+    # A triangle of 2.5 steps starting mid-step (D = 2.5e-4, start 0.5e-4, dt = 1e-4):
+    # the step ends 1e-4, 2e-4 see 0.4 and 0.8 of the peak P = 2I/D, so the model
+    # receives Δt (0.4 + 0.8) P = 0.96 I (GN22's rule at a constant Δt), 80% of the peak.
+    # Warned before the run with the Δt needed; the summary reports 0.96, not 1. Before
+    # the fix: no warning, and the summary reported the requested impulse only.
+    loads = '''
+[loads.hit]
+group = "a_left"
+impulse = 0.02
+start = 0.5e-4
+duration = 2.5e-4
+'''
+    with caplog.at_level("WARNING", logger="breakwater"):
+        s = _run_case(folder, stacked, loads, "under_resolved", 5e-4)
+    applied = s["loads"]["hit"]["applied"]
+    assert applied["impulse_ratio"] == pytest.approx(0.96, rel=1e-9)
+    assert applied["peak_force_ratio"] == pytest.approx(0.8, rel=1e-9)
+    assert applied["impulse_per_length"][0] == pytest.approx(0.96 * 0.02 / 0.5, rel=1e-9)
+    if COMM.rank == 0:
+        lines = [r.getMessage() for r in caplog.records if "loads.hit" in r.getMessage()]
+        assert len(lines) == 1 and "96% of its impulse and 80% of its peak" in lines[0]
+        assert "time.dt <= " in lines[0]
+
+
+def test_applied_force_of_a_profile(stacked, folder):
+    # Constant loads: the applied resultant at every step end is the unit resultant on the
+    # mesh (here a profile p = 1 kPa on s = 0.1..0.15 m of a_left, which spans y = 0.05..
+    # 0.15: 50 N/m pushing +x into a), and the impulse over the run is F · end_time.
+    loads = '''
+[loads.wave]
+group = "a_left"
+profile.points = [[0.1, 1e3], [0.15, 1e3]]
+'''
+    s = _run_case(folder, stacked, loads, "profile_applied", 3e-4)
+    applied = s["loads"]["wave"]["applied"]
+    # Exact quadrature but for the profile's ends, on nodes: the conditionals there see
+    # the vertex coordinates' round-off (measured 2.6e-12): 1e-10.
+    assert applied["final_force_per_length"][0] == pytest.approx(50.0, rel=1e-10)
+    assert applied["impulse_per_length"][0] == pytest.approx(50.0 * 3e-4, rel=1e-10)
+
+
+@pytest.mark.parametrize(("loads", "message"), [
+    ('[loads.wave]\ngroup = "a_left"\nprofile.points = [[5.0, 1e3], [6.0, 0.0]]\n',
+     "loads.wave.profile: the pressure is zero on all of 'a_left'"),
+    # Goda's pressure with the still water level 10 m above the block: off its face.
+    (GODA_TOML.replace(f"still_water_level = {SWL}", "still_water_level = 10.0"),
+     "loads.wave.goda: the pressure is zero on all of 'a_left'"),
+])
+def test_pressure_off_the_face_is_refused(stacked, folder, loads, message):
+    # Before the fix these ran to the end with no load at all (exit 0).
+    path = _write_case(folder, stacked, loads + f'\n[output]\ndirectory = "{folder / "off"}"\n',
+                       "off_face")
+    with pytest.raises(CaseError) as info:
+        load_case(path).build(COMM)
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(("key", "value", "message"), [
+    ("duration", "5e-5", "loads.hit.duration: the pulse lasts 5e-05 s, not more than "
+                         "time.dt = 0.0001 s"),
+    ("duration", "1e-4", "loads.hit.duration: the pulse lasts 0.0001 s, not more than"),
+    ("start", "1e-3", "loads.hit.start: the load starts at t = 0.001 s, at or after "
+                      "time.end_time = 0.001 s: it never acts"),
+])
+def test_pulses_that_never_act_are_refused(stacked, folder, key, value, message):
+    # A pulse shorter than Δt between two step ends applied nothing while the summary
+    # reported its impulse; one starting at the end time never acted (both ran, exit 0).
+    settings = {"start": "2.5e-4", "duration": "2e-3", key: value}
+    loads = '[loads.hit]\ngroup = "a_left"\nimpulse = 0.02\n' + "".join(
+        f"{k} = {v}\n" for k, v in settings.items())
+    with pytest.raises(CaseError) as info:
+        load_case(_write_case(folder, stacked, loads, "never"))
+    assert message in str(info.value) and "\n" not in str(info.value)
