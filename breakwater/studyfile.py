@@ -42,6 +42,7 @@ point with its error.
 from __future__ import annotations
 
 import bisect
+import datetime
 import itertools
 import json
 import math
@@ -53,7 +54,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
-from .schema import OVERRIDE, suggest
+from .schema import OUT_OF_RANGE, OVERRIDE, out_of_range, printable, suggest
 
 if TYPE_CHECKING:
     from .case import Case
@@ -76,13 +77,24 @@ def toml_literal(value: Any) -> str:
     if isinstance(value, int | float):
         return repr(value)  # TOML spells inf and nan as Python does
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+        return _string(value)
+    if isinstance(value, datetime.date | datetime.time):
+        return value.isoformat()  # TOML's dates and times (the case refuses them)
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{json.dumps(str(k))} = {toml_literal(v)}"
+        return "{" + ", ".join(f"{_string(str(k))} = {toml_literal(v)}"
                                for k, v in value.items()) + "}"
     if isinstance(value, list | tuple):
         return "[" + ", ".join(toml_literal(v) for v in value) + "]"
     raise TypeError(f"no TOML literal for {value!r}")
+
+
+def _string(text: str) -> str:
+    """A TOML basic string.
+
+    JSON's, but the characters beyond U+FFFF kept (JSON would write surrogate pairs,
+    which TOML refuses) and DEL escaped (TOML refuses it raw).
+    """
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 @dataclass(frozen=True)
@@ -183,8 +195,8 @@ class _Reader:
         self.path = path
 
     def error(self, where: str, problem: str) -> CaseError:
-        return CaseError(f"{self.path.name}: {where}: {problem}" if where
-                         else f"{self.path.name}: {problem}")
+        return CaseError(printable(f"{self.path.name}: {where}: {problem}" if where
+                                   else f"{self.path.name}: {problem}"))
 
     def unknown(self, table: Mapping[str, Any], known: Sequence[str], where: str) -> None:
         for key in table:
@@ -209,8 +221,8 @@ class _Reader:
         count, seed = table.pop("count", None), table.pop("seed", 0)
         if not isinstance(count, int) or isinstance(count, bool) or count < 1:
             raise self.error("samples.count", f"expected an integer >= 1 (got {count!r})")
-        if not isinstance(seed, int) or isinstance(seed, bool):
-            raise self.error("samples.seed", f"expected an integer (got {seed!r})")
+        if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+            raise self.error("samples.seed", f"expected an integer >= 0 (got {seed!r})")
         specs = _flatten(table, leaf=lambda v: not any(isinstance(x, Mapping)
                                                        for x in v.values()))
         if not specs:
@@ -229,8 +241,9 @@ class _Reader:
                 if not isinstance(args, list) or not args:
                     raise self.error(where, "choice: expected a non-empty list")
             elif not (isinstance(args, list) and len(args) == 2 and all(map(_number, args))
-                      and args[0] < args[1] and (kind == "uniform" or args[0] > 0)):
-                raise self.error(where, f"{kind}: expected [a, b] with a < b"
+                      and args[0] < args[1] and (kind == "uniform" or args[0] > 0)
+                      and math.isfinite(args[1] - args[0])):  # numpy's uniform needs it
+                raise self.error(where, f"{kind}: expected finite [a, b] with a < b"
                                  + (" and a > 0" if kind == "log_uniform" else ""))
             checked[key] = (kind, args)
         rng = np.random.default_rng(seed)
@@ -316,7 +329,12 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = ()) -> Study
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise CaseError(f"{path.name}: invalid TOML ({e})") from None
+    except ValueError as e:  # tomllib's int() of an integer of more than 4300 digits
+        raise CaseError(f"{path.name}: invalid TOML ({str(e).split(':')[0]})") from None
     r = _Reader(path)
+    key = out_of_range(data)
+    if key is not None:
+        raise r.error(key, OUT_OF_RANGE)
     r.unknown(data, TOP_KEYS, "")
     for key in ("name", "description", "base"):
         if key in data and not isinstance(data[key], str):
@@ -436,8 +454,8 @@ def check_points(study: Study, out: pathlib.Path) -> tuple[list[Point], list[Cas
         n = sum(map(len, bad.values()))
         parts = [f"{labels[0] if len(labels) == 1 else _names(labels)}: {message}"
                  for message, labels in bad.items()]
-        raise CaseError(f"{study.path.name}: {n} of {len(study.points)} points make an "
-                        f"invalid case: " + "; ".join(parts))
+        raise CaseError(printable(f"{study.path.name}: {n} of {len(study.points)} points "
+                                  f"make an invalid case: " + "; ".join(parts)))
     return points, cases
 
 
