@@ -33,6 +33,7 @@ import datetime
 import io
 import itertools
 import math
+import os
 import pathlib
 import re
 import signal
@@ -67,9 +68,12 @@ from breakwater.studyfile import check_points, load_study, toml_literal
 #   runaway sizes).
 PENDING = ("paths", "names", "tables", "sizes")
 
-EXAMPLES = 120
-"""Examples per test: the file runs in about 30 s serially (measured: see the commit)."""
-PROFILE = settings(max_examples=EXAMPLES, derandomize=True, database=None,
+EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))
+"""Examples per test (the file runs in about 20 s of CPU serially). To explore, set
+``BREAKWATER_PROPERTY_EXAMPLES`` (e.g. 3000) and ``BREAKWATER_PROPERTY_RANDOM=1``
+(new random examples on every run instead of the fixed ones)."""
+PROFILE = settings(max_examples=EXAMPLES, database=None,
+                   derandomize=not os.environ.get("BREAKWATER_PROPERTY_RANDOM"),
                    deadline=2000,  # ms: an example takes ~10-50 ms; a loaded machine, 10x
                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much,
                                           HealthCheck.data_too_large])
@@ -201,6 +205,9 @@ def check_case_file(path: pathlib.Path, note: bool = True) -> Case | CaseError:
             assert err == f"breakwater: error: {' '.join(str(result).split())}\n", err
         return result
     assert status == 0 and err == "", (status, err)
+    for load in result.loads:  # what a pulse derives from the case is finite too
+        if load.kind == "pulse":
+            assert math.isfinite(load.total_impulse / result.out_of_plane_length), load
     data = result.resolved()
     text = out if printing else tomli_w.dumps(data)
     assert tomllib.loads(text) == data
@@ -299,13 +306,37 @@ def mutations(data: dict[str, Any]) -> st.SearchStrategy[list[tuple[str, Any, An
     """Lists of edits of ``data``: set a key (known or not) to a value, delete a key."""
     known = sorted(set(paths_of(data)) | set(schema_paths(data)))
     tables = [()] + [p for p in paths_of(data) if isinstance(_get(data, p), dict)]
-    edit = st.one_of(
-        st.tuples(st.just("set"), st.sampled_from(known), values),
-        st.tuples(st.just("delete"), st.sampled_from(known), st.none()),
-        st.tuples(st.just("unknown"), st.sampled_from(tables),
-                  st.tuples(st.text(min_size=1, max_size=10), values)),
-    )
+    numeric = [p for p in paths_of(data) if _numbers(_get(data, p))]
+    kinds = {
+        "scale": st.tuples(st.just("scale"), st.sampled_from(numeric), factors),
+        "set": st.tuples(st.just("set"), st.sampled_from(known), values),
+        "delete": st.tuples(st.just("delete"), st.sampled_from(known), st.none()),
+        "unknown": st.tuples(st.just("unknown"), st.sampled_from(tables),
+                             st.tuples(st.text(min_size=1, max_size=10), values)),
+    }
+    # Scaled numbers half of the time: an edited case that loads is tested further.
+    edit = st.sampled_from(["scale", "scale", "scale", "set", "delete", "unknown"]
+                           ).flatmap(kinds.__getitem__)
     return st.lists(edit, min_size=1, max_size=3)
+
+
+factors = st.one_of(st.sampled_from([0.0, -1.0, 0.5, 2.0, 10.0, 1e-300, 1e300]),
+                    st.floats(0.1, 10.0))
+"""Factors of a number of the case: the value keeps its type, the case often loads."""
+
+
+def _numbers(value: Any) -> bool:
+    """A number or an array of numbers (not booleans)."""
+    if isinstance(value, list):
+        return bool(value) and all(map(_numbers, value))
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _scale(value: Any, factor: float) -> Any:
+    if isinstance(value, list):
+        return [_scale(v, factor) for v in value]
+    scaled = value * factor
+    return int(scaled) if isinstance(value, int) and math.isfinite(scaled) else scaled
 
 
 def _get(data: Any, path: tuple[str, ...]) -> Any:
@@ -314,10 +345,21 @@ def _get(data: Any, path: tuple[str, ...]) -> Any:
     return data
 
 
+def _get_or_none(data: Any, path: tuple[str, ...]) -> Any:
+    for p in path:
+        if not isinstance(data, dict) or p not in data:
+            return None
+        data = data[p]
+    return data
+
+
 def mutate(data: dict[str, Any], edits: list[tuple[str, Any, Any]]) -> dict[str, Any]:
     data = copy.deepcopy(data)
     for kind, path, arg in edits:
-        if kind == "set":
+        if kind == "scale":
+            if _numbers(_get_or_none(data, path)):
+                set_path(data, path, _scale(_get(data, path), arg))
+        elif kind == "set":
             set_path(data, path, arg)
         elif kind == "delete":
             delete_path(data, path)
