@@ -34,8 +34,8 @@ from typing import Any, Literal
 
 from .errors import CaseError
 
-__all__ = ["OVERRIDE", "InvalidField", "Schema", "positive", "printable", "setting",
-           "suggest", "to_toml"]
+__all__ = ["INTEGER_RANGE", "OUT_OF_RANGE", "OVERRIDE", "InvalidField", "Schema",
+           "out_of_range", "positive", "printable", "setting", "suggest", "to_toml"]
 
 OVERRIDE = "--set"
 """Origin of a value given as a ``key=value`` override."""
