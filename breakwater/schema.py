@@ -534,6 +534,8 @@ class Schema:
             tp = _hints(cls)[part]
             item = _keyed_item(tp)
             last = i == len(parts) - 1
+            if part not in node:  # a table the override creates: its keys are its own
+                origins[here] = OVERRIDE
             if item is not None and not last:
                 table = node.setdefault(part, {})
                 if not isinstance(table, dict):

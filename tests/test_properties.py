@@ -46,13 +46,13 @@ from typing import Any
 import pytest
 import tomli_w
 from blocks import two_block_case
-from hypothesis import HealthCheck, assume, event, given, settings
+from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
 
 from breakwater import cli
 from breakwater.case import BUILTIN_CASES, Case, load_case
 from breakwater.errors import CaseError
-from breakwater.schema import schema_keys
+from breakwater.schema import display, schema_keys
 from breakwater.studyfile import check_points, load_study, toml_literal
 
 # Inputs of other classes of issue 20, excluded here until those changes are merged
@@ -429,6 +429,7 @@ override_texts = st.one_of(values.map(toml_literal), st.text(max_size=12))
 @PROFILE
 @given(st.lists(st.tuples(override_keys, st.sampled_from(["=", " = ", "", "=="]),
                           override_texts), min_size=1, max_size=2))
+@example([("loads.impact.goda.period", "=", "8")])  # tests/bad_cases/run/x7_*
 def test_generated_overrides(specs):
     """``--set key=value`` of the Goda case: a case or one line naming ``--set``."""
     overrides = [f"{key}{sep}{text}" for key, sep, text in specs]
@@ -439,7 +440,13 @@ def test_generated_overrides(specs):
     except CaseError as e:
         message = str(e)
         assert one_line(message), repr(message)
-        assert message.startswith("--set"), message
+        # The override, or the case file whose key the override contradicts.
+        assert message.startswith(("--set", f"{display(BUILTIN_CASES / 'goda.toml')}: ")), \
+            message
+        if message.startswith("--set"):
+            return
+        assert message.split(": ", 2)[1] in {".".join(p) for p in paths_of(GODA_DATA)}, \
+            message  # a key the file gives (not one an override made)
         return
     assert isinstance(case, Case)
     assume(case.name.isprintable())  # "names" (PENDING)
