@@ -283,9 +283,12 @@ class _Reader:
             rows = tuple((r[0], r[1]) for r in table)
             if interpolate:
                 xs = [a for a, _ in rows]
+                # Finite steps too: (x - x0) / (x1 - x0) of an infinite step is 0.
                 if not all(_number(a) and _number(b) for a, b in rows) or \
-                        any(x1 <= x0 for x0, x1 in itertools.pairwise(xs)):
-                    raise self.error(f"{where}.table", "interpolate: expected numbers, "
+                        not all(x1 > x0 and math.isfinite(x1 - x0) and math.isfinite(y1 - y0)
+                                for (x0, y0), (x1, y1) in itertools.pairwise(rows)) or \
+                        not all(map(math.isfinite, (*xs, *(b for _, b in rows)))):
+                    raise self.error(f"{where}.table", "interpolate: expected finite numbers, "
                                      "the first column increasing")
             out.append(Derived(d["from"], d["key"], rows, interpolate))
         return tuple(out)
