@@ -1,8 +1,9 @@
 """Property-based tests of the load-time layer: generated inputs never end in a traceback.
 
 Generated case files (mutations of the built-in Goda case and of the tests' two-block
-case: values of every TOML type, unknown keys, missing keys, broken TOML text), load
-tables (CSV text) and study files are read as the program reads them
+case: values of every TOML type, unknown keys, missing keys, broken TOML text),
+``--set`` overrides, load tables (CSV text) and study files are read as the program
+reads them
 (:func:`~breakwater.case.load_case`, ``show-case``, :func:`~breakwater.studyfile.load_study`
 and :func:`~breakwater.studyfile.check_points`). The outcome must be a valid object or
 one :class:`~breakwater.errors.CaseError` of one line naming the file; never another
@@ -12,10 +13,10 @@ the rows that were written, as finite, increasing numbers.
 
 Reproducible: every test is derandomised (hypothesis draws the same examples on every
 run, on every machine and on every MPI rank) and keeps no example database. Every
-minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``)
-or ``tests/bad_studies`` (``y*``). Each example runs under a wall-clock alarm
-(:func:`time_limit`) besides hypothesis' deadline, so that a hang fails instead of
-stalling the suite.
+minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``;
+an override's in ``tests/bad_cases/run``) or ``tests/bad_studies`` (``y*``). Each
+example runs under a wall-clock alarm (:func:`time_limit`) besides hypothesis'
+deadline, so that a hang fails instead of stalling the suite.
 
 Pure Python: no mesh is built and nothing runs (the two-block case names a ``.msh``
 file of which the case layer reads only the ``$PhysicalNames`` header). Under MPI each
