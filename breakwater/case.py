@@ -453,6 +453,11 @@ class Case:
         for ld in self.loads:
             if ld.body is not None:
                 body(ld.body, f"loads.{ld.name}.body")
+            if ld.kind == "pulse" and not math.isfinite(ld.total_impulse
+                                                        / self.out_of_plane_length):
+                raise InvalidField("out_of_plane_length", f"the impulse of loads.{ld.name} "
+                                   f"per metre, {ld.total_impulse:g} N s / "
+                                   f"{self.out_of_plane_length:g} m, overflows")
             ld.check_time(self.time.end_time, self.time.dt)
         loads = [ld.name for ld in self.loads]
         for name in self.initial.loads or ():

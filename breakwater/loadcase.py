@@ -73,6 +73,9 @@ class PendulumCase:
             positive(getattr(self, name), name)
         if not 0.0 <= self.restitution <= 1.0:
             raise InvalidField("restitution", f"must be in [0, 1] (got {self.restitution:g})")
+        if not math.isfinite(self.impulse):  # e.g. a cord of 1e-320 m: ω overflows
+            raise InvalidField("", f"the impulse M ω (1 + e₀) overflows (ω = s₀ sqrt(g/l₀) "
+                               f"= {self.velocity:g} m/s)")
 
     @property
     def velocity(self) -> float:
@@ -144,6 +147,8 @@ class ProfileCase:
             raise InvalidField("axis", f"must be a non-zero 2-vector (got {list(self.axis)})")
         if len(self.origin) != 2:
             raise InvalidField("origin", f"must have 2 coordinates (got {list(self.origin)})")
+        if any(len(p) != 2 for p in self.points):
+            raise InvalidField("points", "expected [s, p] pairs")
         try:
             self.field()
         except ValueError as e:

@@ -34,8 +34,8 @@ from typing import Any, Literal
 
 from .errors import CaseError
 
-__all__ = ["OVERRIDE", "InvalidField", "Schema", "positive", "setting", "suggest",
-           "to_toml"]
+__all__ = ["INTEGER_RANGE", "OUT_OF_RANGE", "OVERRIDE", "InvalidField", "Schema",
+           "out_of_range", "positive", "printable", "setting", "suggest", "to_toml"]
 
 OVERRIDE = "--set"
 """Origin of a value given as a ``key=value`` override."""
@@ -68,6 +68,18 @@ def positive(value: float, name: str, strict: bool = True) -> None:
     """Raise :class:`InvalidField` unless ``value`` > 0 (``strict``) or >= 0."""
     if not (value > 0 if strict else value >= 0):
         raise InvalidField(name, f"must be {'>' if strict else '>='} 0 (got {value:g})")
+
+
+def printable(text: str) -> str:
+    r"""``text`` with its unprintable characters escaped as in a Python literal.
+
+    A key or a name of a file may hold a line break or another control character
+    (``"a\nb" = 1`` is a valid TOML key): a message quoting it must stay one line
+    (``\n``, ``\x1f``, ``\u2028`` instead of the characters themselves).
+    """
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def suggest(word: str, choices: Sequence[str]) -> str:
@@ -200,12 +212,42 @@ def display(path: pathlib.Path) -> str:
 def _read_toml(path: pathlib.Path) -> dict[str, Any]:
     try:
         with path.open("rb") as fh:
-            return tomllib.load(fh)
+            data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as e:
         raise CaseError(f"{display(path)}: invalid TOML: {e}") from None
     except OSError as e:
         raise CaseError(f"{display(path)}: cannot read the case file "
                         f"({e.strerror or e})") from None
+    except ValueError as e:  # tomllib's int() of an integer of more than 4300 digits
+        raise CaseError(f"{display(path)}: invalid TOML: {str(e).split(':')[0]}") from None
+    key = out_of_range(data)
+    if key is not None:
+        raise CaseError(f"{display(path)}: {key}: {OUT_OF_RANGE}")
+    return data
+
+
+INTEGER_RANGE = (-(2**63), 2**63 - 1)
+"""The integers of TOML (64-bit); :mod:`tomllib` reads any size."""
+OUT_OF_RANGE = "integer out of the 64-bit range of TOML"
+
+
+def out_of_range(data: Any, prefix: str = "") -> str | None:
+    """The dotted key of the first integer of ``data`` beyond :data:`INTEGER_RANGE`.
+
+    Refused when read, before any conversion: a bigger integer makes ``float()``
+    overflow and cannot even be printed past 4300 digits.
+    """
+    if isinstance(data, int) and not isinstance(data, bool):
+        lo, hi = INTEGER_RANGE
+        return None if lo <= data <= hi else prefix
+    items = data.items() if isinstance(data, dict) else \
+        enumerate(data) if isinstance(data, list) else ()
+    for k, v in items:
+        where = f"{prefix}[{k}]" if isinstance(k, int) else f"{prefix}.{k}" if prefix else k
+        found = out_of_range(v, where)
+        if found is not None:
+            return found
+    return None
 
 
 def _record(data: Any, label: str, prefix: str, origins: dict[str, str]) -> None:
@@ -279,9 +321,17 @@ class Schema:
                 with a path from the root).
 
         Raises:
-            CaseError: One line naming the file (or ``--set``), the field and the problem.
+            CaseError: One line naming the file (or ``--set``), the field and the problem
+                (unprintable characters of keys and values escaped: :func:`printable`).
 
         """
+        try:
+            return self._load(file, overrides, check)
+        except CaseError as e:
+            raise CaseError(printable(str(e))) from None
+
+    def _load(self, file: pathlib.Path, overrides: Sequence[str],
+              check: Callable[[Any], None] | None) -> Any:
         origins: dict[str, str] = {}
         raw = self._load_raw(file, (), origins)
         for spec in overrides:
@@ -464,6 +514,8 @@ class Schema:
         if not key or not all(parts):
             raise CaseError(f"{OVERRIDE} {spec}: empty key")
         value = _parse_value(text)
+        if out_of_range(value) is not None:
+            raise CaseError(f"{OVERRIDE} {key}: {OUT_OF_RANGE}")
         cls: Any = self.root
         node = raw
         done: list[str] = []
@@ -482,6 +534,8 @@ class Schema:
             tp = _hints(cls)[part]
             item = _keyed_item(tp)
             last = i == len(parts) - 1
+            if part not in node:  # a table the override creates: its keys are its own
+                origins[here] = OVERRIDE
             if item is not None and not last:
                 table = node.setdefault(part, {})
                 if not isinstance(table, dict):

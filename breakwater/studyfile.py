@@ -50,6 +50,7 @@ point with its error.
 from __future__ import annotations
 
 import bisect
+import datetime
 import itertools
 import json
 import math
@@ -61,7 +62,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
-from .schema import OVERRIDE, suggest
+from .schema import OUT_OF_RANGE, OVERRIDE, out_of_range, printable, suggest
 
 if TYPE_CHECKING:
     from .case import Case
@@ -86,13 +87,24 @@ def toml_literal(value: Any) -> str:
     if isinstance(value, int | float):
         return repr(value)  # TOML spells inf and nan as Python does
     if isinstance(value, str):
-        return json.dumps(value, ensure_ascii=False)
+        return _string(value)
+    if isinstance(value, datetime.date | datetime.time):
+        return value.isoformat()  # TOML's dates and times (the case refuses them)
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{json.dumps(str(k))} = {toml_literal(v)}"
+        return "{" + ", ".join(f"{_string(str(k))} = {toml_literal(v)}"
                                for k, v in value.items()) + "}"
     if isinstance(value, list | tuple):
         return "[" + ", ".join(toml_literal(v) for v in value) + "]"
     raise TypeError(f"no TOML literal for {value!r}")
+
+
+def _string(text: str) -> str:
+    """A TOML basic string.
+
+    JSON's, but the characters beyond U+FFFF kept (JSON would write surrogate pairs,
+    which TOML refuses) and DEL escaped (TOML refuses it raw).
+    """
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 @dataclass(frozen=True)
@@ -193,8 +205,8 @@ class _Reader:
         self.path = path
 
     def error(self, where: str, problem: str) -> CaseError:
-        return CaseError(f"{self.path.name}: {where}: {problem}" if where
-                         else f"{self.path.name}: {problem}")
+        return CaseError(printable(f"{self.path.name}: {where}: {problem}" if where
+                                   else f"{self.path.name}: {problem}"))
 
     def unknown(self, table: Mapping[str, Any], known: Sequence[str], where: str) -> None:
         for key in table:
@@ -226,8 +238,8 @@ class _Reader:
         table = dict(table)
         del table["count"]
         seed = table.pop("seed", 0)
-        if not isinstance(seed, int) or isinstance(seed, bool):
-            raise self.error("samples.seed", f"expected an integer (got {seed!r})")
+        if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+            raise self.error("samples.seed", f"expected an integer >= 0 (got {seed!r})")
         specs = _flatten(table, leaf=lambda v: not any(isinstance(x, Mapping)
                                                        for x in v.values()))
         if not specs:
@@ -246,8 +258,9 @@ class _Reader:
                 if not isinstance(args, list) or not args:
                     raise self.error(where, "choice: expected a non-empty list")
             elif not (isinstance(args, list) and len(args) == 2 and all(map(_number, args))
-                      and args[0] < args[1] and (kind == "uniform" or args[0] > 0)):
-                raise self.error(where, f"{kind}: expected [a, b] with a < b"
+                      and args[0] < args[1] and (kind == "uniform" or args[0] > 0)
+                      and math.isfinite(args[1] - args[0])):  # numpy's uniform needs it
+                raise self.error(where, f"{kind}: expected finite [a, b] with a < b"
                                  + (" and a > 0" if kind == "log_uniform" else ""))
             checked[key] = (kind, args)
         rng = np.random.default_rng(seed)
@@ -287,9 +300,12 @@ class _Reader:
             rows = tuple((r[0], r[1]) for r in table)
             if interpolate:
                 xs = [a for a, _ in rows]
+                # Finite steps too: (x - x0) / (x1 - x0) of an infinite step is 0.
                 if not all(_number(a) and _number(b) for a, b in rows) or \
-                        any(x1 <= x0 for x0, x1 in itertools.pairwise(xs)):
-                    raise self.error(f"{where}.table", "interpolate: expected numbers, "
+                        not all(x1 > x0 and math.isfinite(x1 - x0) and math.isfinite(y1 - y0)
+                                for (x0, y0), (x1, y1) in itertools.pairwise(rows)) or \
+                        not all(map(math.isfinite, (*xs, *(b for _, b in rows)))):
+                    raise self.error(f"{where}.table", "interpolate: expected finite numbers, "
                                      "the first column increasing")
             out.append(Derived(d["from"], d["key"], rows, interpolate))
         return tuple(out)
@@ -335,7 +351,12 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise CaseError(f"{path.name}: invalid TOML ({e})") from None
+    except ValueError as e:  # tomllib's int() of an integer of more than 4300 digits
+        raise CaseError(f"{path.name}: invalid TOML ({str(e).split(':')[0]})") from None
     r = _Reader(path)
+    key = out_of_range(data)
+    if key is not None:
+        raise r.error(key, OUT_OF_RANGE)
     r.unknown(data, TOP_KEYS, "")
     for key in ("name", "description", "base"):
         if key in data and not isinstance(data[key], str):
@@ -477,8 +498,8 @@ def check_points(study: Study, out: pathlib.Path) -> tuple[list[Point], list[Cas
         n = sum(map(len, bad.values()))
         parts = [f"{labels[0] if len(labels) == 1 else _names(labels)}: {message}"
                  for message, labels in bad.items()]
-        raise CaseError(f"{study.path.name}: {n} of {len(study.points)} points make an "
-                        f"invalid case: " + "; ".join(parts))
+        raise CaseError(printable(f"{study.path.name}: {n} of {len(study.points)} points "
+                                  f"make an invalid case: " + "; ".join(parts)))
     return points, cases
 
 
