@@ -70,7 +70,7 @@ from .monitor import Monitor, interface_state, pair_names
 from .runspec import OutputSpec, TimeSpec
 from .session import Session
 from .stepsize import GROW_AFTER
-from .summary import format_report
+from .summary import balance_warning, format_report
 
 __all__ = ["GROW_AFTER", "Monitor", "RunInterrupted", "SimulationFailed", "interface_state",
            "pair_names", "run"]
@@ -302,6 +302,9 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
     summary = r.finish(error is None, message, status)
     if error is None or not stopped:
         r.log_quality(dynamic=True)
+        warning = balance_warning(summary.get("energy", {}))
+        if warning is not None:
+            log.warning("%s", warning)
     if r.comm.rank == 0:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
         if output.figures and not stopped:
