@@ -48,6 +48,14 @@ class PairProbeSpec:
     point: tuple[float, ...]
 
 
+MAX_CUTBACKS = 40
+"""The most halvings of a step: dt/2^40 ≈ 1e-12 dt, about the rounding of the time
+t = 1e4 dt in double precision (a smaller step would not advance the time)."""
+MAX_NEWTON_IT = 10_000
+"""The most Newton iterations per solve: PETSc counts them (and 10 times as many
+function evaluations) in 32-bit integers, and a Newton solve that has not converged in
+a few tens of iterations will not."""
+
 Solver = Literal["fast", "reference"]
 """The GN22 step solvers (:class:`breakwater.gn22.GN22`'s ``solver``)."""
 
@@ -102,9 +110,17 @@ class TimeSpec:
                                    f"{self.beta1:g} is not unconditionally stable (set "
                                    "time.allow_conditional = true to insist)")
         positive(self.max_cutbacks, "max_cutbacks", strict=False)
-        positive(self.newton_rtol, "newton_rtol")
+        if self.max_cutbacks > MAX_CUTBACKS:
+            raise InvalidField("max_cutbacks", f"must be at most {MAX_CUTBACKS} (got "
+                               f"{self.max_cutbacks}): a step of dt/2^{MAX_CUTBACKS} is "
+                               "lost in the rounding of the time")
+        if not 0 < self.newton_rtol < 1:
+            raise InvalidField("newton_rtol", f"must be in (0, 1): the residual must "
+                               f"decrease (got {self.newton_rtol:g})")
         positive(self.newton_atol, "newton_atol")
-        positive(self.newton_max_it, "newton_max_it")
+        if not 1 <= self.newton_max_it <= MAX_NEWTON_IT:
+            raise InvalidField("newton_max_it", f"must be in [1, {MAX_NEWTON_IT}] (got "
+                               f"{self.newton_max_it})")
 
 
 @dataclass(frozen=True)

@@ -199,8 +199,14 @@ def display(path: pathlib.Path) -> str:
 
 def _read_toml(path: pathlib.Path) -> dict[str, Any]:
     try:
-        with path.open("rb") as fh:
-            return tomllib.load(fh)
+        data = path.read_bytes()
+        return tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        column = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise CaseError(f"{display(path)}: not UTF-8 text: byte 0x{data[e.start]:02x} at "
+                        f"position {e.start} (line {line}, column {column}); save the "
+                        "file as UTF-8") from None
     except tomllib.TOMLDecodeError as e:
         raise CaseError(f"{display(path)}: invalid TOML: {e}") from None
     except OSError as e:
