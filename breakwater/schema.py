@@ -430,10 +430,23 @@ class Schema:
                 return names
         return None
 
+    def sources(self, file: pathlib.Path) -> list[pathlib.Path]:
+        """The files that :meth:`load` reads for ``file``: itself and those it extends.
+
+        Raises:
+            CaseError: As :meth:`load`, when a file cannot be read.
+        """
+        read: list[pathlib.Path] = []
+        self._load_raw(file, (), {}, read)
+        return read
+
     def _load_raw(self, path: pathlib.Path, chain: tuple[pathlib.Path, ...],
-                  origins: dict[str, str]) -> dict[str, Any]:
+                  origins: dict[str, str], read: list[pathlib.Path] | None = None
+                  ) -> dict[str, Any]:
         label = display(path)
         raw = _read_toml(path)
+        if read is not None:
+            read.append(path.resolve())
         self._resolve_paths(raw, path.parent)
         if self.name_key is not None and self.name_key not in raw and not chain:
             raw[self.name_key] = path.stem
@@ -456,7 +469,8 @@ class Schema:
             raise CaseError(f"{label}: extends: case file not found: {base}")
         if base_path in chain or base_path == path.resolve():
             raise CaseError(f"{label}: extends: circular ({base})")
-        merged = _merge(self._load_raw(base_path, (*chain, path.resolve()), origins), raw)
+        merged = _merge(self._load_raw(base_path, (*chain, path.resolve()), origins, read),
+                        raw)
         _record(raw, label, "", origins)
         return merged
 

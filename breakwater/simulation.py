@@ -49,6 +49,7 @@ This module holds :func:`run` and its time loop; the parts it uses:
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import signal
 import sys
@@ -64,9 +65,17 @@ from petsc4py import PETSc
 from . import checkpoint as ckpt
 from . import files
 from .console import Progress, StopSignal, rank_zero_logging
-from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError
+from .errors import (
+    BreakwaterError,
+    CaseError,
+    ConvergenceError,
+    MeshError,
+    OutputError,
+    cannot_write,
+)
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
+from .parallel import on_rank_zero
 from .runspec import OutputSpec, TimeSpec
 from .session import Session
 from .stepsize import GROW_AFTER
@@ -241,8 +250,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
             r.restore()  # CheckpointError: nothing written yet
-        if resolved_case is not None and r.comm.rank == 0:
-            files.atomic_write_toml(r.directory / files.CASE, resolved_case)
+        if resolved_case is not None:
+            on_rank_zero(r.comm, lambda: bool(
+                files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
         # From now on the folder always says whether the run finished.
         r.write_summary(r.summary(False, None, "running"))
         error: BaseException | None = None
@@ -254,6 +264,10 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             error = e
         try:
             summary = _end(r, error, output, report)
+        except (OutputError, OSError) as e:  # e.g. a full disk: the first error is
+            if error is None:  # the reason
+                error = e if isinstance(e, OutputError) else cannot_write(e.filename, e)
+            summary = _failed_end(r, error)
         finally:
             r.close()
         if error is None:
@@ -284,7 +298,8 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
     summary = r.finish(error is None, message, status)
     if error is None or not stopped:
         r.log_quality(dynamic=True)
-    if r.comm.rank == 0:
+
+    def write() -> dict[str, Any]:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
         if output.figures and not stopped:
             from . import figures
@@ -301,4 +316,21 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
                 files.atomic_write_json(r.directory / files.SUMMARY, summary)
         if report:
             print(format_report(summary, r.directory), flush=True)
-    return r.comm.bcast(summary, root=0)
+        return summary
+
+    # Rank 0 writes; an error (e.g. OutputError: a full disk) is raised on every rank.
+    return on_rank_zero(r.comm, write)
+
+
+def _failed_end(r: Session, error: BaseException) -> dict[str, Any]:
+    """The summary of a run whose outputs could not all be written (collective).
+
+    ``summary.json`` says ``failed`` (``interrupted`` on a stop) with the one-line
+    reason, when it can still be written; the state is what the run had reached.
+    """
+    stopped = isinstance(error, _Stop | KeyboardInterrupt)
+    summary = r.summary(False, str(error) or type(error).__name__,
+                        "interrupted" if stopped else "failed")
+    with contextlib.suppress(OutputError):
+        r.write_summary(summary)
+    return summary
