@@ -110,6 +110,29 @@ class _Stop(BreakwaterError):
     """Raised inside the time loop when a stop signal was received."""
 
 
+CRASHES = (PETSc.Error, RuntimeError, ArithmeticError, MemoryError, ValueError)
+"""What the numerical libraries raise (PETSc, MUMPS through PETSc, dolfinx's C++,
+NumPy): a run that meets one fails with ``summary.json`` saying so and one line,
+instead of a traceback and a summary left ``running``."""
+
+
+def crash_reason(error: BaseException) -> str:
+    """One line for an error of PETSc (its code, routine and message) or another library.
+
+    PETSc's text is ``error code N`` then ``[rank] Routine() at file:line`` and the
+    message lines, each prefixed by the rank.
+    """
+    if not isinstance(error, PETSc.Error):
+        text = " ".join(str(error).split())
+        return (f"{type(error).__name__}: {text}" if not isinstance(error, BreakwaterError)
+                else text) or type(error).__name__
+    lines = [line.split("] ", 1)[-1].strip() for line in str(error).splitlines()[1:]]
+    where = [line.split(" at ", 1)[0] for line in lines if "() at " in line]
+    said = [line for line in lines if line and "() at " not in line]
+    return (f"PETSc error {error.ierr}" + (f" in {where[0]}" if where else "")
+            + (f": {'; '.join(said)}" if said else ""))
+
+
 def _finite(comm: MPI.Comm, *functions: fem.Function) -> bool:
     """Whether every value of the Functions is finite, on every rank."""
     ok = all(np.isfinite(f.x.array).all() for f in functions)
@@ -187,9 +210,10 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 if not step.reject():
                     raise SimulationFailed(
                         f"step from t = {t:.6g} s with dt = {trial:.3g} s did not "
-                        f"converge after {step.halvings} cut-backs: {e}") from e
+                        f"converge after {step.halvings} cut-backs: {crash_reason(e)}"
+                        ) from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
-                            t, e, step.h, step.halvings, time.max_cutbacks)
+                            t, crash_reason(e), step.h, step.halvings, time.max_cutbacks)
                 continue
             s.update()
             grew = step.accept()
@@ -262,6 +286,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             _loop(r, stop)
         except (BreakwaterError, KeyboardInterrupt) as e:
             error = e
+        except CRASHES as e:  # not foreseen by a check: the run fails, in one line
+            error = SimulationFailed(crash_reason(e))
+            error.__cause__ = e  # (--debug shows it)
         try:
             summary = _end(r, error, output, report)
         except (OutputError, OSError) as e:  # e.g. a full disk: the first error is

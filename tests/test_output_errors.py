@@ -240,3 +240,32 @@ def test_sweep_never_replaces_its_study(shared_dir, capsys):
     _refused(code, err, "the study's outputs would write over the input")
     assert study.is_file()
 
+
+# --- a crash of the numerical libraries ---------------------------------------------------
+
+def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
+    """A PETSc error in the static solve (here a real one: SNESSetTolerances refusing
+    rtol = 1): exit 1, one line naming the routine, summary failed (was: a traceback,
+    the summary left running)."""
+    from petsc4py import PETSc
+
+    from breakwater import session
+
+    case, out = _case(shared_dir), shared_dir / "out"
+
+    def crash(model: object) -> None:
+        snes = PETSc.SNES().create(COMM)
+        try:
+            snes.setTolerances(rtol=1.0)
+        finally:
+            snes.destroy()
+
+    monkeypatch.setattr(session, "initial_state", crash)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = ("PETSc error 63 in SNESSetTolerances(): Argument out of range; Relative "
+                  "tolerance 1. must be non-negative and less than 1.0")
+        assert err.splitlines()[-1] == f"breakwater: error: {reason}", err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
