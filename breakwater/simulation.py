@@ -129,7 +129,7 @@ def crash_reason(error: BaseException) -> str:
     lines = [line.split("] ", 1)[-1].strip() for line in str(error).splitlines()[1:]]
     where = [line.split(" at ", 1)[0] for line in lines if "() at " in line]
     said = [line for line in lines if line and "() at " not in line]
-    return (f"PETSc error {getattr(error, "ierr", "?")}" + (f" in {where[0]}" if where else "")
+    return (f"PETSc error {getattr(error, 'ierr', '?')}" + (f" in {where[0]}" if where else "")
             + (f": {'; '.join(said)}" if said else ""))
 
 
