@@ -368,7 +368,8 @@ class Case:
     """A whole case (see the module docstring and :func:`case_reference`)."""
 
     name: str = setting("case", doc="case name (default: the file name); default output "
-                        "folder results/<name>")
+                        "folder results/<name>, so a folder name of its own: not . or .., "
+                        "no / \\ : or control characters, at most 255 bytes")
     description: str = setting("", doc="free text")
     out_of_plane_length: float = setting(1.0, unit="m", doc="length of the real structure "
                                          "out of plane: impulses, forces and target "

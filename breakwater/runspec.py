@@ -82,11 +82,11 @@ class TimeSpec:
     allow_conditional: bool = setting(False, doc="accept β₁ < ½ or β₂ < β₁ (not "
                                       "unconditionally stable)")
     max_cutbacks: int = setting(4, doc="a failing step is retried with Δt/2, up to this "
-                                "many times")
-    newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance")
+                                "many times (at most 40)")
+    newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance, in (0, 1)")
     newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
                                  "the load-vector norm")
-    newton_max_it: int = setting(40, doc="Newton iterations per step")
+    newton_max_it: int = setting(40, doc="Newton iterations per step (1 to 10000)")
     solver: Solver = setting("fast", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
                              'on the contact surfaces only; "reference": Newton on the whole '
                              "residual, refactorised every iteration (the same results to "
