@@ -4,10 +4,13 @@
 default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every
 command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
-exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
-failed or interrupted (SIGTERM, SIGINT) run. ``run --resume`` continues a killed run in
-the same output folder from its last checkpoint (``output.checkpoint_interval``); ``sweep``
-exits 0 only when every case of the study finished.
+exit status 2 for input errors (case, mesh, usage, no checkpoint to resume, an output
+folder that cannot be written or that holds an input the outputs would replace: checked
+before anything runs), 1 for a failed or interrupted (SIGTERM, SIGINT) run, a run whose
+outputs could not be written (``cannot write <path>: <reason>``) included. ``run
+--resume`` continues a killed run in the same output folder from its last checkpoint
+(``output.checkpoint_interval``); ``sweep`` exits 0 only when every case of the study
+finished.
 """
 
 from __future__ import annotations

@@ -40,9 +40,8 @@ SNAPSHOT = "snapshot_max_ux.npz"
 FIGURES = "figures"
 CHECKPOINT = "checkpoint.npz"
 OUTPUT_PATTERNS = (HISTORY, SUMMARY, CASE, STATIC, SNAPSHOT, CHECKPOINT, FIGURES,
-                   "fields_*.bp", "contact_*.bp", "*.part[0-9]*.bp", ".*.tmp[0-9]*",
-                   "sweep.csv", "sweep_case.json", ".sweep.lock")
-"""The names a run (or a study) may write in its output folder (shell patterns)."""
+                   "fields_*.bp", "contact_*.bp", "*.part[0-9]*.bp", ".*.tmp[0-9]*")
+"""The names a run may write in its output folder (shell patterns)."""
 
 NAME_MAX = 255
 """The longest file or folder name of the usual file systems (ext4, XFS, APFS), bytes."""
@@ -145,7 +144,8 @@ def check_writable(directory: str | pathlib.Path, where: str = "--out") -> None:
                 folder.rmdir()
 
 
-STUDY_PATTERNS = (*OUTPUT_PATTERNS, "case-[0-9][0-9][0-9][0-9]*")
+STUDY_PATTERNS = ("sweep.csv", ".sweep.lock", FIGURES, ".*.tmp[0-9]*",
+                  "case-[0-9][0-9][0-9][0-9]*")
 """The names a study writes in its folder (its cases' folders are replaced whole)."""
 
 
