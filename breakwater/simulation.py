@@ -250,7 +250,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         output: Output directory, probes, output switches, checkpoint interval.
         resolved_case: The resolved case, written as ``case.toml`` when given.
         extra_summary: Merged into the summary (e.g. calibration results).
-        report: Print a short report of the results at the end (rank 0).
+        report: Print a short report of the results at the end (rank 0), and log why
+            a run failed or was interrupted (without it the caller reports it).
         resume: Continue the run of ``output.directory`` from its checkpoint.
         fingerprint: Identifies the case in checkpoints; a checkpoint is resumed only
             by a run of the same fingerprint. Default: the hash of ``resolved_case``
@@ -302,7 +303,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if isinstance(error, KeyboardInterrupt):
             raise error
         stopped = isinstance(error, _Stop)
-        log.error("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
+        if report:  # else the caller reports it (the command line: one line, --quiet)
+            log.error("run %s: %s", "interrupted" if stopped else "failed",
+                      summary["error"])
         if stopped:
             raise RunInterrupted(summary["error"], summary) from error
         if isinstance(error, CaseError | MeshError):  # an input found bad once built
