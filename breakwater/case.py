@@ -403,6 +403,14 @@ class Case:
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
         names = [b.name for b in self.bodies]
+        # The ParaView files fields_<body>.bp and contact_<pair>.bp are named after them.
+        for where, file in [*((f"bodies.{b.name}", f"fields_{b.name}.bp") for b in self.bodies),
+                            *((f"contact.{c.name}", f"contact_{c.name}.bp")
+                              for c in self.contact)]:
+            problem = name_problem(file)
+            if problem is not None:
+                raise InvalidField(where, f"the name cannot name the output file {file[:40]}"
+                                   f"{'...' if len(file) > 40 else ''}: it {problem}")
 
         def body(value: str, where: str) -> None:
             if value not in names:

@@ -70,7 +70,7 @@ def name_problem(name: str) -> str | None:
     except UnicodeEncodeError:
         return f"is not valid Unicode (got {name!r})"
     if size > NAME_MAX:
-        return (f"is {size} bytes long in UTF-8; a folder name has at most {NAME_MAX} "
+        return (f"is {size} bytes long in UTF-8; a file or folder name has at most {NAME_MAX} "
                 f"(got {name[:20]!r}...)")
     return None
 

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import re
 import signal
 import sys
 import time as _time
@@ -122,8 +123,8 @@ def crash_reason(error: BaseException) -> str:
     PETSc's text is ``error code N`` then ``[rank] Routine() at file:line`` and the
     message lines, each prefixed by the rank.
     """
-    if not isinstance(error, PETSc.Error):
-        text = " ".join(str(error).split())
+    if not isinstance(error, PETSc.Error):  # ADIOS2 colours its messages: not in a file
+        text = " ".join(re.sub(r"\x1b\[[0-9;]*m", "", str(error)).split())
         return (f"{type(error).__name__}: {text}" if not isinstance(error, BreakwaterError)
                 else text) or type(error).__name__
     lines = [line.split("] ", 1)[-1].strip() for line in str(error).splitlines()[1:]]
