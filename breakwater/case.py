@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 
 from . import casebuild
 from .errors import CaseError
+from .files import name_problem
 from .gmshtools import physical_groups
 from .initial import InitialCase
 from .loadcase import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
@@ -69,7 +70,9 @@ __all__ = [
     "TableCase",
     "TimeCase",
     "builtin_case",
+    "case_inputs",
     "case_reference",
+    "case_sources",
     "is_file_value",
     "load_case",
 ]
@@ -381,7 +384,8 @@ class Case:
     """A whole case (see the module docstring and :func:`case_reference`)."""
 
     name: str = setting("case", doc="case name (default: the file name); default output "
-                        "folder results/<name>")
+                        "folder results/<name>, so a folder name of its own: not . or .., "
+                        "no / \\ : or control characters, at most 255 bytes")
     description: str = setting("", doc="free text")
     out_of_plane_length: float = setting(1.0, unit="m", doc="length of the real structure "
                                          "out of plane: impulses, forces and target "
@@ -406,15 +410,23 @@ class Case:
     # --- validation ----------------------------------------------------------------
 
     def _check(self) -> None:
-        if not self.name or any(c in self.name for c in '/\\:'):
-            raise InvalidField("name", f"must be a non-empty name without path separators "
-                               f"(got {self.name!r})")
+        problem = name_problem(self.name)
+        if problem is not None:  # the name is the default output folder results/<name>
+            raise InvalidField("name", problem)
         positive(self.out_of_plane_length, "out_of_plane_length")
         if len(self.gravity) != 2:
             raise InvalidField("gravity", f"must have 2 components (got {list(self.gravity)})")
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
         names = [b.name for b in self.bodies]
+        # The ParaView files fields_<body>.bp and contact_<pair>.bp are named after them.
+        for where, file in [*((f"bodies.{b.name}", f"fields_{b.name}.bp") for b in self.bodies),
+                            *((f"contact.{c.name}", f"contact_{c.name}.bp")
+                              for c in self.contact)]:
+            problem = name_problem(file)
+            if problem is not None:
+                raise InvalidField(where, f"the name cannot name the output file {file[:40]}"
+                                   f"{'...' if len(file) > 40 else ''}: it {problem}")
 
         def body(value: str, where: str) -> None:
             if value not in names:
@@ -649,17 +661,41 @@ def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] =
         CaseError: One line naming the file (or ``--set``), the field and the problem.
 
     """
-    if path is None:
-        file = builtin_case(DEFAULT_CASE)
-    else:
-        file = pathlib.Path(path)
-        if not file.exists() and file.suffix == "" and "/" not in str(path):
-            file = builtin_case(str(path))
-        elif not file.is_file():
-            raise CaseError(f"{path}: case file not found")
-    case: Case = _SCHEMA.load(file, overrides,
+    case: Case = _SCHEMA.load(_case_file(path), overrides,
                               check=lambda c: _check_groups(c, _mesh_groups(c.mesh)))
     return case
+
+
+def _case_file(path: str | pathlib.Path | None) -> pathlib.Path:
+    """The file of a case argument: a file, a built-in name, or None (the default)."""
+    if path is None:
+        return builtin_case(DEFAULT_CASE)
+    file = pathlib.Path(path)
+    if not file.exists() and file.suffix == "" and "/" not in str(path):
+        return builtin_case(str(path))
+    if not file.is_file():
+        raise CaseError(f"{path}: case file not found")
+    return file
+
+
+def case_sources(path: str | pathlib.Path | None) -> list[pathlib.Path]:
+    """The case file of a case argument and the files it extends."""
+    return _SCHEMA.sources(_case_file(path))
+
+
+def case_inputs(path: str | pathlib.Path | None, case: Case) -> list[pathlib.Path]:
+    """Every file a case reads: the case file and those it extends, the mesh, the tables.
+
+    Args:
+        path: The case argument of :func:`load_case`.
+        case: The case it gave.
+    """
+    inputs = case_sources(path)
+    if not case.mesh.generated:
+        inputs.append(pathlib.Path(case.mesh.source))
+    inputs += [pathlib.Path(ld.table.file) for ld in case.loads
+               if ld.table is not None and ld.table.file is not None]
+    return inputs
 
 
 def case_reference() -> str:

@@ -4,10 +4,13 @@
 default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every
 command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
-exit status 2 for input errors (case, mesh, usage, no checkpoint to resume), 1 for a
-failed or interrupted (SIGTERM, SIGINT) run. ``run --resume`` continues a killed run in
-the same output folder from its last checkpoint (``output.checkpoint_interval``); ``sweep``
-exits 0 only when every case of the study finished.
+exit status 2 for input errors (case, mesh, usage, no checkpoint to resume, an output
+folder that cannot be written or that holds an input the outputs would replace: checked
+before anything runs), 1 for a failed or interrupted (SIGTERM, SIGINT) run, a run whose
+outputs could not be written (``cannot write <path>: <reason>``) included. ``run
+--resume`` continues a killed run in the same output folder from its last checkpoint
+(``output.checkpoint_interval``); ``sweep`` exits 0 only when every case of the study
+finished.
 """
 
 from __future__ import annotations
@@ -22,12 +25,14 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from . import __version__
+from . import __version__, files
 from .errors import BreakwaterError, CaseError, MeshError
 from .parallel import on_rank_zero, shared_tempdir
 from .studyfile import MAX_POINTS
 
 if TYPE_CHECKING:
+    from mpi4py import MPI
+
     from .case import Case
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
@@ -81,6 +86,32 @@ def _load(args: argparse.Namespace) -> Case:
     return load_case(args.case, _overrides(args))
 
 
+def _inputs(args: argparse.Namespace, case: Case) -> list[pathlib.Path]:
+    from .case import case_inputs
+
+    return case_inputs(args.case, case)
+
+
+def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Path],
+                  comm: MPI.Comm) -> None:
+    """Refuse an output folder that cannot be written or would replace an input.
+
+    Before anything runs; rank 0 checks, every rank raises.
+
+    Raises:
+        CaseError: ``cannot write <path>: <reason>``, a file of that name, or an input
+            (the case file, the mesh, a table) under an output's name.
+    """
+    def check() -> None:
+        files.check_writable(folder, where)
+        risky = files.overwritten_inputs(folder, inputs)
+        if risky:
+            raise CaseError(f"{where} {folder}: the outputs would write over the input "
+                            f"{risky[0]} (choose another output folder)")
+
+    on_rank_zero(comm, check)
+
+
 # --- commands ---------------------------------------------------------------------
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -91,9 +122,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     comm = MPI.COMM_WORLD
     case = _load(args)
     folder = case.output_directory
-    if folder.exists() and not folder.is_dir():
-        where = "--out" if args.out is not None else "output.directory"
-        raise CaseError(f"{where} {folder}: not a folder (a file of that name exists)")
+    _check_output(folder, "--out" if args.out is not None else "output.directory",
+                  _inputs(args, case), comm)
     if args.resume:
         # Fail early, before meshing and calibrating, when there is nothing to resume;
         # run() then checks that the case (case.toml) is the checkpoint's.
@@ -124,8 +154,17 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
         raise CaseError(f"--out {out}: unknown mesh file suffix '{out.suffix}' "
                         "(use .msh, .xdmf, .vtu or another meshio format)")
     case = _load(args)
+
+    def check() -> None:
+        if out.is_dir():
+            raise CaseError(f"--out {out}: a folder (give a file name)")
+        files.check_writable(out.parent, "--out")
+
+    on_rank_zero(comm, check)
     with shared_tempdir(comm, "breakwater-mesh-") as folder:
-        meshes.convert(case.mesh_file(comm, folder), out, comm=comm)
+        source = case.mesh_file(comm, folder)
+        with files.writing(out):
+            meshes.convert(source, out, comm=comm)
     _say(f"wrote {out}", args.quiet)
     return EXIT_OK
 
@@ -175,10 +214,25 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from .case import case_sources
     from .studyfile import load_study
     from .sweep import run_study
 
     study = load_study(args.study, args.set or [], max_points=args.max_points)
+    out = args.out if args.out is not None else pathlib.Path("results") / study.name
+    where = "--out" if args.out is not None else "the study's folder"
+    inputs = [study.path, *case_sources(study.base)]
+
+    def check() -> None:
+        files.check_writable(out, where)
+        risky = files.overwritten_inputs(out, inputs, files.STUDY_PATTERNS)
+        if risky:
+            raise CaseError(f"{where} {out}: the study's outputs would write over the "
+                            f"input {risky[0]} (choose another folder)")
+
+    on_rank_zero(MPI.COMM_WORLD, check)
     if not args.verbose:  # the cases' own messages: one line per case instead
         logging.getLogger("breakwater").setLevel(logging.CRITICAL)
     outcome = run_study(study, args.out, ranks_per_case=args.ranks_per_case,
@@ -318,3 +372,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         _report(KeyboardInterrupt("interrupted"))
         return 130
+    except OSError as e:  # not met where files are written (those say cannot write)
+        if args.debug:
+            raise
+        _report(OSError(f"{e.filename}: {e.strerror}" if e.filename and e.strerror
+                        else str(e)))
+        return EXIT_FAILED

@@ -15,6 +15,20 @@ class MeshError(BreakwaterError):
     """A mesh is unreadable or inconsistent with what the case asks of it."""
 
 
+class OutputError(BreakwaterError):
+    """An output file or folder cannot be written: ``cannot write <path>: <reason>``.
+
+    Permissions, a full disk, a name too long: one line, exit status 1 (a check before
+    the run refuses the output folder with exit status 2 instead:
+    :func:`breakwater.files.check_writable`).
+    """
+
+
+def cannot_write(path: object, error: OSError) -> OutputError:
+    """The :class:`OutputError` of an ``OSError`` met while writing ``path``."""
+    return OutputError(f"cannot write {path}: {error.strerror or error}")
+
+
 class ConvergenceError(BreakwaterError):
     """A nonlinear solve did not converge.
 

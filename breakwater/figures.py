@@ -22,6 +22,7 @@ Usage: ``python -m breakwater.figures <output directory>``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import pathlib
 import sys
@@ -32,7 +33,16 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
-from .files import FIGURES, HISTORY, SNAPSHOT, STATIC, SUMMARY, read_history, temporary_path
+from .files import (
+    FIGURES,
+    HISTORY,
+    SNAPSHOT,
+    STATIC,
+    SUMMARY,
+    read_history,
+    temporary_path,
+    writing,
+)
 
 __all__ = ["make_figures"]
 
@@ -45,8 +55,14 @@ NUMERICAL = ("numerical_dissipation", "numerical_dissipation_contact")
 def _save(fig: Figure, path: pathlib.Path) -> pathlib.Path:
     """Save atomically (temporary file with the same suffix, then rename)."""
     tmp = temporary_path(path)
-    fig.savefig(tmp, dpi=150, bbox_inches="tight")
-    tmp.replace(path)
+    with writing(path):
+        try:
+            fig.savefig(tmp, dpi=150, bbox_inches="tight")
+            tmp.replace(path)
+        except OSError:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise
     return path
 
 

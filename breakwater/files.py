@@ -9,25 +9,28 @@ into place with :func:`os.replace`, so a reader never sees half a file.
 from __future__ import annotations
 
 import contextlib
+import fnmatch
 import io
 import json
 import math
 import os
 import pathlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .errors import CaseError, cannot_write
 from .parallel import on_rank_zero
 
 if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints import this
     from mpi4py import MPI
 
-__all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "SNAPSHOT", "STATIC", "SUMMARY",
-           "atomic_savez", "atomic_write_bytes", "atomic_write_json", "atomic_write_text",
-           "atomic_write_toml", "make_directory", "outputs_entry", "read_history",
-           "remove_temporaries", "temporary_path", "to_jsonable"]
+__all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "NAME_MAX", "SNAPSHOT", "STATIC",
+           "STUDY_PATTERNS", "SUMMARY", "atomic_savez", "atomic_write_bytes", "atomic_write_json",
+           "atomic_write_text", "atomic_write_toml", "check_writable", "make_directory",
+           "name_problem", "outputs_entry", "overwritten_inputs", "read_history",
+           "remove_temporaries", "temporary_path", "to_jsonable", "writing"]
 
 HISTORY = "history.csv"
 SUMMARY = "summary.json"
@@ -36,16 +39,138 @@ STATIC = "static.npz"
 SNAPSHOT = "snapshot_max_ux.npz"
 FIGURES = "figures"
 CHECKPOINT = "checkpoint.npz"
+OUTPUT_PATTERNS = (HISTORY, SUMMARY, CASE, STATIC, SNAPSHOT, CHECKPOINT, FIGURES,
+                   "fields_*.bp", "contact_*.bp", "*.part[0-9]*.bp", ".*.tmp[0-9]*")
+"""The names a run may write in its output folder (shell patterns)."""
+
+NAME_MAX = 255
+"""The longest file or folder name of the usual file systems (ext4, XFS, APFS), bytes."""
+
+
+def name_problem(name: str) -> str | None:
+    """Why ``name`` cannot name an output folder of its own (``results/<name>``), or None.
+
+    Refused rather than made safe: the name is also the case's label in the reports and
+    the tables, and a folder under another name would be looked for in vain. ``"."``,
+    ``".."``, a path separator or an absolute path would put the outputs elsewhere (the
+    working directory, over the user's files); control characters and names longer
+    than :data:`NAME_MAX` bytes cannot be created or read back reliably.
+    """
+    if not name:
+        return "must not be empty"
+    if name in (".", ".."):
+        where = "the working directory" if name == ".." else "the folder results itself"
+        return f"must not be '{name}': results/{name} is {where}, not a folder of its own"
+    if any(c in name for c in "/\\:"):
+        return f"must be a name without path separators ('/', '\\', ':') (got {name!r})"
+    if any(ord(c) < 32 or ord(c) == 127 for c in name):
+        return f"must not contain control characters (got {name!r})"
+    try:
+        size = len(name.encode("utf-8"))
+    except UnicodeEncodeError:
+        return f"is not valid Unicode (got {name!r})"
+    if size > NAME_MAX:
+        return (f"is {size} bytes long in UTF-8; a file or folder name has at most {NAME_MAX} "
+                f"(got {name[:20]!r}...)")
+    return None
+
+
+@contextlib.contextmanager
+def writing(path: str | pathlib.Path) -> Iterator[None]:
+    """Turn an ``OSError`` of the block into :class:`~breakwater.errors.OutputError`.
+
+    The one line ``cannot write <path>: <reason>`` (permissions, a full disk, a name
+    too long) names ``path``, the file meant, not a temporary one.
+    """
+    try:
+        yield
+    except OSError as e:
+        raise cannot_write(path, e) from e
 
 
 def make_directory(path: str | pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
-    """Create the output folder (rank 0); its absolute path, the same on every rank."""
+    """Create the output folder (rank 0); its absolute path, the same on every rank.
+
+    Raises:
+        OutputError: The folder cannot be created (on every rank).
+    """
     def make() -> pathlib.Path:
         directory = pathlib.Path(path).resolve()
-        directory.mkdir(parents=True, exist_ok=True)
+        with writing(directory):
+            directory.mkdir(parents=True, exist_ok=True)
         return directory
 
     return on_rank_zero(comm, make)
+
+
+def check_writable(directory: str | pathlib.Path, where: str = "--out") -> None:
+    """Check (before a run) that files can be written in ``directory``; call on rank 0.
+
+    The folder (and its missing parents) is created, a small file written, synced and
+    removed; the folders created here are removed again (the run creates them).
+
+    Args:
+        directory: The output folder.
+        where: How the messages name it (``--out``, ``output.directory``).
+
+    Raises:
+        CaseError: ``cannot write <path>: <reason>``, or ``directory`` is a file.
+    """
+    directory = pathlib.Path(directory)
+    made: list[pathlib.Path] = []
+    probe = directory / f".breakwater-write-test{os.getpid()}"
+    try:  # is_dir() and exists() raise too (e.g. ENAMETOOLONG)
+        if directory.exists() and not directory.is_dir():
+            raise CaseError(f"{where} {directory}: not a folder (a file of that name "
+                            "exists)")
+        for folder in [*reversed(directory.parents), directory]:
+            if folder.is_dir():
+                continue
+            if folder.exists():
+                raise CaseError(f"cannot write {directory}: {folder} is a file, not a "
+                                "folder")
+            folder.mkdir()
+            made.append(folder)
+        with open(probe, "wb") as f:
+            f.write(b"breakwater\n")
+            f.flush()
+            os.fsync(f.fileno())
+        probe.unlink()
+    except OSError as e:
+        raise CaseError(f"cannot write {directory}: {e.strerror or e}") from None
+    finally:
+        for folder in reversed(made):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+
+
+STUDY_PATTERNS = ("sweep.csv", ".sweep.lock", FIGURES, ".*.tmp[0-9]*",
+                  "case-[0-9][0-9][0-9][0-9]*")
+"""The names a study writes in its folder (its cases' folders are replaced whole)."""
+
+
+def overwritten_inputs(directory: str | pathlib.Path, inputs: Iterable[str | pathlib.Path],
+                       patterns: Sequence[str] = OUTPUT_PATTERNS) -> list[pathlib.Path]:
+    """The input files that outputs written in ``directory`` could replace.
+
+    An input is at risk when it lies in the output folder under a name a run or a
+    study writes (``patterns``), or inside a folder of such a name (the figures, the
+    ParaView folders, a study's case folders), or when it is the output folder itself.
+    """
+    out = pathlib.Path(directory).resolve()
+    risky = []
+    for item in inputs:
+        path = pathlib.Path(item).resolve()
+        if path == out:
+            risky.append(path)
+            continue
+        try:
+            first = path.relative_to(out).parts[0]
+        except ValueError:
+            continue
+        if any(fnmatch.fnmatchcase(first, p) for p in patterns):
+            risky.append(path)
+    return risky
 
 
 def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool,
@@ -77,14 +202,24 @@ def remove_temporaries(directory: pathlib.Path) -> None:
 
 
 def atomic_write_bytes(path: str | pathlib.Path, data: bytes) -> pathlib.Path:
-    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`."""
+    """Write ``data`` to ``path`` through a temporary file and :func:`os.replace`.
+
+    Raises:
+        OutputError: ``cannot write <path>: <reason>`` (the temporary file removed).
+    """
     path = pathlib.Path(path)
     tmp = temporary_path(path)
-    with open(tmp, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    with writing(path):
+        try:
+            with open(tmp, "wb") as f:
+                f.write(data)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
+        except OSError:  # e.g. a full disk: no half-written temporary file is left
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise
     return path
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import pathlib
 from contextlib import nullcontext
 
@@ -14,6 +15,8 @@ from mpi4py import MPI
 from .errors import MeshError
 from .gmshtools import gmsh_session
 from .parallel import on_rank_zero, shared_tempdir
+
+log = logging.getLogger("breakwater.mesh")
 
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
@@ -77,6 +80,98 @@ def _merge(path: pathlib.Path, gdim: int) -> None:
     types, _, _ = gmsh.model.mesh.getElements(gdim)
     if len(types) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
+    if gdim == 2:
+        check_cells(path)
+
+
+DEGENERATE = 1e-6
+"""A cell whose height is below this fraction of its longest edge is refused as
+degenerate (zero area). The stiffness of such a cell exceeds its neighbours' by
+1/DEGENERATE or more, so the solution would carry errors of the order of its
+condition number times the round-off (1e6 × 1e-16 × the neighbours' own ~1e6);
+a collapsed cell (three collinear vertices) makes the matrix singular (a MUMPS error)."""
+THIN = 1e-2
+"""A cell whose height is below this fraction of its longest edge (an angle below about
+0.6°, an aspect ratio above 100) is accepted with a warning."""
+
+
+def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed area and height over the longest edge (relative) of polygonal cells.
+
+    Args:
+        corners: The corner coordinates, shape ``(cells, corners, 2)``, in the cells'
+            vertex order.
+
+    Returns:
+        ``(area, quality)``: the signed area (shoelace; its sign is the cell's
+        orientation) and ``2 |area| / L²`` with ``L`` the longest edge (for a triangle,
+        its height over the longest edge divided by that edge: √3/2 equilateral, 0
+        collapsed).
+    """
+    x, y = corners[..., 0], corners[..., 1]
+    xn, yn = np.roll(x, -1, axis=1), np.roll(y, -1, axis=1)
+    area = 0.5 * np.sum(x * yn - xn * y, axis=1)
+    longest = np.max(np.hypot(xn - x, yn - y), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        quality = np.where(longest > 0, 2 * np.abs(area) / longest**2, 0.0)
+    return area, quality
+
+
+def check_cells(path: pathlib.Path) -> None:
+    """Refuse degenerate or overlapping 2D cells of the current gmsh model (rank 0).
+
+    Checked on the corners of each cell (the straight-sided cell; the mid-side nodes of
+    a curved P2 cell are not checked): a height below :data:`DEGENERATE` of the longest
+    edge is refused, below :data:`THIN` warned about once (the thinnest cell); two
+    cells on the same side of their shared edge overlap (a folded mesh, an inverted
+    cell among its neighbours), whatever the orientation of each surface.
+
+    Raises:
+        MeshError: One line naming the file, the cell (gmsh element tag) and its
+            position.
+    """
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    xy = np.zeros((int(tags.max()) + 1, 2))
+    xy[tags.astype(np.int64)] = coords.reshape(-1, 3)[:, :2]
+    cells, elements, sides = [], [], []
+    for etype, etags, enodes in zip(*gmsh.model.mesh.getElements(2), strict=True):
+        corners = gmsh.model.mesh.getElementProperties(etype)[5]
+        nodes = enodes.astype(np.int64).reshape(len(etags), -1)[:, :corners]
+        cells.append(nodes)
+        elements.append(etags.astype(np.int64))
+    for nodes, etags in zip(cells, elements, strict=True):
+        area, quality = cell_quality(xy[nodes])
+        worst = int(np.argmin(quality))
+        centre = xy[nodes[worst]].mean(axis=0)
+        where = f"cell {etags[worst]} at ({centre[0]:.6g}, {centre[1]:.6g})"
+        if quality[worst] < DEGENERATE:
+            raise MeshError(f"{path}: {where} is degenerate: its height is "
+                            f"{quality[worst]:.1e} of its longest edge, below "
+                            f"{DEGENERATE:g} (zero area; remesh)")
+        thin = int(np.count_nonzero(quality < THIN))
+        if thin:
+            log.warning("%s: %d thin cell(s), the thinnest %s: height %.1e of its longest "
+                        "edge, below %g (poor accuracy and conditioning)", path, thin, where,
+                        quality[worst], THIN)
+        # Each edge, its vertices sorted, and the side of it the cell lies on.
+        k = nodes.shape[1]
+        a, b = nodes, np.roll(nodes, -1, axis=1)
+        forward = a < b
+        side = np.where(forward, 1, -1) * np.sign(area)[:, None]
+        edges = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=-1).reshape(-1, 2)
+        sides.append((edges, side.reshape(-1), np.repeat(etags, k)))
+    edges = np.concatenate([e for e, _, _ in sides])
+    side = np.concatenate([s for _, s, _ in sides])
+    owner = np.concatenate([o for _, _, o in sides])
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges, side, owner = edges[order], side[order], owner[order]
+    same = np.all(edges[1:] == edges[:-1], axis=1) & (side[1:] == side[:-1])
+    if same.any():
+        j = int(np.flatnonzero(same)[0])
+        mid = xy[edges[j]].mean(axis=0)
+        raise MeshError(f"{path}: cells {owner[j]} and {owner[j + 1]} overlap at "
+                        f"({mid[0]:.6g}, {mid[1]:.6g}): both lie on the same side of their "
+                        "shared edge (a folded mesh or an inverted cell; remesh)")
 
 
 def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2

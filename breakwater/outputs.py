@@ -43,7 +43,8 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from . import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from .files import HISTORY, atomic_savez, atomic_write_text, read_history
+from .errors import cannot_write
+from .files import HISTORY, atomic_savez, atomic_write_text, read_history, writing
 from .interface import InterfaceNodes
 from .model import ContactModel
 from .parallel import on_rank_zero
@@ -78,18 +79,26 @@ class HistoryWriter:
                  keep_rows: int | None = None) -> None:
         self.path = pathlib.Path(path)
         self.columns = tuple(columns)
+        self.comm = comm
         self.rows = 0
         self.kept: list[dict[str, float]] = []
         self._file: IO[str] | None = None
         if keep_rows is None:
-            if comm.rank == 0:
-                self._file = open(self.path, "w", encoding="utf-8", newline="")
-                self._write(",".join(self.columns))
+            def start() -> None:
+                with writing(self.path):
+                    self._file = open(self.path, "w", encoding="utf-8", newline="")
+                    self._write(",".join(self.columns))
+
+            on_rank_zero(comm, start)
             return
         self.kept = on_rank_zero(comm, lambda: self._cut(keep_rows))
         self.rows = keep_rows
-        if comm.rank == 0:
-            self._file = open(self.path, "a", encoding="utf-8", newline="")
+
+        def reopen() -> None:
+            with writing(self.path):
+                self._file = open(self.path, "a", encoding="utf-8", newline="")
+
+        on_rank_zero(comm, reopen)
 
     def _cut(self, keep_rows: int) -> list[dict[str, float]]:
         """Keep the header and ``keep_rows`` whole rows, atomically; return the rows."""
@@ -116,22 +125,43 @@ class HistoryWriter:
         self._file.flush()
 
     def append(self, row: Mapping[str, float]) -> None:
-        """Write one row (every column must be present)."""
-        if self._file is not None:
-            self._write(",".join(repr(float(row[c])) for c in self.columns))
+        """Write one row (every column must be present); collective.
+
+        Raises:
+            OutputError: The row cannot be written (e.g. a full disk), on every rank.
+        """
+        def write() -> None:
+            if self._file is not None:
+                with writing(self.path):
+                    self._write(",".join(repr(float(row[c])) for c in self.columns))
+
+        on_rank_zero(self.comm, write)
         self.rows += 1
 
     def sync(self) -> None:
-        """Force the rows written so far to disk (before a checkpoint refers to them)."""
-        if self._file is not None:
-            self._file.flush()
-            os.fsync(self._file.fileno())
+        """Force the rows written so far to disk (before a checkpoint refers to them).
+
+        Collective; raises :class:`~breakwater.errors.OutputError` on every rank.
+        """
+        def sync() -> None:
+            if self._file is not None:
+                with writing(self.path):
+                    self._file.flush()
+                    os.fsync(self._file.fileno())
+
+        on_rank_zero(self.comm, sync)
 
     def close(self) -> None:
-        """Close the file."""
+        """Close the file (not collective: a write error here is not raised)."""
         if self._file is not None:
-            self._file.close()
-            self._file = None
+            file, self._file = self._file, None
+            try:
+                file.close()
+            except OSError as e:  # the rows were flushed one by one: the last one lost
+                import logging
+
+                logging.getLogger("breakwater.simulation").warning(
+                    "%s", cannot_write(self.path, e))
 
 
 # --- fields of the bodies ---------------------------------------------------------
@@ -425,8 +455,8 @@ class RunFiles:
                        interface: Mapping[str, np.ndarray], time: float) -> None:
         """Write the nodal snapshot of the state ``u`` (collective; rank 0 writes)."""
         arrays = snapshot_arrays(self.bodies, u, interface, time, self.comm)
-        if arrays is not None:
-            atomic_savez(self.directory / filename, **arrays)
+        on_rank_zero(self.comm, lambda: arrays is not None and bool(
+            atomic_savez(self.directory / filename, **arrays)))
 
     def close(self) -> None:
         """Close the history and the ParaView files."""

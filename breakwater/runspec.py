@@ -54,6 +54,11 @@ class PairProbeSpec:
     point: tuple[float, ...]
 
 
+MAX_NEWTON_IT = 10_000
+"""The most Newton iterations per solve: PETSc counts them (and 10 times as many
+function evaluations) in 32-bit integers, and a Newton solve that has not converged in
+a few tens of iterations will not."""
+
 Solver = Literal["fast", "reference"]
 """The GN22 step solvers (:class:`breakwater.gn22.GN22`'s ``solver``)."""
 
@@ -87,10 +92,10 @@ class TimeSpec:
     max_steps: int = setting(1_000_000, doc="refuse a case of more steps (end_time / dt); "
                              "a run that needs more (cut-backs) fails when it has taken "
                              "them")
-    newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance")
+    newton_rtol: float = setting(1e-9, doc="Newton relative residual tolerance, in (0, 1)")
     newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
                                  "the load-vector norm")
-    newton_max_it: int = setting(40, doc="Newton iterations per step")
+    newton_max_it: int = setting(40, doc="Newton iterations per step (1 to 10000)")
     solver: Solver = setting("fast", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
                              'on the contact surfaces only; "reference": Newton on the whole '
                              "residual, refactorised every iteration (the same results to "
@@ -129,9 +134,13 @@ class TimeSpec:
                                f"{self.dt:g} = {self.planned_steps:.4g} steps, above the "
                                f"limit time.max_steps = {self.max_steps} (raise "
                                "time.max_steps to run it)")
-        positive(self.newton_rtol, "newton_rtol")
+        if not 0 < self.newton_rtol < 1:
+            raise InvalidField("newton_rtol", f"must be in (0, 1): the residual must "
+                               f"decrease (got {self.newton_rtol:g})")
         positive(self.newton_atol, "newton_atol")
-        positive(self.newton_max_it, "newton_max_it")
+        if not 1 <= self.newton_max_it <= MAX_NEWTON_IT:
+            raise InvalidField("newton_max_it", f"must be in [1, {MAX_NEWTON_IT}] (got "
+                               f"{self.newton_max_it})")
 
     @property
     def planned_steps(self) -> int:

@@ -137,10 +137,15 @@ def save(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str],
         comm: The communicator of the mesh.
     """
     arrays = ckpt.gather_nodal(functions, comm)
-    if arrays is not None:
-        meta = {"fingerprint": fingerprint, "mpi_size": comm.size, "bodies": list(bodies),
-                "columns": list(columns), "state": state.as_dict()}
-        ckpt.write(directory / ckpt.CHECKPOINT, meta, arrays)
+
+    def write() -> None:
+        if arrays is not None:
+            meta = {"fingerprint": fingerprint, "mpi_size": comm.size,
+                    "bodies": list(bodies), "columns": list(columns),
+                    "state": state.as_dict()}
+            ckpt.write(directory / ckpt.CHECKPOINT, meta, arrays)
+
+    on_rank_zero(comm, write)  # an OutputError (e.g. a full disk) on every rank
 
 
 def load(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str], time: TimeSpec,

@@ -211,8 +211,14 @@ def display(path: pathlib.Path) -> str:
 
 def _read_toml(path: pathlib.Path) -> dict[str, Any]:
     try:
-        with path.open("rb") as fh:
-            data = tomllib.load(fh)
+        raw = path.read_bytes()
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as e:
+        line = raw.count(b"\n", 0, e.start) + 1
+        column = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
+        raise CaseError(f"{display(path)}: not UTF-8 text: byte 0x{raw[e.start]:02x} at "
+                        f"position {e.start} (line {line}, column {column}); save the "
+                        "file as UTF-8") from None
     except tomllib.TOMLDecodeError as e:
         raise CaseError(f"{display(path)}: invalid TOML: {e}") from None
     except OSError as e:
@@ -474,10 +480,23 @@ class Schema:
                 return names
         return None
 
+    def sources(self, file: pathlib.Path) -> list[pathlib.Path]:
+        """The files that :meth:`load` reads for ``file``: itself and those it extends.
+
+        Raises:
+            CaseError: As :meth:`load`, when a file cannot be read.
+        """
+        read: list[pathlib.Path] = []
+        self._load_raw(file, (), {}, read)
+        return read
+
     def _load_raw(self, path: pathlib.Path, chain: tuple[pathlib.Path, ...],
-                  origins: dict[str, str]) -> dict[str, Any]:
+                  origins: dict[str, str], read: list[pathlib.Path] | None = None
+                  ) -> dict[str, Any]:
         label = display(path)
         raw = _read_toml(path)
+        if read is not None:
+            read.append(path.resolve())
         self._resolve_paths(raw, path.parent)
         if self.name_key is not None and self.name_key not in raw and not chain:
             raw[self.name_key] = path.stem
@@ -500,7 +519,8 @@ class Schema:
             raise CaseError(f"{label}: extends: case file not found: {base}")
         if base_path in chain or base_path == path.resolve():
             raise CaseError(f"{label}: extends: circular ({base})")
-        merged = _merge(self._load_raw(base_path, (*chain, path.resolve()), origins), raw)
+        merged = _merge(self._load_raw(base_path, (*chain, path.resolve()), origins, read),
+                        raw)
         _record(raw, label, "", origins)
         return merged
 

@@ -33,6 +33,7 @@ from .ledger import EnergyLedger
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
 from .outputs import RunFiles
+from .parallel import on_rank_zero
 from .runspec import OutputSpec, TimeSpec
 from .runstate import RunState
 from .solver import NewtonOptions
@@ -292,9 +293,9 @@ class Session:
         return self.state.wall_before + _time.perf_counter() - self.wall0
 
     def write_summary(self, summary: Mapping[str, Any]) -> None:
-        """Write ``summary.json`` (rank 0)."""
-        if self.comm.rank == 0:
-            files.atomic_write_json(self.directory / files.SUMMARY, summary)
+        """Write ``summary.json`` (rank 0; collective: an OutputError on every rank)."""
+        on_rank_zero(self.comm, lambda: bool(
+            files.atomic_write_json(self.directory / files.SUMMARY, summary)))
 
     def log_quality(self, dynamic: bool = False) -> None:
         """Log (rank 0) the warnings of the contact quality not logged yet.

@@ -49,7 +49,9 @@ This module holds :func:`run` and its time loop; the parts it uses:
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import re
 import signal
 import sys
 import time as _time
@@ -64,9 +66,18 @@ from petsc4py import PETSc
 from . import checkpoint as ckpt
 from . import files
 from .console import Progress, StopSignal, rank_zero_logging
-from .errors import BreakwaterError, CaseError, ConvergenceError, MeshError, PenetrationError
+from .errors import (
+    BreakwaterError,
+    CaseError,
+    ConvergenceError,
+    MeshError,
+    OutputError,
+    PenetrationError,
+    cannot_write,
+)
 from .model import ContactModel
 from .monitor import Monitor, interface_state, pair_names
+from .parallel import on_rank_zero
 from .runspec import OutputSpec, TimeSpec
 from .session import Session
 from .stepsize import GROW_AFTER
@@ -99,6 +110,29 @@ class RunInterrupted(SimulationFailed):
 
 class _Stop(BreakwaterError):
     """Raised inside the time loop when a stop signal was received."""
+
+
+CRASHES = (PETSc.Error, RuntimeError, ArithmeticError, MemoryError, ValueError)
+"""What the numerical libraries raise (PETSc, MUMPS through PETSc, dolfinx's C++,
+NumPy): a run that meets one fails with ``summary.json`` saying so and one line,
+instead of a traceback and a summary left ``running``."""
+
+
+def crash_reason(error: BaseException) -> str:
+    """One line for an error of PETSc (its code, routine and message) or another library.
+
+    PETSc's text is ``error code N`` then ``[rank] Routine() at file:line`` and the
+    message lines, each prefixed by the rank.
+    """
+    if not isinstance(error, PETSc.Error):  # ADIOS2 colours its messages: not in a file
+        text = " ".join(re.sub(r"\x1b\[[0-9;]*m", "", str(error)).split())
+        return (f"{type(error).__name__}: {text}" if not isinstance(error, BreakwaterError)
+                else text) or type(error).__name__
+    lines = [line.split("] ", 1)[-1].strip() for line in str(error).splitlines()[1:]]
+    where = [line.split(" at ", 1)[0] for line in lines if "() at " in line]
+    said = [line for line in lines if line and "() at " not in line]
+    return (f"PETSc error {getattr(error, 'ierr', '?')}" + (f" in {where[0]}" if where else "")
+            + (f": {'; '.join(said)}" if said else ""))
 
 
 def _finite(comm: MPI.Comm, *functions: fem.Function) -> bool:
@@ -190,9 +224,9 @@ def _loop(r: Session, stop: StopSignal) -> None:
                         "did not converge"
                     raise SimulationFailed(
                         f"step from t = {t:.6g} s with dt = {trial:.3g} s {what} after "
-                        f"{step.halvings} cut-backs{floor}: {e}") from e
+                        f"{step.halvings} cut-backs{floor}: {crash_reason(e)}") from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
-                            t, e, step.h, step.halvings, time.max_cutbacks)
+                            t, crash_reason(e), step.h, step.halvings, time.max_cutbacks)
                 continue
             s.update()
             grew = step.accept()
@@ -229,7 +263,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         output: Output directory, probes, output switches, checkpoint interval.
         resolved_case: The resolved case, written as ``case.toml`` when given.
         extra_summary: Merged into the summary (e.g. calibration results).
-        report: Print a short report of the results at the end (rank 0).
+        report: Print a short report of the results at the end (rank 0), and log why
+            a run failed or was interrupted (without it the caller reports it).
         resume: Continue the run of ``output.directory`` from its checkpoint.
         fingerprint: Identifies the case in checkpoints; a checkpoint is resumed only
             by a run of the same fingerprint. Default: the hash of ``resolved_case``
@@ -257,8 +292,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
             r.restore()  # CheckpointError: nothing written yet
-        if resolved_case is not None and r.comm.rank == 0:
-            files.atomic_write_toml(r.directory / files.CASE, resolved_case)
+        if resolved_case is not None:
+            on_rank_zero(r.comm, lambda: bool(
+                files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
         # From now on the folder always says whether the run finished.
         r.write_summary(r.summary(False, None, "running"))
         error: BaseException | None = None
@@ -268,8 +304,15 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             _loop(r, stop)
         except (BreakwaterError, KeyboardInterrupt) as e:
             error = e
+        except CRASHES as e:  # not foreseen by a check: the run fails, in one line
+            error = SimulationFailed(crash_reason(e))
+            error.__cause__ = e  # (--debug shows it)
         try:
             summary = _end(r, error, output, report)
+        except (OutputError, OSError) as e:  # e.g. a full disk: the first error is
+            if error is None:  # the reason
+                error = e if isinstance(e, OutputError) else cannot_write(e.filename, e)
+            summary = _failed_end(r, error)
         finally:
             r.close()
         if error is None:
@@ -305,7 +348,8 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
         warning = balance_warning(summary.get("energy", {}))
         if warning is not None:
             log.warning("%s", warning)
-    if r.comm.rank == 0:
+
+    def write() -> dict[str, Any]:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
         if output.figures and not stopped:
             from . import figures
@@ -322,4 +366,21 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
                 files.atomic_write_json(r.directory / files.SUMMARY, summary)
         if report:
             print(format_report(summary, r.directory), flush=True)
-    return r.comm.bcast(summary, root=0)
+        return summary
+
+    # Rank 0 writes; an error (e.g. OutputError: a full disk) is raised on every rank.
+    return on_rank_zero(r.comm, write)
+
+
+def _failed_end(r: Session, error: BaseException) -> dict[str, Any]:
+    """The summary of a run whose outputs could not all be written (collective).
+
+    ``summary.json`` says ``failed`` (``interrupted`` on a stop) with the one-line
+    reason, when it can still be written; the state is what the run had reached.
+    """
+    stopped = isinstance(error, _Stop | KeyboardInterrupt)
+    summary = r.summary(False, str(error) or type(error).__name__,
+                        "interrupted" if stopped else "failed")
+    with contextlib.suppress(OutputError):
+        r.write_summary(summary)
+    return summary

@@ -62,6 +62,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
+from .files import name_problem
 from .schema import OUT_OF_RANGE, OVERRIDE, out_of_range, printable, suggest
 
 if TYPE_CHECKING:
@@ -362,9 +363,9 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
         if key in data and not isinstance(data[key], str):
             raise r.error(key, "expected a string")
     name = data.get("name", path.stem)
-    if not name or any(c in name for c in "/\\:"):
-        raise r.error("name", f"must be a non-empty name without path separators "
-                      f"(got {name!r})")
+    problem = name_problem(name)
+    if problem is not None:  # the name is the default folder results/<name>
+        raise r.error("name", problem)
     if "base" not in data:
         raise r.error("base", 'missing (a case file, or a built-in case such as "goda")')
     base = data["base"]

@@ -1,0 +1,271 @@
+"""Outputs that cannot be written, and outputs that would replace inputs.
+
+Every command goes through :func:`breakwater.cli.main` in-process, serially and under
+``mpiexec`` (every rank must return the same exit status: no hang). A problem found
+before the run is one line ``breakwater: error: ...`` and exit status 2; a write that
+fails during a run ends it with exit status 1, one line ``cannot write <path>:
+<reason>`` and, when ``summary.json`` can still be written, ``"status": "failed"``.
+
+The tests run as root, where ``chmod`` does not stop writes, so an unwritable folder
+is made in ways that work for root: a path under a regular file (a real ``ENOTDIR``
+from the file system), a name longer than 255 bytes (a real ``ENAMETOOLONG``), and a
+read-only folder by monkeypatching ``open`` in :mod:`breakwater.files` to raise
+``PermissionError(EACCES)``. A full disk is simulated by monkeypatching a writer
+(``HistoryWriter._write``, the figures, ``os.replace``) to raise ``OSError(ENOSPC)``.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import pathlib
+
+import pytest
+from blocks import two_block_case, two_rectangles
+from mpi4py import MPI
+
+from breakwater import cli, figures, files
+from breakwater.outputs import HistoryWriter
+
+COMM = MPI.COMM_WORLD
+FULL = os.strerror(errno.ENOSPC)  # "No space left on device"
+
+
+def _case(folder: pathlib.Path, name: str = "tiny.toml", head: str = "") -> pathlib.Path:
+    """A two-block case of 3 steps on a coarse mesh (about 1 s), written in ``folder``."""
+    mesh = two_rectangles(folder / "blocks.msh", COMM, (1.0, 0.5), (1.0, 0.5), 0.5)
+    path = folder / name
+    if COMM.rank == 0:
+        path.write_text(two_block_case(mesh.name, head=head, tail="[output]\n"
+                                       "field_interval = 0\nfigures = false\n")
+                        .replace("end_time = 1e-3", "end_time = 3e-4"))
+    COMM.barrier()
+    return path
+
+
+def _study(folder: pathlib.Path, case: pathlib.Path) -> pathlib.Path:
+    path = folder / "study.toml"
+    if COMM.rank == 0:
+        path.write_text(f'base = "{case.name}"\n[grid]\n"time.dt" = [1e-4]\n')
+    COMM.barrier()
+    return path
+
+
+def _main(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    code = cli.main([*args, "--quiet"])
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert "Traceback" not in err, err
+    return code, err
+
+
+def _refused(code: int, err: str, phrase: str) -> None:
+    """Exit status 2 and one line ``breakwater: error: ...`` holding ``phrase``."""
+    assert code == 2, err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1 and err.startswith("breakwater: error: "), err
+        assert phrase in err, err
+
+
+def _summary(out: pathlib.Path) -> dict:
+    return json.loads((out / files.SUMMARY).read_text())
+
+
+# --- a full disk during and at the end of a run -------------------------------------------
+
+def test_full_disk_during_the_run(shared_dir, capsys, monkeypatch):
+    """history.csv's 4th row meets a full disk: exit 1, one line, summary failed."""
+    case, out = _case(shared_dir), shared_dir / "out"
+    write, lines = HistoryWriter._write, []
+
+    def full(self: HistoryWriter, line: str) -> None:
+        lines.append(line)
+        if len(lines) > 4:  # the header, the static row, two steps
+            raise OSError(errno.ENOSPC, FULL)
+        write(self, line)
+
+    monkeypatch.setattr(HistoryWriter, "_write", full)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = f"cannot write {out / files.HISTORY}: {FULL}"
+        assert err == f"breakwater: error: {reason}\n", err  # one line with --quiet
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
+        assert len((out / files.HISTORY).read_text().splitlines()) == 4
+
+
+def test_full_disk_at_the_end(shared_dir, capsys, monkeypatch):
+    """The figures meet a full disk after the last step: the summary says failed."""
+    case, out = _case(shared_dir), shared_dir / "out"
+
+    def full(directory: pathlib.Path) -> list[pathlib.Path]:
+        (directory / files.FIGURES).mkdir(exist_ok=True)
+        with files.writing(directory / files.FIGURES / "history.png"):
+            raise OSError(errno.ENOSPC, FULL)
+
+    monkeypatch.setattr(figures, "make_figures", full)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress",
+                       "--set", "output.figures=true"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = f"cannot write {out / files.FIGURES / 'history.png'}: {FULL}"
+        assert err.splitlines()[-1] == f"breakwater: error: {reason}", err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
+
+
+def test_full_disk_from_the_start(shared_dir, capsys, monkeypatch):
+    """No file can be replaced at all (os.replace raises ENOSPC): exit 1, one line."""
+    case, out = _case(shared_dir), shared_dir / "out"
+
+    def full(src: object, dst: object) -> None:
+        raise OSError(errno.ENOSPC, FULL)
+
+    monkeypatch.setattr(files.os, "replace", full)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        assert err.splitlines()[-1] == (f"breakwater: error: cannot write "
+                                        f"{out / files.CASE}: {FULL}"), err
+        assert not (out / files.SUMMARY).exists()
+        assert not list(out.glob(".*.tmp*"))  # no temporary file left behind
+
+
+# --- output folders that cannot be written, refused before the run ------------------------
+
+def _commands(case: pathlib.Path, study: pathlib.Path, out: pathlib.Path
+              ) -> dict[str, list[str]]:
+    return {"run": ["run", str(case), "--out", str(out), "--no-progress"],
+            "sweep": ["sweep", str(study), "--out", str(out)],
+            "mesh": ["mesh", str(case), "--out", str(out / "mesh.msh")]}
+
+
+@pytest.mark.parametrize("command", ["run", "sweep", "mesh"])
+def test_out_under_a_file(command, shared_dir, capsys):
+    """An output path under a regular file (ENOTDIR, even for root): exit 2."""
+    case = _case(shared_dir)
+    study = _study(shared_dir, case)
+    out = case / "out"  # the case file is a file, not a folder
+    code, err = _main(_commands(case, study, out)[command], capsys)
+    _refused(code, err, "is a file, not a folder")
+
+
+@pytest.mark.parametrize("command", ["run", "sweep", "mesh"])
+def test_read_only_out(command, shared_dir, capsys, monkeypatch):
+    """A folder where files cannot be created (open raises EACCES, as for a read-only
+    folder; chmod does not stop root): exit 2, naming the folder."""
+    case = _case(shared_dir)
+    study = _study(shared_dir, case)
+    out = shared_dir / "out"
+    if COMM.rank == 0:
+        out.mkdir()
+    COMM.barrier()
+
+    def denied(path: object, *args: object, **kwargs: object) -> None:
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+
+    monkeypatch.setattr(files, "open", denied, raising=False)
+    code, err = _main(_commands(case, study, out)[command], capsys)
+    _refused(code, err, f"cannot write {out}: Permission denied")
+    if COMM.rank == 0:
+        assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["run", "sweep"])
+def test_out_is_a_file(command, shared_dir, capsys):
+    """--out naming a file: exit 2 for run and sweep alike."""
+    case = _case(shared_dir)
+    study = _study(shared_dir, case)
+    code, err = _main(_commands(case, study, case)[command], capsys)
+    _refused(code, err, "not a folder (a file of that name exists)")
+
+
+def test_out_name_too_long(shared_dir, capsys):
+    """A folder name over 255 bytes (ENAMETOOLONG): exit 2."""
+    case = _case(shared_dir)
+    out = shared_dir / ("x" * 300) / "out"
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    _refused(code, err, "File name too long")
+
+
+# --- outputs never replace inputs ------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["case.toml", "summary.json"])
+def test_outputs_never_replace_the_case_file(name, shared_dir, capsys):
+    """A case file in the output folder under an output's name: refused, untouched.
+
+    ``summary.json`` is the base of the case run (``extends``): the files a case
+    extends are inputs too.
+    """
+    base = _case(shared_dir, name=name, head="# my notes")
+    case = base
+    if name != "case.toml":
+        case = shared_dir / "run.toml"
+        if COMM.rank == 0:
+            case.write_text(f'extends = "{name}"\n')
+        COMM.barrier()
+    before = base.read_bytes()
+    code, err = _main(["run", str(case), "--out", str(shared_dir), "--no-progress"],
+                      capsys)
+    _refused(code, err, f"the outputs would write over the input {shared_dir / name}")
+    assert base.read_bytes() == before
+    assert not (shared_dir / files.HISTORY).exists()
+
+
+def test_dotdot_name_without_out(shared_dir, capsys, monkeypatch):
+    """name = ".." run without --out wrote into the working directory, over case.toml."""
+    case = _case(shared_dir, name="case.toml", head='# my notes\nname = ".."')
+    before = case.read_bytes()
+    monkeypatch.chdir(shared_dir)
+    code, err = _main(["run", "case.toml", "--no-progress"], capsys)
+    _refused(code, err, "name: must not be '..'")
+    assert case.read_bytes() == before
+    assert not (shared_dir / files.SUMMARY).exists()
+
+
+def test_sweep_never_replaces_its_study(shared_dir, capsys):
+    """A study whose folder is the study file's own: sweep.csv is fine, a case folder
+    named like the study's is not."""
+    case = _case(shared_dir)
+    folder = shared_dir / "case-0001_mine"
+    if COMM.rank == 0:
+        folder.mkdir()
+        (folder / "study.toml").write_text(f'base = "../{case.name}"\n[grid]\n'
+                                           '"time.dt" = [1e-4]\n')
+    COMM.barrier()
+    study = folder / "study.toml"
+    code, err = _main(["sweep", str(study), "--out", str(shared_dir)], capsys)
+    _refused(code, err, "the study's outputs would write over the input")
+    assert study.is_file()
+
+
+# --- a crash of the numerical libraries ---------------------------------------------------
+
+def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
+    """A PETSc error in the static solve (here a real one: SNESSetTolerances refusing
+    rtol = 1): exit 1, one line naming the routine, summary failed (was: a traceback,
+    the summary left running)."""
+    from petsc4py import PETSc
+
+    from breakwater import session
+
+    case, out = _case(shared_dir), shared_dir / "out"
+
+    def crash(model: object) -> None:
+        snes = PETSc.SNES().create(COMM)
+        try:
+            snes.setTolerances(rtol=1.0)
+        finally:
+            snes.destroy()
+
+    monkeypatch.setattr(session, "initial_state", crash)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = ("PETSc error 63 in SNESSetTolerances(): Argument out of range; Relative "
+                  "tolerance 1. must be non-negative and less than 1.0")
+        assert err.splitlines()[-1] == f"breakwater: error: {reason}", err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
