@@ -43,7 +43,7 @@ from .loads import (
     read_table,
 )
 from .schema import InvalidField, positive, setting
-from .wavepressure import GodaPressure, goda_pressure
+from .wavepressure import GodaPressure, GodaRangeError, goda_pressure
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -198,7 +198,10 @@ class GodaCase:
             raise InvalidField("berm_width", "is used only with impulsive = true")
         if self.berm_width is not None and not self.berm_width > 0:
             raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
-        self.pressure()  # the formula's own range checks (ValueError -> InvalidField)
+        try:
+            self.pressure()  # the formula's own range checks
+        except GodaRangeError as e:
+            raise InvalidField(e.key, e.problem) from None
 
     def pressure(self) -> GodaPressure:
         """The pressures (Pa) of the design wave."""
