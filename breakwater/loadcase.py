@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
+from .godaface import check_goda_face, goda_applied
 from .loadfields import Pressure, PressureProfile, TractionField
 from .loads import (
     STANDARD_GRAVITY,
@@ -434,8 +435,16 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
     """The model loads of a case's load on a mesh.
 
     One per group (``group``, then ``groups``), plus the uplift of a Goda load.
+
+    Raises:
+        CaseError: A Goda profile entirely off its loaded face (:func:`check_goda_face`;
+            part of it off: a warning).
+
     """
     from .model import SurfaceLoad
+
+    if load.goda is not None:
+        check_goda_face(load, data, warn=False)  # warned by casebuild.build
 
     groups = (load.group, *load.groups)
     if load.kind == "pulse":
@@ -524,11 +533,17 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
         info["pressure"] = load.pressure
     elif load.goda is not None:
         g = load.goda.pressure()
+        applied = goda_applied(load, data)
         info.update({"wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
                      "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3,
                      "p4": g.p4, "uplift_pressure": g.uplift,
-                     "horizontal_force_per_length": g.force,
-                     "horizontal_moment_per_length": g.moment})
+                     "horizontal_force_per_length": applied.force,
+                     "horizontal_moment_per_length": applied.moment,
+                     "applied_fraction": applied.fraction,
+                     "face_elevations": list(applied.face),
+                     "profile_elevations": list(applied.profile),
+                     "goda_force_per_length": g.force,
+                     "goda_moment_per_length": g.moment})
         if g.alpha_impulsive is not None:
             info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
         if load.goda.uplift_group is not None:

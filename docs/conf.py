@@ -91,7 +91,7 @@ API_SECTIONS = {
     "The physics in UFL (forms/)": _modules("breakwater.forms"),
     "Cases and runs": ["breakwater.case", "breakwater.simulation"],
     "Loads": ["breakwater.loads", "breakwater.loadfields", "breakwater.wavepressure",
-              "breakwater.loadcase"],
+              "breakwater.loadcase", "breakwater.godaface"],
 }
 
 

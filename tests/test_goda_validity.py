@@ -9,17 +9,31 @@
   refusal naming the input and the range; accepted at the bounds; deep water without
   overflow (α₁ = 0.6, α₃ = 1 − h'/h, p₂ = 0, α_I = 0);
 - the part of the profile on a face (:meth:`GodaPressure.part`) against the trapezoidal
-  rule.
+  rule; on a mesh, the summary's force and moment equal the load the mesh receives
+  when the crest height or the still water level puts part of the profile off the
+  face (with a warning giving the fraction), and a profile off the face is refused;
+- a study of a Goda case: a point the mesh refuses fails alone, the others (one in
+  1000 m of water, which raised OverflowError before any case ran) run.
 """
 
 from __future__ import annotations
 
+import csv
+import logging
 import math
+import pathlib
 
 import numpy as np
 import pytest
+import ufl
+from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
+from breakwater import cli
+from breakwater.case import CaseError, load_case
+from breakwater.godaface import check_goda_face
+from breakwater.loadcase import load_summary
+from breakwater.sweep import TABLE
 from breakwater.wavepressure import (
     GodaRangeError,
     breaking_height,
@@ -160,3 +174,144 @@ def test_part_of_the_profile():
         force, moment = g.part(lo, hi)
         assert np.trapezoid(p, z) == pytest.approx(force, rel=1e-9)
         assert np.trapezoid(p * (z + h1), z) == pytest.approx(moment, rel=1e-9)
+
+
+# --- the summary reports the load the mesh receives ---------------------------------------
+
+# Block a (0.2 × 0.1 m) on base b (0.2 × 0.05 m), the front face a_left at x = −0.1 from
+# y = 0.05 to 0.15; P2 triangles of 0.025 m: every kink of the profiles below (the still
+# water level, the base, the face's top) is on a node, so the facet quadrature is exact.
+AW, AH, BH, SIZE = 0.2, 0.1, 0.05, 0.025
+
+
+@pytest.fixture(scope="module")
+def stacked(folder: pathlib.Path) -> pathlib.Path:
+    return two_rectangles(folder / "stacked.msh", COMM, a=(AW, AH), b=(AW, BH), h=SIZE)
+
+
+def _case(folder: pathlib.Path, mesh: pathlib.Path, name: str, swl: float, crest: float):
+    toml = f'''
+[loads.wave]
+group = "a_left"
+time_function = "ramp"
+rise = 0.01
+[loads.wave.goda]
+wave_height = 0.04
+period = 1.0
+depth = 0.1
+toe_depth = 0.075
+berm_depth = 0.06
+crest_height = {crest}
+still_water_level = {swl}
+'''
+    path = folder / f"{name}.toml"
+    if COMM.rank == 0:
+        path.write_text(two_block_case(mesh, "mesh.degree = 2\nout_of_plane_length = 0.5",
+                                       toml))
+    COMM.barrier()
+    return load_case(path)
+
+
+def _applied(model, about_y: float) -> tuple[float, float]:
+    """Horizontal force and its moment (clockwise, about (−AW/2, about_y)) of load 0."""
+    ld = model.loads[0]
+    x = ufl.SpatialCoordinate(model.mesh)
+    fx = model.assemble(model.form(ld.unit[0] * ld.ds))
+    m = model.assemble(model.form((x[1] - about_y) * ld.unit[0] * ld.ds))
+    return fx, m
+
+
+@pytest.mark.parametrize(("swl", "crest", "percent"), [
+    (0.125, 0.025, "100"),   # the face: SWL − h' = 0.05 to SWL + h_c = 0.15, whole
+    (0.125, 0.1, "89.7"),    # h_c above the face's top: the profile to η* = 0.06 m, cut at 0.025 m
+    (0.15, 0.025, "77.8"),   # the still water level 0.025 m up: the top 0.025 m off the face
+], ids=["whole", "crest_above_face", "swl_up"])
+def test_summary_is_the_load_the_mesh_receives(stacked, folder, swl, crest, percent, caplog):
+    case = _case(folder, stacked, f"goda_applied_{swl}_{crest}", swl, crest)
+    data = case.read_mesh(COMM, folder / "out")
+    model = case.build_model(data)
+    g = case.loads[0].goda.pressure()
+    fx, m = _applied(model, swl - g.toe_depth)
+    summary = load_summary(case.loads[0], data, case.out_of_plane_length)
+    # What the mesh receives, to round-off (the quadrature is exact: kinks on nodes).
+    assert summary["horizontal_force_per_length"] == pytest.approx(fx, rel=1e-12)
+    assert summary["horizontal_moment_per_length"] == pytest.approx(m, rel=1e-12)
+    assert summary["goda_force_per_length"] == g.force
+    assert summary["applied_fraction"] == pytest.approx(fx / g.force, rel=1e-12)
+    with caplog.at_level(logging.WARNING, logger="breakwater"):
+        check_goda_face(case.loads[0], data)
+    warned = [r.getMessage() for r in caplog.records if "of Goda's horizontal" in r.getMessage()]
+    if percent == "100":
+        assert fx == pytest.approx(g.force, rel=1e-12) and not warned
+    else:
+        assert fx < 0.9 * g.force
+        assert len(warned) == 1 and f"only {percent}% of Goda's horizontal force" in warned[0]
+        assert warned[0].startswith("loads.wave.goda: ")
+
+
+def test_profile_off_the_face_is_refused(stacked, folder):
+    # Still water at y = 0.5: the profile (0.425 to 0.45) misses the face (0.05 to 0.15).
+    case = _case(folder, stacked, "goda_off", 0.5, 0.025)
+    data = case.read_mesh(COMM, folder / "out")
+    with pytest.raises(CaseError, match=r"^loads\.wave\.goda\.still_water_level: the "
+                       r"pressure profile \(y = 0\.425 to 0\.525 m.*misses the loaded face "
+                       r"\(a_left: y = 0\.05 to 0\.15 m\): no wave load"):
+        case.build_model(data)
+
+
+# --- a study of a Goda case ---------------------------------------------------------------
+
+STUDY_CASE = '''extends = "goda"
+name = "goda_wave_study"
+calibration.enabled = false
+bodies.mound.shear_modulus = 2.28e6
+mesh.refinement = 0.5
+[loads.impact]
+enabled = false
+[loads.wave]
+group = "caisson_front"
+groups = ["impact"]
+time_function = "ramp"
+rise = 0.01
+[loads.wave.goda]
+wave_height = 0.18
+period = 1.4
+depth = 0.32
+toe_depth = 0.13
+berm_depth = 0.13
+crest_height = 0.072
+still_water_level = 0.32
+[time]
+end_time = 2e-4
+[output]
+field_interval = 0
+figures = false
+'''
+
+STUDY = '''base = "wave.toml"
+[zip]
+"loads.wave.goda.depth" = [0.32, 1000.0, 0.32]
+"loads.wave.goda.still_water_level" = [0.32, 0.32, 1.5]
+'''
+
+
+def test_study_runs_the_other_points(shared_dir, capsys):
+    # 1000 m of water raised OverflowError while the study read its points (a traceback,
+    # no case ran); the still water level 1.5 m puts the profile off the caisson's face,
+    # which only the mesh shows: those points fail alone, with their one-line error.
+    if COMM.rank == 0:
+        (shared_dir / "wave.toml").write_text(STUDY_CASE)
+        (shared_dir / "study.toml").write_text(STUDY)
+    COMM.barrier()
+    out = shared_dir / "out"
+    assert cli.main(["sweep", str(shared_dir / "study.toml"), "--out", str(out), "-q"]) == 1
+    assert "Traceback" not in capsys.readouterr().err
+    with open(out / TABLE, newline="") as f:
+        rows = list(csv.DictReader(f))
+    status = {(float(r["loads.wave.goda.depth"]), float(r["loads.wave.goda.still_water_level"])):
+              (r["status"], r["error"]) for r in rows}
+    assert {k: s for k, (s, _) in status.items()} == {
+        (0.32, 0.32): "finished", (1000.0, 0.32): "finished", (0.32, 1.5): "failed"}
+    error = status[(0.32, 1.5)][1]
+    assert "loads.wave.goda.still_water_level: the pressure profile" in error
+    assert "\n" not in error
