@@ -93,10 +93,16 @@ def check_goda_face(load: LoadCase, data: gmshio.MeshData, warn: bool = True
                     ) -> GodaApplied:
     """Refuse a Goda profile off its loaded face; warn when only part of it is on it.
 
+    Also warned: a face that reaches below the base of the upright section (SWL − h')
+    or above its crest (SWL + h_c, when η* is higher), where the profile stops because
+    ``toe_depth`` or ``crest_height`` says the upright section does: that part of the
+    mesh's face is left unloaded.
+
     Args:
         load: A ``[loads.X]`` with a ``[goda]`` table.
         data: The mesh.
-        warn: Log the one-line warning when only part of the profile is on the face.
+        warn: Log the one-line warnings (part of the profile off the face, part of the
+            face beyond the profile).
 
     Raises:
         CaseError: No part of the profile is on the loaded facets (the same on every
@@ -115,11 +121,28 @@ def check_goda_face(load: LoadCase, data: gmshio.MeshData, warn: bool = True
     if not applied.fraction > APPLIED_TOLERANCE:
         raise CaseError(f"{key}.still_water_level: the pressure profile ({profile}) misses "
                         f"the loaded face ({face}): no wave load would be applied")
-    if warn and applied.fraction < 1.0 - APPLIED_TOLERANCE:
-        P = load.goda.pressure().force
-        logging.getLogger("breakwater").warning(
-            f"{key}: only {100 * applied.fraction:.1f}% of Goda's horizontal force is on "
-            f"the loaded face ({face}; the profile {profile}): the run applies P = "
-            f"{applied.force:.4g} N/m of the formula's {P:.4g} N/m, as summary.json "
-            f"reports")
+    if not warn:
+        return applied
+    log = logging.getLogger("breakwater")
+    g = load.goda.pressure()
+    if applied.fraction < 1.0 - APPLIED_TOLERANCE:
+        log.warning(f"{key}: only {100 * applied.fraction:.1f}% of Goda's horizontal force "
+                    f"is on the loaded face ({face}; the profile {profile}): the run applies "
+                    f"P = {applied.force:.4g} N/m of the formula's {g.force:.4g} N/m, as "
+                    f"summary.json reports")
+    # The face beyond the profile's ends, where Goda's formula stops only because h' or
+    # h_c says the upright section does: the mesh's face there is left unloaded.
+    swl, (lo, hi) = load.goda.still_water_level, applied.face
+    slack = APPLIED_TOLERANCE * (hi - lo)
+    base, crest = swl - g.toe_depth, swl + g.crest_height
+    if lo < base - slack and hi > base:
+        log.warning(f"{key}.toe_depth: the loaded face ({face}) reaches {base - lo:.4g} m "
+                    f"below the base of the upright section (still_water_level − "
+                    f"toe_depth, y = {base:.4g} m), where Goda's profile stops: that part "
+                    f"of the face is not loaded")
+    if g.eta_star > g.crest_height and hi > crest + slack and lo < crest:
+        log.warning(f"{key}.crest_height: the loaded face ({face}) reaches {hi - crest:.4g} "
+                    f"m above the crest (still_water_level + crest_height, y = "
+                    f"{crest:.4g} m), where Goda's profile stops below η* = "
+                    f"{g.eta_star:.4g} m: that part of the face is not loaded")
     return applied

@@ -189,7 +189,8 @@ def stacked(folder: pathlib.Path) -> pathlib.Path:
     return two_rectangles(folder / "stacked.msh", COMM, a=(AW, AH), b=(AW, BH), h=SIZE)
 
 
-def _case(folder: pathlib.Path, mesh: pathlib.Path, name: str, swl: float, crest: float):
+def _case(folder: pathlib.Path, mesh: pathlib.Path, name: str, swl: float, crest: float,
+          toe: float = 0.075):
     toml = f'''
 [loads.wave]
 group = "a_left"
@@ -199,8 +200,8 @@ rise = 0.01
 wave_height = 0.04
 period = 1.0
 depth = 0.1
-toe_depth = 0.075
-berm_depth = 0.06
+toe_depth = {toe}
+berm_depth = {min(toe, 0.06)}
 crest_height = {crest}
 still_water_level = {swl}
 '''
@@ -221,13 +222,21 @@ def _applied(model, about_y: float) -> tuple[float, float]:
     return fx, m
 
 
-@pytest.mark.parametrize(("swl", "crest", "percent"), [
-    (0.125, 0.025, "100"),   # the face: SWL − h' = 0.05 to SWL + h_c = 0.15, whole
-    (0.125, 0.1, "89.7"),    # h_c above the face's top: the profile to η* = 0.06 m, cut at 0.025 m
-    (0.15, 0.025, "77.8"),   # the still water level 0.025 m up: the top 0.025 m off the face
-], ids=["whole", "crest_above_face", "swl_up"])
-def test_summary_is_the_load_the_mesh_receives(stacked, folder, swl, crest, percent, caplog):
-    case = _case(folder, stacked, f"goda_applied_{swl}_{crest}", swl, crest)
+@pytest.mark.parametrize(("swl", "toe", "crest", "percent", "beyond"), [
+    # the face: SWL − h' = 0.05 to SWL + h_c = 0.15, the whole profile on it
+    (0.125, 0.075, 0.025, "100", []),
+    # h_c above the face's top: the profile to η* = 0.06 m, cut at 0.025 m
+    (0.125, 0.075, 0.1, "89.7", []),
+    # the still water level 0.025 m up: the top 0.025 m of the profile off the face, and
+    # the face's lowest 0.025 m below the profile's base
+    (0.15, 0.075, 0.025, "77.8", ["toe_depth"]),
+    # h' and h_c short of the face's ends: the whole profile on the face, the face's
+    # lowest and top 0.025 m unloaded
+    (0.1, 0.025, 0.025, "100", ["toe_depth", "crest_height"]),
+], ids=["whole", "crest_above_face", "swl_up", "face_beyond_profile"])
+def test_summary_is_the_load_the_mesh_receives(stacked, folder, swl, toe, crest, percent,
+                                               beyond, caplog):
+    case = _case(folder, stacked, f"goda_applied_{swl}_{toe}_{crest}", swl, crest, toe)
     data = case.read_mesh(COMM, folder / "out")
     model = case.build_model(data)
     g = case.loads[0].goda.pressure()
@@ -240,13 +249,17 @@ def test_summary_is_the_load_the_mesh_receives(stacked, folder, swl, crest, perc
     assert summary["applied_fraction"] == pytest.approx(fx / g.force, rel=1e-12)
     with caplog.at_level(logging.WARNING, logger="breakwater"):
         check_goda_face(case.loads[0], data)
-    warned = [r.getMessage() for r in caplog.records if "of Goda's horizontal" in r.getMessage()]
+    messages = [r.getMessage() for r in caplog.records]
+    warned = [w for w in messages if "of Goda's horizontal" in w]
     if percent == "100":
         assert fx == pytest.approx(g.force, rel=1e-12) and not warned
     else:
         assert fx < 0.9 * g.force
         assert len(warned) == 1 and f"only {percent}% of Goda's horizontal force" in warned[0]
         assert warned[0].startswith("loads.wave.goda: ")
+    # A face beyond the profile's ends: one line naming the key that stops the profile.
+    assert sorted(w.split(":")[0] for w in messages if "is not loaded" in w) == sorted(
+        f"loads.wave.goda.{k}" for k in beyond)
 
 
 def test_profile_off_the_face_is_refused(stacked, folder):
