@@ -689,6 +689,7 @@ def test_fingerprint_follows_the_table_contents(stacked, folder):
     table = folder / "record3.csv"
 
     def write(text: str) -> None:
+        COMM.barrier()  # every rank has read the table before it changes
         if COMM.rank == 0:
             table.write_text(text)
         COMM.barrier()
@@ -715,6 +716,7 @@ table = { file = "record3.csv", hold_last = true }
     write("0,0\n1,1\n")
     assert fingerprint() == first
     # The mesh file counts the same way (the case reads it too).
+    COMM.barrier()
     if COMM.rank == 0:
         with mesh.open("a") as f:
             f.write("\n")
