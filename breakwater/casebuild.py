@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 from mpi4py import MPI
 
 from .errors import CaseError, MeshError
+from .godaface import check_goda_face
 from .initial import velocity_conflict
 from .loadcase import load_summary, surface_loads
 from .loadchecks import face_problems, pulse_warning
@@ -194,12 +195,16 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
         The :class:`BuiltCase` (``model, time, output, extra = build(case)``).
 
     Raises:
-        CaseError: The mesh does not fit the case.
+        CaseError: The mesh does not fit the case (e.g. a Goda profile off its loaded
+            face, :func:`~breakwater.godaface.check_goda_face`; warned when partly off).
         CalibrationError: The calibration failed.
 
     """
     comm = MPI.COMM_WORLD if comm is None else comm
     data = read_mesh(case, comm)
+    for ld in case.loads:  # before the calibration: a misplaced Goda profile fails fast
+        if ld.enabled and ld.goda is not None:
+            check_goda_face(ld, data)
     extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
     if case.calibration.enabled:
         result = calibrate(case, data)

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
+from .godaface import check_goda_face, goda_applied
 from .loadchecks import RESOLVED_STEPS
 from .loadfields import Pressure, PressureProfile, TractionField
 from .loads import (
@@ -44,7 +45,7 @@ from .loads import (
     read_table,
 )
 from .schema import InvalidField, positive, setting
-from .wavepressure import GodaPressure, goda_pressure
+from .wavepressure import GodaPressure, GodaRangeError, goda_pressure
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -207,7 +208,10 @@ class GodaCase:
             raise InvalidField("berm_width", "is used only with impulsive = true")
         if self.berm_width is not None and not self.berm_width > 0:
             raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
-        self.pressure()  # the formula's own range checks (ValueError -> InvalidField)
+        try:
+            self.pressure()  # the formula's own range checks
+        except GodaRangeError as e:
+            raise InvalidField(e.key, e.problem) from None
 
     def pressure(self) -> GodaPressure:
         """The pressures (Pa) of the design wave."""
@@ -473,8 +477,16 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
     """The model loads of a case's load on a mesh.
 
     One per group (``group``, then ``groups``), plus the uplift of a Goda load.
+
+    Raises:
+        CaseError: A Goda profile entirely off its loaded face (:func:`check_goda_face`;
+            part of it off: a warning).
+
     """
     from .model import SurfaceLoad
+
+    if load.goda is not None:
+        check_goda_face(load, data, warn=False)  # warned by casebuild.build
 
     groups = (load.group, *load.groups)
     if load.kind == "pulse":
@@ -565,11 +577,17 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
         info["pressure"] = load.pressure
     elif load.goda is not None:
         g = load.goda.pressure()
+        applied = goda_applied(load, data)
         info.update({"wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
                      "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3,
                      "p4": g.p4, "uplift_pressure": g.uplift,
-                     "horizontal_force_per_length": g.force,
-                     "horizontal_moment_per_length": g.moment})
+                     "horizontal_force_per_length": applied.force,
+                     "horizontal_moment_per_length": applied.moment,
+                     "applied_fraction": applied.fraction,
+                     "face_elevations": list(applied.face),
+                     "profile_elevations": list(applied.profile),
+                     "goda_force_per_length": g.force,
+                     "goda_moment_per_length": g.moment})
         if g.alpha_impulsive is not None:
             info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
         if load.goda.uplift_group is not None:

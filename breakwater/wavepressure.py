@@ -54,6 +54,37 @@ the upright section, at the depth d)::
     δ₂₂  = −0.36 (B_M/L − 0.12) + 0.93 (0.4 − d/h)
 
 η*, p₃ = α₃ p₁, p₄ and the uplift p_u (which has no α₂) follow as above.
+
+**Range of validity** (checked by :func:`goda_pressure`, which refuses anything outside
+with a :class:`GodaRangeError` naming the input and the range)::
+
+    H_max > 0, T > 0, ρ > 0, g > 0
+    0 < d <= h' <= h          the upright section stands on the mound, in the water
+                              (Goda 2000 §4.2.2, Fig. 4.5; d > 0: α₂ has (H_max/d)²)
+    h_b >= d                  α₂ >= 0: (h_b − d)/(3 h_b) < 0 would turn the mound's
+                              effect into suction on the front (α₂ is an increase of
+                              pressure by the mound, Goda 1974)
+    h_c >= 0                  a crest above the SWL (submerged walls: other formulas)
+    0 <= β < 90°, λ₁, λ₂, λ₃ >= 0
+    H_max <= H_b              the design wave reaches the wall: no higher than the
+                              breaking limit at the depth h_B = max(h, h_b)
+
+with H_b Goda's breaker index (Goda 1970, "A synthesis of breaker indices", Trans. JSCE
+2; Goda 2000 §3.6; re-examined in Goda 2010, Coastal Eng. J. 52(1) 71–106)::
+
+    H_b = A L₀ {1 − exp[−1.5 (π h_B/L₀)(1 + 15 tan^(4/3) θ)]},  A = 0.17, L₀ = gT²/2π
+
+taken at tan θ = 1/10, the steepest bottom slope of the data behind it (Goda 2010): the
+most permissive limit, 0.17 L₀ in deep water (the steepness limit) and 1.36 h_B in
+shallow water, so that only a wave that cannot exist is refused (H_max = 10 h is). Goda's
+surf-zone formulas for H_max of random waves (2000 §3.6) can give more than this
+regular-wave limit very near the shore (h_b/L₀ < 0.05 with steep waves); such a design
+wave is refused too.
+
+The wavelength solves ω² = g k tanh(k h) (:func:`wavelength`) for any period and depth
+(no overflow: the hyperbolic functions of large arguments are taken in their decaying
+forms, e.g. 1/cosh x = 2e^(−x)/(1 + e^(−2x)), so α₁ → 0.6, α₃ → 1 − h'/h and p₂ → 0 in
+deep water).
 """
 
 from __future__ import annotations
@@ -61,33 +92,110 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["GodaPressure", "goda_pressure", "impulsive_coefficient", "wavelength"]
+__all__ = ["GodaPressure", "GodaRangeError", "breaking_height", "goda_pressure",
+           "impulsive_coefficient", "wavelength"]
+
+BREAKER_SLOPE = 0.1
+"""tan θ of Goda's breaker index in the breaking check: the steepest of its data."""
+
+
+class GodaRangeError(ValueError):
+    """An input of Goda's formula out of its range of validity.
+
+    Attributes:
+        key: The input (the name of the :func:`goda_pressure` argument, which is also
+            the case file's key).
+        problem: What is wrong, with the range.
+
+    """
+
+    def __init__(self, key: str, problem: str) -> None:
+        super().__init__(f"{key}: {problem}")
+        self.key = key
+        self.problem = problem
+
+
+def _sech(x: float) -> float:
+    """1/cosh x without overflow (→ 0 for large |x|)."""
+    e = math.exp(-abs(x))
+    return 2.0 * e / (1.0 + e * e)
+
+
+def _x_over_sinh(x: float) -> float:
+    """The ratio x / sinh x without overflow (1 at x = 0, → 0 for large |x|)."""
+    x = abs(x)
+    if x < 1e-8:
+        return 1.0
+    if x < 1.0:
+        return x / math.sinh(x)
+    e = math.exp(-x)
+    return 2.0 * x * e / (1.0 - e * e)
 
 
 def wavelength(period: float, depth: float, gravity: float = 9.81) -> float:
-    """Wavelength L (m) of linear waves: ω² = g k tanh(k h), L = 2π/k (Newton's method).
+    """Wavelength L (m) of linear waves: ω² = g k tanh(k h), L = 2π/k.
+
+    Solved for y = k h from y tanh y = K, K = ω² h/g (tanh never overflows): Fenton &
+    McKee's (1990) approximation y₀ = K / tanh(K^¾)^⅔ (within 1.7 %), then Newton's
+    method kept inside the bracket [y_lo, y_lo / tanh y_lo], y_lo = max(K, √K) (F(y) =
+    y tanh y − K is increasing, F(y_lo) <= 0 <= F(y_lo / tanh y_lo)), bisecting when a
+    step leaves it; to round-off for any period and depth (deep water: y = K exactly
+    once tanh K = 1; shallow: y → √K).
 
     Args:
         period: Wave period T (s).
         depth: Water depth h (m).
         gravity: g (m/s²).
 
+    Raises:
+        ValueError: A non-positive input, or one so extreme that ω² h/g is not a
+            positive finite number.
+
     """
     if not (period > 0 and depth > 0 and gravity > 0):
         raise ValueError("period, depth and gravity must be > 0")
-    ω2 = (2.0 * math.pi / period) ** 2
-    # Start from Eckart's (1952) approximation (a few per cent off), then Newton.
-    k0 = ω2 / gravity
-    k = k0 / math.sqrt(math.tanh(k0 * depth))
-    for _ in range(100):
-        th = math.tanh(k * depth)
-        f = gravity * k * th - ω2
-        df = gravity * (th + k * depth * (1.0 - th * th))
-        step = f / df
-        k -= step
-        if abs(step) < 1e-15 * k:
+    ω = 2.0 * math.pi / period
+    K = ω * ω * depth / gravity  # inf, not OverflowError, beyond the float range
+    if not (K > 0 and math.isfinite(K)):
+        raise ValueError(f"ω² h/g = {K:g} for T = {period:g} s, h = {depth:g} m: "
+                         "out of the range of floating point")
+    lo = max(K, math.sqrt(K))
+    hi = lo / math.tanh(lo)
+    y = min(max(K / math.tanh(K**0.75) ** (2.0 / 3.0), lo), hi)
+    for _ in range(200):
+        th = math.tanh(y)
+        f = y * th - K
+        if f == 0.0:
             break
-    return 2.0 * math.pi / k
+        if f < 0.0:
+            lo = y
+        else:
+            hi = y
+        df = th + y * (1.0 - th) * (1.0 + th)
+        new = y - f / df
+        if not lo < new < hi:
+            new = 0.5 * (lo + hi)
+        if abs(new - y) <= 4e-16 * y or hi - lo <= 4e-16 * hi:
+            y = new
+            break
+        y = new
+    return 2.0 * math.pi * depth / y
+
+
+def breaking_height(period: float, depth: float, slope: float = BREAKER_SLOPE,
+                    gravity: float = 9.81) -> float:
+    """Goda's breaker index: the highest wave H_b (m) at a depth (module docstring).
+
+    Args:
+        period: Wave period T (s).
+        depth: Water depth (m).
+        slope: Bottom slope tan θ (default 1/10, the most permissive of its data).
+        gravity: g (m/s²).
+
+    """
+    L0 = gravity * period**2 / (2.0 * math.pi)
+    x = 1.5 * math.pi * depth / L0 * (1.0 + 15.0 * slope ** (4.0 / 3.0))
+    return 0.17 * L0 * -math.expm1(-x)
 
 
 def impulsive_coefficient(wave_height: float, depth: float, berm_depth: float,
@@ -109,9 +217,9 @@ def impulsive_coefficient(wave_height: float, depth: float, berm_depth: float,
     δ1 = 20.0 * δ11 if δ11 <= 0.0 else 15.0 * δ11
     δ2 = 4.9 * δ22 if δ22 <= 0.0 else 3.0 * δ22
     if δ2 <= 0.0:
-        α_i1 = math.cos(δ2) / math.cosh(δ1)
+        α_i1 = math.cos(δ2) * _sech(δ1)
     else:
-        α_i1 = 1.0 / (math.cosh(δ1) * math.sqrt(math.cosh(δ2)))
+        α_i1 = _sech(δ1) * math.sqrt(_sech(δ2))
     α_i0 = wave_height / berm_depth if wave_height <= 2.0 * berm_depth else 2.0
     return α_i0 * α_i1
 
@@ -187,6 +295,29 @@ class GodaPressure:
         return ((2 * p1 + p3) * h1**2 / 6 + 0.5 * (p1 + p4) * h1 * hc
                 + (p1 + 2 * p4) * hc**2 / 6)
 
+    def part(self, lo: float, hi: float) -> tuple[float, float]:
+        """Force and moment (about the base, z = −h') of the profile on lo <= z <= hi.
+
+        The exact integrals of the piecewise-linear profile over the part of the face
+        between the elevations lo and hi (m above the SWL); ``part(-h', h_c*)`` is
+        (:attr:`force`, :attr:`moment`).
+        """
+        force = moment = 0.0
+        h1 = self.toe_depth
+        pieces = ((-h1, 0.0, self.p3, self.p1), (0.0, self.wetted_crest, self.p1, self.p4))
+        for z0, z1, q0, q1 in pieces:
+            a, b = max(lo, z0), min(hi, z1)
+            if not b > a:
+                continue
+            slope = (q1 - q0) / (z1 - z0)
+            pa, pb = q0 + slope * (a - z0), q0 + slope * (b - z0)
+            force += 0.5 * (pa + pb) * (b - a)
+            # ∫ p (z + h') dz, exact by Simpson's rule (a quadratic integrand).
+            mid = 0.5 * (a + b)
+            pm = 0.5 * (pa + pb)
+            moment += (b - a) / 6.0 * (pa * (a + h1) + 4.0 * pm * (mid + h1) + pb * (b + h1))
+        return force, moment
+
     def uplift_force(self, width: float) -> float:
         """Uplift U = ½ p_u B on a base of width B (N/m)."""
         return 0.5 * self.uplift * width
@@ -221,42 +352,21 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
             exactly when ``impulsive``.
 
     Raises:
-        ValueError: An input out of range (named in the message).
+        GodaRangeError: An input outside the range of validity of the formula (module
+            docstring), named with its range.
 
     """
     hb = depth if breaking_depth is None else breaking_depth
-    checks = {"wave_height": wave_height, "period": period, "depth": depth,
-              "toe_depth": toe_depth, "berm_depth": berm_depth, "breaking_depth": hb,
-              "density": density, "gravity": gravity}
-    for name, value in checks.items():
-        if not (value > 0 and math.isfinite(value)):
-            raise ValueError(f"{name} must be > 0 (got {value:g})")
-    if not crest_height >= 0:
-        raise ValueError(f"crest_height must be >= 0 (got {crest_height:g})")
-    if toe_depth > depth:
-        raise ValueError(f"toe_depth h' = {toe_depth:g} m must not exceed the depth "
-                         f"h = {depth:g} m")
-    if berm_depth > toe_depth:
-        raise ValueError(f"berm_depth d = {berm_depth:g} m must not exceed toe_depth "
-                         f"h' = {toe_depth:g} m")
-    if not 0.0 <= angle < 90.0:
-        raise ValueError(f"angle must be in [0, 90) degrees (got {angle:g})")
-    if any(not f >= 0 for f in factors) or len(factors) != 3:
-        raise ValueError(f"factors must be three values >= 0 (got {list(factors)})")
-    if impulsive and not (berm_width is not None and berm_width > 0
-                          and math.isfinite(berm_width)):
-        raise ValueError(f"berm_width B_M must be given (> 0) with impulsive "
-                         f"(got {berm_width})")
-    if not impulsive and berm_width is not None:
-        raise ValueError("berm_width is used only with impulsive (the extended formula)")
+    _check_range(wave_height, period, depth, toe_depth, berm_depth, crest_height, angle,
+                 hb, factors, density, gravity, impulsive, berm_width)
     λ1, λ2, λ3 = factors
     L = wavelength(period, depth, gravity)
-    kh2 = 4.0 * math.pi * depth / L
-    α1 = 0.6 + 0.5 * (kh2 / math.sinh(kh2)) ** 2
+    kh = 2.0 * math.pi * depth / L
+    α1 = 0.6 + 0.5 * _x_over_sinh(2.0 * kh) ** 2
     α2 = min((hb - berm_depth) / (3.0 * hb) * (wave_height / berm_depth) ** 2,
              2.0 * berm_depth / wave_height)
-    cosh = math.cosh(2.0 * math.pi * depth / L)
-    α3 = 1.0 - toe_depth / depth * (1.0 - 1.0 / cosh)
+    sech = _sech(kh)
+    α3 = 1.0 - toe_depth / depth * (1.0 - sech)
     α_i = (impulsive_coefficient(wave_height, depth, berm_depth, berm_width, L)
            if berm_width is not None else None)
     α_star = α2 if α_i is None else max(α2, α_i)
@@ -267,5 +377,56 @@ def goda_pressure(wave_height: float, period: float, depth: float, toe_depth: fl
     p4 = p1 * (1.0 - crest_height / η) if η > crest_height else 0.0
     pu = 0.5 * (1.0 + cb) * λ3 * α1 * α3 * ρgH
     return GodaPressure(wavelength=L, alpha1=α1, alpha2=α2, alpha3=α3, eta_star=η, p1=p1,
-                        p2=p1 / cosh, p3=α3 * p1, p4=p4, uplift=pu, toe_depth=toe_depth,
+                        p2=p1 * sech, p3=α3 * p1, p4=p4, uplift=pu, toe_depth=toe_depth,
                         crest_height=crest_height, alpha_impulsive=α_i)
+
+
+def _check_range(wave_height: float, period: float, depth: float, toe_depth: float,
+                 berm_depth: float, crest_height: float, angle: float, hb: float,
+                 factors: tuple[float, ...], density: float, gravity: float,
+                 impulsive: bool, berm_width: float | None) -> None:
+    """Raise :class:`GodaRangeError` for an input outside the formula's range."""
+    for name, value in (("wave_height", wave_height), ("period", period), ("depth", depth),
+                        ("toe_depth", toe_depth), ("berm_depth", berm_depth),
+                        ("breaking_depth", hb), ("density", density),
+                        ("gravity", gravity)):
+        if not (value > 0 and math.isfinite(value)):
+            raise GodaRangeError(name, f"must be > 0 (got {value:g})")
+    if not (crest_height >= 0 and math.isfinite(crest_height)):
+        raise GodaRangeError("crest_height", f"h_c = {crest_height:g} m: must be >= 0 (the "
+                             "crest above the still water level)")
+    if toe_depth > depth:
+        raise GodaRangeError("toe_depth", f"h' = {toe_depth:g} m must not exceed the depth "
+                             f"h = {depth:g} m (range 0 < d <= h' <= h)")
+    if berm_depth > toe_depth:
+        raise GodaRangeError("berm_depth", f"d = {berm_depth:g} m must not exceed toe_depth "
+                             f"h' = {toe_depth:g} m (range 0 < d <= h' <= h)")
+    if hb < berm_depth:
+        α2 = (hb - berm_depth) / (3.0 * hb) * (wave_height / berm_depth) ** 2
+        raise GodaRangeError("breaking_depth", f"h_b = {hb:g} m is shallower than the berm "
+                             f"depth d = {berm_depth:g} m: α₂ = {α2:.3g} < 0 would put "
+                             f"suction on the front (range h_b >= d)")
+    if not 0.0 <= angle < 90.0:
+        raise GodaRangeError("angle", f"β = {angle:g}°: must be in [0, 90) degrees")
+    if len(factors) != 3 or not all(f >= 0 and math.isfinite(f) for f in factors) \
+            or not factors[0] > 0:
+        raise GodaRangeError("factors", f"λ₁, λ₂, λ₃ = {list(factors)}: expected three "
+                             "values, λ₁ > 0 (η* = 0.75 (1 + cos β) λ₁ H_max), λ₂, λ₃ >= 0")
+    if impulsive and not (berm_width is not None and berm_width > 0
+                          and math.isfinite(berm_width)):
+        raise GodaRangeError("berm_width", f"B_M must be given (> 0) with impulsive "
+                             f"(got {berm_width})")
+    if not impulsive and berm_width is not None:
+        raise GodaRangeError("berm_width", "is used only with impulsive (the extended "
+                             "formula)")
+    try:
+        wavelength(period, depth, gravity)
+    except ValueError as e:
+        raise GodaRangeError("period", str(e)) from None
+    at = max(depth, hb)
+    limit = breaking_height(period, at, BREAKER_SLOPE, gravity)
+    if wave_height > limit:
+        raise GodaRangeError("wave_height", f"H_max = {wave_height:g} m exceeds the breaking "
+                             f"limit H_b = {limit:.4g} m at the depth {at:g} m for T = "
+                             f"{period:g} s (Goda's breaker index, bottom slopes up to "
+                             f"1/10): range 0 < H_max <= {limit:.4g} m")

@@ -91,7 +91,8 @@ API_SECTIONS = {
     "The physics in UFL (forms/)": _modules("breakwater.forms"),
     "Cases and runs": ["breakwater.case", "breakwater.simulation"],
     "Loads": ["breakwater.loads", "breakwater.loadfields", "breakwater.wavepressure",
-              "breakwater.loadcase", "breakwater.loadchecks", "breakwater.appliedloads"],
+              "breakwater.loadcase", "breakwater.loadchecks", "breakwater.appliedloads",
+              "breakwater.godaface"],
 }
 
 

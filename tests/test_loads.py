@@ -413,7 +413,7 @@ def test_impulsive_coefficient_branches():
     plain, ext = goda_pressure(*args), goda_pressure(*args, impulsive=True, berm_width=2.0)
     assert ext.alpha_impulsive < 0.5 * ext.alpha2
     assert (ext.p1, ext.p3, ext.p4, ext.force) == (plain.p1, plain.p3, plain.p4, plain.force)
-    with pytest.raises(ValueError, match="berm_width B_M must be given"):
+    with pytest.raises(ValueError, match="berm_width: B_M must be given"):
         goda_pressure(*args, impulsive=True)
     with pytest.raises(ValueError, match="only with impulsive"):
         goda_pressure(*args, berm_width=2.0)
