@@ -280,8 +280,9 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
 
     - Encoding: UTF-8, with or without a byte-order mark (Excel's "CSV UTF-8"), or
       UTF-16 with its mark (Excel's "Unicode text"); any line ends (LF, CRLF, CR).
-    - Separator, one per file: ``;`` if a row has one, else a tab if a row has one,
-      else a comma and/or blanks. Trailing empty cells (``0,1,,``) are dropped; a row
+    - Separator, one per file (the rows after the first decide: a header may use
+      another): ``;`` if a row has one, else a tab if a row has one, else a comma
+      and/or blanks. Trailing empty cells (``0,1,,``) are dropped; a row
       of empty cells (``,,``), a blank line and ``#`` comments are skipped.
     - Decimal commas (``0,5;1,2``) are read in ``;``- or tab-separated files; a file
       mixing decimal commas and decimal points is refused (``1.000`` would be 1 or
@@ -298,7 +299,9 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
     if not path.is_file():
         raise OSError(f"file not found: {path}")
     lines = [line.split("#", 1)[0] for line in _decode(path.read_bytes()).splitlines()]
-    separator = _separator(lines)
+    # The separator of the data: a header ("time (s)<tab>factor") may use another.
+    filled = [line for line in lines if line.strip()]
+    separator = _separator(filled[1:] or filled)
     times: list[float] = []
     values: list[float] = []
     rows: list[int] = []

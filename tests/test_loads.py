@@ -94,6 +94,9 @@ SPREADSHEET_TABLES = {
     "utf8_bom_header": b"\xef\xbb\xbft (s),F (-)\r\n0,0.25\r\n0.5,1.5\r\n1,0\r\n",
     # Quoted cells (a "bad" first cell for a blank/comma split).
     "quoted": b'"0","0.25"\n"0.5","1.5"\n"1","0"\n',
+    # A header with another separator than the data (found by tests/test_properties.py:
+    # the header's tab made the comma rows one cell each, refused).
+    "tab_header_comma_data": b"time (s)\tfactor\n0,0.25\n0.5,1.5\n1,0\n",
     # A European Excel: ";" between cells, decimal commas.
     "semicolon_decimal_comma": b"t;F\r\n0;0,25\r\n0,5;1,5\r\n1;0\r\n",
     # Trailing empty cells, rows of empty cells, blank lines.
