@@ -15,6 +15,7 @@ import json
 import math
 import os
 import pathlib
+import unicodedata
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -53,8 +54,10 @@ def name_problem(name: str) -> str | None:
     Refused rather than made safe: the name is also the case's label in the reports and
     the tables, and a folder under another name would be looked for in vain. ``"."``,
     ``".."``, a path separator or an absolute path would put the outputs elsewhere (the
-    working directory, over the user's files); control characters and names longer
-    than :data:`NAME_MAX` bytes cannot be created or read back reliably.
+    working directory, over the user's files); control characters (C0, DEL and C1) and
+    the line and paragraph separators U+2028, U+2029 break the one-line messages and
+    the reports that print the name; names longer than :data:`NAME_MAX` bytes cannot be
+    created or read back reliably.
     """
     if not name:
         return "must not be empty"
@@ -63,8 +66,9 @@ def name_problem(name: str) -> str | None:
         return f"must not be '{name}': results/{name} is {where}, not a folder of its own"
     if any(c in name for c in "/\\:"):
         return f"must be a name without path separators ('/', '\\', ':') (got {name!r})"
-    if any(ord(c) < 32 or ord(c) == 127 for c in name):
-        return f"must not contain control characters (got {name!r})"
+    if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in name):  # C0, DEL, C1
+        # (U+0085 NEL), U+2028, U+2029: each breaks a line of the reports and logs
+        return f"must not contain control characters or line breaks (got {name!r})"
     try:
         size = len(name.encode("utf-8"))
     except UnicodeEncodeError:
