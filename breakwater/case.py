@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 
 from . import casebuild
 from .errors import CaseError
-from .files import name_problem
+from .files import name_problem, path_problem
 from .gmshtools import physical_groups
 from .initial import InitialCase
 from .loadcase import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
@@ -587,6 +587,9 @@ def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     """The named physical groups of the case's mesh (name -> dimension)."""
     if mesh.generated:
         return {name: dim for name, (dim, _) in mesh.goda.physical_groups.items()}
+    problem = path_problem(mesh.source)  # a whole [mesh] table given by --set
+    if problem is not None:
+        raise InvalidField("mesh.source", problem)
     path = pathlib.Path(mesh.source)
     if not path.is_file():
         raise InvalidField("mesh.source", f"mesh file not found: {path}")

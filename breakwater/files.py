@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints impor
 __all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "NAME_MAX", "SNAPSHOT", "STATIC",
            "STUDY_PATTERNS", "SUMMARY", "atomic_savez", "atomic_write_bytes", "atomic_write_json",
            "atomic_write_text", "atomic_write_toml", "check_writable", "make_directory",
-           "name_problem", "outputs_entry", "overwritten_inputs", "read_history",
+           "name_problem", "outputs_entry", "overwritten_inputs", "path_problem", "read_history",
            "remove_temporaries", "temporary_path", "to_jsonable", "writing"]
 
 HISTORY = "history.csv"
@@ -76,6 +76,34 @@ def name_problem(name: str) -> str | None:
     if size > NAME_MAX:
         return (f"is {size} bytes long in UTF-8; a file or folder name has at most {NAME_MAX} "
                 f"(got {name[:20]!r}...)")
+    return None
+
+
+PATH_MAX = 4096
+"""The longest path Linux opens, bytes with the closing NUL (``PATH_MAX``)."""
+
+
+def path_problem(path: str) -> str | None:
+    """Why the text of an input path can name no file, or None.
+
+    Input paths: ``mesh.source``, ``extends``, a table's ``file``, a study's ``base``.
+
+    Checked before the path is resolved or opened: Python refuses a NUL byte with
+    ``ValueError: embedded null byte`` and the system a name or path too long with
+    ``OSError: File name too long``, neither of which names the input.
+    """
+    if "\x00" in path:
+        return f"a path must not contain a NUL byte (got {path[:40]!r})"
+    try:
+        size = len(path.encode("utf-8"))
+    except UnicodeEncodeError:
+        return f"is not valid Unicode (got {path[:40]!r})"
+    if size >= PATH_MAX:
+        return f"the path is {size} bytes long; a path has at most {PATH_MAX - 1}"
+    for part in path.split("/"):
+        if len(part.encode("utf-8")) > NAME_MAX:
+            return (f"{part[:20]!r}... is {len(part.encode('utf-8'))} bytes long; a file "
+                    f"or folder name has at most {NAME_MAX}")
     return None
 
 

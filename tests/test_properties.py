@@ -58,12 +58,9 @@ from breakwater.studyfile import check_points, load_study, toml_literal
 
 # Inputs of other classes of issue 20, excluded here until those changes are merged
 # (remove an exclusion with its class):
-# - "paths": a NUL byte or an over-long name in a path (mesh.source, a table's file,
-#   extends, a study's base) raises ValueError/OSError from pathlib; a file that is
-#   not UTF-8 raises UnicodeDecodeError (OS errors, names and paths);
 # - "sizes": a study of more than a few points (samples.count = 10**9 draws for ever;
 #   runaway sizes).
-PENDING = ("paths", "sizes")
+PENDING = ("sizes",)
 
 EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))
 """Examples per test (the file runs in about 20 s of CPU serially). To explore, set
@@ -236,8 +233,11 @@ floats = st.one_of(
 )
 integers = st.one_of(st.integers(-3, 60), st.integers(-2**70, 2**70),
                      st.sampled_from([2**63 - 1, -2**63, 2**63, 10**400, -10**400]))
+PATHS = ("a\x00b", "x" * 300, "x/" * 2100, "wave\u2028case", "a\x85b", "nul.csv\x00")
+"""Strings no path or name can hold: a NUL byte, a name over 255 bytes, a path over
+4095 bytes, line breaks (z4-z6, q2, q3; z2, q1)."""
 texts = st.one_of(st.sampled_from(NAMES), st.text(max_size=12),
-                  st.text(string.printable, max_size=12))
+                  st.text(string.printable, max_size=12), st.sampled_from(PATHS))
 dates = st.one_of(st.dates(), st.datetimes(), st.times())
 scalars = st.one_of(floats, integers, st.booleans(), texts, dates)
 
@@ -368,25 +368,6 @@ def mutate(data: dict[str, Any], edits: list[tuple[str, Any, Any]]) -> dict[str,
     return data
 
 
-def pending_case(data: Any) -> str | None:
-    """The class of issue 20 (:data:`PENDING`) that an edited case falls in, if any."""
-    def strings(node: Any) -> Iterator[str]:
-        if isinstance(node, dict):
-            for k, v in node.items():
-                yield k
-                yield from strings(v)
-        elif isinstance(node, list):
-            for v in node:
-                yield from strings(v)
-        elif isinstance(node, str):
-            yield node
-
-    texts_ = list(strings(data))
-    if any("\x00" in s or len(s.encode("utf-8", "replace")) > 200 for s in texts_):
-        return "paths"  # pathlib refuses a NUL byte; the OS a name that long
-    return None
-
-
 GODA_DATA = tomllib.loads(GODA_TEXT)
 TWO_BLOCK_DATA = tomllib.loads(two_block_case("blocks.msh", tail=TWO_BLOCK_TAIL))
 BASES = {"goda": GODA_DATA, "goda-resolved": GODA_RESOLVED, "two-block": TWO_BLOCK_DATA}
@@ -398,7 +379,6 @@ BASES = {"goda": GODA_DATA, "goda-resolved": GODA_RESOLVED, "two-block": TWO_BLO
 def test_generated_case_files(here, example):
     base, edits = example
     data = mutate(BASES[base], edits)
-    assume(pending_case(data) is None)
     path = here / "case.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     check_case_file(path)
@@ -429,7 +409,6 @@ override_texts = st.one_of(values.map(toml_literal), st.text(max_size=12))
 def test_generated_overrides(specs):
     """``--set key=value`` of the Goda case: a case or one line naming ``--set``."""
     overrides = [f"{key}{sep}{text}" for key, sep, text in specs]
-    assume(not any("\x00" in o or len(o) > 200 for o in overrides))  # "paths" (PENDING)
     try:
         with time_limit():
             case = load_case(None, overrides)
@@ -484,10 +463,8 @@ def edit_text(text: str, edits: list[tuple[str, float, float, str]]) -> str:
 @given(st.sampled_from(["goda", "two-block"]), edits_of_text)
 def test_edited_case_text(here, base, edits):
     text = edit_text(GODA_TEXT if base == "goda" else two_block_text(), edits)
-    assume(not any(c == "\x00" for c in text))  # "paths" (PENDING)
     path = here / "text.toml"
     path.write_bytes(text.encode("utf-8", "surrogatepass"))
-    assume(_utf8(path.read_bytes()))  # a file that is not UTF-8: "paths" (PENDING)
     check_case_file(path)
 
 
@@ -605,7 +582,8 @@ distribution = st.one_of(
 def studies(draw: st.DrawFn) -> dict[str, Any]:
     """A study file's data: base, [set], [grid], [zip], [samples], [[derived]], [figures]."""
     data: dict[str, Any] = {}
-    base = draw(st.sampled_from(["goda", "blocks.toml", "missing.toml", "nope", None]))
+    base = draw(st.sampled_from(["goda", "blocks.toml", "missing.toml", "nope", None,
+                                 *PATHS]))
     if base is not None:
         data["base"] = base
     if draw(st.booleans()):
@@ -643,7 +621,7 @@ def pending_study(data: dict[str, Any]) -> str | None:
     count = samples.get("count") if isinstance(samples, dict) else None
     if isinstance(count, int) and count > 3:
         return "sizes"
-    return pending_case(data)
+    return None
 
 
 @PROFILE
