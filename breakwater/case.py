@@ -416,6 +416,13 @@ class Case:
         positive(self.out_of_plane_length, "out_of_plane_length")
         if len(self.gravity) != 2:
             raise InvalidField("gravity", f"must have 2 components (got {list(self.gravity)})")
+        gx, gy = self.gravity
+        if not math.isfinite(gx * gx + gy * gy):  # |g|² of the energy and the weights
+            raise InvalidField("gravity", f"[{gx:g}, {gy:g}] m/s²: gx² + gy² overflows")
+        for b in self.bodies:  # the body force ρ g of the run
+            if not math.isfinite(b.density * max(abs(gx), abs(gy))):
+                raise InvalidField(f"bodies.{b.name}.density", f"{b.density:g} kg/m³ times "
+                                   f"gravity [{gx:g}, {gy:g}] m/s² overflows")
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
         names = [b.name for b in self.bodies]
