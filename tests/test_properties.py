@@ -13,8 +13,10 @@ the rows that were written, as finite, increasing numbers.
 
 Reproducible: every test is derandomised (hypothesis draws the same examples on every
 run, on every machine and on every MPI rank) and keeps no example database. Every
-minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``;
-an override's in ``tests/bad_cases/run``) or ``tests/bad_studies`` (``y*``). Each
+minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``,
+``z*``; an override's in ``tests/bad_cases/run``) or ``tests/bad_studies`` (``y*``,
+``q*``). Every class of input is generated: NUL bytes and over-long names in paths,
+files that are not UTF-8, names with line breaks, spreadsheet tables, huge sizes. Each
 example runs under a wall-clock alarm (:func:`time_limit`) besides hypothesis'
 deadline, so that a hang fails instead of stalling the suite.
 
@@ -192,6 +194,9 @@ def check_case_file(path: pathlib.Path, note: bool = True) -> Case | CaseError:
         return result
     assert status == 0 and err == "", (status, err)
     assert result.name.splitlines() == [result.name], repr(result.name)  # z2
+    gx, gy = result.gravity  # the weights and energies of the run are finite (z7, z8)
+    assert math.isfinite(gx * gx + gy * gy), result.gravity
+    assert all(math.isfinite(b.density * max(abs(gx), abs(gy))) for b in result.bodies)
     for load in result.loads:  # what a pulse derives from the case is finite too
         if load.kind == "pulse":
             assert math.isfinite(load.total_impulse / result.out_of_plane_length), load
@@ -367,6 +372,8 @@ BASES = {"goda": GODA_DATA, "goda-resolved": GODA_RESOLVED, "two-block": TWO_BLO
 @PROFILE
 @given(st.sampled_from(sorted(BASES)).flatmap(
     lambda base: st.tuples(st.just(base), mutations(BASES[base]))))
+@example(("goda", [("set", ("gravity",), [1e308, 1e308])]))  # z7
+@example(("goda", [("scale", ("mesh", "refinement"), 1e300)]))  # z3
 def test_generated_case_files(here, example):
     base, edits = example
     data = mutate(BASES[base], edits)
