@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any, Literal, get_args
 
 from . import casebuild
 from .errors import CaseError
-from .files import name_problem
+from .files import name_problem, path_problem
 from .gmshtools import physical_groups
 from .initial import InitialCase
 from .loadcase import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
@@ -416,6 +416,13 @@ class Case:
         positive(self.out_of_plane_length, "out_of_plane_length")
         if len(self.gravity) != 2:
             raise InvalidField("gravity", f"must have 2 components (got {list(self.gravity)})")
+        gx, gy = self.gravity
+        if not math.isfinite(gx * gx + gy * gy):  # |g|² of the energy and the weights
+            raise InvalidField("gravity", f"[{gx:g}, {gy:g}] m/s²: gx² + gy² overflows")
+        for b in self.bodies:  # the body force ρ g of the run
+            if not math.isfinite(b.density * max(abs(gx), abs(gy))):
+                raise InvalidField(f"bodies.{b.name}.density", f"{b.density:g} kg/m³ times "
+                                   f"gravity [{gx:g}, {gy:g}] m/s² overflows")
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
         names = [b.name for b in self.bodies]
@@ -587,6 +594,9 @@ def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     """The named physical groups of the case's mesh (name -> dimension)."""
     if mesh.generated:
         return {name: dim for name, (dim, _) in mesh.goda.physical_groups.items()}
+    problem = path_problem(mesh.source)  # a whole [mesh] table given by --set
+    if problem is not None:
+        raise InvalidField("mesh.source", problem)
     path = pathlib.Path(mesh.source)
     if not path.is_file():
         raise InvalidField("mesh.source", f"mesh file not found: {path}")

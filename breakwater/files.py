@@ -15,6 +15,7 @@ import json
 import math
 import os
 import pathlib
+import unicodedata
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +30,7 @@ if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints impor
 __all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "NAME_MAX", "SNAPSHOT", "STATIC",
            "STUDY_PATTERNS", "SUMMARY", "atomic_savez", "atomic_write_bytes", "atomic_write_json",
            "atomic_write_text", "atomic_write_toml", "check_writable", "make_directory",
-           "name_problem", "outputs_entry", "overwritten_inputs", "read_history",
+           "name_problem", "outputs_entry", "overwritten_inputs", "path_problem", "read_history",
            "remove_temporaries", "temporary_path", "to_jsonable", "writing"]
 
 HISTORY = "history.csv"
@@ -53,8 +54,10 @@ def name_problem(name: str) -> str | None:
     Refused rather than made safe: the name is also the case's label in the reports and
     the tables, and a folder under another name would be looked for in vain. ``"."``,
     ``".."``, a path separator or an absolute path would put the outputs elsewhere (the
-    working directory, over the user's files); control characters and names longer
-    than :data:`NAME_MAX` bytes cannot be created or read back reliably.
+    working directory, over the user's files); control characters (C0, DEL and C1) and
+    the line and paragraph separators U+2028, U+2029 break the one-line messages and
+    the reports that print the name; names longer than :data:`NAME_MAX` bytes cannot be
+    created or read back reliably.
     """
     if not name:
         return "must not be empty"
@@ -63,8 +66,9 @@ def name_problem(name: str) -> str | None:
         return f"must not be '{name}': results/{name} is {where}, not a folder of its own"
     if any(c in name for c in "/\\:"):
         return f"must be a name without path separators ('/', '\\', ':') (got {name!r})"
-    if any(ord(c) < 32 or ord(c) == 127 for c in name):
-        return f"must not contain control characters (got {name!r})"
+    if any(unicodedata.category(c) in ("Cc", "Zl", "Zp") for c in name):  # C0, DEL, C1
+        # (U+0085 NEL), U+2028, U+2029: each breaks a line of the reports and logs
+        return f"must not contain control characters or line breaks (got {name!r})"
     try:
         size = len(name.encode("utf-8"))
     except UnicodeEncodeError:
@@ -72,6 +76,34 @@ def name_problem(name: str) -> str | None:
     if size > NAME_MAX:
         return (f"is {size} bytes long in UTF-8; a file or folder name has at most {NAME_MAX} "
                 f"(got {name[:20]!r}...)")
+    return None
+
+
+PATH_MAX = 4096
+"""The longest path Linux opens, bytes with the closing NUL (``PATH_MAX``)."""
+
+
+def path_problem(path: str) -> str | None:
+    """Why the text of an input path can name no file, or None.
+
+    Input paths: ``mesh.source``, ``extends``, a table's ``file``, a study's ``base``.
+
+    Checked before the path is resolved or opened: Python refuses a NUL byte with
+    ``ValueError: embedded null byte`` and the system a name or path too long with
+    ``OSError: File name too long``, neither of which names the input.
+    """
+    if "\x00" in path:
+        return f"a path must not contain a NUL byte (got {path[:40]!r})"
+    try:
+        size = len(path.encode("utf-8"))
+    except UnicodeEncodeError:
+        return f"is not valid Unicode (got {path[:40]!r})"
+    if size >= PATH_MAX:
+        return f"the path is {size} bytes long; a path has at most {PATH_MAX - 1}"
+    for part in path.split("/"):
+        if len(part.encode("utf-8")) > NAME_MAX:
+            return (f"{part[:20]!r}... is {len(part.encode('utf-8'))} bytes long; a file "
+                    f"or folder name has at most {NAME_MAX}")
     return None
 
 

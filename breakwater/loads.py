@@ -292,8 +292,9 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
 
     Raises:
         OSError: The file cannot be read (the message names it).
-        ValueError: A row is not two numbers, the times do not increase, or fewer than
-            two rows (the message names the file and the line).
+        ValueError: A row is not two numbers (or one is beyond the largest float), the
+            times do not increase, or fewer than two rows (the message names the file and
+            the line).
 
     """
     if not path.is_file():
@@ -341,6 +342,9 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
                                  f"{'comma' if decimal[0] == ',' else 'point'}: use one "
                                  "throughout")
         t, v = (float(c.replace(",", ".")) for c in cells)
+        if not (math.isfinite(t) and math.isfinite(v)):  # 1e400: inf, not an error of float
+            raise ValueError(f"{where}: {cells[math.isfinite(t)]!r} is beyond the largest "
+                             f"number (about 1.8e308)")
         if times and not t > times[-1]:
             raise ValueError(f"{where}: t = {t:g} does not increase (line {rows[-1]} has "
                              f"t = {times[-1]:g})")

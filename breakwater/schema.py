@@ -33,6 +33,7 @@ from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, Literal
 
 from .errors import CaseError
+from .files import path_problem
 
 __all__ = ["INTEGER_RANGE", "OUT_OF_RANGE", "OVERRIDE", "InvalidField", "Schema",
            "out_of_range", "positive", "printable", "setting", "suggest", "to_toml"]
@@ -265,6 +266,17 @@ def _record(data: Any, label: str, prefix: str, origins: dict[str, str]) -> None
             _record(v, label, p, origins)
 
 
+def _resolved(folder: pathlib.Path, text: str, where: str) -> str:
+    """The absolute path of ``text`` (relative to ``folder``), or a CaseError at ``where``."""
+    problem = path_problem(text)
+    if problem is None:
+        try:
+            return str((folder / text).resolve())
+        except (OSError, ValueError) as e:  # the folder and the path together too long
+            problem = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
+    raise CaseError(f"{where}: {problem}")
+
+
 def _merge(base: dict[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
     """``top`` merged over ``base``, table by table."""
     out = dict(base)
@@ -453,22 +465,25 @@ class Schema:
 
     # --- files, extends and overrides ------------------------------------------------------
 
-    def _resolve_paths(self, raw: dict[str, Any], base: pathlib.Path) -> None:
+    def _resolve_paths(self, raw: dict[str, Any], base: pathlib.Path, label: str) -> None:
         """Resolve the path values of a file's data against the file's folder.
 
         A ``*`` in a path key stands for every entry of a table (``loads.*.table.file``).
+
+        Raises:
+            CaseError: A path that can name no file (:func:`~breakwater.files.path_problem`),
+                naming the file ``label`` and the key.
         """
         for key, names in self.paths.items():
             *tables, last = key.split(".")
-            nodes: list[Any] = [raw]
+            nodes: list[tuple[str, Any]] = [("", raw)]
             for part in tables:
-                nodes = [n.get(part) if part != "*" else v
-                         for n in nodes if isinstance(n, dict)
-                         for v in ([None] if part != "*" else list(n.values()))]
-            for node in nodes:
+                nodes = [(f"{at}{k}.", n[k]) for at, n in nodes if isinstance(n, dict)
+                         for k in ([part] if part != "*" else list(n)) if k in n]
+            for at, node in nodes:
                 if isinstance(node, dict) and isinstance(node.get(last), str) \
                         and node[last] not in names:
-                    node[last] = str((base / node[last]).resolve())
+                    node[last] = _resolved(base, node[last], f"{label}: {at}{last}")
 
     def _path_key(self, here: str) -> Collection[str] | None:
         """The names that are not paths, if the dotted key ``here`` is a path key."""
@@ -497,7 +512,7 @@ class Schema:
         raw = _read_toml(path)
         if read is not None:
             read.append(path.resolve())
-        self._resolve_paths(raw, path.parent)
+        self._resolve_paths(raw, path.parent, label)
         if self.name_key is not None and self.name_key not in raw and not chain:
             raw[self.name_key] = path.stem
         base = raw.pop("extends", None)
@@ -507,9 +522,9 @@ class Schema:
         if not isinstance(base, str):
             raise CaseError(f"{label}: extends: expected a case name or file, got "
                             f"{_describe(base)}")
-        candidate = path.parent / base
+        candidate = pathlib.Path(_resolved(path.parent, base, f"{label}: extends"))
         if candidate.is_file():
-            base_path = candidate.resolve()
+            base_path = candidate
         elif "/" not in base and not base.endswith(".toml"):
             try:
                 base_path = self.builtin(base)
@@ -590,7 +605,7 @@ class Schema:
             break
         not_paths = self._path_key(here)
         if not_paths is not None and isinstance(value, str) and value not in not_paths:
-            value = str(pathlib.Path(value).resolve())
+            value = _resolved(pathlib.Path(), value, f"{OVERRIDE} {key}")
         node[part] = value
         for p in [p for p in origins if p == here or p.startswith(here + ".")]:
             del origins[p]

@@ -62,7 +62,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 from .errors import CaseError
-from .files import name_problem
+from .files import name_problem, path_problem
 from .schema import OUT_OF_RANGE, OVERRIDE, out_of_range, printable, suggest
 
 if TYPE_CHECKING:
@@ -369,6 +369,9 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
     if "base" not in data:
         raise r.error("base", 'missing (a case file, or a built-in case such as "goda")')
     base = data["base"]
+    problem = path_problem(base)
+    if problem is not None:  # a NUL byte or a name too long: ValueError, OSError
+        raise r.error("base", problem)
     candidate = path.parent / base
     if candidate.is_file():
         base = str(candidate.resolve())
@@ -460,7 +463,8 @@ def _relative_to_study(study: Study, values: Mapping[str, Any]) -> dict[str, Any
 
     folder = study.path.parent
     return {k: str((folder / v).resolve()) if not isinstance(v, _Literal)
-            and is_file_value(k, v) else v for k, v in values.items()}
+            and is_file_value(k, v) and path_problem(v) is None else v  # else the case's
+            for k, v in values.items()}  # error names the path (schema._resolved)
 
 
 def case_of(study: Study, point: Point, folder: pathlib.Path) -> Case:

@@ -209,8 +209,13 @@ class GodaGeometry:
         mound = 0.5 * (self.crest_width + self.base_width) * self.mound_height
         caisson = self.caisson_width * self.caisson_height
         triangle = math.sqrt(3.0) / 4.0
-        return (mound / (triangle * (self.mound_element_size / refinement) ** 2)
-                + caisson / (triangle * (self.caisson_element_size / refinement) ** 2))
+        # Divided then multiplied in turn: (size / refinement) ** 2 underflows to 0 at a
+        # refinement of 1e300 (ZeroDivisionError), refinement ** 2 raises OverflowError;
+        # here a huge count is inf, which the case refuses (mesh.max_elements).
+        return (mound / triangle / self.mound_element_size * refinement
+                / self.mound_element_size * refinement
+                + caisson / triangle / self.caisson_element_size * refinement
+                / self.caisson_element_size * refinement)
 
     def coarse_elements(self, refinement: float = 1.0) -> str | None:
         """Why the element sizes at this refinement are too large, or None.

@@ -13,17 +13,16 @@ the rows that were written, as finite, increasing numbers.
 
 Reproducible: every test is derandomised (hypothesis draws the same examples on every
 run, on every machine and on every MPI rank) and keeps no example database. Every
-minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``;
-an override's in ``tests/bad_cases/run``) or ``tests/bad_studies`` (``y*``). Each
+minimal failing example found so far is kept as a file in ``tests/bad_cases`` (``x*``,
+``z*``; an override's in ``tests/bad_cases/run``) or ``tests/bad_studies`` (``y*``,
+``q*``). Every class of input is generated: NUL bytes and over-long names in paths,
+files that are not UTF-8, names with line breaks, spreadsheet tables, huge sizes. Each
 example runs under a wall-clock alarm (:func:`time_limit`) besides hypothesis'
 deadline, so that a hang fails instead of stalling the suite.
 
 Pure Python: no mesh is built and nothing runs (the two-block case names a ``.msh``
 file of which the case layer reads only the ``$PhysicalNames`` header). Under MPI each
 rank runs the same examples in a folder of its own, without collectives.
-
-Inputs another change of issue 20 deals with are not generated here (see
-``PENDING``); each exclusion names its class.
 """
 
 from __future__ import annotations
@@ -47,7 +46,7 @@ from typing import Any
 import pytest
 import tomli_w
 from blocks import two_block_case
-from hypothesis import HealthCheck, assume, event, example, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from breakwater import cli
@@ -55,19 +54,6 @@ from breakwater.case import BUILTIN_CASES, Case, load_case
 from breakwater.errors import CaseError
 from breakwater.schema import display, schema_keys
 from breakwater.studyfile import check_points, load_study, toml_literal
-
-# Inputs of other classes of issue 20, excluded here until those changes are merged
-# (remove an exclusion with its class):
-# - "paths": a NUL byte or an over-long name in a path (mesh.source, a table's file,
-#   extends, a study's base) raises ValueError/OSError from pathlib; a file that is
-#   not UTF-8 raises UnicodeDecodeError (OS errors, names and paths);
-# - "names": a case name with control characters is accepted (names and paths);
-# - "tables": a byte-order mark, decimal commas, a bad first row (taken for a
-#   header), a table error that names neither the CSV file nor its line (load tables
-#   with BOM/decimal commas);
-# - "sizes": a study of more than a few points (samples.count = 10**9 draws for ever;
-#   runaway sizes).
-PENDING = ("paths", "names", "tables", "sizes")
 
 EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))
 """Examples per test (the file runs in about 20 s of CPU serially). To explore, set
@@ -207,6 +193,10 @@ def check_case_file(path: pathlib.Path, note: bool = True) -> Case | CaseError:
             assert err == f"breakwater: error: {' '.join(str(result).split())}\n", err
         return result
     assert status == 0 and err == "", (status, err)
+    assert result.name.splitlines() == [result.name], repr(result.name)  # z2
+    gx, gy = result.gravity  # the weights and energies of the run are finite (z7, z8)
+    assert math.isfinite(gx * gx + gy * gy), result.gravity
+    assert all(math.isfinite(b.density * max(abs(gx), abs(gy))) for b in result.bodies)
     for load in result.loads:  # what a pulse derives from the case is finite too
         if load.kind == "pulse":
             assert math.isfinite(load.total_impulse / result.out_of_plane_length), load
@@ -239,8 +229,11 @@ floats = st.one_of(
 )
 integers = st.one_of(st.integers(-3, 60), st.integers(-2**70, 2**70),
                      st.sampled_from([2**63 - 1, -2**63, 2**63, 10**400, -10**400]))
+PATHS = ("a\x00b", "x" * 300, "x/" * 2100, "wave\u2028case", "a\x85b", "nul.csv\x00")
+"""Strings no path or name can hold: a NUL byte, a name over 255 bytes, a path over
+4095 bytes, line breaks (z4-z6, q2, q3; z2, q1)."""
 texts = st.one_of(st.sampled_from(NAMES), st.text(max_size=12),
-                  st.text(string.printable, max_size=12))
+                  st.text(string.printable, max_size=12), st.sampled_from(PATHS))
 dates = st.one_of(st.dates(), st.datetimes(), st.times())
 scalars = st.one_of(floats, integers, st.booleans(), texts, dates)
 
@@ -371,28 +364,6 @@ def mutate(data: dict[str, Any], edits: list[tuple[str, Any, Any]]) -> dict[str,
     return data
 
 
-def pending_case(data: Any) -> str | None:
-    """The class of issue 20 (:data:`PENDING`) that an edited case falls in, if any."""
-    def strings(node: Any) -> Iterator[str]:
-        if isinstance(node, dict):
-            for k, v in node.items():
-                yield k
-                yield from strings(v)
-        elif isinstance(node, list):
-            for v in node:
-                yield from strings(v)
-        elif isinstance(node, str):
-            yield node
-
-    texts_ = list(strings(data))
-    if any("\x00" in s or len(s.encode("utf-8", "replace")) > 200 for s in texts_):
-        return "paths"  # pathlib refuses a NUL byte; the OS a name that long
-    name = data.get("name") if isinstance(data, dict) else None
-    if isinstance(name, str) and not name.isprintable():
-        return "names"
-    return None
-
-
 GODA_DATA = tomllib.loads(GODA_TEXT)
 TWO_BLOCK_DATA = tomllib.loads(two_block_case("blocks.msh", tail=TWO_BLOCK_TAIL))
 BASES = {"goda": GODA_DATA, "goda-resolved": GODA_RESOLVED, "two-block": TWO_BLOCK_DATA}
@@ -401,10 +372,11 @@ BASES = {"goda": GODA_DATA, "goda-resolved": GODA_RESOLVED, "two-block": TWO_BLO
 @PROFILE
 @given(st.sampled_from(sorted(BASES)).flatmap(
     lambda base: st.tuples(st.just(base), mutations(BASES[base]))))
+@example(("goda", [("set", ("gravity",), [1e308, 1e308])]))  # z7
+@example(("goda", [("scale", ("mesh", "refinement"), 1e300)]))  # z3
 def test_generated_case_files(here, example):
     base, edits = example
     data = mutate(BASES[base], edits)
-    assume(pending_case(data) is None)
     path = here / "case.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
     check_case_file(path)
@@ -435,7 +407,6 @@ override_texts = st.one_of(values.map(toml_literal), st.text(max_size=12))
 def test_generated_overrides(specs):
     """``--set key=value`` of the Goda case: a case or one line naming ``--set``."""
     overrides = [f"{key}{sep}{text}" for key, sep, text in specs]
-    assume(not any("\x00" in o or len(o) > 200 for o in overrides))  # "paths" (PENDING)
     try:
         with time_limit():
             case = load_case(None, overrides)
@@ -453,7 +424,7 @@ def test_generated_overrides(specs):
         assert key in tables or key.rpartition(".")[0] in tables, message
         return
     assert isinstance(case, Case)
-    assume(case.name.isprintable())  # "names" (PENDING)
+    assert case.name.splitlines() == [case.name], repr(case.name)  # z2
     with tempfile.TemporaryDirectory() as folder:
         path = pathlib.Path(folder) / "resolved.toml"
         path.write_text(tomli_w.dumps(case.resolved()), encoding="utf-8")
@@ -490,10 +461,8 @@ def edit_text(text: str, edits: list[tuple[str, float, float, str]]) -> str:
 @given(st.sampled_from(["goda", "two-block"]), edits_of_text)
 def test_edited_case_text(here, base, edits):
     text = edit_text(GODA_TEXT if base == "goda" else two_block_text(), edits)
-    assume(not any(c == "\x00" for c in text))  # "paths" (PENDING)
     path = here / "text.toml"
     path.write_bytes(text.encode("utf-8", "surrogatepass"))
-    assume(_utf8(path.read_bytes()))  # a file that is not UTF-8: "paths" (PENDING)
     check_case_file(path)
 
 
@@ -528,20 +497,22 @@ def tables(draw: st.DrawFn) -> tuple[str, list[tuple[float, float]], str | None]
     written = [(float(a), float(b)) for a, b in cells]
     separator = draw(st.sampled_from([",", ", ", " ", "\t", "  ,  "]))
     newline = draw(st.sampled_from(["\n", "\r\n", "\r"]))
-    header = draw(st.sampled_from([None, "t,value", "time (s)\tfactor", "t v"]))
+    # A header in the data's separator (the reader takes one separator per file).
+    header = draw(st.sampled_from([None, "t{}value", "time (s){}factor", "t v"]))
+    header = None if header is None else header.format(separator)
     reason = None
     if len(written) < 2 or any(b[0] <= a[0] for a, b in itertools.pairwise(written)):
         reason = "order"
     garbage = draw(st.one_of(st.none(), st.tuples(
         st.integers(0, max(0, n - 1)), st.integers(0, 1),
-        st.sampled_from(["nan", "inf", "-inf", "1e400", "abc", "", "1,2", "0x10", "--1",
-                         "1;2", "t"]))))
+        st.sampled_from(["nan", "inf", "-inf", "1e400", "abc", "", "0x10", "--1", "1;2",
+                         "t", "1_0", "\u0663", "0,,1",
+                         # a decimal comma: a number in a tab-separated file
+                         *(["1,2"] if separator != "\t" else [])]))))
     if garbage is not None and cells:
         i, j, text = garbage
         cells[i][j] = text
         reason = "value" if text in ("nan", "inf", "-inf", "1e400") else "cell"
-        if i == 0 and header is None and reason == "cell":
-            reason = "first"  # a bad first row, taken for a header
     lines = [] if header is None else [header]
     for k, row in enumerate(cells):
         if k and draw(st.booleans()):
@@ -566,16 +537,20 @@ hold_last = true
 @given(tables())
 def test_generated_load_tables(here, table):
     text, rows, reason = table
-    # "order", "value": the error names neither the CSV file nor its line; "first": a
-    # bad first row is taken for a header, the table loses it: "tables" (PENDING).
-    assume(reason in (None, "cell"))
     (here / "measured.csv").write_bytes(text.encode("utf-8"))
     path = here / "with_table.toml"
     path.write_text(CASE_WITH_TABLE, encoding="utf-8")
     result = check_case_file(path)
     if reason is not None:
         assert isinstance(result, CaseError), text
-        assert re.search(r"measured\.csv line \d+", str(result)), str(result)
+        # The CSV file and its line (a file of fewer than two rows: the file).
+        where = (r"measured\.csv: a table needs at least two" if len(rows) < 2
+                 and reason == "order" else r"measured\.csv line \d+")
+        assert re.search(where, str(result)), (str(result), text)
+        return
+    if rows[0][0] >= 0.01:  # at or after CASE_WITH_TABLE's end: the load never acts (t6)
+        assert isinstance(result, CaseError), text
+        assert "loads.measured.table: the table's first point" in str(result), str(result)
         return
     assert isinstance(result, Case), (str(result), text)
     (load,) = [ld for ld in result.loads if ld.name == "measured"]
@@ -607,7 +582,8 @@ distribution = st.one_of(
 def studies(draw: st.DrawFn) -> dict[str, Any]:
     """A study file's data: base, [set], [grid], [zip], [samples], [[derived]], [figures]."""
     data: dict[str, Any] = {}
-    base = draw(st.sampled_from(["goda", "blocks.toml", "missing.toml", "nope", None]))
+    base = draw(st.sampled_from(["goda", "blocks.toml", "missing.toml", "nope", None,
+                                 *PATHS]))
     if base is not None:
         data["base"] = base
     if draw(st.booleans()):
@@ -619,7 +595,8 @@ def studies(draw: st.DrawFn) -> dict[str, Any]:
     if draw(st.booleans()):
         samples = draw(st.dictionaries(keys, distribution, max_size=2))
         if draw(st.booleans()):
-            samples["count"] = draw(st.one_of(st.integers(-1, 3), values))
+            samples["count"] = draw(st.one_of(st.integers(-1, 3), values,
+                                               st.sampled_from([1001, 10**9, 2**63])))
         if draw(st.booleans()):
             samples["seed"] = draw(st.one_of(st.integers(-2**70, 2**70), values))
         data["samples"] = samples
@@ -639,19 +616,9 @@ def studies(draw: st.DrawFn) -> dict[str, Any]:
     return data
 
 
-def pending_study(data: dict[str, Any]) -> str | None:
-    """The class of issue 20 (:data:`PENDING`) that a study falls in, if any."""
-    samples = data.get("samples")
-    count = samples.get("count") if isinstance(samples, dict) else None
-    if isinstance(count, int) and count > 3:
-        return "sizes"
-    return pending_case(data)
-
-
 @PROFILE
 @given(studies())
 def test_generated_study_files(here, data):
-    assume(pending_study(data) is None)
     (here / "blocks.toml").write_text(two_block_text(), encoding="utf-8")
     path = here / "study.toml"
     path.write_text(tomli_w.dumps(data), encoding="utf-8")
