@@ -958,9 +958,10 @@ profile.points = [[0.1, 1e3], [0.15, 1e3]]
 @pytest.mark.parametrize(("loads", "message"), [
     ('[loads.wave]\ngroup = "a_left"\nprofile.points = [[5.0, 1e3], [6.0, 0.0]]\n',
      "loads.wave.profile: the pressure is zero on all of 'a_left'"),
-    # Goda's pressure with the still water level 10 m above the block: off its face.
+    # Goda's pressure with the still water level 10 m above the block: off its face
+    # (refused by Goda's own check, godaface.check_goda_face, before the calibration).
     (GODA_TOML.replace(f"still_water_level = {SWL}", "still_water_level = 10.0"),
-     "loads.wave.goda: the pressure is zero on all of 'a_left'"),
+     "loads.wave.goda.still_water_level: the pressure profile"),
 ])
 def test_pressure_off_the_face_is_refused(stacked, folder, loads, message):
     # Before the fix these ran to the end with no load at all (exit 0).

@@ -162,7 +162,14 @@ def test_study_stops_on_sigterm_while_a_case_is_built(tmp_path):
 @pytest.mark.serial
 def test_study_stops_every_group_under_mpiexec(tmp_path):
     """``mpiexec -n 2`` with groups of one rank: SIGTERM to the job stops both groups,
-    the cases they run are interrupted and no further case starts."""
+    the cases they run are interrupted and no further case starts.
+
+    The signal is sent when two case folders exist. On a busy machine one group may
+    already have finished its case and started the next by then (measured beside a
+    CPU-heavy process: cases 0 finished, 1 and 2 interrupted, 3 pending), so the test
+    checks what must hold whatever the timing: no case is left running or failed, the
+    cases running at the signal are interrupted, and at least one case never starts.
+    The cases are long (0.03 s, 300 steps) so that finishing one first is unlikely."""
     if COMM.size > 1:
         pytest.skip("subprocess test")
     mpiexec = shutil.which("mpiexec", path=str(pathlib.Path(sys.executable).parent)) \
@@ -170,14 +177,16 @@ def test_study_stops_every_group_under_mpiexec(tmp_path):
     if mpiexec is None:
         pytest.skip("no mpiexec")
     study = tmp_path / "study.toml"
-    study.write_text(STUDY.format(end=0.003, values="[0.5, 0.6, 0.7, 0.8]"))
+    study.write_text(STUDY.format(end=0.03, values="[0.5, 0.6, 0.7, 0.8]"))
     out = tmp_path / "out"
     done = _sigterm_when_built([mpiexec, "-n", "2", sys.executable, "-m", "breakwater",
                                 "sweep", str(study), "--out", str(out), "--quiet"], out, 2)
     assert done.returncode != 0, done
     assert "Traceback" not in done.stderr, done.stderr
     statuses = _statuses(out)
-    assert statuses["2"] == statuses["3"] == "pending", statuses
-    assert not any(out.glob("case-0002*")) and not any(out.glob("case-0003*"))
-    for case in ("0", "1"):  # stopped, not run to their end
-        assert statuses[case] == "interrupted", (statuses, done)
+    assert set(statuses.values()) <= {"finished", "interrupted", "pending"}, statuses
+    interrupted = [k for k, v in statuses.items() if v == "interrupted"]
+    pending = [k for k, v in statuses.items() if v == "pending"]
+    assert 1 <= len(interrupted) <= 2 and pending, (statuses, done)
+    for case in pending:  # never started
+        assert not any(out.glob(f"case-{int(case):04d}*")), statuses
