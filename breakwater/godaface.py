@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
 
-    from .loadcase import LoadCase
+    from . import loadcase
 
 __all__ = ["APPLIED_TOLERANCE", "GodaApplied", "check_goda_face", "goda_applied"]
 
@@ -45,7 +45,7 @@ class GodaApplied:
     profile: tuple[float, float]
 
 
-def goda_applied(load: LoadCase, data: gmshio.MeshData) -> GodaApplied:
+def goda_applied(load: loadcase.LoadCase, data: gmshio.MeshData) -> GodaApplied:
     """Integrate a Goda load's front profile over its loaded facets (collective).
 
     Each facet (owned by one rank) receives the profile between its lowest and highest
@@ -89,7 +89,7 @@ APPLIED_TOLERANCE = 1e-6
 (the mesh's coordinates against the still water level, h' and h_c: round-off)."""
 
 
-def check_goda_face(load: LoadCase, data: gmshio.MeshData, warn: bool = True
+def check_goda_face(load: loadcase.LoadCase, data: gmshio.MeshData, warn: bool = True
                     ) -> GodaApplied:
     """Refuse a Goda profile off its loaded face; warn when only part of it is on it.
 

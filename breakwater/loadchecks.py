@@ -18,7 +18,7 @@ from .loadfields import PressureProfile
 from .loads import Pulse
 
 if TYPE_CHECKING:
-    from .loadcase import LoadCase
+    from . import loadcase
     from .model import ContactModel
 
 __all__ = ["RESOLVED_STEPS", "SAMPLING_TOLERANCE", "face_problems", "profile_area",
@@ -57,7 +57,7 @@ def sampled_pulse(pulse: Pulse, dt: float, end_time: float, beta1: float
     return impulse, max(values), inside
 
 
-def pulse_warning(load: LoadCase, dt: float, end_time: float, beta1: float
+def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: float
                   ) -> tuple[str | None, dict[str, float]]:
     """What the nominal steps make of a pulse, and a one-line warning if it is poor.
 
@@ -109,7 +109,7 @@ def profile_area(profile: PressureProfile) -> float:
     return area
 
 
-def face_problems(load: LoadCase, model: ContactModel) -> tuple[str | None, str | None]:
+def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | None, str | None]:
     """An error (the load applies nothing) or a warning about a profile's loaded facets.
 
     For each model load of ``load`` with a :class:`PressureProfile` (a ``[profile]``,
