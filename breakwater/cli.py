@@ -93,20 +93,29 @@ def _inputs(args: argparse.Namespace, case: Case) -> list[pathlib.Path]:
 
 
 def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Path],
-                  comm: MPI.Comm) -> None:
+                  comm: MPI.Comm, patterns: Sequence[str] = files.OUTPUT_PATTERNS,
+                  outputs: str = "the outputs") -> None:
     """Refuse an output folder that cannot be written or would replace an input.
 
     Before anything runs; rank 0 checks, every rank raises.
 
+    Args:
+        folder: The output folder.
+        where: How the messages name it (``--out``, ``output.directory``).
+        inputs: The files the command reads.
+        comm: The ranks that raise.
+        patterns: The names written in ``folder`` (a run's, or a study's).
+        outputs: How the messages name what is written.
+
     Raises:
         CaseError: ``cannot write <path>: <reason>``, a file of that name, or an input
-            (the case file, the mesh, a table) under an output's name.
+            (the case file, the mesh, a table, the study file) under an output's name.
     """
     def check() -> None:
         files.check_writable(folder, where)
-        risky = files.overwritten_inputs(folder, inputs)
+        risky = files.overwritten_inputs(folder, inputs, patterns)
         if risky:
-            raise CaseError(f"{where} {folder}: the outputs would write over the input "
+            raise CaseError(f"{where} {folder}: {outputs} would write over the input "
                             f"{risky[0]} (choose another output folder)")
 
     on_rank_zero(comm, check)
@@ -223,16 +232,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     study = load_study(args.study, args.set or [], max_points=args.max_points)
     out = args.out if args.out is not None else pathlib.Path("results") / study.name
     where = "--out" if args.out is not None else "the study's folder"
-    inputs = [study.path, *case_sources(study.base)]
-
-    def check() -> None:
-        files.check_writable(out, where)
-        risky = files.overwritten_inputs(out, inputs, files.STUDY_PATTERNS)
-        if risky:
-            raise CaseError(f"{where} {out}: the study's outputs would write over the "
-                            f"input {risky[0]} (choose another folder)")
-
-    on_rank_zero(MPI.COMM_WORLD, check)
+    _check_output(out, where, [study.path, *case_sources(study.base)], MPI.COMM_WORLD,
+                  files.STUDY_PATTERNS, "the study's outputs")
     if not args.verbose:  # the cases' own messages: one line per case instead
         logging.getLogger("breakwater").setLevel(logging.CRITICAL)
     outcome = run_study(study, args.out, ranks_per_case=args.ranks_per_case,

@@ -263,8 +263,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         output: Output directory, probes, output switches, checkpoint interval.
         resolved_case: The resolved case, written as ``case.toml`` when given.
         extra_summary: Merged into the summary (e.g. calibration results).
-        report: Print a short report of the results at the end (rank 0), and log why
-            a run failed or was interrupted (without it the caller reports it).
+        report: Print a short report of the results at the end (rank 0).
         resume: Continue the run of ``output.directory`` from its checkpoint.
         fingerprint: Identifies the case in checkpoints; a checkpoint is resumed only
             by a run of the same fingerprint. Default: the hash of ``resolved_case``
