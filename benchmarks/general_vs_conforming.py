@@ -9,7 +9,7 @@ Run on purpose, never in CI (a conforming run of 6 s and general runs of 2-3 min
     .venv/bin/mpiexec -n 2 .venv/bin/python benchmarks/general_vs_conforming.py
 
 Issue 12, item 5: on the conforming Goda mesh the general path (closest-point
-kinematics: :mod:`breakwater.surfacepair`) should give the headline results of the
+kinematics: :mod:`breakwater.contact.general`) should give the headline results of the
 conforming (node-to-node) path within 0.5 %. The built-in case runs through the CLI,
 each run in its own output folder:
 
@@ -41,7 +41,7 @@ pair probes check them. Printed: a Markdown table of the headline results (summa
 and largest uplift) with the relative differences, and the solvers' figures.
 
 Every run starts from its static state (the general ones from
-:mod:`breakwater.relaxation`). The results are in the README ("general pairs").
+:mod:`breakwater.statics.relaxation`). The results are in the README ("general pairs").
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ from mpi4py import MPI
 
 import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
 from breakwater import cli
-from breakwater.files import read_history
+from breakwater.common.files import read_history
 
 G_MOUND = 2.27789e6  # Pa: the conforming calibration at refinement 1 (K_x = 500 kN/m)
 CORNERS = ("corner_front", "corner_rear")

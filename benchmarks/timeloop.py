@@ -8,7 +8,7 @@ Run on purpose, never in CI::
 
 For each mesh refinement of the built-in Goda case, both solvers (``time.solver =
 "fast"`` and ``"reference"``) run the same case in this one process, one after the other,
-through :func:`breakwater.simulation.run` with every output of the case file (history,
+through :func:`breakwater.run.simulation.run` with every output of the case file (history,
 ledger, probes, fields at their interval). The reference path may be given a shorter end
 time on big meshes (``--reference-end-time``); its figures are then per step and the
 speed-up is the ratio of the times per step. Printed and recorded for each run: DOFs,
@@ -39,10 +39,10 @@ import numpy as np
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
-from breakwater.case import load_case
-from breakwater.condensed import BulkOperators, MonolithicLayout, interface_dofs
-from breakwater.parallel import single_threaded_blas
-from breakwater.simulation import run
+from breakwater.casefile.case import load_case
+from breakwater.common.parallel import single_threaded_blas
+from breakwater.run.simulation import run
+from breakwater.stepping.condensed import BulkOperators, MonolithicLayout, interface_dofs
 
 HERE = pathlib.Path(__file__).resolve().parent
 PAGE = os.sysconf("SC_PAGE_SIZE")

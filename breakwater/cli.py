@@ -1,7 +1,7 @@
 """Command line: ``python -m breakwater {run,mesh,calibrate,sweep,show-case} [CASE] ...``.
 
 ``CASE`` is a case file (TOML), or the name of a built-in case (``goda``, the
-default); ``sweep`` takes a study file instead (:mod:`breakwater.studyfile`). Every
+default); ``sweep`` takes a study file instead (:mod:`breakwater.studies.studyfile`). Every
 command takes ``--set key=value`` overrides (repeatable). Errors
 the user can act on are one line on stderr, without a traceback unless ``--debug``:
 exit status 2 for input errors (case, mesh, usage, no checkpoint to resume, an output
@@ -25,15 +25,16 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from . import __version__, files
-from .errors import BreakwaterError, CaseError, MeshError
-from .parallel import on_rank_zero, shared_tempdir
-from .studyfile import MAX_POINTS
+from breakwater import __version__
+from breakwater.common import files
+from breakwater.common.errors import BreakwaterError, CaseError, MeshError
+from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.studies.studyfile import MAX_POINTS
 
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-    from .case import Case
+    from breakwater.casefile.case import Case
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
 PROG = "python -m breakwater"
@@ -81,13 +82,13 @@ def _overrides(args: argparse.Namespace) -> list[str]:
 
 
 def _load(args: argparse.Namespace) -> Case:
-    from .case import load_case
+    from breakwater.casefile.case import load_case
 
     return load_case(args.case, _overrides(args))
 
 
 def _inputs(args: argparse.Namespace, case: Case) -> list[pathlib.Path]:
-    from .case import case_inputs
+    from breakwater.casefile.case import case_inputs
 
     return case_inputs(args.case, case)
 
@@ -126,7 +127,8 @@ def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Pat
 def _cmd_run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from . import checkpoint, simulation
+    from breakwater.outputs import checkpoint
+    from breakwater.run import simulation
 
     comm = MPI.COMM_WORLD
     case = _load(args)
@@ -155,7 +157,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     import meshio
     from mpi4py import MPI
 
-    from . import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
+    from breakwater import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
 
     comm = MPI.COMM_WORLD
     out = pathlib.Path(args.out)
@@ -181,7 +183,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from .calibrate import HorizontalStiffness
+    from breakwater.statics.calibrate import HorizontalStiffness
 
     comm = MPI.COMM_WORLD
     case = _load(args)
@@ -225,9 +227,9 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from .case import case_sources
-    from .studyfile import load_study
-    from .sweep import run_study
+    from breakwater.casefile.case import case_sources
+    from breakwater.studies.studyfile import load_study
+    from breakwater.studies.sweep import run_study
 
     study = load_study(args.study, args.set or [], max_points=args.max_points)
     out = args.out if args.out is not None else pathlib.Path("results") / study.name
@@ -243,7 +245,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def _cmd_show_case(args: argparse.Namespace) -> int:
     if args.reference:
-        from .case import case_reference
+        from breakwater.casefile.case import case_reference
 
         _say(case_reference())
         return EXIT_OK
@@ -320,7 +322,7 @@ def _parser() -> argparse.ArgumentParser:
                        "each, handed out dynamically. Rerunning skips the finished cases. "
                        "Exit status 0 when every case finished, 1 otherwise.")
     p.add_argument("study", type=pathlib.Path, metavar="STUDY",
-                   help="study file (TOML; see breakwater.studyfile)")
+                   help="study file (TOML; see breakwater.studies.studyfile)")
     p.add_argument("--out", type=pathlib.Path, default=None, metavar="DIR",
                    help="the study's folder (default: results/<study name>)")
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
@@ -353,7 +355,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:  # usage errors (2) and --help/--version (0)
         return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
-    from .checkpoint import CheckpointError
+    from breakwater.outputs.checkpoint import CheckpointError
 
     try:
         with _logging(args):

@@ -3,8 +3,8 @@
 Build with ``make docs`` (``sphinx-build -W --keep-going -b html docs docs/_build/html``).
 Three things are generated at build time into ``docs/_generated/`` (not committed):
 
-- ``case_reference.md``, the case-file table, from :func:`breakwater.case.case_reference`;
-- ``api.md``, one ``automodule`` per module of the package;
+- ``case_reference.md``, the case-file table, from :func:`breakwater.casefile.case.case_reference`;
+- ``api.md``, one ``automodule`` per module, grouped by subpackage;
 - the notebooks, converted from their jupytext sources ``notebooks/*.py`` to ``.ipynb``,
   which MyST-NB executes during the build, with the short end time of
   ``NOTEBOOK_SETTINGS`` (an environment variable of the same name overrides it).
@@ -24,7 +24,7 @@ import nbformat
 from sphinx.application import Sphinx
 
 import breakwater  # first: it loads the PETSc of the dolfinx wheel (when installed)
-from breakwater.case import case_reference
+from breakwater.casefile.case import case_reference
 
 DOCS = pathlib.Path(__file__).resolve().parent
 ROOT = DOCS.parent
@@ -79,36 +79,40 @@ def _modules(package: str) -> list[str]:
     return names
 
 
-# The physics core first, then the application; every other module of the package after.
+# One section per subpackage, in the order of the pipeline (the package's docstring first).
 API_SECTIONS = {
-    "The physics core": ["breakwater.model", "breakwater.interface", "breakwater.gn22",
-                         "breakwater.initial",
-                         "breakwater.slipguard", "breakwater.solver", "breakwater.ledger",
-                         "breakwater.numerical", "breakwater.bulkenergy",
-                         "breakwater.probes"],
-    "The fast step solver": ["breakwater.bulk", "breakwater.condensed",
-                             "breakwater.nodalcontact"],
-    "The physics in UFL (forms/)": _modules("breakwater.forms"),
-    "Cases and runs": ["breakwater.case", "breakwater.simulation"],
-    "Loads": ["breakwater.loads", "breakwater.loadfields", "breakwater.wavepressure",
-              "breakwater.loadcase", "breakwater.loadchecks", "breakwater.appliedloads",
-              "breakwater.godaface"],
+    "Foundations (breakwater.common)": "breakwater.common",
+    "Settings (breakwater.config)": "breakwater.config",
+    "Loads (breakwater.loads)": "breakwater.loads",
+    "The model (breakwater.model)": "breakwater.model",
+    "Contact (breakwater.contact)": "breakwater.contact",
+    "Time stepping (breakwater.stepping)": "breakwater.stepping",
+    "Energy (breakwater.energy)": "breakwater.energy",
+    "Static states (breakwater.statics)": "breakwater.statics",
+    "Outputs (breakwater.outputs)": "breakwater.outputs",
+    "The case file (breakwater.casefile)": "breakwater.casefile",
+    "A run (breakwater.run)": "breakwater.run",
+    "Studies (breakwater.studies)": "breakwater.studies",
+    "The physics in UFL (forms/)": "breakwater.forms",
+    "Geometries (meshes/)": "breakwater.meshes",
 }
 
 
 def _api() -> str:
-    listed = {name for names in API_SECTIONS.values() for name in names}
-    every = [*_modules("breakwater"), *_modules("breakwater.meshes")]
-    sections = {**API_SECTIONS,
-                "Other modules": [m for m in every if m not in listed and m != "breakwater"]}
-    lines = []
-    for title, names in sections.items():
+    lines = ["```{eval-rst}", ".. automodule:: breakwater", "```", "",
+             "```{eval-rst}", ".. automodule:: breakwater.cli", "   :members:", "```", ""]
+    for title, package in API_SECTIONS.items():
         lines += [f"## {title}", ""]
-        for name in names:
+        for name in _modules(package):
             # A package's own page is its docstring: its members are its modules'.
-            package = hasattr(importlib.import_module(name), "__path__")
-            options = [] if package else ["   :members:"]
+            options = [] if name == package else ["   :members:"]
             lines += ["```{eval-rst}", f".. automodule:: {name}", *options, "```", ""]
+    listed = {m for p in API_SECTIONS.values() for m in _modules(p)}
+    packages = [m.name for m in pkgutil.iter_modules(breakwater.__path__, "breakwater.")
+                if m.ispkg and m.name != "breakwater.cases"]
+    missing = sorted(set(packages) - listed)
+    if missing:
+        raise RuntimeError(f"docs/conf.py: subpackages missing from API_SECTIONS: {missing}")
     return "\n".join(lines)
 
 

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from breakwater.case import load_case
+from breakwater.casefile.case import load_case
 
 HERE = pathlib.Path(__file__).resolve().parent
 

@@ -1,10 +1,10 @@
 """The contact law: penalty normal contact and regularised Coulomb friction.
 
-SPEC §1-2, eqs. 7-15 and 23. **This module is the one place where the contact law
-is written.** The residual (:meth:`breakwater.model.ContactModel.traction`), the
+the paper's §2-3, eqs. 7-15 and 23. **This module is the one place where the contact law
+is written.** The residual (:meth:`breakwater.model.model.ContactModel.traction`), the
 energy ledger (:mod:`forms.energy`), the history's resultants, the nodal outputs
-(:meth:`breakwater.interface.InterfaceNodes.contact_state`) and the Newton slip guard
-(:mod:`breakwater.slipguard`, through :attr:`RegularisedCoulomb.stick_band`) all
+(:meth:`breakwater.contact.conforming.InterfaceNodes.contact_state`) and the Newton slip guard
+(:mod:`breakwater.contact.slipguard`, through :attr:`RegularisedCoulomb.stick_band`) all
 evaluate the objects below, which a model builds per contact pair
 (:meth:`ContactLaw.of`, with ``fem.Constant`` parameters; :meth:`ContactLaw.values`
 for nodal arrays).
@@ -12,7 +12,7 @@ for nodal arrays).
 Where to change the friction law: here, in :class:`RegularisedCoulomb` (or a new
 class with the same methods, built in :meth:`ContactLaw.of`). If the new law needs a
 new parameter, it also needs an entry in the case schema (``[contact.<interface>]``,
-:mod:`breakwater.case`) and the field of :class:`breakwater.model.ContactPair` that
+:mod:`breakwater.casefile.case`) and the field of :class:`breakwater.model.model.ContactPair` that
 carries it to :meth:`ContactLaw.of`.
 
 Each law evaluates on UFL expressions (for forms) and on NumPy arrays of nodal
@@ -24,7 +24,7 @@ UFL or NumPy from the type of the arguments. On the UFL path the parameters may 
 NumPy path the parameters are floats, scalars per node have shape ``(n,)`` and
 vectors per node shape ``(n, gdim)``; the arrays may be complex (the NumPy operations
 are analytic, so a complex step differentiates them: the general contact pairs of
-:mod:`breakwater.surfacepair` take their Jacobian so).
+:mod:`breakwater.contact.general` take their Jacobian so).
 
 Quantities are written for a slave body s pressed on a master body m, on a
 conforming interface, with the master's outward unit normal ``n`` (pointing from
@@ -80,7 +80,7 @@ class _NumpyOps:
     @staticmethod
     def where_closed(g_n, closed, open_):
         # The real part decides: complex arrays carry complex-step derivatives
-        # (breakwater.surfacepair), and the active set does not depend on them.
+        # (breakwater.contact.general), and the active set does not depend on them.
         return np.where(np.real(np.asarray(g_n)) <= 0.0, closed, open_)
 
     @staticmethod
@@ -172,7 +172,7 @@ class RegularisedCoulomb:
     def stick_band(self):
         """χ: below this slip speed the law is smooth (``|t_T| < μp/√2``).
 
-        Newton's slip guard (:mod:`breakwater.slipguard`) leaves steps that start
+        Newton's slip guard (:mod:`breakwater.contact.slipguard`) leaves steps that start
         inside the band alone.
         """
         return self.χ
@@ -216,7 +216,7 @@ class ContactLaw:
 
         Args:
             pair: Anything with the attributes ``penalty``, ``gap``, ``friction`` and
-                ``regularisation`` (a :class:`breakwater.model.ContactPair`).
+                ``regularisation`` (a :class:`breakwater.model.model.ContactPair`).
             parameter: Maps each value to the law's parameter, e.g. to a
                 ``fem.Constant`` for forms.
 

@@ -1,4 +1,4 @@
-"""Linear isotropic elastodynamics (SPEC §3, eqs. 16-22).
+"""Linear isotropic elastodynamics (the paper's §4, eqs. 16-22).
 
 The semi-discrete balance is ``M a + C v + K u = f``: :func:`inertia` gives the ``M``
 term, :func:`elastic_residual` the ``K`` term, :func:`rayleigh_damping` the

@@ -1,6 +1,6 @@
 """GN22's numerical dissipation over one step, from the scheme's discrete energy identity.
 
-One GN22 step (see :func:`breakwater.gn22.gn22_kinematics`) satisfies, with
+One GN22 step (see :func:`breakwater.stepping.gn22.gn22_kinematics`) satisfies, with
 v̄ = ½(v₀ + v₁), ā = ½(a₀ + a₁), Δa = a₁ − a₀,
 
     Δu = Δt v̄ + c Δt² Δa,     c = ½(β₂ − β₁)            (the displacement jump)

@@ -1,7 +1,7 @@
 """Bodies meshed separately in one gmsh file (disconnected components), for general pairs.
 
 Each body is its own surface with its own element size, so the meshes of two bodies in
-contact need not match (:mod:`breakwater.surfacepair`); each side of a body is an
+contact need not match (:mod:`breakwater.contact.general`); each side of a body is an
 exterior facet group. Rectangles are structured (transfinite) triangles.
 """
 
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import gmsh
 from mpi4py import MPI
 
-from breakwater.gmshtools import gmsh_session
-from breakwater.parallel import on_rank_zero
+from breakwater.common.gmshtools import gmsh_session
+from breakwater.common.parallel import on_rank_zero
 
 __all__ = ["Rectangle", "rectangles"]
 

@@ -29,7 +29,7 @@ import meshio  # type: ignore[import-untyped]
 import numpy as np
 from mpi4py import MPI
 
-from breakwater.parallel import on_rank_zero
+from breakwater.common.parallel import on_rank_zero
 
 _XDMF_SUFFIXES = (".xdmf", ".xmf")
 _TAGS = ("gmsh:physical", "gmsh:geometrical")
@@ -125,7 +125,7 @@ def convert(
     Raises:
         ValueError: For an unknown suffix (checked on all ranks before any work).
         Exception: What the conversion raised on rank 0, on every rank (see
-            :func:`breakwater.parallel.on_rank_zero`).
+            :func:`breakwater.common.parallel.on_rank_zero`).
 
     """
     file_format = _file_format(pathlib.Path(out_path))

@@ -7,7 +7,7 @@ one shared gmsh curve (``interface``), so the two bodies have conforming nodes
 there. With ``GodaGeometry(conforming=False)`` the two bodies are meshed apart: the
 caisson base (``caisson_base``) and the whole mound crest (``mound_crest``) are
 distinct curves, coincident in space, with no shared nodes (for a general contact
-pair, :mod:`breakwater.surfacepair`), and each body has its own element size. The
+pair, :mod:`breakwater.contact.general`), and each body has its own element size. The
 struck (seaward) face is the caisson's left face; the pendulum pushes in ``+x``.
 
 Physical groups are referred to by name (the module constants below); their
@@ -28,8 +28,8 @@ from types import MappingProxyType
 import gmsh  # type: ignore[import-untyped]
 from mpi4py import MPI
 
-from breakwater.gmshtools import gmsh_session as _session
-from breakwater.parallel import on_rank_zero
+from breakwater.common.gmshtools import gmsh_session as _session
+from breakwater.common.parallel import on_rank_zero
 
 # Surfaces (dim 2).
 CAISSON = "caisson"
@@ -320,7 +320,7 @@ def _check_mesh_args(refinement: float, order: int) -> None:
 def gmsh_session() -> AbstractContextManager[None]:
     """A quiet gmsh session with this module's meshing options.
 
-    See :func:`breakwater.gmshtools.gmsh_session`: nested in the caller's session,
+    See :func:`breakwater.common.gmshtools.gmsh_session`: nested in the caller's session,
     the caller's model and options are restored on exit.
     """
     return _session(_OPTIONS, _MODEL_NAME)
@@ -458,7 +458,7 @@ def generate(
     Raises:
         ValueError: For invalid geometry, refinement or order (on all ranks).
         Exception: What gmsh raised on rank 0, on every rank (see
-            :func:`breakwater.parallel.on_rank_zero`).
+            :func:`breakwater.common.parallel.on_rank_zero`).
 
     """
     g = GodaGeometry() if geometry is None else geometry

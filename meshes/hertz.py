@@ -3,7 +3,7 @@
 The half-cylinder of radius R (axis and flat top at y = R; here its quarter x ≥ 0, by
 symmetry) touches the block's top y = 0 at the origin; the two bodies are separate
 surfaces of one gmsh file (disconnected components), refined near the origin, so that
-their meshes do not match (:mod:`breakwater.surfacepair`). Physical groups:
+their meshes do not match (:mod:`breakwater.contact.general`). Physical groups:
 
 - ``cylinder`` (cells): ``cylinder_contact`` (the arc within ``contact_angle`` of the
   bottom), ``cylinder_arc`` (the rest of the arc), ``cylinder_top`` (the flat top
@@ -19,8 +19,8 @@ import pathlib
 import gmsh
 from mpi4py import MPI
 
-from breakwater.gmshtools import gmsh_session
-from breakwater.parallel import on_rank_zero
+from breakwater.common.gmshtools import gmsh_session
+from breakwater.common.parallel import on_rank_zero
 
 __all__ = ["hertz"]
 

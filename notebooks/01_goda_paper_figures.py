@@ -24,11 +24,11 @@
 # on the mound and settle again under its own weight.
 #
 # 1. the model, with the paper's equation numbers (sections 2-4 of the paper);
-# 2. the case (section 5), read with `breakwater.case.load_case`;
+# 2. the case (section 5), read with `breakwater.casefile.case.load_case`;
 # 3. the mound's shear modulus, calibrated to Goda's horizontal stiffness $K_x$;
-# 4. the run, `breakwater.simulation.run`;
+# 4. the run, `breakwater.run.simulation.run`;
 # 5. the paper's Figs. 16-22, drawn from the run's output files with
-#    `breakwater.figures`;
+#    `breakwater.outputs.figures`;
 # 6. the paper's headline numbers next to the run's.
 #
 # The same run from the command line is `python -m breakwater run` (the default case).
@@ -64,10 +64,12 @@ import numpy as np
 from IPython.display import Image, Markdown, display
 from mpi4py import MPI
 
-from breakwater import figures, meshes, simulation
-from breakwater.calibrate import HorizontalStiffness
-from breakwater.case import load_case
-from breakwater.outputs import read_history
+from breakwater import meshes
+from breakwater.casefile.case import load_case
+from breakwater.outputs import figures
+from breakwater.outputs.writers import read_history
+from breakwater.run import simulation
+from breakwater.statics.calibrate import HorizontalStiffness
 
 # %% [markdown]
 # ## 1. The model
@@ -181,7 +183,7 @@ overrides = [
     f"time.end_time={END_TIME}",
     f"mesh.refinement={REFINEMENT}",
     f"output.directory={json.dumps(OUT.as_posix())}",
-    "output.figures=false",  # drawn below with breakwater.figures
+    "output.figures=false",  # drawn below with breakwater.outputs.figures
 ]
 case = load_case(None, overrides)
 
@@ -250,7 +252,7 @@ plt.show()
 # ## 3. The mound's stiffness
 #
 # `case.build()` reads the mesh, calibrates the mound's shear modulus (the case's
-# `[calibration]` table, `breakwater.calibrate`) and builds the contact model with its
+# `[calibration]` table, `breakwater.statics.calibrate`) and builds the contact model with its
 # loads, gravity and damping. The calibration follows Goda's mass-spring model: the
 # caisson's horizontal stiffness $K_x$ is the inertial load of a uniform horizontal
 # acceleration of the caisson over its mean displacement, the interface bonded (at small
@@ -310,7 +312,7 @@ print(sorted(p.name for p in OUT.iterdir()))
 # ## 5. The paper's figures
 #
 # `figures.make_figures(folder)` draws every figure of a run from its output files only
-# (so it can be redone later, e.g. `python -m breakwater.figures results/goda`), into
+# (so it can be redone later, e.g. `python -m breakwater.outputs.figures results/goda`), into
 # `<folder>/figures/`. Below, each figure of the paper next to the run's.
 
 # %%

@@ -59,12 +59,13 @@ import numpy as np
 from IPython.display import Image, Markdown, display
 from mpi4py import MPI
 
-from breakwater import meshes, simulation
-from breakwater.calibrate import HorizontalStiffness
-from breakwater.case import load_case
-from breakwater.gmshtools import gmsh_session
+from breakwater import meshes
+from breakwater.casefile.case import load_case
+from breakwater.common.gmshtools import gmsh_session
 from breakwater.meshes import GodaGeometry
-from breakwater.outputs import read_history
+from breakwater.outputs.writers import read_history
+from breakwater.run import simulation
+from breakwater.statics.calibrate import HorizontalStiffness
 
 comm = MPI.COMM_WORLD
 
@@ -378,8 +379,8 @@ display(Image(filename=str(OUT / "berm" / "figures" / "max_ux_deformed.png"), wi
 # at 2 kHz with transducer noise. To use your own, point `table.file` at it.
 
 # %%
-from breakwater.loads import read_table
-from breakwater.wavepressure import goda_pressure
+from breakwater.loads.signals import read_table
+from breakwater.loads.wavepressure import goda_pressure
 
 (OUT / "measured").mkdir(parents=True, exist_ok=True)
 record = OUT / "measured" / "pressure_record.csv"

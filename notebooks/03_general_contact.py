@@ -17,7 +17,7 @@
 #
 # A general contact pair (`slave_surface`, `master_surface` in `[contact.<name>]`)
 # projects the slave's integration points onto the master surface in the current
-# configuration (the paper's closest-point kinematics, SPEC §2, eqs. 4–9), so the two
+# configuration (the paper's closest-point kinematics, the paper's §3, eqs. 4–9), so the two
 # bodies may be meshed separately and may slide by many elements. This notebook:
 #
 # 1. runs `examples/sliding_block/sliding_block.toml`, a concrete block pushed along a
@@ -56,9 +56,9 @@ import numpy as np
 from IPython.display import Markdown, display
 from mpi4py import MPI
 
-from breakwater import simulation
-from breakwater.case import load_case
-from breakwater.files import read_history
+from breakwater.casefile.case import load_case
+from breakwater.common.files import read_history
+from breakwater.run import simulation
 
 comm = MPI.COMM_WORLD
 EXAMPLE = next(p / "examples" / "sliding_block" / "sliding_block.toml"

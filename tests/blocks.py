@@ -21,9 +21,9 @@ import pytest
 from breakwater.meshes import gmsh_session
 from mpi4py import MPI
 
-from breakwater.gn22 import GN22
-from breakwater.mesh import read_mesh
-from breakwater.model import (
+from breakwater.common.parallel import on_rank_zero
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
     Body,
     ContactModel,
     ContactPair,
@@ -32,7 +32,7 @@ from breakwater.model import (
     Material,
     SurfaceLoad,
 )
-from breakwater.parallel import on_rank_zero
+from breakwater.stepping.gn22 import GN22
 
 
 def two_rectangles(path: str | pathlib.Path, comm: MPI.Comm, a: tuple[float, float],

@@ -17,11 +17,11 @@ import pytest
 from blocks import stacked_blocks
 from mpi4py import MPI
 
-from breakwater import simulation
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.outputs import read_history
-from breakwater.runspec import OutputSpec, PairProbeSpec, TimeSpec
+from breakwater.config.runspec import OutputSpec, PairProbeSpec, TimeSpec
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs.writers import read_history
+from breakwater.run import simulation
 
 COMM = MPI.COMM_WORLD
 WIDTH, HEIGHTS = 0.4, (0.2, 0.15, 0.1)   # m

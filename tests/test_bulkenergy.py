@@ -1,9 +1,9 @@
 """The energy ledger's whole-mesh terms from the fast solver's cached M and K.
 
-On the fast solver the ledger (:class:`breakwater.ledger.EnergyLedger`) takes the
+On the fast solver the ledger (:class:`breakwater.energy.ledger.EnergyLedger`) takes the
 kinetic ½v·Mv, strain ½u·Ku, Rayleigh power v̄·(αM + βK)v̄, external work f·Δu and the
-bulk numerical dissipation (:func:`breakwater.numerical.bulk_coefficients`) from the
-cached M, K and unit load vectors (:mod:`breakwater.bulkenergy`); the reference solver
+bulk numerical dissipation (:func:`breakwater.energy.dissipation.bulk_coefficients`) from the
+cached M, K and unit load vectors (:mod:`breakwater.energy.bulkenergy`); the reference solver
 assembles the UFL forms of ``forms/``. Both are the same quadratic and linear forms with
 the same quadrature, so they differ by round-off only: two ledgers on the same run, one
 of each source, agree column by column at every step to 1e-10 of the ledger's energy
@@ -26,19 +26,19 @@ import pytest
 from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks
 from mpi4py import MPI
 
-from breakwater.case import load_case
-from breakwater.gn22 import GN22, GN22Parameters
-from breakwater.initial import initial_state
-from breakwater.ledger import FIELDS, EnergyLedger
-from breakwater.mesh import read_mesh
-from breakwater.model import (
+from breakwater.casefile.case import load_case
+from breakwater.energy.ledger import FIELDS, EnergyLedger
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
     Body,
     ContactModel,
     ContactPair,
     Fixed,
     Material,
 )
-from breakwater.solver import NewtonOptions
+from breakwater.statics.initial import initial_state
+from breakwater.stepping.gn22 import GN22, GN22Parameters
+from breakwater.stepping.solver import NewtonOptions
 
 COMM = MPI.COMM_WORLD
 RTOL = 1e-10  # of the ledger's energy scale (see the module docstring)

@@ -1,4 +1,4 @@
-"""Calibration of a shear modulus to a horizontal stiffness (breakwater.calibrate)."""
+"""Calibration of a shear modulus to a horizontal stiffness (breakwater.statics.calibrate)."""
 
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from blocks import two_rectangles
 
-from breakwater.calibrate import (
+from breakwater.casefile.case import load_case
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.statics.calibrate import (
     CalibrationError,
     HorizontalStiffness,
     calibrate_shear_modulus,
 )
-from breakwater.case import load_case
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
 
 COMM = MPI.COMM_WORLD
 
@@ -93,7 +93,7 @@ def goda(folder: pathlib.Path):
 def test_goda_calibration_hits_the_target(goda):
     case, data = goda
     r = case.calibrate(data)
-    target = 500e3 / 0.205  # Goda's K_x per metre of the 0.205 m block (SPEC §4)
+    target = 500e3 / 0.205  # Goda's K_x per metre of the 0.205 m block (the paper's §5)
     assert r.target == pytest.approx(target, rel=1e-14)
     assert r.relative_error <= case.calibration.tolerance <= 1e-3
     assert abs(r.stiffness - target) <= 1e-3 * target

@@ -19,10 +19,10 @@ from hypothesis import strategies as st
 from mpi4py import MPI
 
 from breakwater import cli
-from breakwater.case import BUILTIN_CASES, Case, CaseError, case_reference, load_case
-from breakwater.loads import Pulse, impact_velocity, pendulum_impulse
-from breakwater.mesh import read_mesh
-from breakwater.schema import schema_keys
+from breakwater.casefile.case import BUILTIN_CASES, Case, CaseError, case_reference, load_case
+from breakwater.config.schema import schema_keys
+from breakwater.loads.signals import Pulse, impact_velocity, pendulum_impulse
+from breakwater.model.mesh import read_mesh
 
 COMM = MPI.COMM_WORLD
 BAD = pathlib.Path(__file__).parent / "bad_cases"
@@ -48,7 +48,7 @@ def test_default_case_is_the_paper_case():
     assert case == load_case("goda") == load_case(BUILTIN_CASES / "goda.toml")
     assert case.name == "goda"
     caisson, mound = case.body("caisson"), case.body("mound")
-    # Stickle et al. (2011) §5.3 / SPEC §4.
+    # Stickle et al. (2011) §5.3 / the paper's §5.
     assert (caisson.density, caisson.poisson, caisson.shear_modulus) == (2314.0, 0.2, 2e9)
     assert mound.poisson == 0.25 and mound.shear_modulus is None
     assert case.calibration.enabled and case.calibration.stiffness == 500e3

@@ -1,4 +1,4 @@
-"""Checkpoint and resume (breakwater.checkpoint; simulation.run(..., resume=True)).
+"""Checkpoint and resume (breakwater.outputs.checkpoint; simulation.run(..., resume=True)).
 
 The model of tests/test_simulation.py: block ``a`` (1 m x 0.5 m) on block ``b``
 (2 m x 0.5 m, base fixed), μ = 0.6, a triangular push on the left face of ``a``. The
@@ -29,14 +29,14 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater import simulation
-from breakwater.checkpoint import CHECKPOINT, CheckpointError, match_nodes
-from breakwater.errors import ConvergenceError
-from breakwater.gn22 import GN22
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.outputs import read_history
-from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.common.errors import ConvergenceError
+from breakwater.config.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs.checkpoint import CHECKPOINT, CheckpointError, match_nodes
+from breakwater.outputs.writers import read_history
+from breakwater.run import simulation
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 WIDTH, HEIGHT = 1.0, 0.5   # block a (m)
@@ -558,7 +558,7 @@ def test_sigint_stops_like_sigterm(mesh_path: pathlib.Path, shared_dir: pathlib.
 def test_second_signal_kills_at_once() -> None:
     # The first SIGINT (or SIGTERM) only sets the flag and gives both signals back
     # their default action: a second one kills the process at once.
-    from breakwater.console import StopSignal
+    from breakwater.common.console import StopSignal
 
     before = {s: signal.getsignal(s) for s in StopSignal.SIGNALS}
     with StopSignal() as stop:

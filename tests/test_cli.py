@@ -15,9 +15,10 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from breakwater.meshes import PHYSICAL_GROUPS, read
 
-from breakwater import cli, simulation
-from breakwater.case import load_case
-from breakwater.runspec import OutputSpec, TimeSpec
+from breakwater import cli
+from breakwater.casefile.case import load_case
+from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.run import simulation
 
 COMM = MPI.COMM_WORLD
 

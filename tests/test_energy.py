@@ -2,7 +2,7 @@
 
 With β1 = β2 = ½, GN22 is Newmark's average-acceleration rule: for linear terms the
 discrete energy identity is exact (Hughes, *The Finite Element Method*, §9.3), so the
-ledger's (:class:`breakwater.ledger.EnergyLedger`) numerical dissipation is only its
+ledger's (:class:`breakwater.energy.ledger.EnergyLedger`) numerical dissipation is only its
 contact share: what the contact nonlinearity (penalty switching on and off within a
 step, stick-slip transitions) leaves. The balance, with that entry, closes to the
 Newton tolerance (more β₁, β₂ in test_numerical_dissipation.py).
@@ -18,10 +18,9 @@ import pytest
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
-from breakwater.gn22 import GN22, GN22Parameters, solve_static
-from breakwater.ledger import EnergyLedger
-from breakwater.mesh import read_mesh
-from breakwater.model import (
+from breakwater.energy.ledger import EnergyLedger
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
     Body,
     ContactModel,
     ContactPair,
@@ -30,6 +29,7 @@ from breakwater.model import (
     Material,
     SurfaceLoad,
 )
+from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles

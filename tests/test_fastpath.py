@@ -1,6 +1,6 @@
 """The fast GN22 solver (``time.solver = "fast"``) against the reference Newton.
 
-The fast path (:mod:`breakwater.condensed`) factorises A = M + β₁Δt C + ½β₂Δt² K once
+The fast path (:mod:`breakwater.stepping.condensed`) factorises A = M + β₁Δt C + ½β₂Δt² K once
 per Δt and runs Newton on the contact-surface unknowns of the interface Schur
 complement; the reference path runs Newton on the whole residual. Both solve the same
 equations to the same tolerances, so their histories agree to the Newton tolerance
@@ -21,14 +21,12 @@ from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks, two
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
-from breakwater import simulation
-from breakwater.case import CaseError, load_case
-from breakwater.condensed import BulkOperators, MonolithicLayout, interface_dofs
-from breakwater.files import read_history
-from breakwater.gn22 import GN22, solve_static
-from breakwater.ledger import FIELDS
-from breakwater.mesh import read_mesh
-from breakwater.model import (
+from breakwater.casefile.case import CaseError, load_case
+from breakwater.common.files import read_history
+from breakwater.config.runspec import OutputSpec, PairProbeSpec, TimeSpec
+from breakwater.energy.ledger import FIELDS
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
     Body,
     ContactModel,
     ContactPair,
@@ -36,7 +34,9 @@ from breakwater.model import (
     Fixed,
     Material,
 )
-from breakwater.runspec import OutputSpec, PairProbeSpec, TimeSpec
+from breakwater.run import simulation
+from breakwater.stepping.condensed import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
 KINEMATICS = ("_ux", "_uy", "_slip", "_opening")

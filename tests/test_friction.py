@@ -18,9 +18,9 @@ import pytest
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
-from breakwater.gn22 import GN22, GN22Parameters, solve_static
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles

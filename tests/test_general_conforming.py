@@ -1,8 +1,8 @@
 """A general pair on a conforming interface: the same run as the conforming pair (issue 12).
 
 On a conforming interface (one facet group shared by the two bodies) a general pair
-(:mod:`breakwater.surfacepair`, slave and master surface both the shared group) and
-the conforming node-to-node pair (:class:`breakwater.model.ContactPair`) model the same
+(:mod:`breakwater.contact.general`, slave and master surface both the shared group) and
+the conforming node-to-node pair (:class:`breakwater.model.model.ContactPair`) model the same
 contact; they differ only in how the interface is integrated (the conforming pair: the
 facet's P2 nodes, GLL/Simpson weights; the general pair: Gauss points on segments,
 with the closest-point kinematics in the current configuration). Two stacked blocks
@@ -25,12 +25,12 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from blocks import stacked_blocks, two_rectangles
 
-from breakwater.errors import MeshError
-from breakwater.gn22 import GN22
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.surfacepair import SurfaceContact
-from breakwater.surfaces import SurfacePair
+from breakwater.common.errors import MeshError
+from breakwater.contact.general import SurfaceContact
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 MATERIAL = Material(density=2000.0, poisson=0.25, young_modulus=1e9)

@@ -1,4 +1,4 @@
-"""Verification of the GN22 integrator (SPEC §3, eqs. 24-28) on a linear elastic oscillator.
+"""Verification of the GN22 integrator (the paper's §4, eqs. 24-28) on a linear elastic oscillator.
 
 The oscillator is a plane-strain cantilever (body ``a``, 1 m × 0.2 m, clamped on its left
 side) without contact. Its semi-discrete equations M ü + K u = 0 are solved exactly by modal
@@ -30,10 +30,10 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.gn22 import GN22, GN22Parameters, gn22_kinematics, solve_static
-from breakwater.mesh import group_tag, read_mesh
-from breakwater.model import Body, ContactModel, Fixed, Material
-from breakwater.probes import PointProbe
+from breakwater.model.mesh import group_tag, read_mesh
+from breakwater.model.model import Body, ContactModel, Fixed, Material
+from breakwater.outputs.probes import PointProbe
+from breakwater.stepping.gn22 import GN22, GN22Parameters, gn22_kinematics, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles

@@ -15,8 +15,8 @@ import pytest
 from mpi4py import MPI
 
 from breakwater import cli
-from breakwater.case import load_case
-from breakwater.files import read_history
+from breakwater.casefile.case import load_case
+from breakwater.common.files import read_history
 
 EXAMPLES = pathlib.Path(__file__).parents[1] / "examples"
 NONMATCHING = EXAMPLES / "goda_nonmatching.toml"
@@ -86,7 +86,7 @@ def test_examples_run_and_compare(shared_dir: pathlib.Path) -> None:
     loop = summary["solver"]["time_loop"]  # the search: a part of the interface assembly
     assert 0 < loop["contact_search"] < loop["interface_assembly"]
     h = read_history(b / "history.csv")
-    # The run starts from the static state (breakwater.relaxation): the crest carries
+    # The run starts from the static state (breakwater.statics.relaxation): the crest carries
     # the caisson's weight ρ g B H (per metre; the relaxation converges to 1e-8 of the
     # load, the first row is the state itself), the caisson's corners settled onto it.
     assert summary["static"]["initial_state"] == "frictionless"

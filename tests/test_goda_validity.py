@@ -4,7 +4,7 @@
   (T = 0.1 s at h = 1000 m: no overflow), against itself (the residual), its deep- and
   shallow-water limits and Fenton & McKee's (1990) approximation (within its stated
   1.7 %);
-- Goda's formula (:mod:`breakwater.wavepressure`) refused outside its range of validity
+- Goda's formula (:mod:`breakwater.loads.wavepressure`) refused outside its range of validity
   (h_b >= d, 0 < d <= h' <= h, h_c >= 0, λ₁ > 0, H_max <= Goda's breaking limit), each
   refusal naming the input and the range; accepted at the bounds; deep water without
   overflow (α₁ = 0.6, α₃ = 1 − h'/h, p₂ = 0, α_I = 0);
@@ -30,16 +30,16 @@ from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
 from breakwater import cli
-from breakwater.case import CaseError, load_case
-from breakwater.godaface import check_goda_face
-from breakwater.loadcase import load_summary
-from breakwater.sweep import TABLE
-from breakwater.wavepressure import (
+from breakwater.casefile.case import CaseError, load_case
+from breakwater.casefile.godaface import check_goda_face
+from breakwater.casefile.loads import load_summary
+from breakwater.loads.wavepressure import (
     GodaRangeError,
     breaking_height,
     goda_pressure,
     wavelength,
 )
+from breakwater.studies.sweep import TABLE
 
 COMM = MPI.COMM_WORLD
 G = 9.81

@@ -38,12 +38,12 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from breakwater.meshes.hertz import hertz
 
-from breakwater.errors import ConvergenceError
-from breakwater.gn22 import GN22, GN22Parameters
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.surfacepair import SurfaceContact
-from breakwater.surfaces import SurfacePair
+from breakwater.common.errors import ConvergenceError
+from breakwater.contact.general import SurfaceContact
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import GN22, GN22Parameters
 
 COMM = MPI.COMM_WORLD
 R, E, NU = 1.0, 1e9, 0.25

@@ -20,9 +20,9 @@ import ufl
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
-from breakwater.gn22 import GN22, GN22Parameters
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Material
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Material
+from breakwater.stepping.gn22 import GN22, GN22Parameters
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -152,9 +152,9 @@ field_interval = 0
 def test_initial_velocity_from_a_case_file(folder: pathlib.Path):
     # The same impact set up by a case file: bar a's initial velocity is
     # bodies.a.initial_velocity; the run layer starts from it (history.csv).
-    from breakwater.case import load_case
-    from breakwater.outputs import read_history
-    from breakwater.simulation import run
+    from breakwater.casefile.case import load_case
+    from breakwater.outputs.writers import read_history
+    from breakwater.run.simulation import run
 
     path = two_rectangles(folder / "bars_case.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
                           layout="side")

@@ -1,4 +1,4 @@
-"""The initial state (breakwater.initial): a block on an incline, held or released.
+"""The initial state (breakwater.statics.initial): a block on an incline, held or released.
 
 Gravity itself is tilted by θ, ``g = (g sinθ, −g cosθ)``, on a horizontal block ``a``
 (W × H) resting on a base ``b`` fixed at its bottom, μ = 0.3, the paper's χ = 1e-10 m/s:
@@ -28,10 +28,10 @@ from mpi4py import MPI
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
-from breakwater.gn22 import GN22, GN22Parameters
-from breakwater.initial import initial_state
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.statics.initial import initial_state
+from breakwater.stepping.gn22 import GN22, GN22Parameters
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -135,7 +135,7 @@ def test_below_the_friction_angle_stays_at_rest(mesh_path, folder, solver):
 @pytest.mark.parametrize("solver", ["fast", "reference"])
 def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, caplog):
     dt = 5e-4
-    with caplog.at_level(logging.WARNING, logger="breakwater.initial"):
+    with caplog.at_level(logging.WARNING, logger="breakwater.statics.initial"):
         r = incline(mesh_path, ABOVE, solver, dt)
     t = np.radians(ABOVE)
     reference = 0.5 * g * (np.sin(t) - μ * np.cos(t)) * T_END**2
@@ -171,8 +171,8 @@ def test_loads_of_the_initial_state(mesh_path):
     # A sustained side push of half μN, present at t = 0: in the initial state by default
     # (a frictional state: no frictionless one exists), left out with InitialSpec(loads=())
     # (the frictionless state under gravity; the push then acts from t = 0 on).
-    from breakwater.model import SurfaceLoad
-    from breakwater.runspec import InitialSpec
+    from breakwater.config.runspec import InitialSpec
+    from breakwater.model.model import SurfaceLoad
 
     push = 0.5 * μ * ρ * g * W * H / H  # Pa on the block's left face
     mat = Material(ρ, ν, young_modulus=E)
@@ -194,8 +194,8 @@ def test_initial_velocity_against_a_fixed_boundary(mesh_path):
     # zero at t = 0 too: a uniform initial velocity of the body along a fixed component
     # is refused (it ran, the ledger then counting a kinetic energy no force put in),
     # one along a free component (a roller) is kept.
-    from breakwater.initial import initial_velocities, velocity_conflict
-    from breakwater.runspec import InitialSpec
+    from breakwater.config.runspec import InitialSpec
+    from breakwater.statics.initial import initial_velocities, velocity_conflict
 
     mat = Material(ρ, ν, young_modulus=E)
     roller = ContactModel(read_mesh(mesh_path, COMM), [Body("a", mat), Body("b", mat)],

@@ -16,11 +16,11 @@ import ufl
 from dolfinx import fem, la
 
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.errors import MeshError
-from breakwater.interface import InterfaceNodes
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Material
-from breakwater.slipguard import SlipGuard, guard_slip
+from breakwater.common.errors import MeshError
+from breakwater.contact.conforming import InterfaceNodes
+from breakwater.contact.slipguard import SlipGuard, guard_slip
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Material
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -150,7 +150,7 @@ def test_nodal_law_is_the_residuals_law(stacked):
 
 
 def test_law_on_sample_values():
-    """The law's formulas on nodal arrays (SPEC eqs. 7, 12, 14-15), including g_n = 0."""
+    """The law's formulas on nodal arrays (the paper's eqs. 7, 12, 14-15), including g_n = 0."""
     law = forms.ContactLaw(forms.PenaltyContact(2.0, 0.5), forms.RegularisedCoulomb(0.3, 1e-3))
     n = np.array([[0.0, 1.0]] * 3)
     u_s = np.array([[0.0, -1.0], [0.0, -0.5], [0.0, 0.25]])

@@ -1,8 +1,8 @@
 """Load time functions, traction fields and Goda's wave pressure.
 
-- time functions (:mod:`breakwater.loads`): constant, ramp-and-hold, tabulated (CSV or
+- time functions (:mod:`breakwater.loads.signals`): constant, ramp-and-hold, tabulated (CSV or
   inline), and a table through a pulse's knots equal to the pulse;
-- Goda's formula (:mod:`breakwater.wavepressure`) against an independent evaluation of
+- Goda's formula (:mod:`breakwater.loads.wavepressure`) against an independent evaluation of
   the equations of Goda (2000, chapter 4; CEM Part VI-5) and its limits; the extended
   formula (Takahashi et al. 1994's impulsive coefficient) on the inputs of Goda's (2000)
   p. 140 example, against the formulas step by step and another code's regression values,
@@ -30,16 +30,16 @@ import ufl
 from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
-from breakwater.case import CaseError, load_case
-from breakwater.checkpoint import case_fingerprint
-from breakwater.errors import MeshError
-from breakwater.gn22 import GN22, solve_static
-from breakwater.loadcase import load_summary
-from breakwater.loadfields import Pressure
-from breakwater.loads import Constant, Pulse, Ramp, Table, TableEnded, read_table
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.wavepressure import goda_pressure, impulsive_coefficient, wavelength
+from breakwater.casefile.case import CaseError, load_case
+from breakwater.casefile.loads import load_summary
+from breakwater.common.errors import MeshError
+from breakwater.loads.fields import Pressure
+from breakwater.loads.signals import Constant, Pulse, Ramp, Table, TableEnded, read_table
+from breakwater.loads.wavepressure import goda_pressure, impulsive_coefficient, wavelength
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs.checkpoint import case_fingerprint
+from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
 
@@ -822,8 +822,8 @@ def test_field_load_on_both_solvers_and_the_ledger(stacked, folder):
     # external work ∫ ½(t₀ + t₁)·Δu of the field load balances kinetic + strain energy
     # to round-off (exact for loads linear in time over a step), on both solvers; the two
     # solvers give the same displacements (both solve the same linear step to 1e-9).
-    from breakwater.gn22 import GN22Parameters
-    from breakwater.ledger import EnergyLedger
+    from breakwater.energy.ledger import EnergyLedger
+    from breakwater.stepping.gn22 import GN22Parameters
 
     case = load_case(_write_case(folder, stacked, GODA_TOML, "goda_field"))
     field = case.loads[0].goda.front()
@@ -869,11 +869,11 @@ def test_design_wave_example_reads():
     assert factor(0.0) == 0.0 and factor(0.01) == 2.5 and factor(case.time.end_time) == 0.0
 
 
-# --- what the run applied (breakwater.appliedloads) and loads that never act ----------------
+# --- what the run applied (breakwater.outputs.applied) and loads that never act ----------------
 
 def _run_case(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str,
               end_time: float) -> dict:
-    from breakwater import simulation
+    from breakwater.run import simulation
 
     path = _write_case(folder, mesh, loads + f'\n[output]\nfigures = false\n'
                        f'directory = "{folder / name}"\n', name)

@@ -259,7 +259,7 @@ def test_existing_gmsh_session_is_left_alone(shared_dir):
 
 
 def test_gmsh_session_finalises_on_errors():
-    from breakwater.gmshtools import gmsh_session
+    from breakwater.common.gmshtools import gmsh_session
 
     assert not gmsh.isInitialized()
     with pytest.raises(ZeroDivisionError), gmsh_session({"Mesh.Algorithm": 5}):

@@ -23,11 +23,11 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 import ufl
 
-from breakwater.gn22 import GN22, solve_static
-from breakwater.interface import InterfaceNodes
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.probes import PointProbe
+from breakwater.contact.conforming import InterfaceNodes
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs.probes import PointProbe
+from breakwater.stepping.gn22 import GN22, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -36,7 +36,7 @@ COMM = MPI.COMM_WORLD
 pytestmark = pytest.mark.skipif(
     COMM.size < 2, reason="compares serial and parallel runs; run under mpiexec -n 2")
 
-# Materials of tests/test_statics.py: Goda's caisson (SPEC §4) on a softer, wider base
+# Materials of tests/test_statics.py: Goda's caisson (the paper's §5) on a softer, wider base
 # (here a 0.2 m square block on a 0.5 m × 0.15 m base, coarse mesh).
 CAISSON = Material(density=2314.0, poisson=0.2, shear_modulus=2e9)
 MOUND = Material(density=2000.0, poisson=0.25, shear_modulus=3e6)
@@ -140,7 +140,7 @@ RTOL = 1e-10
 # The fast solver (time.solver = "fast") eliminates the bulk through the interface
 # compliance X_II = (A⁻¹)_II and its inverse S, whose round-off the χ = 1e-10 stick
 # tangent μp/χ magnifies. Measured with the nodal contact forces (summed in a
-# partition-independent order; breakwater.nodalcontact): 5.0e-11 (history), 5.4e-11 on
+# partition-independent order; breakwater.contact.nodal): 5.0e-11 (history), 5.4e-11 on
 # both sides' displacements, 4.4e-10 / 2.1e-9 on the slave / master velocities (with the
 # assembled forms, summed in the partition's order: 4.6e-11, 5e-11 / 1.3e-10, 8e-10 /
 # 1.2e-9); a tighter Newton tolerance does not reduce it (it is the conditioning, not the

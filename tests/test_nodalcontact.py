@@ -1,10 +1,10 @@
 """The fast solver's nodal contact forces against the assembled UFL contact forms.
 
-:class:`breakwater.nodalcontact.NodalContactForces` evaluates the contact law on the
+:class:`breakwater.contact.nodal.NodalContactForces` evaluates the contact law on the
 interface nodes, which are the points of the interface forms' Gauss–Lobatto quadrature
 on P2 facets, with the law's nodal derivatives
 (:meth:`forms.ContactLaw.nodal`). Its f_c and ∂f_c/∂y must be those of the UFL
-forms assembled by dolfinx (:class:`breakwater.condensed.InterfaceAssembler`) to
+forms assembled by dolfinx (:class:`breakwater.stepping.condensed.InterfaceAssembler`) to
 round-off: the quadrature is the same and the basis functions are Kronecker deltas at
 its points up to basix's points (1e-16 off the facet's ends). Checked at random states
 with open and closed nodes, slipping and sticking nodes (|v_T| near χ), on the Goda
@@ -22,12 +22,12 @@ import ufl
 from blocks import stacked_blocks
 from mpi4py import MPI
 
-from breakwater.case import load_case
-from breakwater.condensed import InterfaceAssembler
-from breakwater.gn22 import GN22
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
-from breakwater.nodalcontact import NodalContactForces, nodal_contact_applies
+from breakwater.casefile.case import load_case
+from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.stepping.condensed import InterfaceAssembler
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 

@@ -1,6 +1,6 @@
 """The ledger's numerical-dissipation entry (GN22's discrete energy identity).
 
-The entry (:mod:`breakwater.numerical`, derived in :mod:`forms.gn22_energy`) has its own
+The entry (:mod:`breakwater.energy.dissipation`, derived in :mod:`forms.gn22_energy`) has its own
 formula, quadratic forms in Δa and v̄ with the mass and damping, plus the interface's
 penalty-switching and slip-increment terms; the balance E − E(0) + D_R + D_F + D_num − W
 is computed from the ledger's other entries and checked independently here.
@@ -27,15 +27,15 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.gn22 import GN22, GN22Parameters, solve_static
-from breakwater.ledger import EnergyLedger
-from breakwater.mesh import read_mesh
-from breakwater.model import (
+from breakwater.energy.ledger import EnergyLedger
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
     Body,
     ContactModel,
     Fixed,
     Material,
 )
+from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks, two_rectangles

@@ -9,7 +9,7 @@ fails during a run ends it with exit status 1, one line ``cannot write <path>:
 The tests run as root, where ``chmod`` does not stop writes, so an unwritable folder
 is made in ways that work for root: a path under a regular file (a real ``ENOTDIR``
 from the file system), a name longer than 255 bytes (a real ``ENAMETOOLONG``), and a
-read-only folder by monkeypatching ``open`` in :mod:`breakwater.files` to raise
+read-only folder by monkeypatching ``open`` in :mod:`breakwater.common.files` to raise
 ``PermissionError(EACCES)``. A full disk is simulated by monkeypatching a writer
 (``HistoryWriter._write``, the figures, ``os.replace``) to raise ``OSError(ENOSPC)``.
 """
@@ -25,8 +25,10 @@ import pytest
 from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
-from breakwater import cli, figures, files
-from breakwater.outputs import HistoryWriter
+from breakwater import cli
+from breakwater.common import files
+from breakwater.outputs import figures
+from breakwater.outputs.writers import HistoryWriter
 
 COMM = MPI.COMM_WORLD
 FULL = os.strerror(errno.ENOSPC)  # "No space left on device"
@@ -249,7 +251,7 @@ def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
     the summary left running)."""
     from petsc4py import PETSc
 
-    from breakwater import session
+    from breakwater.run import session
 
     case, out = _case(shared_dir), shared_dir / "out"
 

@@ -1,4 +1,4 @@
-"""The rank-0 helpers (breakwater.parallel), serially and on several ranks."""
+"""The rank-0 helpers (breakwater.common.parallel), serially and on several ranks."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import pathlib
 import pytest
 from mpi4py import MPI
 
-from breakwater.checkpoint import CheckpointError
-from breakwater.errors import ConvergenceError
-from breakwater.parallel import on_rank_zero, shared_tempdir
+from breakwater.common.errors import ConvergenceError
+from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.outputs.checkpoint import CheckpointError
 
 COMM = MPI.COMM_WORLD
 

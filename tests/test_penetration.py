@@ -1,4 +1,4 @@
-"""Penetration a general pair's search cannot see (breakwater.penetration).
+"""Penetration a general pair's search cannot see (breakwater.contact.penetration).
 
 A general pair presses a slave node only while the search finds it within its radius r
 of the master surface (the longest master facet). A block thrown at 20 m/s onto the
@@ -23,12 +23,12 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 from breakwater.meshes.apart import Rectangle, rectangles
 
 from breakwater import cli
-from breakwater.errors import MeshError
-from breakwater.files import read_history
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, Fixed, Material
-from breakwater.penetration import allowed_depth, step_penetration
-from breakwater.surfaces import Surface, SurfacePair
+from breakwater.common.errors import MeshError
+from breakwater.common.files import read_history
+from breakwater.contact.penetration import allowed_depth, step_penetration
+from breakwater.contact.surfaces import Surface, SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Fixed, Material
 
 COMM = MPI.COMM_WORLD
 RUNS = pathlib.Path(__file__).parent / "bad_cases" / "run"

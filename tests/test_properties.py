@@ -4,9 +4,10 @@ Generated case files (mutations of the built-in Goda case and of the tests' two-
 case: values of every TOML type, unknown keys, missing keys, broken TOML text),
 ``--set`` overrides, load tables (CSV text) and study files are read as the program
 reads them
-(:func:`~breakwater.case.load_case`, ``show-case``, :func:`~breakwater.studyfile.load_study`
-and :func:`~breakwater.studyfile.check_points`). The outcome must be a valid object or
-one :class:`~breakwater.errors.CaseError` of one line naming the file; never another
+(:func:`~breakwater.casefile.case.load_case`, ``show-case``,
+:func:`~breakwater.studies.studyfile.load_study` and
+:func:`~breakwater.studies.studyfile.check_points`). The outcome must be a valid object or one
+:class:`~breakwater.common.errors.CaseError` of one line naming the file; never another
 exception, never a hang, never a multi-line message. A case that loads must round-trip
 (``show-case`` prints a file that loads back to the same case); a table that loads holds
 the rows that were written, as finite, increasing numbers.
@@ -50,10 +51,10 @@ from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from breakwater import cli
-from breakwater.case import BUILTIN_CASES, Case, load_case
-from breakwater.errors import CaseError
-from breakwater.schema import display, schema_keys
-from breakwater.studyfile import check_points, load_study, toml_literal
+from breakwater.casefile.case import BUILTIN_CASES, Case, load_case
+from breakwater.common.errors import CaseError
+from breakwater.config.schema import display, schema_keys
+from breakwater.studies.studyfile import check_points, load_study, toml_literal
 
 EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))
 """Examples per test (the file runs in about 20 s of CPU serially). To explore, set
@@ -90,7 +91,7 @@ def time_limit(seconds: float = LIMIT) -> Iterator[None]:
 # --- the folder of the examples -----------------------------------------------------
 
 # The two-block case's mesh: only its $PhysicalNames header is read when a case is
-# loaded (breakwater.gmshtools), so this header stands for the mesh of
+# loaded (breakwater.common.gmshtools), so this header stands for the mesh of
 # blocks.two_rectangles (stacked, equal widths) without building one.
 MSH_HEADER = """$MeshFormat
 4.1 0 8

@@ -1,4 +1,4 @@
-"""The contact quality report (breakwater.quality): pure functions of numbers.
+"""The contact quality report (breakwater.outputs.quality): pure functions of numbers.
 
 Reference values are computed here from the definitions in the module docstring:
 penetration δ = max ⟨−g_n⟩₊, settlement s = |mean(½(u_s + u_m)·n)|, stiffness ratio
@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from mpi4py import MPI
 
-from breakwater import quality
+from breakwater.outputs import quality
 
 COMM = MPI.COMM_WORLD
 
@@ -46,7 +46,7 @@ def test_stiffness_ratio() -> None:
 
 
 def _goda() -> dict:
-    """Goda-like numbers (SPEC §4-5): p = ρ g H = 2314·9.81·0.202 Pa, ε_n = 5e8 N/m³."""
+    """Goda-like numbers (the paper's §5-5.4): p = ρ g H = 2314·9.81·0.202 Pa, ε_n = 5e8 N/m³."""
     p, ε = 2314.0 * 9.81 * 0.202, 5e8
     E_mound = 2 * 2.3e6 * 1.25          # E = 2G(1 + ν), ν = 0.25
     E_caisson = 2 * 2e9 * 1.2           # ν = 0.2

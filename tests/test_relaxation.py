@@ -1,4 +1,4 @@
-"""The static initial state of general contact pairs (breakwater.relaxation, issue 12).
+"""The static initial state of general contact pairs (breakwater.statics.relaxation, issue 12).
 
 A block ``block`` (W × H) rests on a wider base ``base`` fixed at its bottom, meshed
 separately (:mod:`meshes.apart`) with element sizes W/7 and 0.4/8 (ratio 1.75), a general
@@ -40,12 +40,12 @@ import ufl
 from breakwater.meshes.apart import Rectangle, rectangles
 from dolfinx import fem
 
-from breakwater.gn22 import GN22
-from breakwater.initial import InitialState, initial_state
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, Fixed, Material
-from breakwater.surfacepair import SurfaceContact
-from breakwater.surfaces import SurfacePair
+from breakwater.contact.general import SurfaceContact
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Fixed, Material
+from breakwater.statics.initial import InitialState, initial_state
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 
@@ -180,7 +180,7 @@ def test_incline_above_the_friction_angle_is_held_and_released(
     """θ = 25°: held up to t = 0 (one warning naming the block), then it slides from
     rest as the rigid block, ½ g (sinθ − μ cosθ) t² along x."""
     model = _model(mesh_path, ABOVE)
-    with caplog.at_level(logging.WARNING, logger="breakwater.relaxation"):
+    with caplog.at_level(logging.WARNING, logger="breakwater.statics.relaxation"):
         state, seconds = _static(model)
     assert state.kind == "held" and state.held == ["block"]
     assert state.relaxation is not None

@@ -7,9 +7,9 @@ Block ``a`` (W × H) rests on a base ``b`` of the same width fixed at its bottom
 - **push**: gravity vertical and a side push F = 1.5 μN on the block's left face,
   present in the static state (a constant load).
 
-Both with the conforming pair of tests/blocks.py (:mod:`breakwater.initial`) and with
+Both with the conforming pair of tests/blocks.py (:mod:`breakwater.statics.initial`) and with
 a general pair on the bodies meshed apart, the block on a wider base (as
-tests/test_relaxation.py; :mod:`breakwater.relaxation`). No frictional equilibrium
+tests/test_relaxation.py; :mod:`breakwater.statics.relaxation`). No frictional equilibrium
 exists: the block is held up to t = 0 and released.
 A rigid block then slides with the constant acceleration a = (F_T − μN)/m, ½ a t²
 (incline: a = g (sinθ − μ cosθ); push: a = ½ μ g; Meriam & Kraige, *Engineering

@@ -15,11 +15,12 @@ from mpi4py import MPI
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
-from breakwater import cli, simulation
-from breakwater.errors import MeshError
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
-from breakwater.runspec import OutputSpec, TimeSpec
+from breakwater import cli
+from breakwater.common.errors import MeshError
+from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.run import simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_block_case, two_rectangles

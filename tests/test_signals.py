@@ -4,7 +4,7 @@
   with ``interruptible=False``) and leaves them on finalising: a SIGTERM while a case
   was meshed or read, or in the second after, killed the process outright. The gmsh
   session of breakwater gives the signals back to Python.
-- A study's :class:`~breakwater.console.StopSignal` and the one of each run nest: a
+- A study's :class:`~breakwater.common.console.StopSignal` and the one of each run nest: a
   signal caught while a case was being built reached only the study's, and the run
   started afterwards went on to its end.
 - Under ``mpiexec``, a group that stops tells the others through the study's shared
@@ -30,7 +30,7 @@ import time
 import pytest
 from mpi4py import MPI
 
-from breakwater.console import StopSignal
+from breakwater.common.console import StopSignal
 
 COMM = MPI.COMM_WORLD
 ROOT = pathlib.Path(__file__).parents[1]
@@ -91,7 +91,7 @@ def test_gmsh_leaves_the_signals_to_python():
     script = textwrap.dedent('''
         import os, signal, time
         import gmsh
-        from breakwater.gmshtools import gmsh_session
+        from breakwater.common.gmshtools import gmsh_session
         got = []
         signal.signal(signal.SIGTERM, lambda s, f: got.append(s))
         with gmsh_session():

@@ -1,4 +1,4 @@
-"""Tests of a whole run (breakwater.simulation.run): outputs, cut-back, failure.
+"""Tests of a whole run (breakwater.run.simulation.run): outputs, cut-back, failure.
 
 The model: block ``a`` (1 m x 0.5 m) resting on block ``b`` (2 m x 0.5 m, base fixed)
 under gravity, with Coulomb friction μ = 0.6 (χ = 1e-10) on the interface and a short
@@ -21,14 +21,14 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater import simulation
-from breakwater.errors import BreakwaterError, ConvergenceError
-from breakwater.gn22 import GN22
-from breakwater.ledger import FIELDS
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.outputs import read_history
-from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.common.errors import BreakwaterError, ConvergenceError
+from breakwater.config.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.energy.ledger import FIELDS
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs.writers import read_history
+from breakwater.run import simulation
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 WIDTH, HEIGHT = 1.0, 0.5   # block a (m)
@@ -127,7 +127,7 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
     assert dyn["peak_ux"]["top"]["value"] > 0
 
     # Static state: the block's weight rests on the interface. Vertical equilibrium of
-    # block a gives a contact resultant ρ g W H and a mean pressure ρ g H (SPEC §5, the
+    # block a gives a contact resultant ρ g W H and a mean pressure ρ g H (the paper's §5.4, the
     # caisson's 2314 * 9.81 * 0.202 Pa); the static solve converges to rtol 1e-9, so
     # 1e-6 is a safe relative tolerance.
     static = written["static"]
@@ -238,7 +238,7 @@ def _check_log_and_bar(err: str, steps: int) -> None:
     assert [sum(bool(re.fullmatch(p, pieces[k])) for k in during) for p in patterns] == \
         [steps, 1, 1]
     assert bar[0] < during[0] and bar[-1] > during[-1]
-    assert not logging.getLogger("breakwater.simulation").filters  # set up by run() only
+    assert not logging.getLogger("breakwater.run.simulation").filters  # set up by run() only
 
 
 @pytest.mark.parametrize("failure", ["diverged", "nan"])

@@ -1,4 +1,4 @@
-"""The SNES convergence test of :class:`breakwater.solver.NewtonSolver`.
+"""The SNES convergence test of :class:`breakwater.stepping.solver.NewtonSolver`.
 
 PETSc's default tests plus one: a residual that has stalled at its round-off floor
 (below ``floor_atol`` of the load norm, not halved over ``stall_its`` iterations) is
@@ -24,11 +24,11 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from petsc4py import PETSc
 
-from breakwater.errors import ConvergenceError
-from breakwater.gn22 import solve_static
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material
-from breakwater.solver import NewtonOptions, NewtonSolver, convergence_reason
+from breakwater.common.errors import ConvergenceError
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.stepping.gn22 import solve_static
+from breakwater.stepping.solver import NewtonOptions, NewtonSolver, convergence_reason
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -79,7 +79,7 @@ def test_real_solve_ends_at_its_round_off_floor(folder: pathlib.Path) -> None:
     """Static solve of a block on a base with every PETSc tolerance set to zero.
 
     Newton then cannot converge by PETSc's tests; its residual falls to round-off
-    (the static iteration converges linearly, see :func:`breakwater.gn22.solve_static`)
+    (the static iteration converges linearly, see :func:`breakwater.stepping.gn22.solve_static`)
     and stays there, where the stall test accepts it. With the stall test off the
     same solve runs out of iterations. The accepted state equals the one of the
     default tolerances to 1e-8 of its largest displacement: the default solve stops

@@ -1,7 +1,7 @@
 """Static verification: self weight of a block on an elastic base, and a contact patch test.
 
 Both run on ``MPI.COMM_WORLD`` (serially and under ``mpiexec -n 2``); nodal interface values
-come from :class:`breakwater.interface.InterfaceNodes`, which gathers them on every rank.
+come from :class:`breakwater.contact.conforming.InterfaceNodes`, which gathers them on every rank.
 """
 
 from __future__ import annotations
@@ -20,18 +20,18 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.gn22 import solve_static
-from breakwater.interface import InterfaceNodes
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
-from breakwater.solver import NewtonOptions
+from breakwater.contact.conforming import InterfaceNodes
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import solve_static
+from breakwater.stepping.solver import NewtonOptions
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
 
 COMM = MPI.COMM_WORLD
 
-# Goda's caisson (SPEC §4): concrete block 0.205 m wide, 0.202 m high, ρ = 2314 kg/m³,
+# Goda's caisson (the paper's §5): concrete block 0.205 m wide, 0.202 m high, ρ = 2314 kg/m³,
 # G = 2e9 Pa, ν = 0.2; penalty ε_n = 5e8 N/m³. The base stands in for the mound: softer
 # (G = 3e6 Pa, ν = 0.25), wider than the block, 0.19 m high (the mound height).
 CAISSON = Material(density=2314.0, poisson=0.2, shear_modulus=2e9)
@@ -68,7 +68,7 @@ def _simpson(x: np.ndarray, p: np.ndarray) -> float:
 
 
 def test_self_weight(folder: pathlib.Path) -> None:
-    """A block resting on an elastic base under gravity (SPEC §5, Fig. 17)."""
+    """A block resting on an elastic base under gravity (the paper's §5.4, Fig. 17)."""
     path = two_rectangles(folder / "self_weight.msh", COMM, a=(B_CAISSON, H_CAISSON),
                           b=(B_BASE, H_BASE), h=0.025)
     model = ContactModel(read_mesh(path, COMM),
@@ -84,7 +84,7 @@ def test_self_weight(folder: pathlib.Path) -> None:
                                           * pair.dS))
     # Reference: the block's weight per metre, ρ g b h (the block is a rectangle, so its
     # area is exact on the mesh); the mean pressure is ρ g h = 2314·9.81·0.202 = 4586 Pa
-    # (SPEC §5).
+    # (the paper's §5.4).
     weight = CAISSON.density * G * B_CAISSON * H_CAISSON
     mean_ref = CAISSON.density * G * H_CAISSON
     mean = resultant / B_CAISSON
@@ -108,7 +108,7 @@ def test_self_weight(folder: pathlib.Path) -> None:
     _say(f"nodal-route resultant {nodal_resultant:.10g} N/m "
          f"(rel. diff {abs(nodal_resultant - resultant) / weight:.2e})")
     assert abs(nodal_resultant - resultant) < 1e-10 * weight
-    # A stiff block on a soft base behaves as a rigid footing (SPEC §5): pressure maxima
+    # A stiff block on a soft base behaves as a rigid footing (the paper's §5.4): pressure maxima
     # at the edges, minimum near the centre.
     centre = int(np.argmin(np.abs(x)))
     _say(f"pressures: left edge {p[0]:.1f} Pa, centre {p[centre]:.1f} Pa, right edge "

@@ -1,4 +1,4 @@
-"""The step-size controller of the time loop (breakwater.stepsize.StepSize).
+"""The step-size controller of the time loop (breakwater.stepping.stepsize.StepSize).
 
 Sequences of propose / reject / accept with the expected step sizes written out:
 halving on a failed step (of the step tried, also when it was the short last one),
@@ -15,11 +15,11 @@ import math
 
 import pytest
 
-from breakwater.errors import CaseError
-from breakwater.quality import PairInputs
-from breakwater.runspec import TimeSpec
-from breakwater.runstate import RunState
-from breakwater.stepsize import GROW_AFTER, StepSize
+from breakwater.common.errors import CaseError
+from breakwater.config.runspec import TimeSpec
+from breakwater.outputs.quality import PairInputs
+from breakwater.run.runstate import RunState
+from breakwater.stepping.stepsize import GROW_AFTER, StepSize
 
 
 def _steps(step: StepSize) -> list[float]:

@@ -1,13 +1,13 @@
-"""Outputs of general contact pairs (:mod:`breakwater.surfaceoutputs`, issue 12 item 4).
+"""Outputs of general contact pairs (:mod:`breakwater.outputs.surfaceoutputs`, issue 12 item 4).
 
 - Matching meshes: a general pair's probe gives the conforming pairs' slip
   (u_s − u_m)·t exactly and their opening (u_s − u_m)·n to second order in the
   master's rotation (the general gap is measured along the current normal).
 - A block pushed along a base by F = 1.5 μN (bodies meshed separately, run through
-  :func:`breakwater.simulation.run`): the pair probe's slip is the rigid block's
+  :func:`breakwater.run.simulation.run`): the pair probe's slip is the rigid block's
   (F − μN) t²/(2m) (Coulomb friction, constant acceleration) and its sides are the
   point probes' displacements; its opening is −p/ε_n with p = N/w the mean pressure
-  (the penalty law, SPEC eq. 12); the ParaView pressure on the slave surface
+  (the penalty law, the paper's eq. 12); the ParaView pressure on the slave surface
   integrates to the normal resultant of the history; the snapshots hold the slave
   surface's arrays; the contact-quality report has the conforming pairs' keys.
 - The example case with a pair probe through the command line, figures included.
@@ -29,17 +29,17 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from breakwater.meshes.apart import Rectangle, rectangles
 
-from breakwater import quality
-from breakwater.errors import MeshError
-from breakwater.files import read_history
-from breakwater.gn22 import GN22
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.probes import PointProbe
-from breakwater.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
-from breakwater.surfaceoutputs import SlavePoints, SurfaceProbe
-from breakwater.surfacepair import SurfaceContact
-from breakwater.surfaces import SurfacePair
+from breakwater.common.errors import MeshError
+from breakwater.common.files import read_history
+from breakwater.config.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.contact.general import SurfaceContact
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
+from breakwater.outputs import quality
+from breakwater.outputs.probes import PointProbe
+from breakwater.outputs.surfaceoutputs import SlavePoints, SurfaceProbe
+from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
 G = 9.81
@@ -136,7 +136,7 @@ def pushed(folder: pathlib.Path) -> pathlib.Path:
     """A 0.1 m × 0.05 m block (3 elements) pushed by 1.5 μN along a 0.4 m base (20
     elements) for 0.3 s, probes at the middle of its bottom (a slave node above a
     master node at the start) and at its left corner."""
-    from breakwater import simulation
+    from breakwater.run import simulation
 
     model = _pushed_block(_pushed_mesh(folder / "pushed.msh"), Damping(0.0, 1e-4))
     out = folder / "pushed"
@@ -174,7 +174,7 @@ def test_pair_probe_of_a_sliding_block(pushed: pathlib.Path) -> None:
     # The base's material point under the middle at t = 0 is the base's point (0, 0).
     np.testing.assert_allclose(h["pmid_master_ux"], h["base_mid_ux"], rtol=1e-12, atol=1e-18)
     # The push acts at t = 0, so the block is held in its static state and released
-    # (breakwater.relaxation): the slip then grows at the rigid block's acceleration
+    # (breakwater.statics.relaxation): the slip then grows at the rigid block's acceleration
     # (F − μN)/m. Its start carries GN22's first-step velocity error (a₀ of the
     # regularised law, README "general pairs"), so the acceleration is compared: a
     # quadratic fitted to the slip after 0.02 s, within 2 %.
@@ -269,9 +269,9 @@ def test_snapshots_and_quality_of_a_general_pair(pushed: pathlib.Path) -> None:
     steps = h["c_penetration"][1:]
     assert q["dynamic_penetration"] == pytest.approx(steps.max(), rel=1e-12)
     assert q["time_of_dynamic_penetration"] == pytest.approx(h["t"][1:][np.argmax(steps)])
-    # The run starts from its static state (breakwater.relaxation): the static
+    # The run starts from its static state (breakwater.statics.relaxation): the static
     # penetration is the first row's, and the verdict follows the report's criteria
-    # (breakwater.quality): this stiff block on a stiff base settles by about its own
+    # (breakwater.outputs.quality): this stiff block on a stiff base settles by about its own
     # penetration, so the penalty is too soft by the settlement criterion.
     assert q["static_penetration"] == pytest.approx(h["c_penetration"][0], rel=1e-12)
     soft = (max(q["static_penetration"], q["dynamic_penetration"])
@@ -333,7 +333,7 @@ def test_resume_keeps_the_general_outputs(shared_dir: pathlib.Path,
     bit; on 2 ranks within the 1e-7 of test_surfacepair's resume test, whose reasons
     hold here) and the same quality report; the fields written before the kill are
     set aside as ``contact_c.part1.bp``."""
-    from breakwater import simulation
+    from breakwater.run import simulation
 
     mesh = _pushed_mesh(shared_dir / "resume.msh")
 

@@ -1,6 +1,6 @@
 """General contact pairs: surfaces that need not match, finite sliding (issue 12).
 
-The projection (:mod:`breakwater.projection`) against closed-form closest points; the
+The projection (:mod:`breakwater.contact.projection`) against closed-form closest points; the
 contact Jacobian (complex steps) against finite differences; and four histories of
 bodies meshed separately (:mod:`meshes.apart`), references from formulas:
 
@@ -36,15 +36,15 @@ from breakwater.meshes.apart import Rectangle, rectangles
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.errors import MeshError
-from breakwater.gn22 import GN22, GN22Parameters
-from breakwater.mesh import read_mesh
-from breakwater.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
-from breakwater.pointkernels import normal_forces
-from breakwater.projection import FacetGrid, closest_point, curve, nearest_end, project
-from breakwater.solver import NewtonOptions
-from breakwater.surfacepair import SurfaceContact
-from breakwater.surfaces import SurfacePair
+from breakwater.common.errors import MeshError
+from breakwater.contact.general import SurfaceContact
+from breakwater.contact.pointkernels import normal_forces
+from breakwater.contact.projection import FacetGrid, closest_point, curve, nearest_end, project
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import GN22, GN22Parameters
+from breakwater.stepping.solver import NewtonOptions
 
 COMM = MPI.COMM_WORLD
 G = 9.81
@@ -524,7 +524,7 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     (F/m − (F − μN)/m) = 2e-3 m/s as a velocity offset (+0.8 % at the end of the push,
     0.2 s, and +1.2 % at 0.3 s, where the rigid block stops after 7.36 cm)."""
     from breakwater import cli
-    from breakwater.files import read_history
+    from breakwater.common.files import read_history
 
     out = shared_dir / "run"
     assert cli.main(["run", str(EXAMPLE), "--out", str(out), "--no-progress", "--quiet",
@@ -552,9 +552,9 @@ def test_resume_with_a_general_pair(shared_dir: pathlib.Path,
     """A run with a general pair killed after its checkpoint resumes to the history of
     the uninterrupted run (the state is u, v, a, and the pair rebuilds its surfaces and
     start-of-step projections from them): a block dropped 1 mm and pushed by 1.5 μN."""
-    from breakwater import simulation
-    from breakwater.files import read_history
-    from breakwater.runspec import OutputSpec, ProbeSpec, TimeSpec
+    from breakwater.common.files import read_history
+    from breakwater.config.runspec import OutputSpec, ProbeSpec, TimeSpec
+    from breakwater.run import simulation
 
     mesh = rectangles(shared_dir / "resume.msh", COMM,
                       [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 7, 2),
@@ -600,7 +600,7 @@ def test_energy_ledger_with_a_general_pair(shared_dir: pathlib.Path) -> None:
     contact period 2π sqrt(m/(ε_n w)) = 8.9 ms against Δt = 0.2 ms): the balance
     error stays below 1 % of the friction dissipation (measured 0.5 %, made at the
     impact; without the pair's terms it would be the whole dissipation)."""
-    from breakwater.ledger import EnergyLedger
+    from breakwater.energy.ledger import EnergyLedger
 
     N = STEEL_LIKE.density * G * 0.2 * 0.1
     pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e8, friction=0.5)

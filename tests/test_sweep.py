@@ -1,5 +1,5 @@
-"""Parameter studies (breakwater.studyfile, breakwater.sweep): points, bad studies, MPI
-groups, resume after a kill, a failing point.
+"""Parameter studies (breakwater.studies.studyfile, breakwater.studies.sweep): points, bad
+studies, MPI groups, resume after a kill, a failing point.
 
 The sweeps run the Goda case for 3 ms (30 steps, about 1 s a case): the numbers are
 the headline numbers of real runs, compared across the ways of running them.
@@ -24,9 +24,9 @@ import breakwater  # noqa: F401  (imports the PETSc of the dolfinx wheel first)
 
 # isort: split
 from breakwater import cli
-from breakwater.errors import CaseError
-from breakwater.studyfile import check_points, load_study, toml_literal
-from breakwater.sweep import RECORD, TABLE, run_study
+from breakwater.common.errors import CaseError
+from breakwater.studies.studyfile import check_points, load_study, toml_literal
+from breakwater.studies.sweep import RECORD, TABLE, run_study
 
 COMM = MPI.COMM_WORLD
 BAD = pathlib.Path(__file__).parent / "bad_studies"
@@ -370,7 +370,7 @@ def test_resume_after_a_kill(tmp_path, how):
 def test_stiffness_basis(shared_dir):
     """``calibration.stiffness_basis``: Goda's K_x = 500 kN/m divided by the 0.205 m block
     length (default) or taken per metre of plane strain; the calibration meets it."""
-    from breakwater.case import load_case
+    from breakwater.casefile.case import load_case
 
     block = load_case()
     metre = load_case(None, ['calibration.stiffness_basis="metre"'])

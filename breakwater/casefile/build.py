@@ -1,0 +1,278 @@
+"""From a case to a run: the mesh, the calibration, the model, the time and output specs.
+
+The functions behind :meth:`Case.mesh_file <breakwater.casefile.case.Case.mesh_file>`,
+:meth:`~breakwater.casefile.case.Case.read_mesh`,
+:meth:`~breakwater.casefile.case.Case.build_model`,
+:meth:`~breakwater.casefile.case.Case.calibrate` and
+:meth:`~breakwater.casefile.case.Case.build`. The case is never changed: :func:`build`
+returns the case as run (with a calibrated modulus written in) in its :class:`BuiltCase`.
+"""
+
+from __future__ import annotations
+
+import pathlib
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from mpi4py import MPI
+
+from breakwater.casefile.godaface import check_goda_face
+from breakwater.casefile.loadchecks import face_problems, pulse_warning
+from breakwater.casefile.loads import load_summary, surface_loads
+from breakwater.common.errors import CaseError, MeshError
+from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import group_points, group_tag, mesh_geo
+from breakwater.model.mesh import read_mesh as _read_msh
+from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
+from breakwater.statics.initial import velocity_conflict
+
+if TYPE_CHECKING:
+    from dolfinx.io import gmsh as gmshio
+
+    from breakwater.casefile.case import Case
+    from breakwater.statics.calibrate import CalibrationResult
+
+__all__ = ["BuiltCase", "build", "build_model", "calibrate", "mesh_file", "read_mesh"]
+
+
+@dataclass(frozen=True)
+class BuiltCase:
+    """What the run layer needs, built from a case; unpacks as ``model, time, output, extra``.
+
+    Attributes:
+        case: The case as run: after a calibration, the calibrated shear modulus is
+            written into its body and ``calibration.enabled`` is false, so that
+            ``case.resolved()`` reproduces the run without calibrating again.
+        model: The contact model.
+        time: Time integration settings.
+        output: What to write and where.
+        extra: The mesh, the loads and the calibration (if any), for the run's summary.
+
+    """
+
+    case: Case
+    model: ContactModel
+    time: TimeSpec
+    output: OutputSpec
+    extra: dict[str, Any]
+
+    def __iter__(self) -> Iterator[Any]:
+        """``model, time, output, extra`` (the case stays an attribute)."""
+        return iter((self.model, self.time, self.output, self.extra))
+
+
+def mesh_file(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None = None
+              ) -> pathlib.Path:
+    """The gmsh ``.msh`` file of the case (collective).
+
+    The Goda mesh is generated into ``<directory>/mesh/goda.msh`` and a ``.geo`` script
+    is meshed into ``<directory>/mesh/<stem>.msh`` (default directory: the output
+    folder; nothing is written beside the user's script); a ``.msh`` source is the
+    case's file.
+
+    Raises:
+        MeshError: gmsh cannot mesh the ``.geo`` script.
+
+    """
+    source = pathlib.Path(case.mesh.source)
+    if not case.mesh.generated and source.suffix != ".geo":
+        return source
+    folder = pathlib.Path(directory) if directory is not None else case.output_directory
+    if not case.mesh.generated:
+        return mesh_geo(source, folder / "mesh" / f"{source.stem}.msh", comm)
+    from breakwater import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
+
+    return meshes.generate(folder / "mesh" / "goda.msh", case.mesh.goda,
+                           refinement=case.mesh.refinement, comm=comm)
+
+
+def read_mesh(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None = None
+              ) -> gmshio.MeshData:
+    """Generate (or find) and read the mesh of the case, distributed over ``comm``.
+
+    Raises:
+        CaseError: The mesh cannot be made or read (``mesh.source: ...``).
+
+    """
+    try:
+        return _read_msh(mesh_file(case, comm, directory), comm)
+    except MeshError as e:
+        raise CaseError(f"mesh.source: {e}") from e
+
+
+def build_model(case: Case, data: gmshio.MeshData,
+                shear_moduli: Mapping[str, float] | None = None,
+                dynamic: bool = True) -> ContactModel:
+    """The contact model of the case on a mesh.
+
+    Args:
+        case: The case.
+        data: The mesh (see :func:`read_mesh`).
+        shear_moduli: Shear moduli (Pa) replacing the case's, by body name (the
+            calibrated body gives none: it must be here).
+        dynamic: Include the loads, gravity and damping (False: the bare elastic
+            bodies, contact pairs and fixed boundaries, for the calibration).
+
+    """
+    moduli = shear_moduli or {}
+    bodies = [Body(b.name, b.material(moduli.get(b.name))) for b in case.bodies]
+    pairs = [ContactPair(c.name, c.slave, c.master, c.penalty, c.friction,
+                         c.regularisation, c.gap) for c in case.contact if not c.general]
+    surface_pairs = [SurfacePair(c.name, c.slave, c.master, c.slave_surface or "",
+                                 c.master_surface or "", c.penalty, c.friction,
+                                 c.regularisation, c.points, c.integration,
+                                 c.rotations)
+                     for c in case.contact if c.general]
+    fixed = [Fixed(f.name, tuple(f.components)) for f in case.fixed]
+    loads: list[SurfaceLoad] = []
+    owner: list[str] = []  # the case load each model load comes from
+    if dynamic:
+        for ld in case.loads:
+            if ld.enabled:
+                made = surface_loads(ld, data, case.out_of_plane_length)
+                owner += [ld.name] * len(made)
+                loads += made
+    model = ContactModel(data, bodies, pairs, fixed, loads,
+                         gravity=case.gravity if dynamic else None,
+                         damping=Damping(case.damping.alpha, case.damping.beta)
+                         if dynamic else None,
+                         degree=case.mesh.degree, surface_pairs=surface_pairs)
+    if dynamic:
+        names = case.initial.loads
+        model.initial = InitialSpec(
+            velocities=tuple((b.name, b.initial_velocity) for b in case.bodies
+                             if any(b.initial_velocity)),
+            loads=None if names is None else tuple(k for k, name in enumerate(owner)
+                                                   if name in names))
+        for b in case.bodies:
+            why = velocity_conflict(model, b.name, b.initial_velocity) \
+                if any(b.initial_velocity) else None
+            if why is not None:
+                raise CaseError(f"bodies.{b.name}.initial_velocity: {why}")
+    return model
+
+
+def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None
+              ) -> CalibrationResult:
+    """Calibrate the shear modulus of ``calibration.body`` (see :mod:`.calibrate`).
+
+    Args:
+        case: The case.
+        data: The mesh.
+        target: Target stiffness (N/m), read as ``calibration.stiffness_basis`` says
+            (``"block"``: divided by ``out_of_plane_length``); ``calibration.stiffness``
+            if None.
+
+    """
+    from breakwater.statics.calibrate import calibrate_shear_modulus
+
+    cal = case.calibration
+    names = [b.name for b in case.bodies]
+    for key in ("body", "structure"):  # checked by the case only when enabled
+        if getattr(cal, key) not in names:
+            raise CaseError(f"calibration.{key}: no body named '{getattr(cal, key)}' "
+                            f"(bodies: {', '.join(names)})")
+    k = cal.stiffness if target is None else target
+    if k is None:
+        raise CaseError("calibration.stiffness: missing (the target stiffness, N/m)")
+    if not k > 0:
+        raise CaseError(f"calibration target stiffness must be > 0 (got {k:g})")
+    model = build_model(case, data, {cal.body: cal.initial_guess}, dynamic=False)
+    return calibrate_shear_modulus(model, cal.body, cal.structure,
+                                   cal.per_metre(k, case.out_of_plane_length), cal.tolerance,
+                                   cal.initial_guess, cal.tangential_penalty,
+                                   cal.max_iterations)
+
+
+def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
+    """Mesh, calibrate (if asked) and build what the run layer needs (collective).
+
+    The Goda mesh is generated into ``<output directory>/mesh/goda.msh`` (a ``.geo``
+    script is meshed into ``<output directory>/mesh/<stem>.msh``).
+
+    Returns:
+        The :class:`BuiltCase` (``model, time, output, extra = build(case)``).
+
+    Raises:
+        CaseError: The mesh does not fit the case (e.g. a Goda profile off its loaded
+            face, :func:`~breakwater.casefile.godaface.check_goda_face`; warned when partly off).
+        CalibrationError: The calibration failed.
+
+    """
+    comm = MPI.COMM_WORLD if comm is None else comm
+    data = read_mesh(case, comm)
+    for ld in case.loads:  # before the calibration: a misplaced Goda profile fails fast
+        if ld.enabled and ld.goda is not None:
+            check_goda_face(ld, data)
+    extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
+    if case.calibration.enabled:
+        result = calibrate(case, data)
+        case = case.calibrated(result.body, result.shear_modulus)
+        extra["calibration"] = result.summary()
+    try:
+        model = build_model(case, data, dynamic=True)
+    except MeshError as e:
+        raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
+    extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
+                      for ld in case.loads if ld.enabled}
+    for ld in case.loads:
+        if not ld.enabled:
+            continue
+        error, warning = face_problems(ld, model)
+        if error is not None:
+            raise CaseError(error)
+        t = case.time
+        pulse, sampled = pulse_warning(ld, t.dt, t.end_time, t.beta1)
+        if sampled:
+            extra["loads"][ld.name]["sampled"] = sampled
+        # Logged when the run starts (not again when it resumes), kept in the summary.
+        lines = [line for line in (warning, pulse) if line is not None]
+        if lines:
+            extra["loads"][ld.name]["warnings"] = lines
+
+    def where(name: str, group: str | None, point: tuple[float, ...] | None
+              ) -> tuple[float, ...]:
+        if point is not None:
+            return tuple(point)
+        assert group is not None
+        try:
+            x = group_points(data, group)
+        except MeshError as e:
+            raise CaseError(f"{name}: {e}") from e
+        if len(x) != 1:
+            raise CaseError(f"{name}: point group '{group}' holds {len(x)} points, "
+                            "expected one")
+        return tuple(float(c) for c in x[0, :model.gdim])
+
+    # A conforming pair by its index in model.pairs, a general pair by its name.
+    pair_index: dict[str, int | str] = {
+        c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
+    pair_index.update({c.name: c.name for c in case.contact if c.general})
+    o = case.output
+    probes = tuple(ProbeSpec(p.name, p.body, where(f"output.probes.{p.name}", p.group, p.point))
+                   for p in o.probes)
+    pair_probes = tuple(PairProbeSpec(q.name, pair_index[q.pair],
+                                      where(f"output.pair_probes.{q.name}", q.group, q.point))
+                        for q in o.pair_probes)
+    output = OutputSpec(directory=case.output_directory, field_interval=o.field_interval,
+                        probes=probes, pair_probes=pair_probes, figures=o.figures,
+                        case_name=case.name, checkpoint_interval=o.checkpoint_interval)
+    return BuiltCase(case, model, case.time, output, extra)
+
+
+def _mesh_summary(case: Case, data: gmshio.MeshData) -> dict[str, Any]:
+    msh = data.mesh
+    tdim = msh.topology.dim
+    nlocal = msh.topology.index_map(tdim).size_local
+    cells = {}
+    assert data.cell_tags is not None
+    for b in case.bodies:
+        found = data.cell_tags.find(group_tag(data, b.name, tdim))
+        cells[b.name] = int(msh.comm.allreduce(int((found < nlocal).sum())))
+    info: dict[str, Any] = {"source": case.mesh.source, "degree": case.mesh.degree,
+                            "cells": cells}
+    if case.mesh.generated:
+        info["refinement"] = case.mesh.refinement
+    return info

@@ -1,0 +1,151 @@
+"""Loads that would not act as asked: checks before a run, on the case and on the mesh.
+
+- :func:`pulse_warning`: a pulse the nominal steps sample badly (under-resolved, or
+  ending after the end time), from :func:`sampled_pulse`, what GN22 makes of a pulse
+  at the step ends; a pulse not longer than Δt, and a load that starts after the end
+  time, are refused by :meth:`LoadCase.check_time <breakwater.casefile.loads.LoadCase.check_time>`;
+- :func:`face_problems`: a pressure profile (or Goda's pressure) that is zero on all of
+  its loaded facets (refused), or a ``[profile]`` that only partly lies on them
+  (warned), integrated on the mesh.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from breakwater.loads.fields import PressureProfile
+from breakwater.loads.signals import Pulse
+
+if TYPE_CHECKING:
+    from breakwater.casefile import loads as loadcase
+    from breakwater.model.model import ContactModel
+
+__all__ = ["RESOLVED_STEPS", "SAMPLING_TOLERANCE", "face_problems", "profile_area",
+           "pulse_warning", "sampled_pulse"]
+
+
+RESOLVED_STEPS = 10
+"""A pulse shorter than this many nominal steps is warned about as under-resolved."""
+
+SAMPLING_TOLERANCE = 0.01
+"""The impulse the steps sample may differ from the requested by this fraction."""
+
+
+def sampled_pulse(pulse: Pulse, dt: float, end_time: float, beta1: float
+                  ) -> tuple[float, float, int]:
+    """What the nominal steps (Δt, no cut-back) make of a pulse: impulse, peak, steps.
+
+    GN22 evaluates the loads at the step ends t_n and its momentum update is
+    M (v₁ − v₀) = Δt [(1 − β₁) M a₀ + β₁ M a₁], so the impulse a load gives is
+    Σ Δt_n [(1 − β₁) f(t_n) + β₁ f(t_{n+1})] (the trapezoidal rule at β₁ = ½; Δt Σ f(t_n)
+    at a constant step for a load zero at both ends). Only the steps near the pulse are
+    summed.
+
+    Returns:
+        The impulse and the largest amplitude sampled (the pulse's own units), and the
+        number of step ends inside the pulse.
+    """
+    steps = max(1, math.ceil(end_time / dt - 1e-9))
+    first = max(0, math.floor(pulse.start / dt) - 1)
+    last = min(steps, math.ceil(pulse.end / dt) + 1)
+    times = [min(k * dt, end_time) for k in range(first, last + 1)]
+    values = [pulse(t) for t in times]
+    impulse = math.fsum((t1 - t0) * ((1.0 - beta1) * f0 + beta1 * f1) for t0, t1, f0, f1
+                        in zip(times, times[1:], values, values[1:], strict=False))
+    inside = sum(pulse.start < t < pulse.end for t in times)
+    return impulse, max(values), inside
+
+
+def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: float
+                  ) -> tuple[str | None, dict[str, float]]:
+    """What the nominal steps make of a pulse, and a one-line warning if it is poor.
+
+    A pulse ending after the end time is applied in part; one lasting fewer than
+    :data:`RESOLVED_STEPS` steps, or whose sampled impulse differs from its own by more
+    than :data:`SAMPLING_TOLERANCE`, is under-resolved: the warning gives the time step
+    that samples it to that tolerance.
+
+    Returns:
+        The warning (None: none) and the summary's ``sampled`` entry: the ratios of the
+        sampled impulse and peak to the requested, the step ends inside the pulse.
+    """
+    if load.kind != "pulse" or not load.enabled:
+        return None, {}
+    pulse = load.pulse(1.0, 1.0)  # the impulse per unit length and area: ratios only
+    impulse, peak, inside = sampled_pulse(pulse, dt, end_time, beta1)
+    ratio = impulse / pulse.impulse
+    sampled = {"impulse_ratio": ratio, "peak_ratio": peak / pulse.maximum,
+               "step_ends_inside": inside}
+    where = f"loads.{load.name}"
+    if pulse.end > end_time:
+        return (f"{where}: the pulse ends at t = {pulse.end:g} s, after time.end_time = "
+                f"{end_time:g} s: the run applies {100 * ratio:.3g}% of its impulse"), sampled
+    if load.duration >= RESOLVED_STEPS * dt and abs(ratio - 1.0) <= SAMPLING_TOLERANCE:
+        return None, sampled
+    needed = next((load.duration / k for k in range(RESOLVED_STEPS, 201)
+                   if abs(sampled_pulse(pulse, load.duration / k, end_time, beta1)[0]
+                          / pulse.impulse - 1.0) <= SAMPLING_TOLERANCE),
+                  load.duration / 200)
+    return (f"{where}: the pulse (duration {load.duration:g} s) spans {inside} step ends of "
+            f"time.dt = {dt:g} s: the steps apply {100 * ratio:.3g}% of its impulse and "
+            f"{100 * peak / pulse.maximum:.3g}% of its peak; time.dt <= {needed:.3g} s "
+            f"samples it to {100 * SAMPLING_TOLERANCE:g}%"), sampled
+
+
+COVERAGE_TOLERANCE = 0.01
+"""A ``[profile]`` may lose this fraction of its ∫|p| ds off the loaded facets unwarned."""
+
+
+def profile_area(profile: PressureProfile) -> float:
+    """∫ |p(s)| ds over the profile's points (Pa m; exact: |p| is piecewise linear)."""
+    area = 0.0
+    for (s0, p0), (s1, p1) in zip(profile.points, profile.points[1:], strict=False):
+        if p0 * p1 >= 0.0:
+            area += 0.5 * (abs(p0) + abs(p1)) * (s1 - s0)
+        else:  # the piece crosses zero at r
+            r = s0 + (s1 - s0) * p0 / (p0 - p1)
+            area += 0.5 * (abs(p0) * (r - s0) + abs(p1) * (s1 - r))
+    return area
+
+
+def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | None, str | None]:
+    """An error (the load applies nothing) or a warning about a profile's loaded facets.
+
+    For each model load of ``load`` with a :class:`PressureProfile` (a ``[profile]``,
+    Goda's front pressure and uplift), ``∫ |p(s(x))| |n × a| ds`` over its facets (a the
+    profile's axis, n the facet normal: the measure of s covered) against the profile's
+    own ``∫ |p| ds``. Zero on every facet: the load applies nothing (an error). A
+    ``[profile]`` covered by less than 1 − :data:`COVERAGE_TOLERANCE`: a warning (Goda's
+    pressure above the crest is cut by design: not warned). Collective.
+
+    Returns:
+        (error, warning), each a one-line message or None.
+    """
+    import ufl
+
+    x = ufl.SpatialCoordinate(model.mesh)
+    n = ufl.FacetNormal(model.mesh)
+    covered: dict[PressureProfile, float] = {}  # a field may load several groups
+    groups: dict[PressureProfile, list[str]] = {}
+    for ld in model.loads:
+        field = ld.spec.field
+        if ld.spec.name != load.name or not isinstance(field, PressureProfile):
+            continue
+        a = field.axis
+        measure = abs(field.ufl_pressure(x)) * abs(n[0] * a[1] - n[1] * a[0])
+        covered[field] = covered.get(field, 0.0) + model.assemble(model.form(measure * ld.ds))
+        groups.setdefault(field, []).append(ld.spec.group)
+    where = f"loads.{load.name}." + ("profile" if load.profile is not None else "goda")
+    for field, part in covered.items():
+        total = profile_area(field)
+        names = ", ".join(f"'{g}'" for g in groups[field])
+        if not part > 1e-12 * total or not total > 0.0:
+            return (f"{where}: the pressure is zero on all of {names} (the profile lies "
+                    "off the loaded facets, or is zero): the load would apply nothing"), None
+        if load.profile is not None and part < (1.0 - COVERAGE_TOLERANCE) * total:
+            s = [p[0] for p in field.points]
+            return None, (f"{where}: only {100 * part / total:.3g}% of the profile "
+                          f"(s = {s[0]:g}..{s[-1]:g} m along {list(field.axis)} from "
+                          f"{list(field.origin)}) lies on {names}: the rest is not applied")
+    return None, None

@@ -1,0 +1,597 @@
+"""The ``[loads.<name>]`` tables of a case: what a load is, in TOML, and its model loads.
+
+A load is a **time function** (a dimensionless factor, or the impulse-normalised
+pulse) times a **spatial traction field** on a facet group (:mod:`breakwater.loads.fields`):
+
+- time functions (``time_function``): ``"pulse"`` (an impact of given ``impulse`` or
+  from a ``[pendulum]``: the default when one of them is given), ``"constant"`` (the
+  default otherwise; from ``start`` on), ``"ramp"`` (zero until ``start``, linear to 1
+  over ``rise``, then held) and ``"table"`` (``[loads.<name>.table]``: a CSV ``file``
+  of t, value rows or inline ``points``, interpolated linearly; a run outlasting the
+  table is an error unless ``hold_last = true``);
+- magnitudes (exactly one, except for pulses which take ``impulse``/``pendulum``):
+  ``force`` (N of the real structure, divided by ``out_of_plane_length``, spread
+  uniformly over the group along ``direction``), ``traction`` (Pa along
+  ``direction``), ``pressure`` (Pa normal to the surface, positive pushing into the
+  body), ``[profile]`` (a pressure p(s) given by points along an axis) or ``[goda]``
+  (Goda's design wave pressure on the front face and, with ``uplift_group``, the
+  triangular uplift under the base; :mod:`breakwater.loads.wavepressure`).
+
+:func:`surface_loads` turns a load into the model's
+:class:`~breakwater.model.model.SurfaceLoad` (two for a Goda load with uplift) on a mesh;
+:func:`load_summary` describes it for the run's summary.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+from breakwater.casefile.godaface import check_goda_face, goda_applied
+from breakwater.casefile.loadchecks import RESOLVED_STEPS
+from breakwater.config.schema import InvalidField, positive, setting
+from breakwater.loads.fields import Pressure, PressureProfile, TractionField
+from breakwater.loads.signals import (
+    STANDARD_GRAVITY,
+    Constant,
+    Pulse,
+    PulseShape,
+    Ramp,
+    Table,
+    impact_velocity,
+    pendulum_impulse,
+    read_table,
+)
+from breakwater.loads.wavepressure import GodaPressure, GodaRangeError, goda_pressure
+
+if TYPE_CHECKING:
+    from dolfinx.io import gmsh as gmshio
+
+    from breakwater.model.model import SurfaceLoad
+
+__all__ = ["GodaCase", "LoadCase", "PendulumCase", "ProfileCase", "TableCase",
+           "load_summary", "surface_loads"]
+
+TimeFunction = Literal["pulse", "constant", "ramp", "table"]
+MAGNITUDES = ("force", "traction", "pressure", "profile", "goda")
+
+
+@dataclass(frozen=True)
+class PendulumCase:
+    """``[loads.<name>.pendulum]``: the impulse of a pendulum, I = M ω (1 + e₀) (eq. 29)."""
+
+    mass: float = setting(unit="kg", doc="pendulum mass M")
+    cord_length: float = setting(unit="m", doc="cord length l₀")
+    release_distance: float = setting(unit="m", doc="release distance s₀ from the struck face")
+    restitution: float = setting(doc="coefficient of restitution e₀, in [0, 1]")
+    gravity: float = setting(STANDARD_GRAVITY, unit="m/s²", doc="g in ω = s₀ sqrt(g/l₀)")
+
+    def __post_init__(self) -> None:
+        for name in ("mass", "cord_length", "release_distance", "gravity"):
+            positive(getattr(self, name), name)
+        if not 0.0 <= self.restitution <= 1.0:
+            raise InvalidField("restitution", f"must be in [0, 1] (got {self.restitution:g})")
+        if not math.isfinite(self.impulse):  # e.g. a cord of 1e-320 m: ω overflows
+            raise InvalidField("", f"the impulse M ω (1 + e₀) overflows (ω = s₀ sqrt(g/l₀) "
+                               f"= {self.velocity:g} m/s)")
+
+    @property
+    def velocity(self) -> float:
+        """Impact velocity ω (m/s)."""
+        return impact_velocity(self.cord_length, self.release_distance, self.gravity)
+
+    @property
+    def impulse(self) -> float:
+        """Impulse I (N s)."""
+        return pendulum_impulse(self.mass, self.cord_length, self.release_distance,
+                                self.restitution, self.gravity)
+
+
+@dataclass(frozen=True)
+class TableCase:
+    """``[loads.<name>.table]``: a tabulated history of the load factor."""
+
+    file: str | None = setting(None, doc="CSV file of t, value rows (s, -), relative to "
+                               "the case file: a first row without numbers (a header), "
+                               "# comments and blank rows are skipped; separators , ; tab "
+                               "or blanks, decimal commas with ; or tab, UTF-8 (with or "
+                               "without BOM) or UTF-16 (see breakwater.loads.signals.read_table)")
+    points: tuple[tuple[float, ...], ...] | None = setting(None, doc="inline [t, value] "
+                                                           "pairs (instead of file)")
+    hold_last: bool = setting(False, doc="hold the last value after the table ends (else "
+                              "a run outlasting the table is an error)")
+
+    def __post_init__(self) -> None:
+        if (self.file is None) == (self.points is None):
+            raise InvalidField("file", "give either file or points (exactly one)")
+        if self.file is not None:
+            try:
+                times, values = read_table(pathlib.Path(self.file))
+            except (OSError, ValueError) as e:
+                raise InvalidField("file", str(e)) from None
+            where = "file"
+        else:
+            assert self.points is not None
+            if any(len(p) != 2 for p in self.points):
+                raise InvalidField("points", "expected [t, value] pairs")
+            times = tuple(p[0] for p in self.points)
+            values = tuple(p[1] for p in self.points)
+            where = "points"
+        try:
+            table = Table(times, values, self.hold_last)
+        except ValueError as e:
+            raise InvalidField(where, str(e)) from None
+        object.__setattr__(self, "_table", table)
+
+    def history(self, start: float = 0.0) -> Table:
+        """The table as a time function, its time 0 at ``start``."""
+        table: Table = self.__dict__["_table"]
+        return Table(table.times, table.values, self.hold_last, start)
+
+
+@dataclass(frozen=True)
+class ProfileCase:
+    """``[loads.<name>.profile]``: a pressure p(s) (Pa, positive into the body) along an axis."""
+
+    points: tuple[tuple[float, ...], ...] = setting(unit="m, Pa", doc="[s, p] pairs, s "
+                                                    "increasing; linear between them, 0 "
+                                                    "outside")
+    axis: tuple[float, ...] = setting((0.0, 1.0), doc="direction along which s is measured "
+                                      "(default: the elevation y)")
+    origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0")
+
+    def __post_init__(self) -> None:
+        if len(self.axis) != 2 or not any(self.axis):
+            raise InvalidField("axis", f"must be a non-zero 2-vector (got {list(self.axis)})")
+        if len(self.origin) != 2:
+            raise InvalidField("origin", f"must have 2 coordinates (got {list(self.origin)})")
+        if any(len(p) != 2 for p in self.points):
+            raise InvalidField("points", "expected [s, p] pairs")
+        try:
+            self.field()
+        except ValueError as e:
+            raise InvalidField("points", str(e)) from None
+
+    def field(self) -> PressureProfile:
+        """The model's pressure profile."""
+        return PressureProfile(tuple((p[0], p[1]) if len(p) == 2 else (math.nan, math.nan)
+                                     for p in self.points), self.axis, self.origin)
+
+
+@dataclass(frozen=True)
+class GodaCase:
+    """``[loads.<name>.goda]``: Goda's design wave pressure (:mod:`breakwater.loads.wavepressure`).
+
+    The front pressure acts on the load's group (the seaward face, vertical, its
+    elevation the mesh's y); with ``uplift_group`` the triangular uplift acts on the
+    base of the same body, p_u at its edge nearest the loaded face, 0 at the heel.
+    """
+
+    wave_height: float = setting(unit="m", doc="design (highest) wave height H_max")
+    period: float = setting(unit="s", doc="wave period (L from the linear dispersion "
+                            "relation at the depth h)")
+    depth: float = setting(unit="m", doc="water depth h in front of the breakwater")
+    toe_depth: float = setting(unit="m", doc="h': depth of the base of the upright section "
+                               "below the still water level")
+    berm_depth: float = setting(unit="m", doc="d: depth above the armour of the "
+                                "foundation (the berm), <= h'")
+    crest_height: float = setting(unit="m", doc="h_c: crest elevation above the still "
+                                  "water level")
+    still_water_level: float = setting(unit="m", doc="y coordinate of the still water "
+                                       "level in the mesh")
+    angle: float = setting(0.0, unit="°", doc="β: wave incidence from the normal to the "
+                           "breakwater")
+    breaking_depth: float | None = setting(None, unit="m", doc="h_b: depth at 5 H_1/3 "
+                                           "seaward (default: h)")
+    factors: tuple[float, ...] = setting((1.0, 1.0, 1.0), doc="λ₁, λ₂, λ₃ (1: plain "
+                                         "upright section)")
+    density: float = setting(1025.0, unit="kg/m³", doc="water density ρ")
+    gravity: float = setting(9.81, unit="m/s²", doc="g")
+    uplift_group: str | None = setting(None, doc="facet group of the base under the "
+                                       "uplift (an interface: its side on the loaded body)")
+    impulsive: bool = setting(False, doc="the extended formula: α* = max(α₂, α_I) in p₁, "
+                              "with Takahashi et al.'s (1994) impulsive coefficient α_I "
+                              "(needs berm_width)")
+    berm_width: float | None = setting(None, unit="m", doc="B_M: width of the berm in "
+                                       "front of the upright section (impulsive only)")
+
+    def __post_init__(self) -> None:
+        if len(self.factors) != 3:
+            raise InvalidField("factors", f"expected 3 values (got {len(self.factors)})")
+        if self.impulsive and self.berm_width is None:
+            raise InvalidField("berm_width", "missing: impulsive = true needs the berm "
+                               "width B_M")
+        if not self.impulsive and self.berm_width is not None:
+            raise InvalidField("berm_width", "is used only with impulsive = true")
+        if self.berm_width is not None and not self.berm_width > 0:
+            raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
+        try:
+            self.pressure()  # the formula's own range checks
+        except GodaRangeError as e:
+            raise InvalidField(e.key, e.problem) from None
+
+    def pressure(self) -> GodaPressure:
+        """The pressures (Pa) of the design wave."""
+        λ1, λ2, λ3 = self.factors
+        return goda_pressure(self.wave_height, self.period, self.depth, self.toe_depth,
+                             self.berm_depth, self.crest_height, self.angle,
+                             self.breaking_depth, (λ1, λ2, λ3), self.density, self.gravity,
+                             self.impulsive, self.berm_width)
+
+    def front(self) -> PressureProfile:
+        """The front pressure profile along y (origin at the still water level)."""
+        return PressureProfile(self.pressure().front_points(), (0.0, 1.0),
+                               (0.0, self.still_water_level))
+
+
+@dataclass(frozen=True)
+class LoadCase:
+    """``[loads.<name>]``: a time function times a traction field on a facet group.
+
+    Pulses (the default with ``impulse`` or ``[pendulum]``): the traction is
+    ``I / (out_of_plane_length · patch length) · shape(t)`` along ``direction``, with
+    ∫ shape dt = 1. Other time functions multiply exactly one magnitude: ``force``,
+    ``traction``, ``pressure``, ``[profile]`` or ``[goda]`` (see
+    :mod:`breakwater.casefile.loads`).
+    """
+
+    name: str = setting(key=True, doc="name of the load")
+    group: str = setting(doc="facet (1D) physical group loaded")
+    groups: tuple[str, ...] = setting((), doc="further facet groups loaded alike (e.g. the "
+                                      "parts of a split face); a force is spread over all")
+    enabled: bool = setting(True, doc="false: the load is not applied (e.g. a load of the "
+                            "case this one extends)")
+    body: str | None = setting(None, doc="the body loaded, when the group is an interface "
+                               "between two bodies")
+    time_function: TimeFunction | None = setting(None, doc='"pulse" (default with impulse '  # noqa: RUF009 (a field() with docs)
+                                                 'or pendulum), "constant" (default '
+                                                 'otherwise), "ramp" or "table"')
+    direction: tuple[float, ...] = setting((1.0, 0.0), doc="direction of the traction "
+                                           "(normalised): pulse, force, traction")
+    impulse: float | None = setting(None, unit="N s", doc="pulse: impulse I of the real (3D) "
+                                    "structure; divided by out_of_plane_length")
+    pendulum: PendulumCase | None = setting(None, doc="pulse: the impulse from a pendulum "  # noqa: RUF009 (a field() with docs)
+                                            "(eq. 29)")
+    force: float | None = setting(None, unit="N", doc="resultant of the real structure "
+                                  "(divided by out_of_plane_length), spread uniformly over "
+                                  "the group along direction")
+    traction: float | None = setting(None, unit="Pa", doc="traction along direction")
+    pressure: float | None = setting(None, unit="Pa", doc="pressure normal to the surface, "
+                                     "positive pushing into the body")
+    profile: ProfileCase | None = setting(None, doc="pressure varying along the surface")  # noqa: RUF009 (a field() with docs)
+    goda: GodaCase | None = setting(None, doc="Goda's design wave pressure")  # noqa: RUF009 (a field() with docs)
+    shape: PulseShape = setting("triangular", doc="pulse: force-time shape")  # noqa: RUF009 (a field() with docs)
+    duration: float = setting(2e-3, unit="s", doc="pulse: duration")
+    start: float = setting(0.0, unit="s", doc="time the load starts (a table: its t = 0)")
+    peak: float = setting(0.5, doc="triangular pulse: time of the peak as a fraction of "
+                          "the duration, in [0, 1]")
+    rise: float | None = setting(None, unit="s", doc="ramp: rise time from 0 to full load")
+    table: TableCase | None = setting(None, doc="table: the tabulated factor")  # noqa: RUF009 (a field() with docs)
+
+    def __post_init__(self) -> None:
+        if len(self.direction) != 2 or not any(self.direction):
+            raise InvalidField("direction", f"must be a non-zero 2-vector (got "
+                               f"{list(self.direction)})")
+        norm = math.hypot(*self.direction)
+        object.__setattr__(self, "direction", tuple(c / norm for c in self.direction))
+        impulsive = self.impulse is not None or self.pendulum is not None
+        given = [k for k in MAGNITUDES if getattr(self, k) is not None]
+        kind = self.time_function or ("pulse" if impulsive else "constant")
+        if kind == "pulse":
+            if given:
+                raise InvalidField(given[0], "a pulse is given by its impulse (or "
+                                   "[pendulum]), not a force or pressure")
+            if (self.impulse is None) == (self.pendulum is None):
+                raise InvalidField("impulse", "give either impulse or a [pendulum] table "
+                                   "(exactly one)")
+            if self.impulse is not None:
+                positive(self.impulse, "impulse")
+        else:
+            if impulsive:
+                raise InvalidField("time_function", f'"{kind}" multiplies a force or '
+                                   f'pressure: an impulse (impulse or [pendulum]) needs '
+                                   f'"pulse"')
+            if len(given) != 1:
+                raise InvalidField(given[1] if given else "force",
+                                   f"give exactly one of {', '.join(MAGNITUDES)} (got "
+                                   f"{', '.join(given) or 'none'})")
+        positive(self.duration, "duration")
+        positive(self.start, "start", strict=False)
+        if not 0.0 <= self.peak <= 1.0:
+            raise InvalidField("peak", f"must be in [0, 1] (got {self.peak:g})")
+        if kind == "ramp":
+            if self.rise is None:
+                raise InvalidField("rise", 'missing: a "ramp" needs its rise time (s)')
+            positive(self.rise, "rise")
+        elif self.rise is not None:
+            raise InvalidField("rise", f'only a "ramp" has a rise time (time_function is '
+                               f'"{kind}")')
+        if kind == "table" and self.table is None:
+            raise InvalidField("table", 'missing: time_function = "table" needs a '
+                               '[table] (file or points)')
+        if kind != "table" and self.table is not None:
+            raise InvalidField("table", f'a [table] needs time_function = "table" (got '
+                               f'"{kind}")')
+        object.__setattr__(self, "_kind", kind)
+
+    @property
+    def kind(self) -> str:
+        """The time function: ``time_function`` or its default."""
+        return str(self.__dict__["_kind"])
+
+    @property
+    def magnitude(self) -> str:
+        """``"impulse"`` for pulses, else the magnitude given (``force``, ...)."""
+        if self.kind == "pulse":
+            return "impulse"
+        return next(k for k in MAGNITUDES if getattr(self, k) is not None)
+
+    @property
+    def total_impulse(self) -> float:
+        """The impulse I of the real structure (N s); pulses only."""
+        if self.pendulum is not None:
+            return self.pendulum.impulse
+        if self.impulse is None:
+            raise ValueError(f"load '{self.name}' is not a pulse")
+        return self.impulse
+
+    def pulse(self, out_of_plane_length: float, patch_length: float) -> Pulse:
+        """The traction amplitude (Pa) of a pulse on a patch of the given length (m)."""
+        per_area = self.total_impulse / (out_of_plane_length * patch_length)
+        return Pulse(per_area, self.duration, self.shape, self.start, self.peak)
+
+    def length(self, data: gmshio.MeshData) -> float:
+        """Length (m) of the loaded groups on a mesh."""
+        return sum(group_length(data, g) for g in (self.group, *self.groups))
+
+    def time_factor(self) -> Callable[[float], float]:
+        """The dimensionless time function of a non-pulse load."""
+        if self.kind == "constant":
+            return Constant(1.0, self.start)
+        if self.kind == "ramp":
+            assert self.rise is not None
+            return Ramp(1.0, self.start, self.rise)
+        if self.kind == "table":
+            assert self.table is not None
+            return self.table.history(self.start)
+        raise ValueError(f"load '{self.name}' is a pulse")
+
+    def check_duration(self, end_time: float) -> None:
+        """Raise :class:`InvalidField` if a table ends before ``end_time`` (s)."""
+        if self.kind == "table" and self.table is not None and not self.table.hold_last:
+            end = self.table.history(self.start).end
+            if end < end_time:
+                raise InvalidField(f"loads.{self.name}.table",
+                                   f"the table ends at t = {end:g} s, before time.end_time "
+                                   f"= {end_time:g} s (extend it or set hold_last = true)")
+
+    def check_time(self, end_time: float, dt: float) -> None:
+        """Refuse a load that never acts before ``end_time``, or a pulse no step can sample.
+
+        Raises:
+            InvalidField: A table that ends too early (:meth:`check_duration`); a load
+                that starts at or after the end time (a table: whose first point is
+                there: before it, its first value would act from t = 0); a pulse not
+                longer than the time step (sampled at the step ends, it applies nothing,
+                or a multiple of its impulse).
+
+        """
+        self.check_duration(end_time)
+        if not self.enabled:
+            return
+        where = f"loads.{self.name}"
+        if self.kind == "table":
+            assert self.table is not None
+            first = self.table.history(self.start).times[0] + self.start
+            if first >= end_time:
+                raise InvalidField(f"{where}.table", f"the table's first point is at t = "
+                                   f"{first:g} s, at or after time.end_time = {end_time:g} "
+                                   "s: only its first value would act, held from t = 0")
+        elif self.start >= end_time:
+            raise InvalidField(f"{where}.start", f"the load starts at t = {self.start:g} s, "
+                               f"at or after time.end_time = {end_time:g} s: it never acts "
+                               "(set enabled = false to keep it off)")
+        if self.kind == "pulse" and not self.duration > dt:
+            raise InvalidField(f"{where}.duration", f"the pulse lasts {self.duration:g} s, "
+                               f"not more than time.dt = {dt:g} s: sampled at the step ends "
+                               "it applies nothing or a multiple of its impulse (set "
+                               f"time.dt <= {self.duration / RESOLVED_STEPS:.3g} s)")
+
+
+
+# --- model loads on a mesh -----------------------------------------------------------
+
+def group_length(data: gmshio.MeshData, group: str) -> float:
+    """Length (m) of a facet group (exterior or interface), summed over the ranks."""
+    import dolfinx
+    import numpy as np
+    import ufl
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    from breakwater.common.errors import CaseError
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    tag = group_tag(data, group, fdim)
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=data.facet_tags)(tag)
+    one = fem.Constant(msh, dolfinx.default_scalar_type(1.0))
+    length = msh.comm.allreduce(fem.assemble_scalar(fem.form(one * ds)), op=MPI.SUM)
+    # Interface facets (not on the boundary: ds leaves them out) by their lengths.
+    assert data.facet_tags is not None
+    msh.topology.create_connectivity(fdim, fdim + 1)
+    facets = data.facet_tags.find(tag)
+    inner = np.setdiff1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
+    inner = inner[inner < msh.topology.index_map(fdim).size_local]
+    if msh.comm.allreduce(len(inner)):
+        length += msh.comm.allreduce(float(msh.h(fdim, inner).sum()) if len(inner) else 0.0,
+                                     op=MPI.SUM)
+    if not length > 0:
+        raise CaseError(f"facet group '{group}' has zero length")
+    return float(length)
+
+
+def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
+    """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
+    import dolfinx
+    import numpy as np
+
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    assert data.facet_tags is not None
+    facets = data.facet_tags.find(group_tag(data, group, fdim))
+    nodes = dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()
+    x = msh.geometry.x[nodes, :2]
+    lo = x.min(axis=0) if len(x) else np.full(2, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(2, -np.inf)
+    return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))
+
+
+def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
+                   ) -> tuple[PressureProfile, float]:
+    """The triangular uplift on the base and the base width B (m).
+
+    p_u at the base's edge nearest the front face, falling linearly to 0 at the heel.
+    """
+    assert goda.uplift_group is not None
+    lo, hi = _extent(data, goda.uplift_group)
+    ends = [_extent(data, g) for g in front]
+    front_x = 0.5 * (min(e[0][0] for e in ends) + max(e[1][0] for e in ends))
+    width = float(hi[0] - lo[0])
+    if abs(front_x - lo[0]) <= abs(front_x - hi[0]):
+        origin, axis = (float(lo[0]), 0.0), (1.0, 0.0)
+    else:
+        origin, axis = (float(hi[0]), 0.0), (-1.0, 0.0)
+    pu = goda.pressure().uplift
+    return PressureProfile(((0.0, pu), (width, 0.0)), axis, origin), width
+
+
+def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
+                  ) -> list[SurfaceLoad]:
+    """The model loads of a case's load on a mesh.
+
+    One per group (``group``, then ``groups``), plus the uplift of a Goda load.
+
+    Raises:
+        CaseError: A Goda profile entirely off its loaded face (:func:`check_goda_face`;
+            part of it off: a warning).
+
+    """
+    from breakwater.model.model import SurfaceLoad
+
+    if load.goda is not None:
+        check_goda_face(load, data, warn=False)  # warned by casebuild.build
+
+    groups = (load.group, *load.groups)
+    if load.kind == "pulse":
+        pulse = load.pulse(out_of_plane_length, load.length(data))
+        return [SurfaceLoad(g, load.direction, pulse, body=load.body, name=load.name)
+                for g in groups]
+    factor = load.time_factor()
+    d = load.direction
+    field: TractionField | None = None
+    t = 0.0
+    if load.force is not None:
+        t = load.force / out_of_plane_length / load.length(data)
+    elif load.traction is not None:
+        t = load.traction
+    elif load.pressure is not None:
+        field = Pressure(load.pressure)
+    elif load.profile is not None:
+        field = load.profile.field()
+    else:
+        assert load.goda is not None
+        field = load.goda.front()
+    direction = (t * d[0], t * d[1]) if field is None else ()
+    loads = [SurfaceLoad(g, direction, factor, field, load.body, load.name) for g in groups]
+    if load.goda is not None and load.goda.uplift_group is not None:
+        profile, _ = uplift_profile(load.goda, data, groups)
+        body = load.body or _owner(data, load.group)
+        loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body, load.name))
+    return loads
+
+
+def _owner(data: gmshio.MeshData, group: str) -> str:
+    """The name of the one cell group next to a facet group (the loaded body)."""
+    from breakwater.common.errors import CaseError
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    tdim = msh.topology.dim
+    assert data.facet_tags is not None and data.cell_tags is not None
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    f2c = msh.topology.connectivity(tdim - 1, tdim)
+    cell_tag = dict(zip(data.cell_tags.indices.tolist(), data.cell_tags.values.tolist(),
+                        strict=True))
+    values = {cell_tag[c] for f in data.facet_tags.find(group_tag(data, group, tdim - 1))
+              for c in f2c.links(f).tolist() if c in cell_tag}
+    values = set().union(*msh.comm.allgather(values))
+    names = [name for name, (dim, tag) in data.physical_groups.items()
+             if dim == tdim and tag in values]
+    if len(names) != 1:
+        raise CaseError(f"facet group '{group}' borders {len(names)} bodies: name the body "
+                        "loaded (body = ...)")
+    return names[0]
+
+
+def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
+                 ) -> dict[str, Any]:
+    """The load as the run's summary describes it."""
+    h = load.length(data)
+    info: dict[str, Any] = {"group": load.group}
+    if load.groups:
+        info["groups"] = list(load.groups)
+    if load.kind == "pulse":
+        pulse = load.pulse(out_of_plane_length, h)
+        info.update({
+            "impulse": load.total_impulse,
+            "impulse_per_length": load.total_impulse / out_of_plane_length,
+            "patch_length": h,
+            "shape": load.shape,
+            "duration": load.duration,
+            "start": load.start,
+            "peak_traction": pulse.maximum,
+            "peak_force_per_length": pulse.maximum * h,
+            "direction": list(load.direction),
+        })
+        if load.pendulum is not None:
+            info["impact_velocity"] = load.pendulum.velocity
+        return info
+    info.update({"time_function": load.kind, "magnitude": load.magnitude,
+                 "patch_length": h, "start": load.start})
+    if load.rise is not None:
+        info["rise"] = load.rise
+    if load.force is not None:
+        info["force_per_length"] = load.force / out_of_plane_length
+        info["traction"] = load.force / out_of_plane_length / h
+    elif load.traction is not None:
+        info["traction"] = load.traction
+        info["force_per_length"] = load.traction * h
+    elif load.pressure is not None:
+        info["pressure"] = load.pressure
+    elif load.goda is not None:
+        g = load.goda.pressure()
+        applied = goda_applied(load, data)
+        info.update({"wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
+                     "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3,
+                     "p4": g.p4, "uplift_pressure": g.uplift,
+                     "horizontal_force_per_length": applied.force,
+                     "horizontal_moment_per_length": applied.moment,
+                     "applied_fraction": applied.fraction,
+                     "face_elevations": list(applied.face),
+                     "profile_elevations": list(applied.profile),
+                     "goda_force_per_length": g.force,
+                     "goda_moment_per_length": g.moment})
+        if g.alpha_impulsive is not None:
+            info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
+        if load.goda.uplift_group is not None:
+            _, width = uplift_profile(load.goda, data, (load.group, *load.groups))
+            info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),
+                         "uplift_moment_per_length": g.uplift_moment(width)})
+    return info

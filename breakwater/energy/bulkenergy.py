@@ -1,0 +1,239 @@
+"""The energy ledger's bulk terms, from UFL forms or from the fast solver's cached M and K.
+
+Each step the ledger (:class:`~breakwater.energy.ledger.EnergyLedger`) needs five terms over
+the whole mesh, in the order of :data:`TERMS` (this rank's share of each: the ledger sums
+them over the ranks with its interface entries in one reduction):
+
+- the kinetic energy ½ v₁·Mv₁ = ½∫ρv·v and the strain energy ½ u₁·Ku₁ = ½∫σ:ε;
+- the Rayleigh power v̄·Cv̄ = α v̄·Mv̄ + β v̄·Kv̄ = ∫αρv̄·v̄ + βσ(v̄):ε(v̄), v̄ = ½(v₀ + v₁);
+- the external work f_g·Δu + Σ_k ½(A_k(t₀) + A_k(t₁)) f_k·Δu = ∫ρb·Δu + ∫½(t₀ + t₁)·Δu,
+  with f_g gravity's load vector and f_k load k's at unit amplitude A_k = 1;
+- the bulk share of the numerical dissipation (:mod:`breakwater.energy.dissipation`).
+
+Two sources give the same numbers (to round-off: the same quadratic forms, the same
+quadrature, summed in another order):
+
+- :class:`FormTerms`: UFL scalar forms assembled over the whole mesh (the reference
+  solver, which caches no matrix);
+- :class:`MatrixTerms`: the fast solver's M, K and load vectors
+  (:class:`~breakwater.stepping.bulk.BulkOperators`, assembled once). Per step two sparse
+  products, each a batch of columns in one pass over the matrix (``MatMatMult`` with a
+  dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries.
+  BulkOperators assembles M and K without the Dirichlet conditions (only the step
+  matrix A has its fixed rows and columns replaced), so their quadratic forms are the
+  integrals above; the fixed DOFs are zero anyway.
+
+:func:`bulk_terms` picks the source.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+from dolfinx import fem
+from petsc4py import PETSc
+
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
+from breakwater.energy import dissipation as numerical
+from breakwater.stepping.condensed import CondensedNewton
+from breakwater.stepping.gn22 import GN22
+
+__all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms"]
+
+#: The bulk terms, in the order of :meth:`BulkTerms.local`.
+TERMS = ("kinetic", "strain", "rayleigh_power", "external_work", "numerical_dissipation")
+#: The sources of :func:`bulk_terms` (``auto``: ``matrices`` on the fast solver).
+SOURCES = ("auto", "forms", "matrices")
+
+
+class BulkTerms(Protocol):
+    """The bulk terms of the stepper's current state, this rank's share."""
+
+    def local(self, step: bool) -> np.ndarray:
+        """The :data:`TERMS`, shape (5,); with ``step`` False the last three are 0.
+
+        Args:
+            step: The state is the end of a step (from the ledger's ``u0``, ``v0``, the
+                start amplitudes and the stepper's Δa, Δt), not the first record.
+        """
+        ...
+
+    def destroy(self) -> None:
+        """Free the PETSc objects it holds (collective)."""
+        ...
+
+
+class FormTerms:
+    """The bulk terms as UFL scalar forms over the bodies.
+
+    Args:
+        stepper: The stepper.
+        u0: Displacements at the start of the step (the ledger's copies).
+        v0: Velocities at the start of the step.
+        amp0: The loads' amplitudes at the start of the step (the ledger's).
+    """
+
+    def __init__(self, stepper: GN22, u0: Sequence[fem.Function], v0: Sequence[fem.Function],
+                 amp0: Sequence[fem.Constant]) -> None:
+        s, m = stepper, stepper.model
+        self.model = m
+        bodies = list(enumerate(m.bodies))
+        v̄ = [0.5 * (a + b) for a, b in zip(s.v, v0, strict=True)]
+        Δu = [a - b for a, b in zip(s.u, u0, strict=True)]
+        self._stored = [
+            m.form(sum(forms.kinetic_energy(b.ρ, s.v[i], b.dx) for i, b in bodies)),
+            m.form(sum(forms.strain_energy(s.u[i], b.λ, b.μ, b.dx) for i, b in bodies))]
+        rayleigh = m.form(sum(forms.rayleigh_power(m.α, m.β, b.ρ, v̄[i], b.λ, b.μ, b.dx)
+                              for i, b in bodies))
+        work = sum(forms.external_power(b.ρ, m.gravity, Δu[i], b.dx) for i, b in bodies)
+        for ld, a0 in zip(m.loads, amp0, strict=True):
+            t̄ = 0.5 * (a0 + ld.amplitude) * ld.unit
+            work += forms.surface_traction(t̄, Δu[ld.body], ld.ds)
+        self._step = [rayleigh, m.form(work), numerical.bulk_form(s)]
+
+    def local(self, step: bool) -> np.ndarray:
+        """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
+        if step:
+            return self.model.assemble_local([*self._stored, *self._step])
+        return np.concatenate([self.model.assemble_local(self._stored), np.zeros(3)])
+
+    def destroy(self) -> None:
+        """Nothing to free (the forms hold no PETSc object)."""
+
+
+class MatrixTerms:
+    """The bulk terms from the fast solver's cached M, K and load vectors.
+
+    Args:
+        stepper: The stepper, on the fast solver
+            (:class:`~breakwater.stepping.condensed.CondensedNewton`).
+        u0: Displacements at the start of the step (the ledger's copies).
+        v0: Velocities at the start of the step.
+        amp0: The loads' amplitudes at the start of the step (the ledger's).
+    """
+
+    def __init__(self, stepper: GN22, u0: Sequence[fem.Function], v0: Sequence[fem.Function],
+                 amp0: Sequence[fem.Constant]) -> None:
+        solver = stepper.solver
+        if not isinstance(solver, CondensedNewton):
+            raise ValueError("the ledger's bulk terms from matrices need the fast solver "
+                             "(time.solver = \"fast\")")
+        self.stepper, self.u0, self.v0, self.amp0 = stepper, u0, v0, amp0
+        m = stepper.model
+        self.bulk = bulk = solver.bulk
+        self.layout = solver.layout
+        self.alpha, self.beta = m.damping.alpha, m.damping.beta
+        self.beta1, self.beta2 = stepper.params.beta1, stepper.params.beta2
+        numerical_on = not self.beta1 == self.beta2 == 0.5
+        # The columns each matrix multiplies (only those some term needs), by name.
+        self._columns = {
+            "M": {c: k for k, c in enumerate(
+                ["v", *(["v̄"] if self.alpha or numerical_on else []),
+                 *(["Δa"] if numerical_on else [])])},
+            "K": {c: k for k, c in enumerate(["u", *(["v̄"] if self.beta else [])])}}
+        n = int(self.layout.offsets[-1])
+        self._in: dict[str, PETSc.Mat] = {}
+        self._out: dict[str, PETSc.Mat] = {}
+        for name, A in (("M", bulk.M), ("K", bulk.K)):
+            X = PETSc.Mat().createDense(((n, None), (None, len(self._columns[name]))),
+                                        comm=m.comm)  # type: ignore[arg-type]
+            X.setUp()
+            X.assemble()
+            self._in[name], self._out[name] = X, A.matMult(X)
+        # The load vectors' owned entries, one column each (gravity's first, amplitude 1),
+        # and the loads' amplitude Constants (the model's, at the end of the step).
+        loads = bulk.load_vectors
+        self._amplitudes: list[fem.Constant] = []
+        for a, _ in loads[1:]:
+            assert a is not None
+            self._amplitudes.append(a)
+        self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
+
+    def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
+        """The owned entries of one Function per body, stacked."""
+        return self.layout.fill(functions, np.empty(int(self.layout.offsets[-1])))
+
+    def _products(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray],
+                                 dict[str, np.ndarray]]:
+        """The vectors (owned entries) and their products with M and K, by name.
+
+        Each matrix multiplies its columns (the vectors written into its dense input
+        block) in one pass (``MatMatMult``).
+        """
+        s = self.stepper
+        X = {k: self._in[k].getDenseArray() for k in ("M", "K")}
+        cm, ck = self._columns["M"], self._columns["K"]
+        x = {"v": self.layout.fill(s.v, X["M"][:, cm["v"]]),
+             "u": self.layout.fill(s.u, X["K"][:, ck["u"]])}
+        if "v̄" in cm or "v̄" in ck:
+            x["v̄"] = v̄ = self._owned(self.v0)
+            v̄ += x["v"]
+            v̄ *= 0.5
+            for name, cols in (("M", cm), ("K", ck)):
+                if "v̄" in cols:
+                    X[name][:, cols["v̄"]] = v̄
+        if "Δa" in cm:
+            x["Δa"] = self.layout.fill(s.da, X["M"][:, cm["Δa"]])
+        products = []
+        for name, A in (("M", self.bulk.M), ("K", self.bulk.K)):
+            A.matMult(self._in[name], self._out[name])
+            y = self._out[name].getDenseArray(readonly=True)
+            products.append({c: y[:, k] for c, k in self._columns[name].items()})
+        return x, products[0], products[1]
+
+    def local(self, step: bool) -> np.ndarray:
+        """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
+        s = self.stepper
+        x, Mx, Kx = self._products()
+        u, v = x["u"], x["v"]
+        out = np.zeros(len(TERMS))
+        out[0] = 0.5 * _dot(v, Mx["v"])
+        out[1] = 0.5 * _dot(u, Kx["u"])
+        if not step:
+            return out
+        if self.alpha:
+            out[2] += self.alpha * _dot(x["v̄"], Mx["v̄"])
+        if self.beta:
+            out[2] += self.beta * _dot(x["v̄"], Kx["v̄"])
+        amplitudes = np.array([1.0, *(0.5 * (float(a0.value) + float(a1.value))
+                                      for a0, a1 in zip(self.amp0, self._amplitudes,
+                                                        strict=True))])
+        out[3] = _dot(np.einsum("ij,j->i", self._loads, amplitudes), u - self._owned(self.u0))
+        if "Δa" in Mx:
+            Δa = x["Δa"]
+            k1, k2, k3, k4 = numerical.bulk_coefficients(float(s.dt.value), self.beta1,
+                                                         self.beta2, self.alpha, self.beta)
+            out[4] = k1 * _dot(Δa, Mx["v̄"]) + _dot(Mx["Δa"], k2 * self._owned(s.a) + k3 * Δa)
+            if self.beta:
+                out[4] += k4 * _dot(Δa, Kx["v̄"])
+        return out
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for X in (*self._in.values(), *self._out.values()):
+            X.destroy()
+
+
+def _dot(x: np.ndarray, y: np.ndarray) -> float:
+    """x·y without BLAS.
+
+    NumPy's OpenBLAS splits a dot product of more than 10,000 entries over its threads
+    (two here); on a shared machine waiting for the second thread to be scheduled made
+    the ledger's products take 20 ms a step at refinement 3 (0.02 ms single-threaded).
+    """
+    return float(np.einsum("i,i->", x, y))
+
+
+def bulk_terms(stepper: GN22, u0: Sequence[fem.Function], v0: Sequence[fem.Function],
+               amp0: Sequence[fem.Constant], source: str = "auto") -> FormTerms | MatrixTerms:
+    """The ledger's bulk terms from the given source (see :data:`SOURCES`).
+
+    ``auto``: the cached matrices on the fast solver, the forms on the reference solver.
+    """
+    if source not in SOURCES:
+        raise ValueError(f"source must be one of {', '.join(SOURCES)} (got {source!r})")
+    if source == "auto":
+        source = "matrices" if isinstance(stepper.solver, CondensedNewton) else "forms"
+    return (MatrixTerms if source == "matrices" else FormTerms)(stepper, u0, v0, amp0)

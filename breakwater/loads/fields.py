@@ -1,0 +1,103 @@
+"""Spatial traction fields of the surface loads: UFL expressions of x and the normal.
+
+A surface load is ``amplitude(t) × field`` (:class:`breakwater.model.model.SurfaceLoad`):
+the field is the traction (Pa) per unit amplitude, a fixed UFL expression of the
+position ``x`` and of the outward unit normal ``n`` of the loaded body, so that the
+fast solver assembles each load once at unit amplitude. A constant traction is the
+load's ``direction`` vector itself; the fields here (frozen dataclasses;
+``traction(x, n)`` gives the UFL vector) are
+
+- :class:`Pressure`: a uniform pressure p normal to the surface, **positive pushing
+  into the body** (traction −p n);
+- :class:`PressureProfile`: a pressure p(s) varying along the surface, linear between
+  given points (s, p), zero outside them, with s = (x − origin)·axis the coordinate
+  along a unit axis (e.g. the elevation y for ``axis = (0, 1)``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import ufl
+
+__all__ = ["Pressure", "PressureProfile", "TractionField"]
+
+
+class TractionField(Protocol):
+    """A traction field per unit amplitude."""
+
+    def traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """The traction (Pa) at position ``x`` where the outward normal is ``n``."""
+
+
+@dataclass(frozen=True)
+class Pressure:
+    """A uniform pressure (Pa) normal to the surface, positive into the body."""
+
+    value: float = 1.0
+
+    def traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """−p n."""
+        return -self.value * n
+
+
+@dataclass(frozen=True)
+class PressureProfile:
+    """A pressure p(s) (Pa, positive into the body), linear between points, 0 outside.
+
+    Attributes:
+        points: (s, p) pairs with increasing s (m, Pa); at least two.
+        axis: Direction along which s is measured (normalised here).
+        origin: The point where s = 0 (m).
+
+    """
+
+    points: tuple[tuple[float, float], ...]
+    axis: tuple[float, ...] = (0.0, 1.0)
+    origin: tuple[float, ...] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if len(self.points) < 2 or any(len(p) != 2 for p in self.points):
+            raise ValueError("a pressure profile needs at least two (s, p) points")
+        s = [p[0] for p in self.points]
+        for k in range(1, len(s)):
+            if not s[k] > s[k - 1]:
+                raise ValueError(f"profile coordinates must increase (point {k}: "
+                                 f"s = {s[k]:g} after s = {s[k - 1]:g})")
+        norm = math.hypot(*self.axis)
+        if not norm > 0 or len(self.axis) != len(self.origin):
+            raise ValueError("the profile axis must be a non-zero vector of the dimension "
+                             "of the origin")
+        object.__setattr__(self, "axis", tuple(c / norm for c in self.axis))
+
+    def coordinate(self, x: np.ndarray) -> np.ndarray:
+        """The coordinate s of points ``x`` (rows; numpy)."""
+        x = np.asarray(x, dtype=float)[..., :len(self.axis)]
+        return (x - np.asarray(self.origin)) @ np.asarray(self.axis)
+
+    def pressure(self, s: np.ndarray | float) -> np.ndarray:
+        """p(s) (numpy): linear between the points, 0 outside them."""
+        s_k = [p[0] for p in self.points]
+        p_k = [p[1] for p in self.points]
+        s = np.asarray(s, dtype=float)
+        inside = (s >= s_k[0]) & (s <= s_k[-1])
+        return np.where(inside, np.interp(s, s_k, p_k), 0.0)
+
+    def ufl_pressure(self, x: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """p(s(x)) as a UFL expression (a sum of one linear piece per interval)."""
+        s = ufl.dot(x - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
+        p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
+        pts = self.points
+        for k in range(len(pts) - 1):
+            (s0, p0), (s1, p1) = pts[k], pts[k + 1]
+            upper = ufl.le(s, s1) if k == len(pts) - 2 else ufl.lt(s, s1)
+            piece = p0 + (p1 - p0) / (s1 - s0) * (s - s0)
+            p = p + ufl.conditional(ufl.And(ufl.ge(s, s0), upper), piece, 0.0)
+        return p
+
+    def traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """−p(s) n."""
+        return -self.ufl_pressure(x) * n

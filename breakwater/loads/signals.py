@@ -1,0 +1,358 @@
+"""Load time functions: pulses of given impulse, constant, ramp-and-hold, tabulated.
+
+Every load is a time function t ↦ factor times a fixed spatial traction field (see
+:mod:`breakwater.loads.fields`); the time functions here are plain callables (frozen
+dataclasses, so that a checkpoint can fingerprint them):
+
+- :class:`Pulse`: an impact pulse of given impulse (below), with the pendulum impulse
+  of eq. 29 (:func:`pendulum_impulse`);
+- :class:`Constant`: ``value`` from ``start`` on (zero before);
+- :class:`Ramp`: zero until ``start``, linear rise to ``value`` over ``rise``, then held;
+- :class:`Table`: linear interpolation of (t, value) points (a measured record), the
+  first value before the first point; after the last point an error unless
+  ``hold_last``.
+
+A pulse is an amplitude ``t ↦ f(t)`` that is zero outside ``[start, start + duration]``
+and whose time integral is exactly the impulse it was built for, so the
+momentum given to the structure does not depend on the chosen shape or duration
+(only on the impulse). The shapes:
+
+- ``"triangular"``: linear rise to the peak at ``start + peak·duration``, linear
+  decay (the paper's Fig. 15); peak value ``2I/duration``.
+- ``"rectangular"``: constant ``I/duration``.
+- ``"half-sine"``: ``(πI / 2 duration) sin(π (t − start)/duration)``.
+
+The time stepper samples the amplitude at the step ends. The trapezoidal sum of a
+triangular pulse is exact when its start, peak and end fall on step ends; the
+other shapes are integrated to O(Δt²) (or O(Δt) at the jumps of the rectangle).
+"""
+
+from __future__ import annotations
+
+import bisect
+import codecs
+import csv
+import math
+import pathlib
+import re
+from dataclasses import dataclass
+from typing import Literal
+
+PulseShape = Literal["triangular", "rectangular", "half-sine"]
+PULSE_SHAPES: tuple[str, ...] = ("triangular", "rectangular", "half-sine")
+
+STANDARD_GRAVITY = 9.81
+"""g (m/s²) used by the paper in eq. 29 and for the caisson weight (4586 N/m²)."""
+
+
+def impact_velocity(cord_length: float, release_distance: float,
+                    gravity: float = STANDARD_GRAVITY) -> float:
+    """Velocity of the pendulum at impact, ω = s₀ sqrt(g / l₀) (m/s, eq. 29).
+
+    The small-angle pendulum released at rest a horizontal distance ``s₀`` from the
+    face moves harmonically with circular frequency sqrt(g/l₀); its speed at the
+    face (the bottom of the swing) is amplitude × frequency.
+
+    Args:
+        cord_length: Cord length l₀ (m).
+        release_distance: Release distance s₀ from the struck face (m).
+        gravity: Acceleration of gravity g (m/s²).
+
+    """
+    if not (cord_length > 0 and release_distance > 0 and gravity > 0):
+        raise ValueError("cord length, release distance and gravity must be > 0")
+    return release_distance * math.sqrt(gravity / cord_length)
+
+
+def pendulum_impulse(mass: float, cord_length: float, release_distance: float,
+                     restitution: float, gravity: float = STANDARD_GRAVITY) -> float:
+    """Impulse of a pendulum bouncing off the structure, I = M ω (1 + e₀) (N s, eq. 29).
+
+    The pendulum arrives with velocity ω and leaves with −e₀ ω; the change of its
+    momentum is the impulse given to the structure (a rigid, fixed target: the
+    paper's assumption).
+
+    Args:
+        mass: Pendulum mass M (kg).
+        cord_length: Cord length l₀ (m).
+        release_distance: Release distance s₀ (m).
+        restitution: Coefficient of restitution e₀ (-), in [0, 1].
+        gravity: Acceleration of gravity g (m/s²).
+
+    """
+    if not mass > 0:
+        raise ValueError(f"pendulum mass must be > 0 (got {mass})")
+    if not 0.0 <= restitution <= 1.0:
+        raise ValueError(f"restitution must be in [0, 1] (got {restitution})")
+    return mass * impact_velocity(cord_length, release_distance, gravity) * (1.0 + restitution)
+
+
+@dataclass(frozen=True)
+class Pulse:
+    """A force-time pulse of given impulse (callable: t ↦ amplitude).
+
+    Attributes:
+        impulse: Time integral of the amplitude (amplitude unit × s).
+        duration: Pulse length (s), > 0.
+        shape: ``"triangular"``, ``"rectangular"`` or ``"half-sine"``.
+        start: Time the pulse starts (s).
+        peak: Triangular pulses: time of the peak as a fraction of the duration,
+            in [0, 1] (0.5: symmetric).
+
+    """
+
+    impulse: float
+    duration: float
+    shape: PulseShape = "triangular"
+    start: float = 0.0
+    peak: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.shape not in PULSE_SHAPES:
+            raise ValueError(f"unknown pulse shape {self.shape!r} (known: "
+                             f"{', '.join(PULSE_SHAPES)})")
+        if not (self.duration > 0 and math.isfinite(self.duration)):
+            raise ValueError(f"pulse duration must be > 0 (got {self.duration})")
+        if not 0.0 <= self.peak <= 1.0:
+            raise ValueError(f"pulse peak fraction must be in [0, 1] (got {self.peak})")
+
+    @property
+    def end(self) -> float:
+        """Time the pulse ends (s)."""
+        return self.start + self.duration
+
+    @property
+    def maximum(self) -> float:
+        """Largest amplitude of the pulse."""
+        return {"triangular": 2.0, "rectangular": 1.0,
+                "half-sine": 0.5 * math.pi}[self.shape] * self.impulse / self.duration
+
+    def __call__(self, t: float) -> float:
+        """Amplitude at time ``t``."""
+        s = (t - self.start) / self.duration  # position in the pulse, 0..1
+        if s < 0.0 or s > 1.0:
+            return 0.0
+        if self.shape == "rectangular":
+            return self.impulse / self.duration
+        if self.shape == "half-sine":
+            return self.maximum * math.sin(math.pi * s)
+        p = self.peak
+        if s < p:
+            rise = s / p
+        elif s > p:
+            rise = (1.0 - s) / (1.0 - p)
+        else:
+            rise = 1.0
+        return self.maximum * rise
+
+
+@dataclass(frozen=True)
+class Constant:
+    """A constant factor ``value`` from ``start`` on, zero before (callable: t ↦ factor).
+
+    With ``start = 0`` the load is present at t = 0 (and enters the initial static
+    state); with ``start > 0`` it is applied suddenly at the first step end ≥ start.
+    """
+
+    value: float = 1.0
+    start: float = 0.0
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        return self.value if t >= self.start else 0.0
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """Zero until ``start``, linear rise to ``value`` at ``start + rise``, then held."""
+
+    value: float = 1.0
+    start: float = 0.0
+    rise: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (self.rise > 0 and math.isfinite(self.rise)):
+            raise ValueError(f"ramp rise time must be > 0 (got {self.rise})")
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        s = (t - self.start) / self.rise
+        return self.value * min(max(s, 0.0), 1.0)
+
+
+class TableEnded(ValueError):
+    """A :class:`Table` was evaluated after its last point without ``hold_last``."""
+
+
+@dataclass(frozen=True)
+class Table:
+    """Linear interpolation of a tabulated history (callable: t ↦ factor).
+
+    Attributes:
+        times: Increasing times (s), at least two.
+        values: The factor at each time.
+        hold_last: After the last time keep the last value (else :class:`TableEnded`).
+        start: The table's time 0 is at ``start`` (s): factor(t) = table(t − start).
+
+    Before the first point the factor is the first value.
+    """
+
+    times: tuple[float, ...]
+    values: tuple[float, ...]
+    hold_last: bool = False
+    start: float = 0.0
+
+    def __post_init__(self) -> None:
+        if len(self.times) != len(self.values):
+            raise ValueError("times and values must have the same length")
+        if len(self.times) < 2:
+            raise ValueError("a table needs at least two points")
+        if not all(math.isfinite(v) for v in (*self.times, *self.values)):
+            raise ValueError("table values must be finite")
+        for k in range(1, len(self.times)):
+            if not self.times[k] > self.times[k - 1]:
+                raise ValueError(f"times must increase (point {k}: t = {self.times[k]:g} after "
+                                 f"t = {self.times[k - 1]:g})")
+
+    @property
+    def end(self) -> float:
+        """The time of the last point (s), on the run's clock."""
+        return self.start + self.times[-1]
+
+    def __call__(self, t: float) -> float:
+        """Factor at time ``t``."""
+        τ = t - self.start
+        times, values = self.times, self.values
+        if τ <= times[0]:
+            return values[0]
+        if τ >= times[-1]:
+            if τ > times[-1] and not self.hold_last:
+                raise TableEnded(f"the table ends at t = {self.end:g} s (asked at t = {t:g} s)")
+            return values[-1]
+        k = bisect.bisect_right(times, τ)  # times[k - 1] <= τ < times[k]
+        t0, t1 = times[k - 1], times[k]
+        return values[k - 1] + (values[k] - values[k - 1]) * (τ - t0) / (t1 - t0)
+
+
+# Cells of a table row: a number with a decimal point or a decimal comma (strict: no
+# "nan", "inf", "1_000", thousands separators or units).
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+# Between the cells of a file without ";" or tabs: a comma and/or blanks.
+_COMMA_OR_BLANKS = re.compile(r"\s*,\s*|\s+")
+
+
+def _decode(raw: bytes) -> str:
+    """The text of a table file: UTF-16 with its byte-order mark, else UTF-8 (BOM dropped).
+
+    Bytes that are not UTF-8 (a header in a legacy code page, e.g. "°C") become U+FFFD:
+    they cannot make a number, so a data row holding one is refused, never misread.
+    """
+    if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return raw.decode("utf-16", errors="replace")
+    return raw.decode("utf-8-sig", errors="replace").replace("\ufeff", "")
+
+
+def _separator(lines: list[str]) -> str:
+    """The file's cell separator: ``;`` or a tab if any row has one, else commas/blanks."""
+    if any(";" in line for line in lines):
+        return ";"
+    if any("\t" in line for line in lines):
+        return "\t"
+    return ","
+
+
+def _cells(text: str, separator: str) -> list[str]:
+    """The cells of a row, unquoted, trailing empty cells (what spreadsheets write) removed."""
+    if '"' in text:  # quoted cells ("0,5" or "t (s)"): the csv module's rules
+        cells = [c.strip() for c in next(csv.reader([text], delimiter=separator,
+                                                    skipinitialspace=True))]
+    elif separator == ",":
+        cells = _COMMA_OR_BLANKS.split(text)
+    else:
+        cells = [c.strip() for c in text.split(separator)]
+    while cells and not cells[-1]:
+        cells.pop()
+    return cells
+
+
+def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Read a CSV history: rows ``t, value``, as spreadsheets write them.
+
+    - Encoding: UTF-8, with or without a byte-order mark (Excel's "CSV UTF-8"), or
+      UTF-16 with its mark (Excel's "Unicode text"); any line ends (LF, CRLF, CR).
+    - Separator, one per file (the rows after the first decide: a header may use
+      another): ``;`` if a row has one, else a tab if a row has one, else a comma
+      and/or blanks. Trailing empty cells (``0,1,,``) are dropped; a row
+      of empty cells (``,,``), a blank line and ``#`` comments are skipped.
+    - Decimal commas (``0,5;1,2``) are read in ``;``- or tab-separated files; a file
+      mixing decimal commas and decimal points is refused (``1.000`` would be 1 or
+      1000).
+    - Header: the first row is skipped only when none of its cells is a number (``t,
+      value``); a first row with a number in it is data, and a bad one is refused.
+
+    Raises:
+        OSError: The file cannot be read (the message names it).
+        ValueError: A row is not two numbers (or one is beyond the largest float), the
+            times do not increase, or fewer than two rows (the message names the file and
+            the line).
+
+    """
+    if not path.is_file():
+        raise OSError(f"file not found: {path}")
+    lines = [line.split("#", 1)[0] for line in _decode(path.read_bytes()).splitlines()]
+    # The separator of the data: a header ("time (s)<tab>factor") may use another.
+    filled = [line for line in lines if line.strip()]
+    separator = _separator(filled[1:] or filled)
+    times: list[float] = []
+    values: list[float] = []
+    rows: list[int] = []
+    decimal: tuple[str, str, int] | None = None  # the file's decimal mark, cell, line
+    header_allowed = True
+    for number, line in enumerate(lines, start=1):
+        cells = _cells(line.strip(), separator)
+        if not cells:
+            continue
+        where = f"{path.name} line {number}"
+        numeric = [bool(_NUMBER.fullmatch(c)) for c in cells]
+        if header_allowed:
+            header_allowed = False
+            if not any(numeric):
+                continue  # the header: no number in it
+        if len(cells) != 2 or not all(numeric):
+            bad = next((c for c, ok in zip(cells, numeric, strict=True) if not ok), None)
+            named = {";": "';'", "\t": "a tab"}.get(separator)
+            why = (f"got {len(cells)} cell{'s' * (len(cells) != 1)}"
+                   + (f", the file's separator being {named}" if named else "")
+                   if len(cells) != 2 else
+                   "no number: only the first row may be a header, comment others out "
+                   "with #" if not any(numeric) else
+                   "an empty cell" if bad == "" else f"{bad!r} is not a number")
+            raise ValueError(f"{where}: expected two numbers t, value ({why}: "
+                             f"{line.strip()!r})")
+        for cell in cells:
+            mark = "," if "," in cell else "." if "." in cell else None
+            if mark is None:
+                continue
+            if decimal is None:
+                decimal = (mark, cell, number)
+            elif mark != decimal[0]:
+                raise ValueError(f"{where}: {cell!r} has a decimal "
+                                 f"{'comma' if mark == ',' else 'point'}, {decimal[1]!r} "
+                                 f"(line {decimal[2]}) a decimal "
+                                 f"{'comma' if decimal[0] == ',' else 'point'}: use one "
+                                 "throughout")
+        t, v = (float(c.replace(",", ".")) for c in cells)
+        if not (math.isfinite(t) and math.isfinite(v)):  # 1e400: inf, not an error of float
+            raise ValueError(f"{where}: {cells[math.isfinite(t)]!r} is beyond the largest "
+                             f"number (about 1.8e308)")
+        if times and not t > times[-1]:
+            raise ValueError(f"{where}: t = {t:g} does not increase (line {rows[-1]} has "
+                             f"t = {times[-1]:g})")
+        times.append(t)
+        values.append(v)
+        rows.append(number)
+    if len(times) < 2:
+        raise ValueError(f"{path.name}: a table needs at least two data rows (found "
+                         f"{len(times)})")
+    return tuple(times), tuple(values)
+

@@ -1,0 +1,245 @@
+"""Reading gmsh meshes with named physical groups, ready for interface integrals."""
+
+from __future__ import annotations
+
+import logging
+import pathlib
+from contextlib import nullcontext
+
+import dolfinx
+import gmsh
+import numpy as np
+from dolfinx.io import gmsh as gmshio
+from mpi4py import MPI
+
+from breakwater.common.errors import MeshError
+from breakwater.common.gmshtools import gmsh_session
+from breakwater.common.parallel import on_rank_zero, shared_tempdir
+
+log = logging.getLogger("breakwater.model.mesh")
+
+
+def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
+              gdim: int = 2) -> gmshio.MeshData:
+    """Read a gmsh ``.msh`` (or mesh a ``.geo``) with its physical groups.
+
+    Cells are ghosted across shared facets, which interior-facet (interface)
+    integrals need in parallel.
+
+    Args:
+        path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
+            temporary folder: nothing is written beside the script).
+        comm: Communicator to distribute the mesh over.
+        gdim: Geometric dimension of the model (2 for plane strain).
+
+    Returns:
+        dolfinx's ``MeshData`` (mesh, cell/facet/ridge tags, physical groups by name).
+
+    Raises:
+        MeshError: The file is missing, unreadable, or has no named physical groups.
+
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise MeshError(f"mesh file not found: {path}")
+    if path.suffix == ".geo":
+        with shared_tempdir(comm, "breakwater-geo-") as folder:
+            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim),
+                             comm, gdim)
+    if path.suffix != ".msh":
+        raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
+    partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
+    # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
+    with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
+        try:
+            on_rank_zero(comm, lambda: _merge(path, gdim))
+        except MeshError:
+            raise
+        except Exception as e:  # gmsh raises bare Exceptions on unreadable files
+            raise MeshError(f"{path}: cannot read the mesh ({e})") from e
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
+    if not data.physical_groups:
+        raise MeshError(f"{path}: the mesh has no named physical groups")
+    return data
+
+
+def _merge(path: pathlib.Path, gdim: int) -> None:
+    """Read a ``.msh`` into the current gmsh model (rank 0) and check it is whole.
+
+    A truncated file may read without error but lack its elements, nodes or physical
+    groups (dolfinx would then fail with a RuntimeError or an IndexError).
+
+    Raises:
+        MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups.
+    """
+    gmsh.merge(str(path))
+    if not gmsh.model.getPhysicalGroups():
+        raise MeshError(f"{path}: cannot read the mesh (no physical groups: truncated?)")
+    if len(gmsh.model.mesh.getNodes()[0]) == 0:
+        raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
+    types, _, _ = gmsh.model.mesh.getElements(gdim)
+    if len(types) == 0:
+        raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
+    if gdim == 2:
+        check_cells(path)
+
+
+DEGENERATE = 1e-6
+"""A cell whose height is below this fraction of its longest edge is refused as
+degenerate (zero area). The stiffness of such a cell exceeds its neighbours' by
+1/DEGENERATE or more, so the solution would carry errors of the order of its
+condition number times the round-off (1e6 × 1e-16 × the neighbours' own ~1e6);
+a collapsed cell (three collinear vertices) makes the matrix singular (a MUMPS error)."""
+THIN = 1e-2
+"""A cell whose height is below this fraction of its longest edge (an angle below about
+0.6°, an aspect ratio above 100) is accepted with a warning."""
+
+
+def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed area and height over the longest edge (relative) of polygonal cells.
+
+    Args:
+        corners: The corner coordinates, shape ``(cells, corners, 2)``, in the cells'
+            vertex order.
+
+    Returns:
+        ``(area, quality)``: the signed area (shoelace; its sign is the cell's
+        orientation) and ``2 |area| / L²`` with ``L`` the longest edge (for a triangle,
+        its height over the longest edge divided by that edge: √3/2 equilateral, 0
+        collapsed).
+    """
+    x, y = corners[..., 0], corners[..., 1]
+    xn, yn = np.roll(x, -1, axis=1), np.roll(y, -1, axis=1)
+    area = 0.5 * np.sum(x * yn - xn * y, axis=1)
+    longest = np.max(np.hypot(xn - x, yn - y), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        quality = np.where(longest > 0, 2 * np.abs(area) / longest**2, 0.0)
+    return area, quality
+
+
+def check_cells(path: pathlib.Path) -> None:
+    """Refuse degenerate or overlapping 2D cells of the current gmsh model (rank 0).
+
+    Checked on the corners of each cell (the straight-sided cell; the mid-side nodes of
+    a curved P2 cell are not checked): a height below :data:`DEGENERATE` of the longest
+    edge is refused, below :data:`THIN` warned about once (the thinnest cell); two
+    cells on the same side of their shared edge overlap (a folded mesh, an inverted
+    cell among its neighbours), whatever the orientation of each surface.
+
+    Raises:
+        MeshError: One line naming the file, the cell (gmsh element tag) and its
+            position.
+    """
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    xy = np.zeros((int(tags.max()) + 1, 2))
+    xy[tags.astype(np.int64)] = coords.reshape(-1, 3)[:, :2]
+    cells, elements, sides = [], [], []
+    for etype, etags, enodes in zip(*gmsh.model.mesh.getElements(2), strict=True):
+        corners = gmsh.model.mesh.getElementProperties(etype)[5]
+        nodes = enodes.astype(np.int64).reshape(len(etags), -1)[:, :corners]
+        cells.append(nodes)
+        elements.append(etags.astype(np.int64))
+    for nodes, etags in zip(cells, elements, strict=True):
+        area, quality = cell_quality(xy[nodes])
+        worst = int(np.argmin(quality))
+        centre = xy[nodes[worst]].mean(axis=0)
+        where = f"cell {etags[worst]} at ({centre[0]:.6g}, {centre[1]:.6g})"
+        if quality[worst] < DEGENERATE:
+            raise MeshError(f"{path}: {where} is degenerate: its height is "
+                            f"{quality[worst]:.1e} of its longest edge, below "
+                            f"{DEGENERATE:g} (zero area; remesh)")
+        thin = int(np.count_nonzero(quality < THIN))
+        if thin:
+            log.warning("%s: %d thin cell(s), the thinnest %s: height %.1e of its longest "
+                        "edge, below %g (poor accuracy and conditioning)", path, thin, where,
+                        quality[worst], THIN)
+        # Each edge, its vertices sorted, and the side of it the cell lies on.
+        k = nodes.shape[1]
+        a, b = nodes, np.roll(nodes, -1, axis=1)
+        forward = a < b
+        side = np.where(forward, 1, -1) * np.sign(area)[:, None]
+        edges = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=-1).reshape(-1, 2)
+        sides.append((edges, side.reshape(-1), np.repeat(etags, k)))
+    edges = np.concatenate([e for e, _, _ in sides])
+    side = np.concatenate([s for _, s, _ in sides])
+    owner = np.concatenate([o for _, _, o in sides])
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges, side, owner = edges[order], side[order], owner[order]
+    same = np.all(edges[1:] == edges[:-1], axis=1) & (side[1:] == side[:-1])
+    if same.any():
+        j = int(np.flatnonzero(same)[0])
+        mid = xy[edges[j]].mean(axis=0)
+        raise MeshError(f"{path}: cells {owner[j]} and {owner[j + 1]} overlap at "
+                        f"({mid[0]:.6g}, {mid[1]:.6g}): both lie on the same side of their "
+                        "shared edge (a folded mesh or an inverted cell; remesh)")
+
+
+def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2
+             ) -> pathlib.Path:
+    """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
+
+    Args:
+        path: The script.
+        target: The ``.msh`` file written (its folder is created); the same path on
+            every rank.
+        comm: Communicator (rank 0 meshes, every rank returns once the file exists).
+        dim: Dimension of the mesh.
+
+    Returns:
+        ``target``.
+
+    Raises:
+        MeshError: gmsh cannot mesh the script (on every rank).
+
+    """
+    def write() -> None:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with gmsh_session():
+            gmsh.merge(str(path))  # into the session's model
+            gmsh.model.mesh.generate(dim)
+            gmsh.write(str(target))
+
+    try:
+        on_rank_zero(comm, write)
+    except Exception as e:
+        raise MeshError(f"{path}: gmsh cannot mesh the script ({e})") from e
+    return target
+
+
+def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:
+    """The gmsh tag of a named physical group, checking its dimension.
+
+    Raises:
+        MeshError: No such group (the message lists the ones that exist), or it has
+            another dimension.
+
+    """
+    groups = data.physical_groups
+    if name not in groups:
+        known = ", ".join(sorted(groups))
+        raise MeshError(f"physical group '{name}' is not in the mesh (it has: {known})")
+    gdim, tag = groups[name]
+    if dim is not None and gdim != dim:
+        raise MeshError(f"physical group '{name}' has dimension {gdim}, expected {dim}")
+    return int(tag)
+
+
+def group_points(data: gmshio.MeshData, name: str) -> np.ndarray:
+    """Coordinates of the vertices in a named point (dimension-0) group, on every rank.
+
+    Returns:
+        Array of shape ``(n, 3)``; the same on all ranks.
+
+    """
+    msh = data.mesh
+    tag = group_tag(data, name, 0)
+    tdim = msh.topology.dim
+    tags = {tdim - 2: data.ridge_tags, tdim - 3: data.peak_tags}.get(0)
+    if tags is None:
+        raise MeshError(f"point group '{name}' cannot be read from this mesh")
+    vertices = tags.find(tag)
+    nloc = msh.topology.index_map(0).size_local
+    vertices = vertices[vertices < nloc]
+    x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, 0, vertices).ravel()]
+    allx = msh.comm.allgather(x.reshape(-1, 3))
+    return np.unique(np.vstack(allx), axis=0)

@@ -1,0 +1,1 @@
+"""What a run writes and reports: history, fields, probes, summary, figures, checkpoints."""

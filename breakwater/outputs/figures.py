@@ -1,0 +1,287 @@
+"""Figures of a run, drawn from its output files only (so they can be remade later).
+
+:func:`make_figures` reads ``history.csv``, ``summary.json``, ``static.npz`` and
+``snapshot_max_ux.npz`` of an output directory and writes PNG files in its
+``figures/`` folder, with matplotlib's object API (no pyplot, no display needed):
+
+- ``probes_ux.png``: horizontal displacement of the probes (the gauges, paper Fig. 18);
+- ``pair_probes_ux.png``: horizontal displacement of both sides of each interface
+  probe and their slip (the caisson corner and the nearest mound node, Fig. 19);
+- ``pair_probes_uy.png``: vertical displacement of both sides and the opening (Fig. 21);
+- ``energy.png``: the energy ledger (with the numerical dissipation) and its balance error;
+- ``contact.png``: contact length, normal and tangential resultants, Newton iterations;
+- ``static_uy.png``, ``static_syy.png``: static vertical displacement and vertical
+  stress (Figs. 16-17);
+- ``static_pressure.png``: static contact pressure along each interface (Fig. 17; a
+  general pair's at its slave surface's nodes);
+- ``max_ux_deformed.png``: deformed shape (×20) coloured by σ_yy at the instant of the
+  largest horizontal displacement of the first probe (Figs. 20, 22).
+
+Usage: ``python -m breakwater.outputs.figures <output directory>``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import pathlib
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.tri import Triangulation
+
+from breakwater.common.files import (
+    FIGURES,
+    HISTORY,
+    SNAPSHOT,
+    STATIC,
+    SUMMARY,
+    read_history,
+    temporary_path,
+    writing,
+)
+
+__all__ = ["make_figures"]
+
+LEDGER = ("kinetic", "strain", "penalty", "rayleigh_dissipation", "friction_dissipation",
+          "external_work", "balance_error")
+# Ledger entries plotted when present (histories written before they existed lack them).
+NUMERICAL = ("numerical_dissipation", "numerical_dissipation_contact")
+
+
+def _save(fig: Figure, path: pathlib.Path) -> pathlib.Path:
+    """Save atomically (temporary file with the same suffix, then rename)."""
+    tmp = temporary_path(path)
+    with writing(path):
+        try:
+            fig.savefig(tmp, dpi=150, bbox_inches="tight")
+            tmp.replace(path)
+        except OSError:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise
+    return path
+
+
+def _names(columns: Sequence[str], suffix: str) -> list[str]:
+    """Prefixes of the columns ending with ``suffix``."""
+    return [c[: -len(suffix)] for c in columns if c.endswith(suffix)]
+
+
+def _time_axis(ax: Any, t: np.ndarray, t_peak: float | None = None) -> None:
+    ax.set_xlabel("t (s)")
+    ax.set_xlim(t[0], t[-1] if len(t) > 1 else t[0] + 1.0)
+    if t_peak is not None:
+        ax.axvline(t_peak, color="0.6", lw=0.8, ls=":")
+    ax.grid(True, lw=0.3)
+    ax.label_outer()  # time label on the bottom plot of a column only
+
+
+def _probes(h: dict[str, np.ndarray], t_peak: float | None, path: pathlib.Path
+            ) -> pathlib.Path | None:
+    names = [n for n in _names(list(h), "_ux")
+             if f"{n}_uy" in h and not n.endswith(("_slave", "_master"))]
+    if not names:
+        return None
+    fig = Figure(figsize=(7, 4))
+    ax = fig.subplots()
+    for n in names:
+        ax.plot(h["t"], 1e3 * h[f"{n}_ux"], label=n)
+    ax.set_ylabel("horizontal displacement $u_x$ (mm)")
+    ax.set_title("Probe displacements (cf. paper Fig. 18)")
+    _time_axis(ax, h["t"], t_peak)
+    ax.legend()
+    return _save(fig, path)
+
+
+def _pair_probes(h: dict[str, np.ndarray], t_peak: float | None, component: str,
+                 path: pathlib.Path) -> pathlib.Path | None:
+    names = _names(list(h), "_slip")
+    if not names:
+        return None
+    relative, label, fig_no = (("slip", "slip", 19) if component == "x"
+                               else ("opening", "opening", 21))
+    fig = Figure(figsize=(7, 3.2 * len(names)))
+    axes = np.atleast_1d(fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0])
+    for ax, n in zip(axes, names, strict=True):
+        for side, style in (("slave", "-"), ("master", "--")):
+            key = f"{n}_{side}_u{component}"
+            if key in h:
+                ax.plot(h["t"], 1e3 * h[key], style, label=f"{side}")
+        ax.plot(h["t"], 1e3 * h[f"{n}_{relative}"], "k", lw=0.9, label=label)
+        ax.set_ylabel(f"$u_{component}$ (mm)")
+        ax.set_title(f"{n}: {'horizontal' if component == 'x' else 'vertical'} "
+                     f"displacement (cf. paper Fig. {fig_no})")
+        _time_axis(ax, h["t"], t_peak)
+        ax.legend()
+    return _save(fig, path)
+
+
+def _energy(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None:
+    if not all(k in h for k in LEDGER):
+        return None
+    fig = Figure(figsize=(7, 6))
+    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1))
+    for k in (*LEDGER[:-1], *(k for k in NUMERICAL if k in h)):
+        ax.plot(h["t"], h[k], ":" if k == NUMERICAL[1] else "-", label=k.replace("_", " "))
+    stored = h["kinetic"] + h["strain"] + h["penalty"]
+    ax.plot(h["t"], stored - stored[0], "k--", lw=0.8, label="stored − stored(0)")
+    ax.set_ylabel("energy (J/m)")
+    ax.set_title("Energy ledger")
+    ax.legend(fontsize=7)
+    _time_axis(ax, h["t"])
+    bx.plot(h["t"], h["balance_error"], "r")
+    bx.set_ylabel("balance error (J/m)")
+    _time_axis(bx, h["t"])
+    return _save(fig, path)
+
+
+def _contact(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None:
+    pairs = [n.removeprefix("contact_length_") for n in h if n.startswith("contact_length_")]
+    fig = Figure(figsize=(7, 8))
+    axes = fig.subplots(4, 1, sharex=True)
+    for k in pairs:
+        axes[0].plot(h["t"], h[f"contact_length_{k}"], label=f"pair {k}")
+        axes[1].plot(h["t"], h[f"normal_force_{k}"], label=f"pair {k}")
+        axes[2].plot(h["t"], h[f"tangential_force_{k}"], label=f"pair {k}")
+    axes[0].set_ylabel("contact length (m)")
+    axes[1].set_ylabel("normal force (N/m)")
+    axes[2].set_ylabel("tangential force (N/m)")
+    axes[3].step(h["t"], h["newton_iterations"], where="pre", color="k", lw=0.8)
+    axes[3].set_ylabel("Newton iterations")
+    ax_dt = axes[3].twinx()
+    ax_dt.step(h["t"][1:], h["dt"][1:], where="pre", color="C3", lw=0.8)
+    ax_dt.set_ylabel("Δt (s)", color="C3")
+    ax_dt.set_ylim(0.0, 1.1 * float(h["dt"].max()) if h["dt"].max() > 0 else 1.0)
+    axes[0].set_title("Contact resultants and solver")
+    for ax in axes:
+        _time_axis(ax, h["t"])
+    if pairs:
+        axes[0].legend()
+    return _save(fig, path)
+
+
+def _triangulations(data: Any, scale: float = 0.0
+                    ) -> list[tuple[str, Triangulation, dict[str, np.ndarray]]]:
+    out = []
+    for name in (str(b) for b in data["bodies"]):
+        x = data[f"{name}_x"]
+        dx = scale * np.column_stack([data[f"{name}_ux"], data[f"{name}_uy"]])
+        xy = x + dx
+        tri = Triangulation(xy[:, 0], xy[:, 1], data[f"{name}_triangles"])
+        fields = {k: data[f"{name}_{k}"] for k in ("ux", "uy", "von_mises", "stress_yy")}
+        out.append((name, tri, fields))
+    return out
+
+
+def _contours(data: Any, field: str, factor: float, label: str, title: str,
+              path: pathlib.Path, scale: float = 0.0, outline: bool = False,
+              cmap: str = "viridis") -> pathlib.Path:
+    bodies = _triangulations(data, scale)
+    values = np.concatenate([f[field] for _, _, f in bodies]) * factor
+    lo, hi = float(values.min()), float(values.max())
+    if hi <= lo:
+        hi = lo + max(abs(lo), 1.0) * 1e-6
+    levels = np.linspace(lo, hi, 21)
+    fig = Figure(figsize=(8, 4))
+    ax = fig.subplots()
+    sets = [ax.tricontourf(tri, f[field] * factor, levels=levels, cmap=cmap)
+            for _, tri, f in bodies]
+    for _, tri, _ in bodies:
+        ax.triplot(tri, color="k", lw=0.1, alpha=0.3)
+    if outline:
+        for _, tri, _ in _triangulations(data, 0.0):
+            ax.triplot(tri, color="0.5", lw=0.2, ls=":")
+    fig.colorbar(sets[0], ax=ax, label=label, shrink=0.8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title)
+    return _save(fig, path)
+
+
+def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
+                     ) -> pathlib.Path | None:
+    # Conforming pairs (pair<k>_*) and general pairs (surface_<name>_*, on the slave).
+    keys = sorted(str(k).removesuffix("_x") for k in data.files
+                  if str(k).startswith(("pair", "surface_")) and str(k).endswith("_x"))
+    if not keys:
+        return None
+    fig = Figure(figsize=(7, 4))
+    ax = fig.subplots()
+    for key in keys:
+        x = data[f"{key}_x"]
+        # Abscissa along the interface: x for a horizontal one, else the arc length.
+        span = np.ptp(x, axis=0)
+        s = x[:, 0] if span[0] >= span[1] else x[:, 1]
+        label = f"pair {key.removeprefix('pair')}" if key.startswith("pair") else \
+            f"contact {key.removeprefix('surface_')}"
+        ax.plot(s, data[f"{key}_pressure"], "o-", ms=3, label=label)
+    static = summary.get("static", {})
+    mean = static.get("mean_contact_pressure")
+    if mean is not None:
+        ax.axhline(mean, color="k", ls="--", lw=0.8, label=f"mean {mean:.4g} Pa")
+    ax.set_xlabel("position along the interface (m)")
+    ax.set_ylabel("contact pressure (Pa)")
+    ax.set_title("Static contact pressure (cf. paper Fig. 17)")
+    ax.grid(True, lw=0.3)
+    ax.legend()
+    return _save(fig, path)
+
+
+def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pathlib.Path]:
+    """Draw every figure of a run whose outputs are in ``directory``.
+
+    Args:
+        directory: The run's output directory.
+        scale: Displacement magnification of the deformed-shape figure.
+
+    Returns:
+        The figures written (in ``directory/figures``).
+    """
+    directory = pathlib.Path(directory)
+    folder = directory / FIGURES
+    folder.mkdir(exist_ok=True)
+    summary: dict[str, Any] = {}
+    if (directory / SUMMARY).is_file():
+        summary = json.loads((directory / SUMMARY).read_text(encoding="utf-8"))
+    t_peak = summary.get("dynamic", {}).get("time_of_max_ux")
+    drawn: list[pathlib.Path | None] = []
+    if (directory / HISTORY).is_file():
+        h = read_history(directory / HISTORY)
+        if len(h.get("t", ())) > 0:
+            drawn += [_probes(h, t_peak, folder / "probes_ux.png"),
+                      _pair_probes(h, t_peak, "x", folder / "pair_probes_ux.png"),
+                      _pair_probes(h, t_peak, "y", folder / "pair_probes_uy.png"),
+                      _energy(h, folder / "energy.png"),
+                      _contact(h, folder / "contact.png")]
+    if (directory / STATIC).is_file():
+        with np.load(directory / STATIC) as data:
+            drawn += [
+                _contours(data, "uy", 1e3, "$u_y$ (mm)",
+                          "Static vertical displacement (cf. paper Fig. 16)",
+                          folder / "static_uy.png"),
+                _contours(data, "stress_yy", 1.0, r"$\sigma_{yy}$ (Pa)",
+                          "Static vertical stress (cf. paper Fig. 17)",
+                          folder / "static_syy.png", cmap="viridis_r"),
+                _static_pressure(data, summary, folder / "static_pressure.png"),
+            ]
+    if (directory / SNAPSHOT).is_file():
+        with np.load(directory / SNAPSHOT) as data:
+            t = float(data["time"])
+            drawn.append(_contours(
+                data, "stress_yy", 1.0, r"$\sigma_{yy}$ (Pa)",
+                f"Deformed shape (×{scale:g}) and vertical stress at t = {t:.4g} s\n"
+                "(largest $u_x$ of the first probe; cf. paper Figs. 20, 22)",
+                folder / "max_ux_deformed.png", scale=scale, outline=True, cmap="viridis_r"))
+    return [p for p in drawn if p is not None]
+
+
+if __name__ == "__main__":  # pragma: no cover
+    if len(sys.argv) != 2:
+        sys.exit("usage: python -m breakwater.outputs.figures <output directory>")
+    for p in make_figures(sys.argv[1]):
+        print(p)

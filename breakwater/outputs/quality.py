@@ -1,0 +1,290 @@
+"""Quality of a penalty contact: penetration and penalty stiffness of each pair.
+
+A penalty contact lets the bodies interpenetrate by ``δ = p / ε_n`` where the contact
+pressure is ``p``. Too soft a penalty ε_n and the penetration is a visible part of the
+result (the paper asks for "no noticeable interpenetration", the paper's §5.4); too stiff and
+it buys nothing but a worse-conditioned Jacobian. The measures, per contact pair:
+
+- ``h``, the element size at the interface: the mean length of the interface facets;
+- ``δ_static`` and ``δ_dynamic``, the largest nodal penetration ``max ⟨−g_n⟩₊`` over
+  the interface nodes, in the static state and over the time steps (m);
+- ``s``, the static settlement: the mean, over the interface nodes, of the normal
+  displacement of the interface in the static state (both sides' nodes averaged,
+  ``|mean(½(u_s + u_m)·n)|``), the deformation scale that the penetration spoils;
+- ``ε_n h / E`` of each side: the penalty's stiffness over that of a layer of the
+  body one element thick (``E/h`` per unit area).
+
+Thresholds (constants below) and why:
+
+- too soft: ``max(δ_static, δ_dynamic) > 1% h`` (:data:`MAX_PENETRATION_OVER_H`): the
+  penetration then distorts the interface elements themselves by more than the
+  error of a P2 interpolation of a smooth field on them, and it is visible on a
+  deformed plot scaled to show the elements; or ``δ_static > 10% s``
+  (:data:`MAX_PENETRATION_OVER_SETTLEMENT`): more than a tenth of the static
+  settlement is the penalty's artefact, not the bodies' deformation (the settlement
+  of a rigid slave on a rigid master is all penetration). Only the static
+  penetration is compared with the settlement: an impact concentrates the pressure
+  under a corner, so the dynamic penetration there is compared with ``h`` only.
+- too stiff: ``ε_n h / E > 1000`` for the softer side
+  (:data:`MAX_STIFFNESS_RATIO`): the penetration is then below 0.1% of the elastic
+  deformation of the interface elements, far below the discretisation error, while
+  the interface rows of the Jacobian are a thousand times stiffer than the bulk rows,
+  so its condition number and the round-off of the contact residual (Newton's floor)
+  grow in proportion. The softer side is used because it deforms the most and it has
+  the smallest diagonal stiffness.
+
+The suggested ε_n range: the lower end is the smallest ε_n meeting the penetration
+criteria, assuming the penetration scales as 1/ε_n while the bodies' own deformation
+stays (the forces do not change with ε_n); the upper end is ``1000 E_soft / h``. The
+current ε_n is inside the range exactly when the verdict is ``ok``. When the lower end is
+above the upper one the criteria cannot both hold: refine the mesh at the interface.
+
+Everything here is a pure function of numbers (no dolfinx): the run layer measures
+the inputs (:class:`PairInputs`, in :mod:`breakwater.outputs.summary`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "MAX_PENETRATION_OVER_H",
+    "MAX_PENETRATION_OVER_SETTLEMENT",
+    "MAX_STIFFNESS_RATIO",
+    "ContactQuality",
+    "PairInputs",
+    "assess",
+    "max_penetration",
+    "settlement",
+    "stiffness_ratio",
+    "suggested_penalty",
+]
+
+MAX_PENETRATION_OVER_H = 0.01
+"""Largest penetration accepted, as a fraction of the interface element size."""
+MAX_PENETRATION_OVER_SETTLEMENT = 0.1
+"""Largest static penetration accepted, as a fraction of the static settlement."""
+MAX_STIFFNESS_RATIO = 1e3
+"""Largest ε_n h / E (softer side) before the penalty costs conditioning."""
+
+
+def max_penetration(gap: np.ndarray) -> float:
+    """The largest penetration ``max ⟨−g_n⟩₊`` of nodal normal gaps (0 if none).
+
+    Args:
+        gap: Nodal normal gaps g_n (m), negative where the bodies interpenetrate.
+    """
+    gap = np.asarray(gap, dtype=float)
+    return float(max(0.0, -gap.min())) if gap.size else 0.0
+
+
+def settlement(u_slave: np.ndarray, u_master: np.ndarray, normal: np.ndarray) -> float:
+    """Static settlement: ``|mean(½(u_s + u_m)·n)|`` over the interface nodes (m).
+
+    Args:
+        u_slave: Slave displacements at the interface nodes, shape (n, gdim).
+        u_master: Master displacements at the same nodes, shape (n, gdim).
+        normal: Unit normals at the nodes, shape (n, gdim).
+    """
+    u = 0.5 * (np.asarray(u_slave, float) + np.asarray(u_master, float))
+    if not len(u):
+        return 0.0
+    return float(abs(np.mean(np.sum(u * np.asarray(normal, float), axis=1))))
+
+
+def stiffness_ratio(penalty: float, h: float, young_modulus: float) -> float:
+    """``ε_n h / E``: the penalty over the stiffness E/h of a one-element layer."""
+    return penalty * h / young_modulus
+
+
+def suggested_penalty(penalty: float, h: float, young_moduli: tuple[float, float],
+                      static_penetration: float, settlement_: float,
+                      dynamic_penetration: float | None = None) -> tuple[float, float]:
+    """The ε_n range meeting the criteria of this module (see its docstring).
+
+    Args:
+        penalty: The current ε_n (N/m³).
+        h: Interface element size (m).
+        young_moduli: Young's moduli of the two sides (Pa).
+        static_penetration: Static penetration at ``penalty`` (m).
+        settlement_: Static settlement (m), penetration included.
+        dynamic_penetration: Largest penetration over the time steps (m), if known.
+
+    Returns:
+        ``(low, high)``: ``low`` from the penetration criteria (0 without
+        penetration), ``high = MAX_STIFFNESS_RATIO · min(E) / h``.
+    """
+    δ = max(static_penetration, dynamic_penetration or 0.0)
+    low = penalty * δ / (MAX_PENETRATION_OVER_H * h)
+    # The settlement (both sides averaged) holds half the penetration: s = s_b + δ/2,
+    # with s_b the bodies' own part, fixed. δ' = δ ε_n / ε' ≤ f (s_b + δ'/2) gives
+    # ε' ≥ ε_n δ (1 − f/2) / (f s_b); at ε' = ε_n this is exactly δ ≤ f s.
+    δ_s, f = static_penetration, MAX_PENETRATION_OVER_SETTLEMENT
+    body = settlement_ - 0.5 * δ_s
+    if δ_s > 0:
+        low = max(low, penalty * δ_s * (1 - 0.5 * f) / (f * body) if body > 0 else np.inf)
+    high = MAX_STIFFNESS_RATIO * min(young_moduli) / h
+    return float(low), float(high)
+
+
+@dataclass(frozen=True)
+class ContactQuality:
+    """The quality measures of one contact pair (see the module docstring).
+
+    Attributes:
+        penalty: ε_n (N/m³).
+        element_size: Mean interface facet length h (m).
+        settlement: Static settlement s (m).
+        static_penetration: Largest static penetration (m).
+        dynamic_penetration: Largest penetration over the steps (m), None before.
+        time_of_dynamic_penetration: When it occurred (s).
+        stiffness_ratio: ``ε_n h / E`` of the slave and of the master.
+        issues: Codes of the criteria failed: ``static_penetration_over_h``,
+            ``dynamic_penetration_over_h``, ``penetration_over_settlement``,
+            ``stiff``.
+        suggested_penalty: ``(low, high)`` ε_n range (N/m³).
+        warnings: One message per issue, with the suggested range.
+    """
+
+    penalty: float
+    element_size: float
+    settlement: float
+    static_penetration: float
+    dynamic_penetration: float | None
+    time_of_dynamic_penetration: float | None
+    stiffness_ratio: tuple[float, float]
+    issues: tuple[str, ...]
+    suggested_penalty: tuple[float, float]
+    warnings: tuple[str, ...]
+
+    @property
+    def verdict(self) -> str:
+        """``ok``, ``too soft``, ``too stiff`` or ``too soft and too stiff``."""
+        soft = any(i != "stiff" for i in self.issues)
+        stiff = "stiff" in self.issues
+        return {(False, False): "ok", (True, False): "too soft", (False, True): "too stiff",
+                (True, True): "too soft and too stiff"}[(soft, stiff)]
+
+    def as_dict(self) -> dict[str, object]:
+        """The summary entry (``contact_quality.<pair>`` in ``summary.json``)."""
+        h, s = self.element_size, self.settlement
+
+        def over(x: float | None, y: float) -> float | None:
+            return None if x is None or not y > 0 else x / y
+
+        return {
+            "penalty": self.penalty,
+            "element_size": h,
+            "static_settlement": s,
+            "static_penetration": self.static_penetration,
+            "static_penetration_over_h": over(self.static_penetration, h),
+            "static_penetration_over_settlement": over(self.static_penetration, s),
+            "dynamic_penetration": self.dynamic_penetration,
+            "time_of_dynamic_penetration": self.time_of_dynamic_penetration,
+            "dynamic_penetration_over_h": over(self.dynamic_penetration, h),
+            "dynamic_penetration_over_settlement": over(self.dynamic_penetration, s),
+            "penalty_h_over_E": {"slave": self.stiffness_ratio[0],
+                                 "master": self.stiffness_ratio[1]},
+            "verdict": self.verdict,
+            "issues": list(self.issues),
+            "suggested_penalty": list(self.suggested_penalty),
+            "thresholds": {"penetration_over_h": MAX_PENETRATION_OVER_H,
+                           "static_penetration_over_settlement":
+                               MAX_PENETRATION_OVER_SETTLEMENT,
+                           "penalty_h_over_E": MAX_STIFFNESS_RATIO},
+            "warnings": list(self.warnings),
+        }
+
+
+def assess(name: str, penalty: float, element_size: float,
+           young_moduli: tuple[float, float], static_penetration: float,
+           settlement_: float, dynamic_penetration: float | None = None,
+           time_of_dynamic_penetration: float | None = None) -> ContactQuality:
+    """Assess one contact pair against the thresholds of this module.
+
+    Args:
+        name: Pair name, for the messages.
+        penalty: ε_n (N/m³).
+        element_size: Mean interface facet length h (m).
+        young_moduli: Young's moduli (slave, master) (Pa).
+        static_penetration: Largest static penetration (m).
+        settlement_: Static settlement (m), see :func:`settlement`.
+        dynamic_penetration: Largest penetration over the steps (m), if any.
+        time_of_dynamic_penetration: When it occurred (s).
+    """
+    h, s = element_size, settlement_
+    ratios = (stiffness_ratio(penalty, h, young_moduli[0]),
+              stiffness_ratio(penalty, h, young_moduli[1]))
+    low, high = suggested_penalty(penalty, h, young_moduli, static_penetration, s,
+                                  dynamic_penetration)
+    advice = f"suggested ε_n in [{low:.3g}, {high:.3g}] N/m³" if low <= high else (
+        f"no ε_n meets both criteria ({low:.3g} > {high:.3g} N/m³): refine the mesh at "
+        "the interface")
+    issues: list[str] = []
+    warnings: list[str] = []
+    pre = f"contact '{name}': penalty ε_n = {penalty:.3g} N/m³"
+    limit = MAX_PENETRATION_OVER_H * h
+    if static_penetration > limit:
+        issues.append("static_penetration_over_h")
+        warnings.append(f"{pre} is too soft: static penetration {static_penetration:.3g} m "
+                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h:.3g} m;"
+                        f" {advice}")
+    if dynamic_penetration is not None and dynamic_penetration > limit:
+        when = ("" if time_of_dynamic_penetration is None
+                else f" at t = {time_of_dynamic_penetration:.4g} s")
+        issues.append("dynamic_penetration_over_h")
+        warnings.append(f"{pre} is too soft: penetration {dynamic_penetration:.3g} m{when} "
+                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h:.3g} m;"
+                        f" {advice}")
+    if static_penetration > MAX_PENETRATION_OVER_SETTLEMENT * s:
+        issues.append("penetration_over_settlement")
+        warnings.append(f"{pre} is too soft: static penetration {static_penetration:.3g} m "
+                        f"> {MAX_PENETRATION_OVER_SETTLEMENT:.0%} of the static settlement "
+                        f"{s:.3g} m; {advice}")
+    if max(ratios) > MAX_STIFFNESS_RATIO:
+        issues.append("stiff")
+        warnings.append(f"{pre} is stiffer than needed: ε_n h / E = {max(ratios):.3g} > "
+                        f"{MAX_STIFFNESS_RATIO:.3g} (softer side; h = {h:.3g} m) costs "
+                        f"conditioning for no accuracy; {advice}")
+    return ContactQuality(penalty, h, s, static_penetration, dynamic_penetration,
+                          time_of_dynamic_penetration, ratios, tuple(issues), (low, high),
+                          tuple(warnings))
+
+
+@dataclass(frozen=True)
+class PairInputs:
+    """The static measures of one contact pair that its quality is assessed from.
+
+    Plain numbers, measured once on the static state and saved with a checkpoint.
+
+    Attributes:
+        name: Pair name, for the messages.
+        penalty: ε_n (N/m³).
+        element_size: Mean interface facet length h (m).
+        young_moduli: Young's moduli (slave, master) (Pa).
+        static_penetration: Largest static penetration (m).
+        settlement: Static settlement (m), see :func:`settlement`.
+        penetration_column: The history column of the pair's largest penetration
+            (None: ``penetration_<k>``, k the pair's index).
+    """
+
+    name: str
+    penalty: float
+    element_size: float
+    young_moduli: tuple[float, float]
+    static_penetration: float
+    settlement: float
+    penetration_column: str | None = None
+
+    def __post_init__(self) -> None:
+        a, b = self.young_moduli  # (a list when read back from JSON)
+        object.__setattr__(self, "young_moduli", (a, b))
+
+    def assess(self, dynamic_penetration: float | None = None,
+               time_of_dynamic_penetration: float | None = None) -> ContactQuality:
+        """The quality of the pair (:func:`assess`), with the dynamic penetration if known."""
+        return assess(self.name, self.penalty, self.element_size, self.young_moduli,
+                      self.static_penetration, self.settlement, dynamic_penetration,
+                      time_of_dynamic_penetration)

@@ -1,0 +1,446 @@
+"""The summary of a run (``summary.json``) and its on-screen report.
+
+Everything here reads what a run produced, the history rows and the nodal interface
+data of the static state, and steps or solves nothing:
+
+- :func:`static_summary`: the first contact pair's static state (the paper's Fig. 17:
+  contact resultant against the weight it carries, mean, edge and centre pressure);
+- :func:`quality_inputs` and :func:`contact_quality`: the contact quality report of
+  each pair (:mod:`breakwater.outputs.quality`);
+- :class:`PeakSnapshot`: the state at the largest |u_x| of the first probe (the
+  paper's Figs. 20, 22: ``snapshot_max_ux.npz``);
+- :func:`dynamic_summary`: peak and residual displacement of the probes, slip and
+  opening of the pair probes, residual slip and largest uplift;
+- :func:`solver_summary`, :func:`energy_summary`, :func:`versions`, and
+  :func:`run_summary`, which puts them together;
+- :func:`format_report`: the short report printed at the end of a run.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import platform
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from breakwater import __version__  # type: ignore[attr-defined]
+from breakwater.config.runspec import TimeSpec
+from breakwater.contact.conforming import InterfaceNodes
+from breakwater.energy.ledger import FIELDS
+from breakwater.model.model import ContactModel
+from breakwater.outputs import quality
+from breakwater.outputs.probes import Probes
+from breakwater.run.runstate import RunState
+
+__all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_quality",
+           "dynamic_summary", "energy_summary", "format_report", "merge", "quality_inputs",
+           "run_summary", "solver_summary", "static_summary", "versions"]
+
+
+# --- the static state -------------------------------------------------------------
+
+def resting_on(model: ContactModel, body: int) -> set[int]:
+    """A body and every body resting on it: the slaves of pairs whose master is one of them.
+
+    Under gravity their weight is what the body's contacts below it carry.
+    """
+    found = {body}
+    while new := {p.slave for p in model.pairs if p.master in found} - found:
+        found |= new
+    return found
+
+
+def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
+    """Indices of the two end nodes of an interface and of the node nearest its centre.
+
+    The nodes are sorted lexicographically (x, then y), so for a straight interface
+    the first and last are its ends.
+    """
+    first, last = 0, len(x) - 1
+    centre = int(np.argmin(np.linalg.norm(x - 0.5 * (x[first] + x[last]), axis=1)))
+    return first, last, centre
+
+
+def static_summary(model: ContactModel, row: Mapping[str, float],
+                   interface: Mapping[str, np.ndarray], iterations: int) -> dict[str, Any]:
+    """The ``static`` entry of the summary: the first contact pair's static state.
+
+    Args:
+        model: The contact model.
+        row: The history row of the static state.
+        interface: Its nodal interface data (:func:`~breakwater.outputs.monitor.interface_state`).
+        iterations: Newton iterations of the static solve.
+    """
+    static: dict[str, Any] = {"newton_iterations": iterations}
+    if not model.pairs:
+        return static
+    slave = model.pairs[0].slave
+    weights = model.weight()
+    weight = sum(weights[i] for i in resting_on(model, slave))
+    length, resultant = row["contact_length_0"], row["normal_force_0"]
+    pressure = interface["pair0_pressure"]
+    first, last, centre = edge_centre(interface["pair0_x"])
+    static.update({
+        "slave": model.bodies[slave].spec.name,
+        "weight": weight,
+        "contact_resultant": resultant,
+        "contact_length": length,
+        "mean_contact_pressure": resultant / length if length > 0 else None,
+        "edge_pressure": 0.5 * (pressure[first] + pressure[last]),
+        "edge_pressures": [pressure[first], pressure[last]],
+        "center_pressure": pressure[centre],
+        "max_pressure": float(pressure.max()),
+        "resultant_over_weight": resultant / weight if weight > 0 else None,
+    })
+    return static
+
+
+# --- contact quality --------------------------------------------------------------
+
+def quality_inputs(model: ContactModel, nodes: Sequence[InterfaceNodes], names: Sequence[str],
+                   u: Sequence[fem.Function], interface: Mapping[str, np.ndarray]
+                   ) -> list[quality.PairInputs]:
+    """The static measures of each pair's contact quality (collective).
+
+    Args:
+        model: The contact model.
+        nodes: Interface nodes of every pair.
+        names: The pairs' names.
+        u: The static state (one Function per body).
+        interface: Its nodal interface data.
+    """
+    inputs = []
+    for k, (p, nd, name) in enumerate(zip(model.pairs, nodes, names, strict=True)):
+        us, um = nd.gather(u[p.slave].x.array, u[p.master].x.array)
+        length = model.assemble(model.form(1.0 * p.dS))
+        facets = model.comm.allreduce(len(p.facet_data))
+        inputs.append(quality.PairInputs(
+            name=name, penalty=p.spec.penalty, element_size=length / facets,
+            young_moduli=(model.bodies[p.slave].spec.material.E,
+                          model.bodies[p.master].spec.material.E),
+            static_penetration=quality.max_penetration(interface[f"pair{k}_gap"]),
+            settlement=quality.settlement(us, um, nd.normal)))
+    return inputs
+
+
+def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mapping[str, float]]
+                    ) -> dict[str, quality.ContactQuality]:
+    """The contact quality of each pair, with the largest penetration over ``steps``.
+
+    Args:
+        inputs: The static measures of each pair.
+        steps: History rows of the time steps (the static row excluded); none for the
+            static report.
+    """
+    report = {}
+    for k, c in enumerate(inputs):
+        δ, when = None, None
+        if steps:
+            column = c.penetration_column or f"penetration_{k}"
+            j = int(np.argmax([r[column] for r in steps]))
+            δ, when = steps[j][column], steps[j]["t"]
+        report[c.name] = c.assess(δ, when)
+    return report
+
+
+# --- the instant of the largest displacement ----------------------------------------
+
+class PeakSnapshot:
+    """The state at the largest |u_x| of the first probe (the first such instant).
+
+    Args:
+        model: The contact model (the snapshot is one Function per body).
+        probes: Names of the point probes; without any there is no snapshot.
+
+    Attributes:
+        u: The state at that instant.
+        time: The instant (None before the first row, or without probes).
+        value: u_x of the first probe then.
+
+    """
+
+    def __init__(self, model: ContactModel, probes: Sequence[str]) -> None:
+        self.column = f"{probes[0]}_ux" if probes else None
+        self.u = model.functions("u_snapshot")
+        self.time: float | None = None
+        self.value = 0.0
+
+    def update(self, row: Mapping[str, float], u: Sequence[fem.Function]) -> None:
+        """Keep the state ``u`` of the history row ``row`` if its |u_x| is the largest."""
+        if self.column is None:
+            return
+        ux = row[self.column]
+        if self.time is None or abs(ux) > abs(self.value):
+            for dst, src in zip(self.u, u, strict=True):
+                dst.x.array[:] = src.x.array
+            self.time, self.value = row["t"], ux
+
+
+# --- the time steps ---------------------------------------------------------------
+
+def _column(rows: Sequence[Mapping[str, float]], name: str) -> np.ndarray:
+    return np.array([r[name] for r in rows])
+
+
+def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
+                    pair_probes: Sequence[str]) -> dict[str, Any]:
+    """The ``dynamic`` entry of the summary, from the history rows (static row first).
+
+    Args:
+        rows: The history rows.
+        probes: Names of the point probes.
+        pair_probes: Names of the pair probes.
+    """
+    if not rows:
+        return {}
+    end = rows[-1]
+    dynamic: dict[str, Any] = {"peak_ux": {}}
+    for name in probes:
+        k = int(np.argmax(np.abs(_column(rows, f"{name}_ux"))))  # the first largest
+        dynamic["peak_ux"][name] = {"value": rows[k][f"{name}_ux"], "time": rows[k]["t"]}
+    dynamic["residual_ux"] = {name: end[f"{name}_ux"] for name in probes}
+    dynamic["residual_uy"] = {name: end[f"{name}_uy"] for name in probes}
+    dynamic["time_of_max_ux"] = dynamic["peak_ux"][probes[0]]["time"] if probes else None
+    pairs: dict[str, Any] = {}
+    for name in pair_probes:
+        slip, opening = _column(rows, f"{name}_slip"), _column(rows, f"{name}_opening")
+        k = int(np.argmax(opening))
+        pairs[name] = {"residual_slip": slip[-1], "residual_opening": opening[-1],
+                       # the static (frictionless) state may already slip a bit
+                       "static_slip": slip[0], "slip_change": slip[-1] - slip[0],
+                       "max_abs_slip": float(np.abs(slip).max()),
+                       "max_opening": opening[k], "time_of_max_opening": rows[k]["t"]}
+    dynamic["pair_probes"] = pairs
+    dynamic["residual_slip"] = pairs[pair_probes[0]]["residual_slip"] if pair_probes else None
+    dynamic["max_uplift"] = max((p["max_opening"] for p in pairs.values()), default=None)
+    return dynamic
+
+
+def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
+                   failed_iterations: int, cutbacks: int, min_dt: float, flips: int,
+                   round_off_accepts: int, wall_time: float, kind: str = "fast",
+                   time_loop: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """The ``solver`` entry of the summary.
+
+    ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``,
+    ``cpu`` (the process's CPU time over the loop, all threads) and, for the fast
+    solver, ``factorisation``, ``back_solves``, ``bulk_products``,
+    ``interface_assembly``, ``newton`` and ``contact_search`` (the general pairs' search,
+    a part of ``interface_assembly``; :class:`~breakwater.stepping.condensed.Timings`).
+    """
+    its = iterations
+    return {
+        "kind": kind,
+        "steps": steps,
+        "newton_iterations": int(sum(its)),
+        "mean_newton_iterations": float(np.mean(its)) if its else None,
+        "max_newton_iterations": int(max(its)) if its else None,
+        "failed_steps": failed_steps,
+        "failed_newton_iterations": failed_iterations,
+        "cutbacks": cutbacks,
+        "min_dt": min_dt,
+        "flip_corrections": flips,
+        "round_off_accepts": round_off_accepts,
+        "wall_time": wall_time,
+        "time_loop": dict(time_loop or {}),
+    }
+
+
+BALANCE_WARNING = 1e-2
+"""A run warns when its largest |balance error| exceeds this fraction of its energy scale.
+
+The ledger closes to Newton's tolerance (1e-9 of the external work on the Goda case,
+README "Energy"): an error of 1 % means that the steps did not resolve what happened,
+e.g. an impact within one step, where the contact's acceleration acts on for
+(1 − β₁)Δt after the bodies part and a block thrown at 20 m/s leaves at 23.6 m/s.
+"""
+
+
+def energy_summary(rows: Sequence[Mapping[str, float]]) -> dict[str, Any]:
+    """The ``energy`` entry of the summary: the largest |balance error|, the last ledger.
+
+    Also the largest |balance error| and the final numerical dissipation as fractions
+    of the final external work (None when no work was done), and the largest |balance
+    error| as a fraction of the run's energy scale: the largest of the stored energy
+    (kinetic + strain + penalty) and of |external work| over the records.
+    """
+    balance = [abs(r["balance_error"]) for r in rows]
+    work = rows[-1]["external_work"] if rows else 0.0
+    scale = max((max(r["kinetic"] + r["strain"] + r["penalty"], abs(r["external_work"]))
+                 for r in rows), default=0.0)
+
+    def of(x: float | None, y: float) -> float | None:
+        return None if x is None or not y else x / abs(y)
+
+    largest = max(balance) if balance else None
+    numerical = rows[-1].get("numerical_dissipation") if rows else None
+    return {"max_balance_error": largest,
+            "final": {k: rows[-1][k] for k in FIELDS if k in rows[-1]} if rows else None,
+            "numerical_dissipation": numerical,
+            "max_balance_error_over_external_work": of(largest, work),
+            "numerical_dissipation_over_external_work": of(numerical, work),
+            "energy_scale": scale,
+            "max_balance_error_over_energy_scale": of(largest, scale)}
+
+
+def balance_warning(energy: Mapping[str, Any]) -> str | None:
+    """The warning of a run whose energy balance does not close, or None.
+
+    See :data:`BALANCE_WARNING`.
+    """
+    ratio = energy.get("max_balance_error_over_energy_scale")
+    if ratio is None or ratio <= BALANCE_WARNING:
+        return None
+    return (f"energy: the balance error reaches {energy['max_balance_error']:.3g} J/m, "
+            f"{100 * ratio:.3g} % of the run's largest energy "
+            f"({energy['energy_scale']:.3g} J/m): the time steps do not resolve the motion "
+            "(an impact within a step?); these results are not reliable: reduce time.dt")
+
+
+def run_summary(*, case_name: str, finished: bool, status: str, error: str | None,
+                time: TimeSpec, state: RunState, rows: Sequence[Mapping[str, float]],
+                probes: Probes | None, contact_quality: Mapping[str, quality.ContactQuality],
+                solver: Mapping[str, Any], checkpoint: Mapping[str, Any] | None,
+                outputs: Mapping[str, Any], comm: MPI.Comm, extra: Mapping[str, Any]
+                ) -> dict[str, Any]:
+    """The summary of a run (``summary.json``), ``extra`` merged in.
+
+    Args:
+        case_name: The case's name.
+        finished: Whether the end time was reached.
+        status: ``running``, ``finished``, ``failed`` or ``interrupted``.
+        error: Why the run stopped early.
+        time: The time settings.
+        state: The run's bookkeeping (static summary, resumed parts).
+        rows: The history rows (the static state's first).
+        probes: The run's probes (None before they exist).
+        contact_quality: The contact quality of each pair.
+        solver: The ``solver`` entry (:func:`solver_summary`).
+        checkpoint: The latest checkpoint written.
+        outputs: The ``outputs`` entry.
+        comm: The communicator (its size is in ``versions``).
+        extra: Merged into the summary (e.g. calibration results).
+    """
+    summary: dict[str, Any] = {
+        "case_name": case_name,
+        "finished": finished,
+        "status": status,
+        "error": error,
+        "time": {"end_time": time.end_time, "dt": time.dt,
+                 "reached": rows[-1]["t"] if rows else None},
+        "static": state.static,
+        "dynamic": (dynamic_summary(rows, probes.names, probes.pair_names)
+                    if probes is not None else {}),
+        "contact_quality": {name: q.as_dict() for name, q in contact_quality.items()},
+        "solver": dict(solver),
+        "energy": energy_summary(rows),
+        "checkpoint": checkpoint,
+        "resumed_from": state.resumed_from,
+        "outputs": dict(outputs),
+        "versions": versions(comm),
+    }
+    return merge(summary, extra)
+
+
+def versions(comm: MPI.Comm) -> dict[str, Any]:
+    """Versions of breakwater and of the libraries it runs on."""
+    import basix
+    import dolfinx
+    import ffcx
+    import gmsh
+    import petsc4py
+    import ufl
+    from petsc4py import PETSc
+
+    return {
+        "breakwater": __version__,
+        "dolfinx": dolfinx.__version__,
+        "petsc4py": petsc4py.__version__,
+        "petsc": ".".join(str(v) for v in PETSc.Sys.getVersion()),
+        "ufl": ufl.__version__,
+        "basix": basix.__version__,
+        "ffcx": ffcx.__version__,
+        "gmsh": gmsh.__version__,
+        "python": platform.python_version(),
+        "mpi_size": comm.size,
+    }
+
+
+def merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
+    """Recursive dictionary merge (``extra`` wins)."""
+    for k, v in extra.items():
+        if isinstance(v, Mapping) and isinstance(base.get(k), dict):
+            merge(base[k], v)
+        else:
+            base[k] = dict(v) if isinstance(v, Mapping) else v
+    return base
+
+
+# --- on-screen report -------------------------------------------------------------
+
+def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> str:
+    """A short human-readable report of a run summary."""
+    s, d, sol = summary.get("static", {}), summary.get("dynamic", {}), summary.get("solver", {})
+
+    def num(x: Any, fmt: str = ".4g") -> str:
+        return "n/a" if x is None else format(x, fmt)
+
+    reached = num(summary.get("time", {}).get("reached"))
+    lines = [f"breakwater: case '{summary.get('case_name', 'case')}' "
+             + ("finished" if summary.get("finished") else
+                f"INTERRUPTED at t = {reached} s: {summary.get('error')}"
+                if summary.get("status") == "interrupted" else
+                f"FAILED at t = {reached} s: {summary.get('error')}")]
+    if s:
+        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N/m, "
+                     f"weight {num(s.get('weight'))} N/m, mean pressure "
+                     f"{num(s.get('mean_contact_pressure'))} Pa (edge "
+                     f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
+    for name, peak in d.get("peak_ux", {}).items():
+        lines.append(f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
+                     f"{num(peak.get('time'))} s, residual "
+                     f"{num(d.get('residual_ux', {}).get(name))} m")
+    if d.get("residual_slip") is not None:
+        lines.append(f"  residual slip {num(d.get('residual_slip'))} m, max uplift "
+                     f"{num(d.get('max_uplift'))} m")
+    if sol and not sol.get("steps"):
+        lines.append(f"  solver: no time step taken, {num(sol.get('wall_time'), '.1f')} s "
+                     "wall time")
+    elif sol:
+        lines.append(f"  solver: {sol.get('steps')} steps, {sol.get('newton_iterations')} "
+                     f"Newton iterations (mean {num(sol.get('mean_newton_iterations'), '.2f')}"
+                     f", max {sol.get('max_newton_iterations')}), {sol.get('cutbacks')} "
+                     f"cut-backs, {num(sol.get('wall_time'), '.1f')} s wall time (time loop "
+                     f"{num(sol.get('time_loop', {}).get('wall'), '.1f')} s, "
+                     f"{sol.get('kind')} solver)")
+        if sol.get("round_off_accepts"):
+            lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
+                         "stalled at round-off (NewtonOptions.floor_atol)")
+    def pct(x: Any) -> str:
+        return "n/a" if x is None else f"{100 * x:.2g}%"
+
+    for name, q in summary.get("contact_quality", {}).items():
+        ratios = q.get("penalty_h_over_E", {})
+        lines.append(f"  contact '{name}': penetration static "
+                     f"{num(q.get('static_penetration'), '.3g')} m "
+                     f"({pct(q.get('static_penetration_over_h'))} of h, "
+                     f"{pct(q.get('static_penetration_over_settlement'))} of the settlement), "
+                     f"max {num(q.get('dynamic_penetration'), '.3g')} m "
+                     f"({pct(q.get('dynamic_penetration_over_h'))} of h); ε_n h/E "
+                     f"{num(ratios.get('slave'), '.3g')} (slave), "
+                     f"{num(ratios.get('master'), '.3g')} (master): {q.get('verdict')}")
+    e = summary.get("energy", {})
+    if e.get("max_balance_error") is not None:
+        line = f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m"
+        if e.get("max_balance_error_over_external_work") is not None:
+            line += (f" ({num(e['max_balance_error_over_external_work'], '.2g')} of the "
+                     f"external work); numerical dissipation "
+                     f"{num(e.get('numerical_dissipation'))} J/m "
+                     f"({pct(e.get('numerical_dissipation_over_external_work'))})")
+        lines.append(line)
+    lines.append(f"  outputs: {directory}")
+    return "\n".join(lines)

@@ -1,0 +1,466 @@
+"""Writing the results of a run: the step history, fields and snapshots.
+
+Everything here is written by rank 0 only, except the ParaView fields (VTX/ADIOS2),
+which every rank writes collectively. Small files (``summary.json``, ``case.toml``,
+``.npz`` snapshots, figures) are written atomically (:mod:`breakwater.common.files`, which
+also names the files), so a reader never sees half a file. The step history
+``history.csv`` grows during the run: one whole row per write call, flushed every
+step, so it can be read (or plotted) while the run goes on.
+
+Output files of a run (in the output directory):
+
+- ``case.toml``: the resolved case, when the case layer gives it.
+- ``history.csv``: one row per accepted step, plus the row of the static state at t = 0.
+- ``summary.json``: headline numbers, solver statistics, versions.
+- ``fields_<body>.bp``: displacement, velocity, stress tensor, von Mises and σ_yy stress
+  of each body, as discontinuous P2 fields (exact for P2 displacements), for ParaView.
+- ``contact_<pair>.bp``: contact pressure, normal gap, slip, slip velocity and
+  friction traction of each contact pair, as P2 fields on the interface (a general
+  pair's on its slave surface: :class:`~breakwater.outputs.surfaceoutputs.SurfaceFields`).
+- ``static.npz``: the static state (P1 nodal values per body and interface pressures).
+- ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
+  probe.
+- ``figures/``: see :mod:`breakwater.outputs.figures`.
+- ``checkpoint.npz``: the latest checkpoint, with ``output.checkpoint_interval`` > 0
+  (see :mod:`breakwater.outputs.checkpoint`).
+
+``summary.json`` is written when the run starts (``finished: false``, ``status:
+"running"``), again at every checkpoint, and at the end (``status`` ``finished``,
+``failed`` or ``interrupted``), so a folder whose run was killed still says that it
+did not finish.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+from collections.abc import Mapping, Sequence
+from typing import IO
+
+import dolfinx
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.errors import cannot_write
+from breakwater.common.files import HISTORY, atomic_savez, atomic_write_text, read_history, writing
+from breakwater.common.parallel import on_rank_zero
+from breakwater.contact.conforming import InterfaceNodes
+from breakwater.contact.general import SurfaceContact
+from breakwater.model.model import ContactModel
+from breakwater.outputs.surfaceoutputs import SurfaceFields, group_fields
+
+__all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
+           "read_history", "snapshot_arrays"]
+
+# --- step history -----------------------------------------------------------------
+
+class HistoryWriter:
+    """The step history as CSV, written by rank 0 one whole row at a time.
+
+    Each row is written by one ``write`` call and flushed, so a run killed at any
+    moment leaves whole rows only (the operating system keeps what was written).
+
+    Args:
+        path: The CSV file (overwritten, unless ``keep_rows`` is given).
+        columns: Column names, in order.
+        comm: Communicator; only its rank 0 writes.
+        keep_rows: Resume: keep the header and the first ``keep_rows`` rows of the
+            existing file (cut atomically; the rest is dropped), read them into
+            :attr:`kept` (on every rank) and append after them.
+
+    Raises:
+        ValueError: (``keep_rows``) The file has other columns or fewer whole rows.
+
+    """
+
+    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm,
+                 keep_rows: int | None = None) -> None:
+        self.path = pathlib.Path(path)
+        self.columns = tuple(columns)
+        self.comm = comm
+        self.rows = 0
+        self.kept: list[dict[str, float]] = []
+        self._file: IO[str] | None = None
+        if keep_rows is None:
+            def start() -> None:
+                with writing(self.path):
+                    self._file = open(self.path, "w", encoding="utf-8", newline="")
+                    self._write(",".join(self.columns))
+
+            on_rank_zero(comm, start)
+            return
+        self.kept = on_rank_zero(comm, lambda: self._cut(keep_rows))
+        self.rows = keep_rows
+
+        def reopen() -> None:
+            with writing(self.path):
+                self._file = open(self.path, "a", encoding="utf-8", newline="")
+
+        on_rank_zero(comm, reopen)
+
+    def _cut(self, keep_rows: int) -> list[dict[str, float]]:
+        """Keep the header and ``keep_rows`` whole rows, atomically; return the rows."""
+        header = ",".join(self.columns) + "\n"
+        lines: list[str] = []
+        with open(self.path, encoding="utf-8", newline="") as f:
+            if f.readline() != header:
+                raise ValueError(f"{self.path}: the columns differ from the run's")
+            for line in f:
+                if len(lines) == keep_rows or not line.endswith("\n"):
+                    break
+                lines.append(line)
+        if len(lines) < keep_rows:
+            raise ValueError(f"{self.path} holds {len(lines)} whole rows, fewer than the "
+                             f"{keep_rows} of the checkpoint")
+        atomic_write_text(self.path, header + "".join(lines))
+        # repr(float) is read back exactly by float().
+        return [dict(zip(self.columns, map(float, line.split(",")), strict=True))
+                for line in lines]
+
+    def _write(self, line: str) -> None:
+        assert self._file is not None
+        self._file.write(line + "\n")  # one call per whole row
+        self._file.flush()
+
+    def append(self, row: Mapping[str, float]) -> None:
+        """Write one row (every column must be present); collective.
+
+        Raises:
+            OutputError: The row cannot be written (e.g. a full disk), on every rank.
+        """
+        def write() -> None:
+            if self._file is not None:
+                with writing(self.path):
+                    self._write(",".join(repr(float(row[c])) for c in self.columns))
+
+        on_rank_zero(self.comm, write)
+        self.rows += 1
+
+    def sync(self) -> None:
+        """Force the rows written so far to disk (before a checkpoint refers to them).
+
+        Collective; raises :class:`~breakwater.common.errors.OutputError` on every rank.
+        """
+        def sync() -> None:
+            if self._file is not None:
+                with writing(self.path):
+                    self._file.flush()
+                    os.fsync(self._file.fileno())
+
+        on_rank_zero(self.comm, sync)
+
+    def close(self) -> None:
+        """Close the file (not collective: a write error here is not raised)."""
+        if self._file is not None:
+            file, self._file = self._file, None
+            try:
+                file.close()
+            except OSError as e:  # the rows were flushed one by one: the last one lost
+                import logging
+
+                logging.getLogger("breakwater.run.simulation").warning(
+                    "%s", cannot_write(self.path, e))
+
+
+# --- fields of the bodies ---------------------------------------------------------
+
+class BodyFields:
+    """Displacement, velocity and stresses of one body as discontinuous P_k fields.
+
+    ``stress`` is the full 3 × 3 tensor (in 2D plane strain with σ_zz = λ tr ε), with
+    ``von_mises`` and ``stress_yy`` (the paper's Figs. 17 and 22) beside it.
+
+    The stress of a P_k displacement is a discontinuous P_(k-1) field, so
+    discontinuous P_k holds every field exactly (no projection or averaging).
+
+    Args:
+        model: The contact model.
+        index: Body index.
+
+    """
+
+    def __init__(self, model: ContactModel, index: int) -> None:
+        body = model.bodies[index]
+        self.name = body.spec.name
+        self.filename = f"fields_{self.name}.bp"
+        sub = body.submesh
+        gdim = model.gdim
+        degree = body.V.ufl_element().embedded_superdegree
+        self.gdim = gdim
+        self.u = fem.Function(body.V, name="u_out")
+        self.v = fem.Function(body.V, name="v_out")
+        Vd = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (gdim,)))
+        S = fem.functionspace(sub, ("Discontinuous Lagrange", degree))
+        self.displacement = fem.Function(Vd, name="displacement")
+        self.velocity = fem.Function(Vd, name="velocity")
+        T = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (3, 3)))
+        self.stress = fem.Function(T, name="stress")
+        self.von_mises = fem.Function(S, name="von_mises")
+        self.stress_yy = fem.Function(S, name="stress_yy")
+        λ0, μ0 = body.spec.material.lame
+        # Constants on the submesh: one compiled kernel serves every body.
+        λ = fem.Constant(sub, dolfinx.default_scalar_type(λ0))
+        μ = fem.Constant(sub, dolfinx.default_scalar_type(μ0))
+        σ3 = forms.stress_3d(self.u, λ, μ)
+        X = S.element.interpolation_points
+        self._σ = fem.Expression(σ3, X)
+        self._vm = fem.Expression(forms.von_mises(σ3), X)
+        self._syy = fem.Expression(σ3[1, 1], X)
+        self.functions = [self.displacement, self.velocity, self.stress, self.von_mises,
+                          self.stress_yy]
+        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace] | None = None
+
+    def update(self, u: fem.Function, v: fem.Function | None = None) -> None:
+        """Evaluate the fields of the state ``(u, v)`` of this body."""
+        self.u.x.array[:] = u.x.array
+        self.v.x.array[:] = 0.0 if v is None else v.x.array
+        self.displacement.interpolate(self.u)
+        self.velocity.interpolate(self.v)
+        self.stress.interpolate(self._σ)
+        self.von_mises.interpolate(self._vm)
+        self.stress_yy.interpolate(self._syy)
+
+    def nodal(self) -> dict[str, np.ndarray] | None:
+        """P1 nodal values of the current fields, gathered on rank 0 (None elsewhere).
+
+        The stresses are discontinuous: at a vertex, the value of one of its cells
+        is taken (no averaging), which is enough for contour plots.
+
+        Returns:
+            On rank 0: ``x`` (n, 2) vertex coordinates, ``triangles`` (m, 3),
+            ``ux``, ``uy``, ``von_mises``, ``stress_yy`` (n,).
+        """
+        sub = self.u.function_space.mesh
+        if self._p1 is None:
+            self._p1 = (fem.functionspace(sub, ("Lagrange", 1, (self.gdim,))),
+                        fem.functionspace(sub, ("Lagrange", 1)))
+        V1, S1 = self._p1
+        u1 = fem.Function(V1)
+        u1.interpolate(self.u)
+        scalars = {}
+        for name, f in (("von_mises", self.von_mises), ("stress_yy", self.stress_yy)):
+            s1 = fem.Function(S1)
+            s1.interpolate(f)
+            scalars[name] = s1
+        imap = S1.dofmap.index_map
+        nloc = imap.size_local
+        tdim = sub.topology.dim
+        ncells = sub.topology.index_map(tdim).size_local
+        # (A rank may hold no cell of a body: keep the shape of its empty block.)
+        dofs = S1.dofmap.list[:ncells]
+        cells = imap.local_to_global(dofs.ravel()).reshape(dofs.shape)
+        local = {
+            "gidx": imap.local_to_global(np.arange(nloc, dtype=np.int32)),
+            "x": S1.tabulate_dof_coordinates()[:nloc, :2],
+            "cells": cells,
+            "ux": u1.x.array.reshape(-1, self.gdim)[:nloc, 0],
+            "uy": u1.x.array.reshape(-1, self.gdim)[:nloc, 1],
+            **{k: f.x.array[:nloc] for k, f in scalars.items()},
+        }
+        parts = sub.comm.gather(local, root=0)
+        if parts is None:
+            return None
+        n = imap.size_global
+        out: dict[str, np.ndarray] = {k: np.zeros(n) for k in ("ux", "uy", *scalars)}
+        out["x"] = np.zeros((n, 2))
+        for part in parts:
+            for k in out:
+                out[k][part["gidx"]] = part[k]
+        cells = np.vstack([part["cells"] for part in parts])
+        if cells.shape[1] == 4:  # quadrilaterals (tensor-product order): two triangles each
+            cells = np.vstack([cells[:, [0, 1, 3]], cells[:, [0, 3, 2]]])
+        out["triangles"] = cells.astype(np.int64)
+        return out
+
+
+class InterfaceFields:
+    """The contact state of one pair as P_k fields on its interface, for ParaView.
+
+    The interface facets form a mesh of their own (a submesh of dimension one less);
+    its P_k nodes are the interface nodes, where the contact law acts (the
+    Gauss–Lobatto points of the interface measure), so nodal values are exact. Fields:
+    ``pressure`` and ``gap`` (scalars), ``slip``, ``slip_velocity`` and
+    ``friction_traction`` (vectors), as in :meth:`InterfaceNodes.contact_state`.
+
+    Args:
+        model: The contact model.
+        nodes: The node pairs of the contact pair.
+        name: The pair's name: the fields go to ``contact_<name>.bp``.
+
+    """
+
+    def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
+        self.filename = f"contact_{name}.bp"
+        self.nodes = nodes
+        self.slave, self.master = nodes.pair.slave, nodes.pair.master
+        degree = model.bodies[self.slave].V.ufl_element().embedded_superdegree
+        self.values, self._index = group_fields(model, nodes.pair.spec.interface, degree,
+                                                nodes.x)
+        self.functions = list(self.values.values())
+
+    def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
+               ) -> None:
+        """Evaluate the fields of the state ``(u, v)`` (one Function per body; collective)."""
+        s, m = self.slave, self.master
+        state = self.nodes.contact_state(u[s].x.array, u[m].x.array,
+                                         None if v is None else v[s].x.array,
+                                         None if v is None else v[m].x.array)
+        for k, f in self.values.items():
+            shape = (len(self._index), f.function_space.dofmap.index_map_bs)
+            f.x.array.reshape(shape)[:] = state[k][self._index].reshape(shape)
+
+
+class FieldWriter:
+    """ParaView output: one VTX (ADIOS2 ``.bp``) file per body and per contact pair.
+
+    Args:
+        fields: The fields of each body (``fields_<body>.bp``).
+        interfaces: The fields of each contact pair (``contact_<pair>.bp``).
+        directory: Output directory.
+        comm: The communicator of the mesh.
+
+    """
+
+    def __init__(self, fields: Sequence[BodyFields],
+                 interfaces: Sequence[InterfaceFields | SurfaceFields],
+                 directory: pathlib.Path, comm: MPI.Comm) -> None:
+        self.fields = list(fields)
+        self.interfaces = list(interfaces)
+        files: list[BodyFields | InterfaceFields | SurfaceFields] = [*self.fields,
+                                                                     *self.interfaces]
+        self.paths = [directory / f.filename for f in files]
+        # The mesh is the reference configuration: written once (warp by displacement).
+        self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
+                                             mesh_policy=dolfinx.io.VTXMeshPolicy.reuse)
+                        for p, f in zip(self.paths, files, strict=True)]
+
+    def write(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
+        """Write the state (one Function per body) at time ``t``."""
+        for f, ui, vi in zip(self.fields, u, v, strict=True):
+            f.update(ui, vi)
+        for i in self.interfaces:
+            i.update(u, v)
+        for w in self.writers:
+            w.write(t)
+
+    def close(self) -> None:
+        """Close the files."""
+        for w in self.writers:
+            w.close()
+
+
+def snapshot_arrays(fields: Sequence[BodyFields], u: Sequence[fem.Function],
+                    interface: Mapping[str, np.ndarray], time: float, comm: MPI.Comm,
+                    ) -> dict[str, np.ndarray] | None:
+    """The arrays of a snapshot file, on rank 0 (None elsewhere); collective.
+
+    Keys: ``time``, ``bodies`` (names), ``<body>_<field>`` for the fields of
+    :meth:`BodyFields.nodal`, and the interface arrays as given.
+    """
+    out: dict[str, np.ndarray] = {"time": np.array(time),
+                                  "bodies": np.array([f.name for f in fields])}
+    for f, ui in zip(fields, u, strict=True):
+        f.update(ui)
+        nodal = f.nodal()
+        if nodal is not None:
+            out.update({f"{f.name}_{k}": a for k, a in nodal.items()})
+    if comm.rank != 0:
+        return None
+    out.update(interface)
+    return out
+
+
+class RunFiles:
+    """The files a run writes as it steps: history, ParaView fields, nodal snapshots.
+
+    ``history.csv`` gets one row per call, the ParaView files the states given (every
+    ``field_interval`` steps; none when 0), the ``.npz`` snapshots a state each.
+
+    Args:
+        model: The contact model.
+        nodes: Interface nodes of every pair.
+        names: The pairs' names (``contact_<name>.bp``).
+        directory: The output folder.
+        field_interval: Steps between ParaView outputs (0: none).
+        surfaces: The general pairs (``contact_<name>.bp`` on their slave surfaces).
+
+    """
+
+    def __init__(self, model: ContactModel, nodes: Sequence[InterfaceNodes],
+                 names: Sequence[str], directory: pathlib.Path, field_interval: int,
+                 surfaces: Sequence[SurfaceContact] = ()) -> None:
+        self.directory, self.comm, self.interval = directory, model.comm, field_interval
+        self.bodies = [BodyFields(model, i) for i in range(len(model.bodies))]
+        self.interfaces: list[InterfaceFields | SurfaceFields] = []
+        if field_interval > 0:
+            self.interfaces += [InterfaceFields(model, nd, name)
+                                for nd, name in zip(nodes, names, strict=True)]
+            self.interfaces += [SurfaceFields(model, c) for c in surfaces]
+        self.history: HistoryWriter | None = None
+        self.writer: FieldWriter | None = None
+
+    def open_history(self, columns: Sequence[str], keep_rows: int | None = None
+                     ) -> list[dict[str, float]]:
+        """Start ``history.csv``, or (resume) keep its first ``keep_rows`` rows.
+
+        Returns:
+            The rows kept (see :class:`HistoryWriter`).
+        """
+        self.history = HistoryWriter(self.directory / HISTORY, columns, self.comm, keep_rows)
+        return self.history.kept
+
+    def open_fields(self, resume: bool = False) -> list[str]:
+        """Start the ParaView files (when fields are written); collective.
+
+        Args:
+            resume: Rename the files of the interrupted part first:
+                ``<file>.part<k>.bp`` (a VTX file cannot be appended to).
+
+        Returns:
+            The names of the files set aside.
+        """
+        if self.interval <= 0:
+            return []
+        def set_aside() -> list[str]:
+            parts: list[str] = []
+            for filename in [f.filename for f in self.bodies] + \
+                    [f.filename for f in self.interfaces]:
+                path = self.directory / filename
+                if resume and path.exists():
+                    k = 1
+                    while (target := path.with_suffix(f".part{k}.bp")).exists():
+                        k += 1
+                    os.replace(path, target)
+                    parts.append(target.name)
+            return parts
+
+        parts = on_rank_zero(self.comm, set_aside)
+        self.writer = FieldWriter(self.bodies, self.interfaces, self.directory, self.comm)
+        return parts
+
+    @property
+    def field_files(self) -> list[str]:
+        """Names of the ParaView files being written."""
+        return [p.name for p in self.writer.paths] if self.writer else []
+
+    def write_fields(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]
+                     ) -> None:
+        """Write the state at ``t`` to the ParaView files, if any (collective)."""
+        if self.writer is not None:
+            self.writer.write(t, u, v)
+
+    def write_snapshot(self, filename: str, u: Sequence[fem.Function],
+                       interface: Mapping[str, np.ndarray], time: float) -> None:
+        """Write the nodal snapshot of the state ``u`` (collective; rank 0 writes)."""
+        arrays = snapshot_arrays(self.bodies, u, interface, time, self.comm)
+        on_rank_zero(self.comm, lambda: arrays is not None and bool(
+            atomic_savez(self.directory / filename, **arrays)))
+
+    def close(self) -> None:
+        """Close the history and the ParaView files."""
+        if self.history is not None:
+            self.history.close()
+        if self.writer is not None:
+            self.writer.close()

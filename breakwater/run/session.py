@@ -1,0 +1,346 @@
+"""The objects of one run and its bookkeeping, between the steps of the time loop.
+
+:class:`Stepped` is the GN22 stepper with the objects bound to its state (energy
+ledger, history monitor, peak snapshot, the run's files). :class:`Session` builds it
+from the static equilibrium (:meth:`Session.start`) or from a checkpoint
+(:meth:`Session.restore`). The time loop (:mod:`breakwater.run.simulation`) steps the
+stepper and calls :meth:`Session.record` after each accepted step (one history row,
+measured by the :class:`~breakwater.outputs.monitor.Monitor`), :meth:`Session.checkpoint`,
+and at the end :meth:`Session.finish`. The bookkeeping a checkpoint saves is
+:attr:`Session.state` (:class:`~breakwater.run.runstate.RunState`).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import logging
+import pathlib
+import time as _time
+from collections.abc import Mapping
+from typing import Any
+
+from dolfinx import fem
+
+from breakwater.common import files
+from breakwater.common.parallel import on_rank_zero
+from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.contact.conforming import interface_nodes
+from breakwater.energy.ledger import EnergyLedger
+from breakwater.model.model import ContactModel
+from breakwater.outputs import summary as sm
+from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
+from breakwater.outputs.checkpoint import CheckpointError
+from breakwater.outputs.monitor import Monitor, interface_state, pair_names
+from breakwater.outputs.surfaceoutputs import quality_inputs as surface_quality
+from breakwater.outputs.writers import RunFiles
+from breakwater.run import runstate
+from breakwater.run.runstate import RunState
+from breakwater.statics.initial import initial_state
+from breakwater.stepping.gn22 import GN22, GN22Parameters
+from breakwater.stepping.solver import NewtonOptions
+
+__all__ = ["Session", "Stepped"]
+
+log = logging.getLogger("breakwater.run.simulation")  # the run's logger: rank 0 only in run()
+
+
+class Stepped:
+    """The GN22 stepper and the objects bound to its state.
+
+    Args:
+        model: The contact model.
+        time: The time settings (step, GN22 and Newton parameters).
+        output: The probes and the field output interval.
+        directory: The output folder.
+
+    Attributes:
+        stepper: The GN22 stepper.
+        nodes: Interface nodes of every pair.
+        ledger: The energy ledger.
+        monitor: Measures one history row per step.
+        peak: The state at the largest |u_x| of the first probe.
+        files: The files written as the run steps.
+
+    """
+
+    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
+                 directory: pathlib.Path) -> None:
+        newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
+                               max_it=time.newton_max_it)
+        params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
+        self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=time.solver)
+        self.nodes = s.nodes or interface_nodes(model)
+        self.ledger = EnergyLedger(s)
+        self.monitor = Monitor(model, s, output, self.nodes)
+        self.peak = sm.PeakSnapshot(model, self.monitor.probes.names)
+        self.files = RunFiles(model, self.nodes, pair_names(model), directory,
+                              output.field_interval, self.monitor.surfaces)
+
+    def functions(self) -> list[list[fem.Function]]:
+        """The Functions of each body that a checkpoint saves."""
+        s, ledger = self.stepper, self.ledger
+        return [[s.u[i], s.v[i], s.a[i], ledger.u0[i], ledger.v0[i], self.peak.u[i]]
+                for i in range(len(s.u))]
+
+    def record(self, dt: float, iterations: int) -> dict[str, float]:
+        """Measure the stepper's state: one history row, written (collective)."""
+        assert self.files.history is not None
+        row = self.monitor.row(dt, iterations, self.ledger.record().as_dict())
+        self.files.history.append(row)
+        self.peak.update(row, self.stepper.u)
+        return row
+
+    def saved(self, state: RunState, wall_time: float) -> RunState:
+        """A copy of ``state`` with these objects' state, to save in a checkpoint."""
+        s, history = self.stepper, self.files.history
+        assert history is not None
+        return dataclasses.replace(
+            state, history_rows=history.rows, wall_before=wall_time,
+            stepper={"dt": float(s.dt.value), "flips": s.flips,
+                     "floor_accepts": s.solver.floor_accepts},
+            ledger=self.ledger.state(), snapshot={"time": self.peak.time,
+                                                  "value": self.peak.value})
+
+    def resume(self, state: RunState) -> None:
+        """Set these objects' state from a checkpoint's (the nodal values set already)."""
+        s = self.stepper
+        s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
+        s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
+        self.ledger.restore(state.ledger)
+        self.peak.time, self.peak.value = state.snapshot["time"], state.snapshot["value"]
+
+
+class Session:
+    """One run: its stepped objects and bookkeeping, from set-up to the summary.
+
+    Args:
+        model: The contact model.
+        time: The time settings.
+        output: The output settings.
+        fingerprint: Identifies the case in checkpoints.
+        extra_summary: Merged into the summary.
+
+    Attributes:
+        state: The bookkeeping a checkpoint saves.
+        rows: The history rows so far (the static state's first).
+        stepped: The stepper and its objects (built by :meth:`start` or :meth:`restore`).
+        checkpointed: The latest checkpoint written (``summary.json``'s ``checkpoint``).
+
+    """
+
+    def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
+                 fingerprint: str, extra_summary: Mapping[str, Any] | None = None) -> None:
+        if not (time.dt > 0 and time.end_time >= 0 and time.max_cutbacks >= 0):
+            raise ValueError(f"invalid time settings: {time}")
+        if output.checkpoint_interval < 0:
+            raise ValueError(f"invalid checkpoint interval {output.checkpoint_interval}")
+        self.model, self.time, self.output = model, time, output
+        self.fingerprint = fingerprint
+        self.extra = dict(extra_summary or {})
+        self.comm = model.comm
+        self.directory = files.make_directory(output.directory, self.comm)
+        self.wall0 = _time.perf_counter()
+        self.state = RunState.start(time)
+        self.rows: list[dict[str, float]] = []
+        self.stepped: Stepped | None = None
+        self.checkpointed: dict[str, Any] | None = None
+        self.applied: AppliedLoads | None = None
+        self._warned: set[tuple[str, str]] = set()
+        # The work of the run, estimated before it starts: steps × unknowns.
+        dofs = sum(b.V.dofmap.index_map.size_global * b.V.dofmap.index_map_bs
+                   for b in model.bodies)
+        self.work = {"steps_planned": time.planned_steps, "dofs": int(dofs),
+                     "estimate": time.planned_steps * int(dofs),
+                     "max_steps": time.max_steps, "max_cutbacks": time.max_cutbacks,
+                     "min_dt": time.min_dt}
+
+    def start(self) -> None:
+        """Find the initial state, start the stepper from it (collective).
+
+        The static equilibrium under gravity and the loads of the initial state, with
+        friction if needed, bodies that friction cannot hold held up to t = 0
+        (:func:`~breakwater.statics.initial.initial_state`); at rest but for the bodies' initial
+        velocities (``model.initial``).
+        """
+        m, st = self.model, self.state
+        log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
+                 m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
+                 len(m.bodies), len(m.pairs) + len(m.surface_pairs))
+        for info in self.extra.get("loads", {}).values():
+            for line in info.get("warnings", ()):
+                log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
+        m.set_time(0.0)
+        init = initial_state(m)
+        st.static_iterations = init.iterations
+        log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
+        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
+        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
+        s, out = x.stepper, x.files
+        s.initialise(init.u, init.v)
+        out.open_history(x.monitor.columns)
+        out.open_fields()
+        row = self.record(0.0, st.static_iterations)
+        surfaces = x.monitor.surfaces
+        interface = interface_state(m, x.nodes, s.u, surfaces)
+        st.static = sm.static_summary(m, row, interface, st.static_iterations)
+        st.static.update(init.summary())
+        st.contact = [*sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface),
+                      *surface_quality(m, surfaces, s.u)]
+        out.write_snapshot(files.STATIC, s.u, interface, 0.0)
+        self.log_quality()
+        out.write_fields(0.0, s.u, s.v)
+
+    def restore(self) -> None:
+        """Continue from the checkpoint of the output folder (collective).
+
+        Nothing in the folder changes until the checkpoint is known to fit.
+
+        Raises:
+            CheckpointError: No checkpoint, another case, a finished run, or a history
+                that does not reach the checkpoint.
+        """
+        m, comm = self.model, self.comm
+        saved = runstate.load(self.directory, self.fingerprint,
+                              [b.spec.name for b in m.bodies], self.time, comm)
+        if saved.mpi_size != comm.size:
+            log.warning("resuming on %d ranks a checkpoint written on %d: the continuation "
+                        "equals the uninterrupted run to round-off, not bit for bit",
+                        comm.size, saved.mpi_size)
+        m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
+        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
+        if saved.columns != x.monitor.columns:
+            raise CheckpointError("the checkpoint's history columns are not the run's")
+        saved.restore_fields(x.functions())
+        st = self.state = saved.state
+        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
+        x.resume(st)
+        t = st.step.t
+        try:
+            self.rows = x.files.open_history(x.monitor.columns, keep_rows=st.history_rows)
+        except (ValueError, OSError) as e:
+            raise CheckpointError(f"cannot resume: {e}") from e
+        if self.rows[-1]["t"] != t:
+            raise CheckpointError(f"cannot resume: the last history row kept (t = "
+                                  f"{self.rows[-1]['t']:.6g} s) is not the checkpoint's "
+                                  f"(t = {t:.6g} s)")
+        st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
+        st.field_parts += x.files.open_fields(resume=True)
+        self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
+                             "history_rows": st.history_rows}
+        if comm.rank == 0:
+            files.remove_temporaries(self.directory)
+        log.info("resuming from the checkpoint at t = %.6g s (step %d)", t, st.steps)
+        self.log_quality()
+
+    def record(self, dt: float, iterations: int) -> dict[str, float]:
+        """Measure the stepper's state: one history row, written (collective)."""
+        assert self.stepped is not None
+        row = self.stepped.record(dt, iterations)
+        self.rows.append(row)
+        if self.applied is not None:
+            self.applied.record(float(self.stepped.stepper.t.value))
+        return row
+
+    def checkpoint(self) -> None:
+        """Save the state after the last accepted step (collective)."""
+        x = self.stepped
+        assert x is not None and x.files.history is not None
+        history = x.files.history
+        history.sync()  # the rows the checkpoint counts are on disk before it
+        runstate.save(self.directory, self.fingerprint, [b.spec.name for b in self.model.bodies],
+                      history.columns, x.saved(self.state, self.wall_time()), x.functions(),
+                      self.comm)
+        t, steps = self.state.step.t, self.state.steps
+        self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": steps,
+                             "history_rows": history.rows}
+        self.write_summary(self.summary(False, None, "running"))
+        log.debug("checkpoint at t = %.6g s (step %d)", t, steps)
+
+    def discard_checkpoint(self) -> None:
+        """Remove the checkpoint of a finished run (nothing is left to resume)."""
+        if self.comm.rank == 0:
+            (self.directory / files.CHECKPOINT).unlink(missing_ok=True)
+        self.checkpointed = None
+
+    def finish(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """Write the remaining outputs and return the summary (collective)."""
+        x = self.stepped
+        if x is not None:
+            # The last accepted state, unless already written (or the state is not
+            # the accepted one: a non-finite step is not written).
+            s, t = x.stepper, self.rows[-1]["t"] if self.rows else None
+            if t is not None and float(s.t.value) == t and self.state.fields_time != t:
+                x.files.write_fields(t, s.u, s.v)
+            x.files.close()
+            if x.peak.time is not None:
+                interface = interface_state(self.model, x.nodes, x.peak.u,
+                                            x.monitor.surfaces)
+                x.files.write_snapshot(files.SNAPSHOT, x.peak.u, interface, x.peak.time)
+        summary = self.summary(finished, error, status)
+        if finished:
+            for line in applied_warnings(summary.get("loads", {})):
+                log.warning("%s", line)
+        return summary
+
+    def close(self) -> None:
+        """Free the stepper's and the ledger's PETSc objects (collective; after the summary)."""
+        if self.stepped is not None:
+            self.stepped.ledger.destroy()
+            self.stepped.stepper.destroy()
+
+    def wall_time(self) -> float:
+        """Wall time of the run so far, earlier parts of a resumed run included (s)."""
+        return self.state.wall_before + _time.perf_counter() - self.wall0
+
+    def write_summary(self, summary: Mapping[str, Any]) -> None:
+        """Write ``summary.json`` (rank 0; collective: an OutputError on every rank)."""
+        on_rank_zero(self.comm, lambda: bool(
+            files.atomic_write_json(self.directory / files.SUMMARY, summary)))
+
+    def log_quality(self, dynamic: bool = False) -> None:
+        """Log (rank 0) the warnings of the contact quality not logged yet.
+
+        Args:
+            dynamic: Include the largest penetration over the steps so far.
+        """
+        steps = self.rows[1:] if dynamic else []
+        for name, q in sm.contact_quality(self.state.contact, steps).items():
+            for issue, message in zip(q.issues, q.warnings, strict=True):
+                if (name, issue) not in self._warned:
+                    self._warned.add((name, issue))
+                    log.warning("%s", message)
+
+    def summary(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
+        """The summary of the run so far (:func:`~breakwater.outputs.summary.run_summary`).
+
+        Args:
+            finished: Whether the end time was reached.
+            error: Why the run stopped early.
+            status: ``running``, ``finished``, ``failed`` or ``interrupted``.
+        """
+        st, x = self.state, self.stepped
+        s = x.stepper if x is not None else None
+        solver = sm.solver_summary(
+            st.steps, st.iterations, st.failed_steps, st.failed_iterations,
+            st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
+            s.solver.floor_accepts if s is not None else 0, self.wall_time(),
+            kind=self.time.solver, time_loop=st.time_loop)
+        outputs = files.outputs_entry(
+            self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
+            snapshot=x is not None and x.peak.time is not None, static=bool(st.static))
+        return {**sm.run_summary(
+            case_name=self.output.case_name, finished=finished, status=status, error=error,
+            time=self.time, state=st, rows=self.rows,
+            probes=x.monitor.probes if x is not None else None,
+            contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
+            checkpoint=self.checkpointed, outputs=outputs, comm=self.comm,
+            extra=self._extra()), "work": self.work}
+
+    def _extra(self) -> dict[str, Any]:
+        """``extra_summary`` with the loads applied so far (requested against applied)."""
+        extra = copy.deepcopy(self.extra)
+        if self.applied is not None:
+            sm.merge(extra, {"loads": self.applied.summary()})
+            sm.merge(extra, {"loads": compare(extra["loads"])})
+        return extra

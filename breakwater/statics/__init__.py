@@ -1,0 +1,6 @@
+"""Static states: the initial equilibrium, relaxation with general pairs, calibration.
+
+:mod:`~breakwater.statics.initial` (equilibrium, bodies held to t = 0, initial
+velocities), :mod:`~breakwater.statics.relaxation` (pseudo-transient relaxation with
+general pairs), :mod:`~breakwater.statics.calibrate` (a shear modulus from a stiffness).
+"""

@@ -1,0 +1,447 @@
+"""Parameter studies: every point of a study file run as a case, in parallel, resumably.
+
+:func:`run_study` runs the points of a :class:`~breakwater.studies.studyfile.Study`:
+
+- the ranks of the communicator form groups of ``ranks_per_case`` ranks (MPI
+  sub-communicators, ``comm.Split``); each group runs one case at a time with the usual
+  run API (:meth:`Case.build <breakwater.casefile.case.Case.build>` and
+  :func:`breakwater.run.simulation.run`) on its sub-communicator;
+- the cases are handed out dynamically: the leader of a group that is free takes the
+  next case number from a counter held by rank 0 (an MPI window,
+  ``Fetch_and_op``), so no rank is spent on a master and a long case does not hold
+  up the others;
+- each case runs in its own folder ``<out>/case-0007_<values>`` (the usual run
+  outputs); when it ends, its group writes ``sweep_case.json`` there, atomically and
+  last: the point, the case's fingerprint, the status (``finished``, ``failed`` with
+  its one-line error, ``interrupted``), the wall time and the headline numbers of its
+  ``summary.json``;
+- ``sweep.csv`` (one row per point: the values, status, wall time, error and headline
+  numbers) is rewritten atomically after every case and by rank 0 at the end, with
+  the figures of :mod:`breakwater.studies.plots`.
+
+A case counts as finished only when its ``sweep_case.json`` says ``finished`` for the
+same case (fingerprint of the resolved case and of the files it reads) and its
+``summary.json`` agrees; a rerun skips those and runs the others again (a killed case
+resumes from its checkpoint when it has one, otherwise starts afresh in an emptied
+folder). SIGTERM or SIGINT stops the study (:class:`~breakwater.common.console.StopSignal`, as
+a run; a second signal kills), at any moment, a case's meshing included: the running
+cases stop at their next step (``interrupted``, with a checkpoint when the case makes
+them), no new case starts, the others stay ``pending``; the study says so in one line
+and exits 1. Under ``mpiexec`` the rank that finds the signal posts it in the shared
+counter, so that every group stops (the ranks agree) even when the signal reached only
+one of them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import fcntl
+import io
+import json
+import logging
+import math
+import pathlib
+import shutil
+import signal
+import sys
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+from mpi4py import MPI
+
+from breakwater.common import files
+from breakwater.common.console import StopSignal
+from breakwater.common.errors import CaseError
+from breakwater.common.gmshtools import settle_signal_handlers
+from breakwater.common.parallel import on_rank_zero
+from breakwater.outputs import checkpoint  # importing PETSc is collective: at import
+from breakwater.run import simulation
+from breakwater.studies.studyfile import Point, Study, check_points, toml_literal
+
+if TYPE_CHECKING:
+    from breakwater.casefile.case import Case
+
+__all__ = ["RECORD", "TABLE", "StudyOutcome", "headline", "read_records", "run_study",
+           "write_table"]
+
+RECORD = "sweep_case.json"
+"""A case's record, written last in its folder."""
+TABLE = "sweep.csv"
+LOCK = ".sweep.lock"
+FIGURES = "figures"
+
+log = logging.getLogger("breakwater.studies.sweep")
+
+
+@dataclass(frozen=True)
+class StudyOutcome:
+    """What a study did: the count of points by status (after the run)."""
+
+    total: int
+    finished: int
+    skipped: int
+    failed: int
+    interrupted: int
+    not_run: int
+
+    @property
+    def complete(self) -> bool:
+        """Whether every point's case finished."""
+        return self.finished == self.total
+
+
+# --- headline numbers ------------------------------------------------------------------
+
+def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = None
+             ) -> dict[str, float]:
+    """The headline numbers of a run's summary (and moduli of its ``case.toml``).
+
+    Columns: ``time_reached``; per probe ``peak_ux.<p>``, ``time_peak_ux.<p>``,
+    ``residual_ux.<p>``; ``time_of_max_ux``, ``residual_slip``, ``max_uplift``;
+    ``static_mean_pressure``; ``energy_balance_error`` (the largest over the run) and
+    ``external_work`` (at the end), per metre out of plane; ``steps``,
+    ``newton_iterations``, ``cutbacks``; ``loop_time`` (s); per body
+    ``shear_modulus.<body>`` of the case as run (the calibrated G included).
+    """
+    out: dict[str, float] = {}
+
+    def put(name: str, value: Any) -> None:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            out[name] = float(value)
+
+    put("time_reached", summary.get("time", {}).get("reached"))
+    dyn = summary.get("dynamic") or {}
+    for p, v in (dyn.get("peak_ux") or {}).items():
+        put(f"peak_ux.{p}", v.get("value"))
+        put(f"time_peak_ux.{p}", v.get("time"))
+    for p, v in (dyn.get("residual_ux") or {}).items():
+        put(f"residual_ux.{p}", v)
+    for key in ("time_of_max_ux", "residual_slip", "max_uplift"):
+        put(key, dyn.get(key))
+    put("static_mean_pressure", (summary.get("static") or {}).get("mean_contact_pressure"))
+    energy = summary.get("energy") or {}
+    put("energy_balance_error", energy.get("max_balance_error"))
+    put("external_work", (energy.get("final") or {}).get("external_work"))
+    solver = summary.get("solver") or {}
+    put("steps", solver.get("steps"))
+    put("newton_iterations", solver.get("newton_iterations"))
+    put("cutbacks", solver.get("cutbacks"))
+    put("loop_time", solver.get("wall_time"))
+    for name, body in ((case_toml or {}).get("bodies") or {}).items():
+        g = body.get("shear_modulus")
+        if g is None and body.get("young_modulus") is not None:
+            g = body["young_modulus"] / (2.0 * (1.0 + body["poisson"]))
+        put(f"shear_modulus.{name}", g)
+    return out
+
+
+# --- the records and the table -------------------------------------------------------------
+
+def _read_json(path: pathlib.Path) -> dict[str, Any] | None:
+    with contextlib.suppress(OSError, ValueError):
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if isinstance(data, dict):
+            return data
+    return None
+
+
+def _finished(folder: pathlib.Path, fingerprint: str) -> bool:
+    """Whether the case of a folder finished, for this very case."""
+    record = _read_json(folder / RECORD)
+    summary = _read_json(folder / files.SUMMARY)
+    return (record is not None and summary is not None
+            and record.get("status") == "finished" and summary.get("status") == "finished"
+            and record.get("fingerprint") == fingerprint)
+
+
+def read_records(out: pathlib.Path, points: Sequence[Point]) -> list[dict[str, Any] | None]:
+    """The record of each point's folder (None when it has none)."""
+    return [_read_json(out / p.folder / RECORD) for p in points]
+
+
+def write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
+                fingerprints: Sequence[str]) -> pathlib.Path:
+    """Write ``sweep.csv`` from the points' records (atomically, under a file lock).
+
+    The lock is held while the records are read: the last writer's table holds every
+    record written before it.
+    """
+    with _locked(out):
+        return _write_table(out, points, keys, fingerprints)
+
+
+def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
+                 fingerprints: Sequence[str]) -> pathlib.Path:
+    records = read_records(out, points)
+    columns: dict[str, None] = {}
+    for r in records:
+        if r is not None:
+            columns.update(dict.fromkeys(r.get("headline", {})))
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["case", "folder", *keys, "status", "wall_time", *columns, "error"])
+    for p, r, fp in zip(points, records, fingerprints, strict=True):
+        current = r is not None and r.get("fingerprint") == fp
+        rec = r if current else {}
+        assert rec is not None
+        values = [_cell(p.values.get(k)) for k in keys]
+        head = rec.get("headline", {})
+        writer.writerow([p.index, p.folder, *values, rec.get("status", "pending"),
+                         _cell(rec.get("wall_time")), *(_cell(head.get(c)) for c in columns),
+                         rec.get("error") or ""])
+    return files.atomic_write_text(out / TABLE, buffer.getvalue())
+
+
+def _cell(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ""
+    if isinstance(value, str | bool | int):
+        return str(value).lower() if isinstance(value, bool) else str(value)
+    return toml_literal(value)
+
+
+@contextlib.contextmanager
+def _locked(out: pathlib.Path) -> Iterator[None]:
+    """An exclusive lock on ``out/.sweep.lock`` (groups writing sweep.csv in turn)."""
+    with open(out / LOCK, "a") as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX)
+        except OSError:  # a file system without locks: the final table is still whole
+            pass
+        try:
+            yield
+        finally:
+            with contextlib.suppress(OSError):
+                fcntl.flock(f, fcntl.LOCK_UN)
+
+
+# --- one case ----------------------------------------------------------------------------
+
+def _one_line(error: BaseException) -> str:
+    return " ".join(str(error).split()) or type(error).__name__
+
+
+def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
+              comm: MPI.Comm) -> dict[str, Any]:
+    """Run one case on ``comm`` (collective); its record, written last in its folder."""
+    from breakwater.outputs.checkpoint import CheckpointError
+
+    def prepare() -> bool:
+        """Resume a killed run of this case from its checkpoint, or start afresh."""
+        record = _read_json(folder / RECORD)
+        if (folder / files.CHECKPOINT).is_file() and record is not None \
+                and record.get("fingerprint") == fingerprint:
+            with contextlib.suppress(CheckpointError):
+                checkpoint.check(folder)
+                return True
+        if folder.exists():
+            shutil.rmtree(folder)
+        folder.mkdir(parents=True)
+        # The record says which case the folder holds (a checkpoint is resumed only for
+        # it); its status says it did not finish, until the run ends.
+        files.atomic_write_json(folder / RECORD, _record(point, fingerprint, "running"))
+        return False
+
+    start = time.perf_counter()
+    resume = on_rank_zero(comm, prepare)
+    status, error, summary = "finished", None, None
+    try:
+        built = case.build(comm)
+        output = replace(built.output, progress=False)
+        summary = simulation.run(built.model, built.time, output,
+                                 resolved_case=built.case.resolved(),
+                                 extra_summary=built.extra, report=False, resume=resume)
+    except simulation.RunInterrupted as e:
+        status, error, summary = "interrupted", _one_line(e), e.summary
+    except KeyboardInterrupt:
+        raise
+    except Exception as e:  # the study goes on: the case's one-line error is recorded
+        status, error = "failed", _one_line(e)
+        summary = getattr(e, "summary", None)
+    wall = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+
+    def write() -> dict[str, Any]:
+        record = _record(point, fingerprint, status, error, wall, comm.size)
+        case_toml = None
+        with contextlib.suppress(OSError, ValueError):
+            import tomllib
+
+            case_toml = tomllib.loads((folder / files.CASE).read_text(encoding="utf-8"))
+        record["headline"] = headline(summary or {}, case_toml)
+        files.atomic_write_json(folder / RECORD, record)
+        return record
+
+    return on_rank_zero(comm, write)
+
+
+def _record(point: Point, fingerprint: str, status: str, error: str | None = None,
+            wall: float | None = None, ranks: int | None = None) -> dict[str, Any]:
+    return {"case": point.index, "folder": point.folder, "values": point.values,
+            "fingerprint": fingerprint, "status": status, "error": error,
+            "wall_time": wall, "ranks": ranks, "headline": {}}
+
+
+# --- the study ---------------------------------------------------------------------------
+
+class _Counter:
+    """The next case number, shared by every rank (an MPI window on rank 0).
+
+    It also carries a stop request to every group: :meth:`stop` raises the counter to
+    ``signum * STOP_UNIT`` at least, so that no group takes a case any more (the number
+    it takes is past the last case) and :meth:`stopped` tells the running cases of the
+    other groups to stop (their runs poll it, :class:`StopSignal`).
+    """
+
+    STOP_UNIT = 1 << 40
+
+    def __init__(self, comm: MPI.Intracomm) -> None:
+        size = MPI.INT64_T.Get_size()
+        self.win = MPI.Win.Allocate(size if comm.rank == 0 else 0, size, comm=comm)
+        if comm.rank == 0:
+            self.win.Lock(0, MPI.LOCK_EXCLUSIVE)
+            memoryview(self.win.tomemory()).cast("B")[:size] = bytes(size)
+            self.win.Unlock(0)
+        comm.Barrier()
+
+    def _fetch_add(self, amount: int, op: MPI.Op = MPI.SUM) -> int:
+        import numpy as np
+
+        add, got = np.full(1, amount, dtype=np.int64), np.zeros(1, dtype=np.int64)
+        self.win.Lock(0, MPI.LOCK_SHARED)
+        self.win.Fetch_and_op(add, got, 0, 0, op)
+        self.win.Unlock(0)
+        return int(got[0])
+
+    def next(self) -> int:
+        """Take the next number (atomically)."""
+        return self._fetch_add(1)
+
+    def stop(self, signum: int) -> None:
+        """Ask every group to stop (any rank, any number of times: the first counts)."""
+        if not self.stopped():
+            self._fetch_add(signum * self.STOP_UNIT, MPI.MAX)
+
+    def stopped(self) -> int:
+        """The signal a group stopped on (0: none)."""
+        return self._fetch_add(0, MPI.NO_OP) // self.STOP_UNIT
+
+    def free(self) -> None:
+        self.win.Free()
+
+
+def run_study(study: Study, out: str | pathlib.Path | None = None,
+              comm: MPI.Intracomm | None = None, ranks_per_case: int = 1,
+              quiet: bool = False) -> StudyOutcome:
+    """Run every point of a study that has not finished yet (collective).
+
+    Args:
+        study: The study (:func:`breakwater.studies.studyfile.load_study`).
+        out: The study's folder (default ``results/<study name>``).
+        comm: The ranks to use (default: all).
+        ranks_per_case: Ranks per group; the communicator's size must be a multiple.
+        quiet: Print nothing but errors.
+
+    Returns:
+        The counts of the points by status, the same on every rank.
+
+    Raises:
+        CaseError: A bad study (every point's case is read before anything runs), or
+            ``ranks_per_case`` does not divide the number of ranks.
+
+    """
+    comm = MPI.COMM_WORLD if comm is None else comm
+    if ranks_per_case < 1 or comm.size % ranks_per_case:
+        raise CaseError(f"--ranks-per-case {ranks_per_case}: must divide the number of "
+                        f"ranks ({comm.size})")
+    folder = files.make_directory(out if out is not None else f"results/{study.name}", comm)
+    # Rank 0 checks every point (the same error on every rank); then each rank reads
+    # the cases itself (cheap, and no large broadcast).
+    on_rank_zero(comm, lambda: bool(check_points(study, folder)))
+    points, cases = check_points(study, folder)
+    # Rank 0's fingerprints: every group then skips and resumes the same cases.
+    fingerprints = comm.bcast([checkpoint.case_fingerprint(c.resolved()) for c in cases]
+                              if comm.rank == 0 else None, root=0)
+    keys = study.keys
+
+    def pending() -> list[int]:
+        todo = [j for j, p in enumerate(points)
+                if not _finished(folder / p.folder, fingerprints[j])]
+        write_table(folder, points, keys, fingerprints)
+        return todo
+
+    todo = on_rank_zero(comm, pending)
+    say = (lambda text: print(text, flush=True)) if not quiet else (lambda text: None)
+    groups = comm.size // ranks_per_case
+    if comm.rank == 0:
+        say(f"study '{study.name}': {len(points)} cases, {len(points) - len(todo)} finished "
+            f"before, {len(todo)} to run by {groups} group(s) of {ranks_per_case} rank(s) "
+            f"-> {folder}")
+    group = comm.Split(comm.rank // ranks_per_case, comm.rank)
+    counter = _Counter(comm)
+    signum = 0
+    settle_signal_handlers()  # gmsh's first initialisation, before the signals are caught
+    try:
+        with StopSignal(poll=counter.stopped, post=counter.stop) as stop:
+            while True:
+                if group.allreduce(stop.received, op=MPI.MAX):
+                    break
+                k = group.bcast(counter.next() if group.rank == 0 else None, root=0)
+                if k >= len(todo):
+                    break
+                j = todo[k]
+                p = points[j]
+                record = _run_case(cases[j], p, fingerprints[j], folder / p.folder, group)
+                if group.rank == 0:
+                    write_table(folder, points, keys, fingerprints)
+                    tail = f": {record['error']}" if record["error"] else ""
+                    say(f"  {p.folder}: {record['status']} in {record['wall_time']:.1f} s"
+                        f"{tail}")
+                if record["status"] == "interrupted":
+                    break
+            # A signal caught by a rank stops the others (``post``, when the rank finds
+            # it: no new case starts anywhere, the running cases stop at their next step
+            # as they poll the counter): the ranks agree.
+            signum = stop.received
+    finally:
+        comm.Barrier()
+        signum = comm.allreduce(signum, op=MPI.MAX)
+        counter.free()
+        group.Free()
+
+    def finish() -> StudyOutcome:
+        write_table(folder, points, keys, fingerprints)
+        records = read_records(folder, points)
+        status = [r.get("status") if r is not None and r.get("fingerprint") == fp else None
+                  for r, fp in zip(records, fingerprints, strict=True)]
+        outcome = StudyOutcome(len(points), status.count("finished"),
+                               len(points) - len(todo), status.count("failed"),
+                               status.count("interrupted"),
+                               len(points) - sum(status.count(s) for s in
+                                                 ("finished", "failed", "interrupted")))
+        from breakwater.studies import plots as sweepplots
+
+        try:
+            drawn = sweepplots.make_figures(folder, study, TABLE)
+        except Exception as e:  # the table is written; a figure problem is reported
+            print(f"breakwater: warning: the figures of the study could not be drawn: "
+                  f"{_one_line(e)}", file=sys.stderr, flush=True)
+            drawn = []
+        if signum:
+            print(f"breakwater: study '{study.name}' interrupted by "
+                  f"{signal.Signals(signum).name}: {outcome.finished}/{outcome.total} "
+                  f"finished, {outcome.interrupted} interrupted, {outcome.not_run} pending "
+                  "(run the study again to go on)", file=sys.stderr, flush=True)
+        say(f"study '{study.name}': {outcome.finished}/{outcome.total} finished"
+            + (f", {outcome.failed} failed" if outcome.failed else "")
+            + (f", {outcome.interrupted} interrupted" if outcome.interrupted else "")
+            + (f", {outcome.not_run} not run" if outcome.not_run else "")
+            + f" -> {folder / TABLE}" + (f" and {len(drawn)} figures" if drawn else ""))
+        return outcome
+
+    return on_rank_zero(comm, finish)
+
