@@ -82,6 +82,7 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
 from breakwater.outputs.summary import balance_warning, format_report
+from breakwater.run import begin
 from breakwater.run.session import Session
 from breakwater.stepping.stepsize import GROW_AFTER
 from breakwater.stepping.stepsolver import StepSolver
@@ -294,7 +295,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
-            r.restore()  # CheckpointError: nothing written yet
+            begin.restore(r)  # CheckpointError: nothing written yet
         if resolved_case is not None:
             on_rank_zero(r.comm, lambda: bool(
                 files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
@@ -303,7 +304,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         error: BaseException | None = None
         try:
             if not resume:
-                r.start()
+                begin.start(r)
             _loop(r, stop)
         except (BreakwaterError, KeyboardInterrupt) as e:
             error = e
