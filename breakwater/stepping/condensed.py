@@ -160,7 +160,6 @@ class InterfaceAssembler:
         return out.reshape(self.n, self.n)
 
 
-
 class CondensedNewton(StepSolver):
     """The fast path's :class:`~breakwater.stepping.stepsolver.StepSolver` (see the module doc).
 
