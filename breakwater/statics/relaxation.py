@@ -135,7 +135,7 @@ class _Result:
     iterations: int
 
 
-def _stage(p: PseudoStepper, frictional: bool) -> _Result:
+def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
     """Relax from the undeformed state (a 1e-9 m penetration along gravity).
 
     c grows ×:data:`GROWTH` per step up to c_max while the increments stay below a tenth
@@ -144,19 +144,19 @@ def _stage(p: PseudoStepper, frictional: bool) -> _Result:
     Raises:
         ConvergenceError: A step's Newton failed, or the increments do not vanish.
     """
-    m, s = p.model, p.stepper
+    m, s = ps.model, ps.stepper
     for u in s.u:
         u.x.array[:] = 0.0
     g = m.gravity.value
     if np.any(g):
-        slaves = {m.body(q.slave).index for q in m.surface_pairs}
-        slaves |= {q.slave for q in m.pairs}
+        slaves = {m.body(p.slave).index for p in m.surface_pairs}
+        slaves |= {p.slave for p in m.pairs}
         for i in slaves:
             s.u[i].x.array.reshape(-1, m.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
-    c, its, history = p.c0, 0, []
+    c, its, history = ps.c0, 0, []
     solved = 0.0  # c of the last solved step
     for k in range(1, MAX_STEPS + 1):
-        p.start(c, frictional)
+        ps.start(c, frictional)
         try:
             its += s.solve()
         except ConvergenceError as e:
@@ -171,23 +171,23 @@ def _stage(p: PseudoStepper, frictional: bool) -> _Result:
             raise ConvergenceError(f"relaxation step {k}: {e}", e.reason,
                                    its + e.iterations) from e
         solved = c
-        inc, residual = p.advance(c)
+        inc, residual = ps.advance(c)
         log.debug("relaxation step %d: c = %.3e s², max|Δu| = %.3e m, residual %.3e, "
-                  "%d Newton iterations", k, c, inc, residual / p.scale, its)
-        if residual <= TOLERANCE * p.scale:
-            p.c = c
+                  "%d Newton iterations", k, c, inc, residual / ps.scale, its)
+        if residual <= TOLERANCE * ps.scale:
+            ps.c = c
             return _Result([u.x.array.copy() for u in s.u], k, its)
         history.append((c, inc))
         same = history[-STALL - 1:]
         if len(same) > STALL and all(h[0] == c for h in same) and inc > 0.5 * same[0][1]:
             break
-        if inc < 0.1 * p.reach:
-            c = min(c * GROWTH, p.c_max)
+        if inc < 0.1 * ps.reach:
+            c = min(c * GROWTH, ps.c_max)
     raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
                            f"{k} steps)", -1, its)
 
 
-def _slide(p: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
+def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
     """Relax the held bodies (``sliding``) into the state of incipient sliding.
 
     The held stage's friction (μ = :data:`HELD_FRICTION`) carries the bonded shear;
@@ -200,7 +200,7 @@ def _slide(p: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
     _release` for conforming pairs: GN22 then starts in the motion of sliding.
 
     Args:
-        p: The pseudo stepper, in the held state.
+        ps: The pseudo stepper, in the held state.
         sliding: Held slave body → its sliding direction (:func:`_held`).
 
     Returns:
@@ -209,8 +209,8 @@ def _slide(p: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
     Raises:
         ConvergenceError: A step failed or the steps did not converge.
     """
-    m, s = p.model, p.stepper
-    c, its = p.c / GROWTH**2, 0
+    m, s = ps.model, ps.stepper
+    c, its = ps.c / GROWTH**2, 0
     bodies = []
     for i, total in sliding.items():
         b = m.bodies[i]
@@ -222,16 +222,16 @@ def _slide(p: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
                 force += forms.surface_traction(ld.traction, dc, ld.ds)
         ext = m.assemble(m.form(force))
         mass = m.assemble(m.form(b.ρ * b.dx))
-        slaves = [q for q in p.providers if m.body(q.spec.slave).index == i]
+        slaves = [p for p in ps.providers if m.body(p.spec.slave).index == i]
         # At first the held state's pressure with the friction of sliding against d.
         contact = 0.0
-        for q in slaves:
-            normal, _ = q.resultants(accepted=True)
-            contact += float(normal @ d) - q.spec.friction * float(np.linalg.norm(normal))
+        for p in slaves:
+            normal, _ = p.resultants(accepted=True)
+            contact += float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
         bodies.append([i, d, ext, mass, slaves, (ext + contact) / mass])
-    with p.friction(None):
+    with ps.friction(None):
         for k in range(1, MAX_STEPS + 1):
-            p.start(c, False)
+            ps.start(c, False)
             Δτ = float(s.dt.value)
             for i, d, _, _, _, α in bodies:
                 s.v[i].x.array.reshape(-1, m.gdim)[:] = -0.5 * Δτ * α * d
@@ -239,37 +239,37 @@ def _slide(p: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
             its += s.solve()
             for body in bodies:
                 i, d, ext, mass, slaves, _ = body
-                contact = sum(float(q.resultant(accepted=False) @ d) for q in slaves)
+                contact = sum(float(p.resultant(accepted=False) @ d) for p in slaves)
                 body[5] = (ext + contact) / mass
-            inc, residual = p.advance(c)
+            inc, residual = ps.advance(c)
             log.debug("sliding step %d: max|Δu| = %.3e m, residual %.3e, α = %s", k, inc,
-                      residual / p.scale, [b[5] for b in bodies])
-            if residual <= TOLERANCE * p.scale:
+                      residual / ps.scale, [b[5] for b in bodies])
+            if residual <= TOLERANCE * ps.scale:
                 return its
-            c = min(c * GROWTH, p.c)
+            c = min(c * GROWTH, ps.c)
     raise ConvergenceError(f"relaxation: no state of incipient sliding after {k} steps",
                            -1, its)
 
 
-def _creep(p: PseudoStepper, v: list[fem.Function]) -> None:
+def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
     """Add the slave nodes' slip velocity of the frictional state to ``v``."""
-    s = p.stepper
-    p.rest()
-    y = np.zeros(p.solver.n)
-    for q in p.providers:
-        pos, v_T = q.slip_velocities()
+    s = ps.stepper
+    ps.rest()
+    y = np.zeros(ps.solver.n)
+    for p in ps.providers:
+        pos, v_T = p.slip_velocities()
         keep = pos >= 0
         y[pos[keep]] = v_T[keep]
-    p.add_slave_velocities(v, y)
-    if p.model.pairs:
+    ps.add_slave_velocities(v, y)
+    if ps.model.pairs:
         u = [fem.Function(f.function_space) for f in s.u]
         for f, g in zip(u, s.u, strict=True):
             f.x.array[:] = g.x.array
-        τ = 0.5 * p.β2 * float(s.dt.value) / p.β1  # τ of the last step
-        creep_velocities(p.model, p.model.pairs, u, v, τ)
+        τ = 0.5 * ps.β2 * float(s.dt.value) / ps.β1  # τ of the last step
+        creep_velocities(ps.model, ps.model.pairs, u, v, τ)
 
 
-def _held(p: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
+def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     """The slave bodies whose pair's tangential resultant exceeds μN (held state).
 
     Returns:
@@ -278,26 +278,26 @@ def _held(p: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     """
     out = []
     sliding: dict[int, np.ndarray] = {}
-    p.rest()
-    with p.friction(HELD_FRICTION, HELD_FRICTION):
-        forces = [q.resultants(accepted=False) for q in p.providers]
-    for q, (normal, friction) in zip(p.providers, forces, strict=True):
+    ps.rest()
+    with ps.friction(HELD_FRICTION, HELD_FRICTION):
+        forces = [p.resultants(accepted=False) for p in ps.providers]
+    for p, (normal, friction) in zip(ps.providers, forces, strict=True):
         N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
-        μ = q.spec.friction
+        μ = p.spec.friction
         if T - μ * N > 1e-6 * max(N, T):
-            if p.model.comm.rank == 0:
+            if ps.model.comm.rank == 0:
                 log.warning("initial state: body '%s' cannot be held by friction on '%s' "
                             "(tangential force %.4g N/m, μN = %.4g N/m): held in place up "
-                            "to t = 0 and released at t = 0", q.spec.slave, q.spec.name,
+                            "to t = 0 and released at t = 0", p.spec.slave, p.spec.name,
                             T, μ * N)
-            index = p.model.body(q.spec.slave).index
+            index = ps.model.body(p.spec.slave).index
             sliding[index] = sliding.get(index, 0.0) - friction
-            if q.spec.slave not in out:
-                out.append(q.spec.slave)
+            if p.spec.slave not in out:
+                out.append(p.spec.slave)
     if not out:  # the conforming pairs' bodies (not checked one by one)
-        for pair in p.model.pairs:
-            body = p.model.bodies[pair.slave].spec.name
-            if p.model.comm.rank == 0:
+        for pair in ps.model.pairs:
+            body = ps.model.bodies[pair.slave].spec.name
+            if ps.model.comm.rank == 0:
                 log.warning("initial state: body '%s' cannot be held by friction on "
                             "'%s': held in place up to t = 0 and released at t = 0",
                             body, pair.spec.interface)
@@ -305,7 +305,7 @@ def _held(p: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     return out, sliding
 
 
-def _release(p: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Function]
+def _release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Function]
              ) -> None:
     """Start the held bodies' slave nodes in contact sliding (added to ``v``).
 
@@ -314,21 +314,21 @@ def _release(p: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Funct
     friction μλ at t = 0 (to 5e-5), so that a₀ is the sliding acceleration rather than
     that without friction.
     """
-    p.rest()
-    y = np.zeros(p.solver.n)
-    for q in p.providers:
-        d = sliding.get(p.model.body(q.spec.slave).index)
+    ps.rest()
+    y = np.zeros(ps.solver.n)
+    for p in ps.providers:
+        d = sliding.get(ps.model.body(p.spec.slave).index)
         if d is None:
             continue
-        pos, v_T = q.slip_velocities()
+        pos, v_T = p.slip_velocities()
         size = np.linalg.norm(v_T, axis=1)[:, None]
         keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
         unit = v_T[keep] / size[keep]
         # Along the node's tangent, turned to the sliding direction (a node's own
         # slip in the held state may point the other way).
         unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
-        y[pos[keep]] = RELEASE * q.spec.regularisation * unit
-    p.add_slave_velocities(v, y)
+        y[pos[keep]] = RELEASE * p.spec.regularisation * unit
+    ps.add_slave_velocities(v, y)
 
 @contextlib.contextmanager
 def _undamped(model: ContactModel) -> Iterator[None]:
