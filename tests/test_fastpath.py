@@ -35,7 +35,8 @@ from breakwater.model.model import (
     Material,
 )
 from breakwater.run import simulation
-from breakwater.stepping.condensed import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.stepping.bulk import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.stepping.factorisations import Factorisations
 from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
@@ -171,8 +172,9 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     layout = MonolithicLayout(model)
     interface = interface_dofs(model, layout)
     dt, β1, β2 = 1e-3, 0.6, 0.605
-    bulk = BulkOperators(model, layout, interface, β1, β2)
-    fact = bulk.factorisation(dt)
+    bulk = BulkOperators(model, layout)
+    factorisations = Factorisations(bulk, interface, β1, β2)
+    fact = factorisations.factorisation(dt)
     # The whole A, dense, on every rank (the model is small).
     n = layout.vec.getSize()
     A = np.zeros((n, n))
@@ -199,6 +201,7 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
         A[np.ix_(B, B)], A[np.ix_(B, interface)])
     # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
     np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
+    factorisations.destroy()
     bulk.destroy()
 
     # Without contact pairs a step is linear: the fast path is one back-solve and

@@ -43,12 +43,13 @@ def _random_state(stepper: GN22, seed: int) -> None:
 
 
 def _compare(stepper: GN22) -> None:
-    solver = stepper.solver
+    solver = stepper.fast
+    assert solver is not None
     providers = solver.providers
     assert providers and all(isinstance(p, NodalContactForces) for p in providers)
     forms = InterfaceAssembler(stepper.model, solver.layout, ufl.extract_blocks(
         stepper.model.interface_residual(stepper.u1, stepper.v1)), stepper.da,
-        solver._write, solver.I)
+        solver.interface.positions, solver.I)
     for seed in range(3):
         _random_state(stepper, seed)
         f = sum(p.vector() for p in providers)

@@ -251,7 +251,7 @@ def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
     the summary left running)."""
     from petsc4py import PETSc
 
-    from breakwater.run import session
+    from breakwater.run import begin
 
     case, out = _case(shared_dir), shared_dir / "out"
 
@@ -262,7 +262,7 @@ def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
         finally:
             snes.destroy()
 
-    monkeypatch.setattr(session, "initial_state", crash)
+    monkeypatch.setattr(begin, "initial_state", crash)
     code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
     assert code == 1, err
     if COMM.rank == 0:

@@ -198,7 +198,8 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
     stepper = GN22(model, 1e-3)
     stepper.initialise()
     stepper.stage()
-    provider, solver = _provider(stepper), stepper.solver
+    provider, solver = _provider(stepper), stepper.fast
+    assert solver is not None
     for f in (*stepper.a, *stepper.v):
         f.x.array[:] = 0.0
     for f in stepper.v[1:]:  # the block slides at 0.1 m/s with a 1e-5 m penetration
@@ -207,7 +208,7 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
     y = np.zeros(solver.n)
     y[provider.pos_s[..., 1][provider.pos_s[..., 1] >= 0]] = -1e-5 / cu
     y += np.random.default_rng(3).normal(size=solver.n) * 1e-7 / cu
-    solver._set_interface(y)
+    solver.contact.set(y)
     J = provider.matrix()
     fd = np.zeros_like(J)
     h = 1e-9 / cu  # 1e-9 m: round-off of the positions (1e-16 m) is 1e-7 of it
@@ -215,7 +216,7 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
         for sign in (1, -1):
             z = y.copy()
             z[j] += sign * h
-            solver._set_interface(z)
+            solver.contact.set(z)
             fd[:, j] += sign * provider.vector() / (2 * h)
     assert np.abs(J).max() > 0
     # Tolerance: central differences of step 1e-9 m on a penalty residual of curvature

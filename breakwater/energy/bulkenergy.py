@@ -37,7 +37,6 @@ from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
 from breakwater.energy import dissipation as numerical
-from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.gn22 import GN22
 
 __all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms"]
@@ -116,8 +115,8 @@ class MatrixTerms:
 
     def __init__(self, stepper: GN22, u0: Sequence[fem.Function], v0: Sequence[fem.Function],
                  amp0: Sequence[fem.Constant]) -> None:
-        solver = stepper.solver
-        if not isinstance(solver, CondensedNewton):
+        solver = stepper.fast
+        if solver is None:
             raise ValueError("the ledger's bulk terms from matrices need the fast solver "
                              "(time.solver = \"fast\")")
         self.stepper, self.u0, self.v0, self.amp0 = stepper, u0, v0, amp0
@@ -235,5 +234,5 @@ def bulk_terms(stepper: GN22, u0: Sequence[fem.Function], v0: Sequence[fem.Funct
     if source not in SOURCES:
         raise ValueError(f"source must be one of {', '.join(SOURCES)} (got {source!r})")
     if source == "auto":
-        source = "matrices" if isinstance(stepper.solver, CondensedNewton) else "forms"
+        source = "matrices" if stepper.fast is not None else "forms"
     return (MatrixTerms if source == "matrices" else FormTerms)(stepper, u0, v0, amp0)

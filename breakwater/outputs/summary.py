@@ -227,10 +227,12 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
     """The ``solver`` entry of the summary.
 
     ``time_loop`` is the wall time of the time loop and of its parts (s): ``outputs``,
-    ``cpu`` (the process's CPU time over the loop, all threads) and, for the fast
+    ``cpu`` (the process's CPU time over the loop, all threads) and the step solver's
+    parts (:attr:`~breakwater.stepping.stepsolver.StepSolver.timings`): for the fast
     solver, ``factorisation``, ``back_solves``, ``bulk_products``,
     ``interface_assembly``, ``newton`` and ``contact_search`` (the general pairs' search,
-    a part of ``interface_assembly``; :class:`~breakwater.stepping.condensed.Timings`).
+    a part of ``interface_assembly``); for the reference solver, ``newton`` (its SNES
+    solves in total).
     """
     its = iterations
     return {

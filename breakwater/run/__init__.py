@@ -1,1 +1,1 @@
-"""One run: the time loop, its session of objects and its state between steps."""
+"""One run: the time loop, its session of objects, how it begins and its state between steps."""

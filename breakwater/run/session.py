@@ -1,9 +1,9 @@
 """The objects of one run and its bookkeeping, between the steps of the time loop.
 
 :class:`Stepped` is the GN22 stepper with the objects bound to its state (energy
-ledger, history monitor, peak snapshot, the run's files). :class:`Session` builds it
-from the static equilibrium (:meth:`Session.start`) or from a checkpoint
-(:meth:`Session.restore`). The time loop (:mod:`breakwater.run.simulation`) steps the
+ledger, history monitor, peak snapshot, the run's files). :mod:`breakwater.run.begin`
+builds it for a :class:`Session`, from the static equilibrium (``begin.start``) or from
+a checkpoint (``begin.restore``). The time loop (:mod:`breakwater.run.simulation`) steps the
 stepper and calls :meth:`Session.record` after each accepted step (one history row,
 measured by the :class:`~breakwater.outputs.monitor.Monitor`), :meth:`Session.checkpoint`,
 and at the end :meth:`Session.finish`. The bookkeeping a checkpoint saves is
@@ -30,13 +30,10 @@ from breakwater.energy.ledger import EnergyLedger
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
-from breakwater.outputs.checkpoint import CheckpointError
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
-from breakwater.outputs.surfaceoutputs import quality_inputs as surface_quality
 from breakwater.outputs.writers import RunFiles
 from breakwater.run import runstate
 from breakwater.run.runstate import RunState
-from breakwater.statics.initial import initial_state
 from breakwater.stepping.gn22 import GN22, GN22Parameters
 from breakwater.stepping.solver import NewtonOptions
 
@@ -124,7 +121,8 @@ class Session:
     Attributes:
         state: The bookkeeping a checkpoint saves.
         rows: The history rows so far (the static state's first).
-        stepped: The stepper and its objects (built by :meth:`start` or :meth:`restore`).
+        stepped: The stepper and its objects (built by :func:`breakwater.run.begin.start`
+            or :func:`breakwater.run.begin.restore`).
         checkpointed: The latest checkpoint written (``summary.json``'s ``checkpoint``).
 
     """
@@ -154,84 +152,6 @@ class Session:
                      "estimate": time.planned_steps * int(dofs),
                      "max_steps": time.max_steps, "max_cutbacks": time.max_cutbacks,
                      "min_dt": time.min_dt}
-
-    def start(self) -> None:
-        """Find the initial state, start the stepper from it (collective).
-
-        The static equilibrium under gravity and the loads of the initial state, with
-        friction if needed, bodies that friction cannot hold held up to t = 0
-        (:func:`~breakwater.statics.initial.initial_state`); at rest but for the bodies' initial
-        velocities (``model.initial``).
-        """
-        m, st = self.model, self.state
-        log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
-                 m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
-                 len(m.bodies), len(m.pairs) + len(m.surface_pairs))
-        for info in self.extra.get("loads", {}).values():
-            for line in info.get("warnings", ()):
-                log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
-        m.set_time(0.0)
-        init = initial_state(m)
-        st.static_iterations = init.iterations
-        log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
-        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
-        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
-        s, out = x.stepper, x.files
-        s.initialise(init.u, init.v)
-        out.open_history(x.monitor.columns)
-        out.open_fields()
-        row = self.record(0.0, st.static_iterations)
-        surfaces = x.monitor.surfaces
-        interface = interface_state(m, x.nodes, s.u, surfaces)
-        st.static = sm.static_summary(m, row, interface, st.static_iterations)
-        st.static.update(init.summary())
-        st.contact = [*sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface),
-                      *surface_quality(m, surfaces, s.u)]
-        out.write_snapshot(files.STATIC, s.u, interface, 0.0)
-        self.log_quality()
-        out.write_fields(0.0, s.u, s.v)
-
-    def restore(self) -> None:
-        """Continue from the checkpoint of the output folder (collective).
-
-        Nothing in the folder changes until the checkpoint is known to fit.
-
-        Raises:
-            CheckpointError: No checkpoint, another case, a finished run, or a history
-                that does not reach the checkpoint.
-        """
-        m, comm = self.model, self.comm
-        saved = runstate.load(self.directory, self.fingerprint,
-                              [b.spec.name for b in m.bodies], self.time, comm)
-        if saved.mpi_size != comm.size:
-            log.warning("resuming on %d ranks a checkpoint written on %d: the continuation "
-                        "equals the uninterrupted run to round-off, not bit for bit",
-                        comm.size, saved.mpi_size)
-        m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
-        self.stepped = x = Stepped(m, self.time, self.output, self.directory)
-        if saved.columns != x.monitor.columns:
-            raise CheckpointError("the checkpoint's history columns are not the run's")
-        saved.restore_fields(x.functions())
-        st = self.state = saved.state
-        self.applied = AppliedLoads(m, self.time.beta1, st.applied_loads)
-        x.resume(st)
-        t = st.step.t
-        try:
-            self.rows = x.files.open_history(x.monitor.columns, keep_rows=st.history_rows)
-        except (ValueError, OSError) as e:
-            raise CheckpointError(f"cannot resume: {e}") from e
-        if self.rows[-1]["t"] != t:
-            raise CheckpointError(f"cannot resume: the last history row kept (t = "
-                                  f"{self.rows[-1]['t']:.6g} s) is not the checkpoint's "
-                                  f"(t = {t:.6g} s)")
-        st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
-        st.field_parts += x.files.open_fields(resume=True)
-        self.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
-                             "history_rows": st.history_rows}
-        if comm.rank == 0:
-            files.remove_temporaries(self.directory)
-        log.info("resuming from the checkpoint at t = %.6g s (step %d)", t, st.steps)
-        self.log_quality()
 
     def record(self, dt: float, iterations: int) -> dict[str, float]:
         """Measure the stepper's state: one history row, written (collective)."""

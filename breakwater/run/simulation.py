@@ -82,8 +82,10 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
 from breakwater.outputs.summary import balance_warning, format_report
+from breakwater.run import begin
 from breakwater.run.session import Session
 from breakwater.stepping.stepsize import GROW_AFTER
+from breakwater.stepping.stepsolver import StepSolver
 
 __all__ = ["GROW_AFTER", "Monitor", "RunInterrupted", "SimulationFailed", "interface_state",
            "pair_names", "run"]
@@ -158,12 +160,13 @@ def _check_stop(r: Session, stop: StopSignal) -> None:
 class _LoopClock:
     """Wall time of the time loop and of its parts, kept in the run state.
 
-    The solver's own parts (:class:`~breakwater.stepping.condensed.Timings`) are folded in at
-    checkpoints and at the end, so that a resumed run sums them over its parts.
+    The solver's own parts (its :attr:`~breakwater.stepping.stepsolver.StepSolver.timings`)
+    are folded in at checkpoints and at the end, so that a resumed run sums them over its
+    parts.
     """
 
-    def __init__(self, times: dict[str, float], solver_timings: Any) -> None:
-        self.times, self.solver = times, solver_timings
+    def __init__(self, times: dict[str, float], solver: StepSolver) -> None:
+        self.times, self.solver = times, solver
         self._mark = self._cpu = 0.0
 
     def add(self, key: str, seconds: float) -> None:
@@ -175,10 +178,10 @@ class _LoopClock:
         # The process's CPU time (all its threads): on a loaded machine, the work done.
         self.add("cpu", cpu - self._cpu)
         self._mark, self._cpu = now, cpu
-        if self.solver is not None:
-            for key, seconds in self.solver.seconds.items():
-                self.add(key, seconds)
-                self.solver.seconds[key] = 0.0
+        parts = self.solver.timings.seconds
+        for key, seconds in parts.items():
+            self.add(key, seconds)
+            parts[key] = 0.0
 
     def __enter__(self) -> _LoopClock:
         self._mark, self._cpu = _time.perf_counter(), _time.process_time()
@@ -198,7 +201,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
     log.info("work estimate: %d steps × %d unknowns = %.3g", r.work["steps_planned"],
              r.work["dofs"], r.work["estimate"])
     log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
-    clock = _LoopClock(st.time_loop, getattr(s.solver, "timings", None))
+    clock = _LoopClock(st.time_loop, s.solver)
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
                   step.t) as progress, clock:
         while not step.finished:
@@ -292,7 +295,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
-            r.restore()  # CheckpointError: nothing written yet
+            begin.restore(r)  # CheckpointError: nothing written yet
         if resolved_case is not None:
             on_rank_zero(r.comm, lambda: bool(
                 files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
@@ -301,7 +304,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         error: BaseException | None = None
         try:
             if not resume:
-                r.start()
+                begin.start(r)
             _loop(r, stop)
         except (BreakwaterError, KeyboardInterrupt) as e:
             error = e

@@ -54,7 +54,7 @@ model with both kinds):
    raised to :data:`HELD_FRICTION` for the relaxation (the bodies are held in place up
    to t = 0); a warning names each body whose pair carries a tangential resultant
    above μN, and the dynamics, with the real μ, releases it at t = 0. It is released
-   in the state of incipient sliding (:meth:`_Relaxation.slide`; models with general
+   in the state of incipient sliding (:func:`_slide`; models with general
    pairs only): pseudo steps with the real μ from the held state, in the frame of the
    body's acceleration α d (d its sliding direction, α from its resultant along d),
    so that its pairs carry the friction of sliding and its deformation is that of the
@@ -74,7 +74,10 @@ drops the body.
 
 :func:`relax` is called by :func:`breakwater.statics.initial.initial_state` for models with
 general pairs; a₀ of the stepper's initialisation then vanishes (it includes the
-general pairs' forces).
+general pairs' forces). This module is the control of the stages (c over the steps,
+:func:`_stage`, :func:`_slide`) and the initial velocities of the state found
+(:func:`_creep`, :func:`_held`, :func:`_release`); the pseudo step itself, its state and
+the model estimates (c₀, c_max, τ) are :class:`~breakwater.statics.pseudostep.PseudoStepper`'s.
 """
 
 from __future__ import annotations
@@ -83,31 +86,22 @@ import contextlib
 import dataclasses
 import logging
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import ConvergenceError
-from breakwater.contact.conforming import RELEASE, creep_velocities, mean_facet_length
-from breakwater.contact.general import SurfaceContact
+from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.model.model import ContactModel, Damping
-from breakwater.stepping.condensed import CondensedNewton
-from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
+from breakwater.statics.pseudostep import GROWTH, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
 __all__ = ["GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
            "STALL", "TOLERANCE", "Relaxed", "relax"]
 
 log = logging.getLogger("breakwater.statics.relaxation")
-
-RATIO = 1e4
-"""c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
-
-GROWTH = 100.0
-"""Growth of c per step (while the increments stay below a tenth of the search radius)."""
 
 TOLERANCE = 1e-8
 """Converged when the static residual ‖M (u₁ − u_k)‖/c is below this fraction of ‖f‖.
@@ -141,312 +135,200 @@ class _Result:
     iterations: int
 
 
-class _Relaxation:
-    """The pseudo-transient stepper of a model (see the module docstring)."""
+def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
+    """Relax from the undeformed state (a 1e-9 m penetration along gravity).
 
-    def __init__(self, model: ContactModel, options: NewtonOptions | None,
-                 stick_band: float) -> None:
-        self.model = m = model
-        self.c_max = RATIO / _lowest_frequency_squared(m)
-        g = float(np.linalg.norm(m.gravity.value))
-        self.reach = _reach(m)
-        self.c0 = min(self.c_max, 0.1 * self.reach / g) if g > 0 else self.c_max / GROWTH**2
-        self.β2 = GN22Parameters().beta2
-        friction = _pair_friction(m)
-        self.has_friction = any(μ > 0 for μ, _, _ in friction)
-        self.τ = min((stick_band * h / χ for _, χ, h in friction), default=1.0)
-        Δτ_max = np.sqrt(2 * self.c_max / self.β2)
-        self.β1 = 0.5 * self.β2 * Δτ_max / self.τ
-        self.stepper = GN22(m, Δτ_max, GN22Parameters(self.β1, self.β2, allow_conditional=True),
-                            newton=options, solver="fast")
-        solver = self.stepper.solver
-        assert isinstance(solver, CondensedNewton)
-        self.solver = solver
-        self.providers = [p for p in solver.providers if isinstance(p, SurfaceContact)]
-        self._vecs = (solver.layout.vec.duplicate(), solver.layout.vec.duplicate())
-        self.scale = force_scale(m)
-        self.steps = 0
-        self.c = self.c_max  # c of the last converged step
-        self.sliding: dict[int, np.ndarray] = {}  # held slave body → its sliding direction
+    c grows ×:data:`GROWTH` per step up to c_max while the increments stay below a tenth
+    of the search radius; a failed step after a grown one is retried at a tenth of it.
 
-    def destroy(self) -> None:
-        """Free the stepper's PETSc objects."""
-        for vec in self._vecs:
-            vec.destroy()
-        self.stepper.destroy()
-
-    # --- one stage --------------------------------------------------------------------
-
-    @contextlib.contextmanager
-    def friction(self, μ: float | None, stretch: float = 1.0) -> Iterator[None]:
-        """Every pair's friction coefficient μ (None: their own) inside the block.
-
-        Their regularisation χ is multiplied by ``stretch``.
-        """
-        saved = [(p, p.spec, p.law) for p in self.providers]
-        conforming = [(p.law.friction, float(p.law.friction.μ.value),
-                       float(p.law.friction.χ.value)) for p in self.model.pairs]
+    Raises:
+        ConvergenceError: A step's Newton failed, or the increments do not vanish.
+    """
+    m, s = ps.model, ps.stepper
+    for u in s.u:
+        u.x.array[:] = 0.0
+    g = m.gravity.value
+    if np.any(g):
+        slaves = {m.body(p.slave).index for p in m.surface_pairs}
+        slaves |= {p.slave for p in m.pairs}
+        for i in slaves:
+            s.u[i].x.array.reshape(-1, m.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
+    c, its, history = ps.c0, 0, []
+    solved = 0.0  # c of the last solved step
+    for k in range(1, MAX_STEPS + 1):
+        ps.start(c, frictional)
         try:
-            for p in self.providers:
-                p.spec = dataclasses.replace(
-                    p.spec, friction=p.spec.friction if μ is None else μ,
-                    regularisation=p.spec.regularisation * stretch)
-                p.law = forms.ContactLaw.of(p.spec)
-            for law, μ0, χ0 in conforming:
-                law.μ.value = μ0 if μ is None else μ
-                law.χ.value = χ0 * stretch
-            yield
-        finally:
-            for p, spec, law in saved:
-                p.spec, p.law = spec, law
-            for law, μ0, χ0 in conforming:
-                law.μ.value, law.χ.value = μ0, χ0
-
-    def _start(self, c: float, frictional: bool) -> None:
-        """The GN22 start of a step from u_k (in ``u``): v₀, a₀ and Δa = 0.
-
-        Frictionless: at rest. Frictional: ``c a₁ = u₁ − u_k`` and ``v₁ = u₁/τ_c``
-        with τ_c = ½β₂Δτ/β₁ (the derivatives of u₁ and v₁ in Δa are c and β₁Δτ).
-        """
-        s = self.stepper
-        Δτ = np.sqrt(2 * c / self.β2)
-        s.dt.value = Δτ
-        if frictional:
-            τ = 0.5 * self.β2 * Δτ / self.β1
-            # (c − ½Δτ²) a₀ − Δτ v₀ = 0 and (Δτ − ½Δτ²/τ) a₀ + (1 − Δτ/τ) v₀ = u_k/τ.
-            A = np.array([[c - 0.5 * Δτ**2, -Δτ], [Δτ - 0.5 * Δτ**2 / τ, 1 - Δτ / τ]])
-            ka, kv = np.linalg.solve(A, [0.0, 1.0 / τ])
-        else:
-            ka = kv = 0.0
-        for u, v, a, d in zip(s.u, s.v, s.a, s.da, strict=True):
-            v.x.array[:] = kv * u.x.array
-            a.x.array[:] = ka * u.x.array
-            d.x.array[:] = 0.0
-
-    def _advance(self, c: float) -> tuple[float, float]:
-        """u_k ← u₁ of the solved step.
-
-        Returns:
-            max|u₁ − u_k| and the static residual at u₁, ‖M (u₁ − u_k)‖/c (Dirichlet
-            rows left out).
-        """
-        s, bulk, layout = self.stepper, self.solver.bulk, self.solver.layout
-        Δτ = float(s.dt.value)
-        x, y = self._vecs
-        for u, v, a, d, lo, hi in zip(s.u, s.v, s.a, s.da, layout.offsets[:-1],
-                                      layout.offsets[1:], strict=True):
-            du = Δτ * v.x.array + 0.5 * Δτ**2 * a.x.array + c * d.x.array
-            u.x.array[:] += du
-            x.array[lo:hi] = du[: hi - lo]
-        bulk.M.mult(x, y)
-        y.array[bulk.bc_rows] = 0.0
-        return self._max(x.array), y.norm() / c
-
-    def _max(self, x: np.ndarray) -> float:
-        return float(self.model.comm.allreduce(np.abs(x).max(initial=0.0), op=MPI.MAX))
-
-    def stage(self, frictional: bool) -> _Result:
-        """Relax from the undeformed state (a 1e-9 m penetration along gravity).
-
-        Raises:
-            ConvergenceError: A step's Newton failed, or the increments do not vanish.
-        """
-        m, s = self.model, self.stepper
-        for u in s.u:
-            u.x.array[:] = 0.0
-        g = m.gravity.value
-        if np.any(g):
-            slaves = {m.body(p.slave).index for p in m.surface_pairs}
-            slaves |= {p.slave for p in m.pairs}
-            for i in slaves:
-                s.u[i].x.array.reshape(-1, m.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
-        c, its, history = self.c0, 0, []
-        solved = 0.0  # c of the last solved step
-        for k in range(1, MAX_STEPS + 1):
-            self._start(c, frictional)
-            try:
-                its += s.solve()
-            except ConvergenceError as e:
-                if c > solved > 0:
-                    # A grown step overshot the contact state: retry at a tenth of it
-                    # (not below the last c that converged); u_k is unchanged.
-                    its += e.iterations
-                    log.debug("relaxation step %d: c = %.3e s² failed, retried at %.3e s²",
-                              k, c, max(solved, c / 10))
-                    c = max(solved, c / 10)
-                    continue
-                raise ConvergenceError(f"relaxation step {k}: {e}", e.reason,
-                                       its + e.iterations) from e
-            solved = c
-            inc, residual = self._advance(c)
-            self.steps += 1
-            log.debug("relaxation step %d: c = %.3e s², max|Δu| = %.3e m, residual %.3e, "
-                      "%d Newton iterations", k, c, inc, residual / self.scale, its)
-            if residual <= TOLERANCE * self.scale:
-                self.c = c
-                return _Result([u.x.array.copy() for u in s.u], k, its)
-            history.append((c, inc))
-            same = history[-STALL - 1:]
-            if len(same) > STALL and all(h[0] == c for h in same) and inc > 0.5 * same[0][1]:
-                break
-            if inc < 0.1 * self.reach:
-                c = min(c * GROWTH, self.c_max)
-        raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
-                               f"{k} steps)", -1, its)
-
-    # --- the held bodies released -------------------------------------------------
-
-    def slide(self) -> int:
-        """Relax the held bodies (:attr:`sliding`) into the state of incipient sliding.
-
-        The held stage's friction (μ = :data:`HELD_FRICTION`) carries the bonded shear;
-        released, the body slides with the friction μλ and the acceleration α d (d the
-        sliding direction, α from its resultant). Pseudo steps with the real μ from the
-        held state, each started with a₀ = α d and v₀ = −½Δτ α d on the body (so that
-        u₁ − u_k = c Δa: the static residual of the stage, in the frame of the body's
-        acceleration, and v₁ ≈ ½Δτ α d, far above χ: the friction of sliding), α updated
-        after each step from the body's resultant along d. As :func:`breakwater.statics.initial.
-        _release` for conforming pairs: GN22 then starts in the motion of sliding.
-
-        Returns:
-            The Newton iterations.
-
-        Raises:
-            ConvergenceError: A step failed or the steps did not converge.
-        """
-        m, s = self.model, self.stepper
-        c, its = self.c / GROWTH**2, 0
-        bodies = []
-        for i, total in self.sliding.items():
-            b = m.bodies[i]
-            d = total / np.linalg.norm(total)
-            dc = fem.Constant(m.mesh, d)
-            force = forms.body_force(b.ρ, m.gravity, dc, b.dx)
-            for ld in m.loads:
-                if ld.body == i:
-                    force += forms.surface_traction(ld.traction, dc, ld.ds)
-            ext = m.assemble(m.form(force))
-            mass = m.assemble(m.form(b.ρ * b.dx))
-            slaves = [p for p in self.providers if m.body(p.spec.slave).index == i]
-            # At first the held state's pressure with the friction of sliding against d.
-            contact = 0.0
-            for p in slaves:
-                normal, _ = p.resultants(accepted=True)
-                contact += float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
-            bodies.append([i, d, ext, mass, slaves, (ext + contact) / mass])
-        with self.friction(None):
-            for k in range(1, MAX_STEPS + 1):
-                self._start(c, False)
-                Δτ = float(s.dt.value)
-                for i, d, _, _, _, α in bodies:
-                    s.v[i].x.array.reshape(-1, m.gdim)[:] = -0.5 * Δτ * α * d
-                    s.a[i].x.array.reshape(-1, m.gdim)[:] = α * d
-                its += s.solve()
-                for body in bodies:
-                    i, d, ext, mass, slaves, _ = body
-                    contact = sum(float(p.resultant(accepted=False) @ d) for p in slaves)
-                    body[5] = (ext + contact) / mass
-                inc, residual = self._advance(c)
-                self.steps += 1
-                log.debug("sliding step %d: max|Δu| = %.3e m, residual %.3e, α = %s", k, inc,
-                          residual / self.scale, [b[5] for b in bodies])
-                if residual <= TOLERANCE * self.scale:
-                    return its
-                c = min(c * GROWTH, self.c)
-        raise ConvergenceError(f"relaxation: no state of incipient sliding after {k} steps",
-                               -1, its)
-
-    # --- after a stage --------------------------------------------------------------
-
-    def _rest(self) -> None:
-        """The state of the last step at its solution: a₁ = 0, u₁ = u_k, v₁ = u_k/τ."""
-        s = self.stepper
-        self._start(self.c, True)
-        for a, d in zip(s.a, s.da, strict=True):
-            d.x.array[:] = -a.x.array
-
-    def _add_slave_velocities(self, v: list[fem.Function], y: np.ndarray) -> None:
-        """V += y, y given at the interface unknowns (every entry this rank holds)."""
-        solver = self.solver
-        for f, gi in zip(v, solver.layout.global_index, strict=True):
-            at = np.minimum(np.searchsorted(solver.I, gi), max(solver.n - 1, 0))
-            hit = np.flatnonzero(solver.I[at] == gi) if solver.n else np.zeros(0, int)
-            f.x.array[hit] += y[at[hit]]
-
-    def creep(self, v: list[fem.Function]) -> None:
-        """Add the slave nodes' slip velocity of the frictional state to ``v``."""
-        s = self.stepper
-        self._rest()
-        y = np.zeros(self.solver.n)
-        for p in self.providers:
-            pos, v_T = p.slip_velocities()
-            keep = pos >= 0
-            y[pos[keep]] = v_T[keep]
-        self._add_slave_velocities(v, y)
-        if self.model.pairs:
-            u = [fem.Function(f.function_space) for f in s.u]
-            for f, g in zip(u, s.u, strict=True):
-                f.x.array[:] = g.x.array
-            τ = 0.5 * self.β2 * float(s.dt.value) / self.β1  # τ of the last step
-            creep_velocities(self.model, self.model.pairs, u, v, τ)
-
-    def held(self) -> list[str]:
-        """The slave bodies whose pair's tangential resultant exceeds μN (held state).
-
-        Each is named in a warning; :attr:`sliding` gets its sliding direction (against
-        the held friction), for :meth:`slide` and :meth:`release`.
-        """
-        out = []
-        self.sliding = {}
-        self._rest()
-        with self.friction(HELD_FRICTION, HELD_FRICTION):
-            forces = [p.resultants(accepted=False) for p in self.providers]
-        for p, (normal, friction) in zip(self.providers, forces, strict=True):
-            N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
-            μ = p.spec.friction
-            if T - μ * N > 1e-6 * max(N, T):
-                if self.model.comm.rank == 0:
-                    log.warning("initial state: body '%s' cannot be held by friction on '%s' "
-                                "(tangential force %.4g N/m, μN = %.4g N/m): held in place up "
-                                "to t = 0 and released at t = 0", p.spec.slave, p.spec.name,
-                                T, μ * N)
-                index = self.model.body(p.spec.slave).index
-                self.sliding[index] = self.sliding.get(index, 0.0) - friction
-                if p.spec.slave not in out:
-                    out.append(p.spec.slave)
-        if not out:  # the conforming pairs' bodies (not checked one by one)
-            for pair in self.model.pairs:
-                body = self.model.bodies[pair.slave].spec.name
-                if self.model.comm.rank == 0:
-                    log.warning("initial state: body '%s' cannot be held by friction on "
-                                "'%s': held in place up to t = 0 and released at t = 0",
-                                body, pair.spec.interface)
-                out.append(body)
-        return out
-
-    def release(self, v: list[fem.Function]) -> None:
-        """Start the held bodies' slave nodes in contact sliding (added to ``v``).
-
-        Each gets the velocity :data:`RELEASE` χ along its tangent, in the body's
-        sliding direction: the law then carries the sliding friction μλ at t = 0 (to
-        5e-5), so that a₀ is the sliding acceleration rather than that without friction.
-        """
-        self._rest()
-        y = np.zeros(self.solver.n)
-        for p in self.providers:
-            d = self.sliding.get(self.model.body(p.spec.slave).index)
-            if d is None:
+            its += s.solve()
+        except ConvergenceError as e:
+            if c > solved > 0:
+                # A grown step overshot the contact state: retry at a tenth of it
+                # (not below the last c that converged); u_k is unchanged.
+                its += e.iterations
+                log.debug("relaxation step %d: c = %.3e s² failed, retried at %.3e s²",
+                          k, c, max(solved, c / 10))
+                c = max(solved, c / 10)
                 continue
-            pos, v_T = p.slip_velocities()
-            size = np.linalg.norm(v_T, axis=1)[:, None]
-            keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
-            unit = v_T[keep] / size[keep]
-            # Along the node's tangent, turned to the sliding direction (a node's own
-            # slip in the held state may point the other way).
-            unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
-            y[pos[keep]] = RELEASE * p.spec.regularisation * unit
-        self._add_slave_velocities(v, y)
+            raise ConvergenceError(f"relaxation step {k}: {e}", e.reason,
+                                   its + e.iterations) from e
+        solved = c
+        inc, residual = ps.advance(c)
+        log.debug("relaxation step %d: c = %.3e s², max|Δu| = %.3e m, residual %.3e, "
+                  "%d Newton iterations", k, c, inc, residual / ps.scale, its)
+        if residual <= TOLERANCE * ps.scale:
+            ps.c = c
+            return _Result([u.x.array.copy() for u in s.u], k, its)
+        history.append((c, inc))
+        same = history[-STALL - 1:]
+        if len(same) > STALL and all(h[0] == c for h in same) and inc > 0.5 * same[0][1]:
+            break
+        if inc < 0.1 * ps.reach:
+            c = min(c * GROWTH, ps.c_max)
+    raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
+                           f"{k} steps)", -1, its)
 
+
+def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
+    """Relax the held bodies (``sliding``) into the state of incipient sliding.
+
+    The held stage's friction (μ = :data:`HELD_FRICTION`) carries the bonded shear;
+    released, the body slides with the friction μλ and the acceleration α d (d the
+    sliding direction, α from its resultant). Pseudo steps with the real μ from the
+    held state, each started with a₀ = α d and v₀ = −½Δτ α d on the body (so that
+    u₁ − u_k = c Δa: the static residual of the stage, in the frame of the body's
+    acceleration, and v₁ ≈ ½Δτ α d, far above χ: the friction of sliding), α updated
+    after each step from the body's resultant along d. As :func:`breakwater.statics.initial.
+    _release` for conforming pairs: GN22 then starts in the motion of sliding.
+
+    Args:
+        ps: The pseudo stepper, in the held state.
+        sliding: Held slave body → its sliding direction (:func:`_held`).
+
+    Returns:
+        The Newton iterations.
+
+    Raises:
+        ConvergenceError: A step failed or the steps did not converge.
+    """
+    m, s = ps.model, ps.stepper
+    c, its = ps.c / GROWTH**2, 0
+    bodies = []
+    for i, total in sliding.items():
+        b = m.bodies[i]
+        d = total / np.linalg.norm(total)
+        dc = fem.Constant(m.mesh, d)
+        force = forms.body_force(b.ρ, m.gravity, dc, b.dx)
+        for ld in m.loads:
+            if ld.body == i:
+                force += forms.surface_traction(ld.traction, dc, ld.ds)
+        ext = m.assemble(m.form(force))
+        mass = m.assemble(m.form(b.ρ * b.dx))
+        slaves = [p for p in ps.providers if m.body(p.spec.slave).index == i]
+        # At first the held state's pressure with the friction of sliding against d.
+        contact = 0.0
+        for p in slaves:
+            normal, _ = p.resultants(accepted=True)
+            contact += float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
+        bodies.append([i, d, ext, mass, slaves, (ext + contact) / mass])
+    with ps.friction(None):
+        for k in range(1, MAX_STEPS + 1):
+            ps.start(c, False)
+            Δτ = float(s.dt.value)
+            for i, d, _, _, _, α in bodies:
+                s.v[i].x.array.reshape(-1, m.gdim)[:] = -0.5 * Δτ * α * d
+                s.a[i].x.array.reshape(-1, m.gdim)[:] = α * d
+            its += s.solve()
+            for body in bodies:
+                i, d, ext, mass, slaves, _ = body
+                contact = sum(float(p.resultant(accepted=False) @ d) for p in slaves)
+                body[5] = (ext + contact) / mass
+            inc, residual = ps.advance(c)
+            log.debug("sliding step %d: max|Δu| = %.3e m, residual %.3e, α = %s", k, inc,
+                      residual / ps.scale, [b[5] for b in bodies])
+            if residual <= TOLERANCE * ps.scale:
+                return its
+            c = min(c * GROWTH, ps.c)
+    raise ConvergenceError(f"relaxation: no state of incipient sliding after {k} steps",
+                           -1, its)
+
+
+def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
+    """Add the slave nodes' slip velocity of the frictional state to ``v``."""
+    s = ps.stepper
+    ps.rest()
+    y = np.zeros(ps.solver.n)
+    for p in ps.providers:
+        pos, v_T = p.slip_velocities()
+        keep = pos >= 0
+        y[pos[keep]] = v_T[keep]
+    ps.add_slave_velocities(v, y)
+    if ps.model.pairs:
+        u = [fem.Function(f.function_space) for f in s.u]
+        for f, g in zip(u, s.u, strict=True):
+            f.x.array[:] = g.x.array
+        τ = 0.5 * ps.β2 * float(s.dt.value) / ps.β1  # τ of the last step
+        creep_velocities(ps.model, ps.model.pairs, u, v, τ)
+
+
+def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
+    """The slave bodies whose pair's tangential resultant exceeds μN (held state).
+
+    Returns:
+        Their names, each named in a warning, and (general pairs) each body's sliding
+        direction (against the held friction), for :func:`_slide` and :func:`_release`.
+    """
+    out = []
+    sliding: dict[int, np.ndarray] = {}
+    ps.rest()
+    with ps.friction(HELD_FRICTION, HELD_FRICTION):
+        forces = [p.resultants(accepted=False) for p in ps.providers]
+    for p, (normal, friction) in zip(ps.providers, forces, strict=True):
+        N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
+        μ = p.spec.friction
+        if T - μ * N > 1e-6 * max(N, T):
+            if ps.model.comm.rank == 0:
+                log.warning("initial state: body '%s' cannot be held by friction on '%s' "
+                            "(tangential force %.4g N/m, μN = %.4g N/m): held in place up "
+                            "to t = 0 and released at t = 0", p.spec.slave, p.spec.name,
+                            T, μ * N)
+            index = ps.model.body(p.spec.slave).index
+            sliding[index] = sliding.get(index, 0.0) - friction
+            if p.spec.slave not in out:
+                out.append(p.spec.slave)
+    if not out:  # the conforming pairs' bodies (not checked one by one)
+        for pair in ps.model.pairs:
+            body = ps.model.bodies[pair.slave].spec.name
+            if ps.model.comm.rank == 0:
+                log.warning("initial state: body '%s' cannot be held by friction on "
+                            "'%s': held in place up to t = 0 and released at t = 0",
+                            body, pair.spec.interface)
+            out.append(body)
+    return out, sliding
+
+
+def _release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Function]
+             ) -> None:
+    """Start the held bodies' slave nodes in contact sliding (added to ``v``).
+
+    Each gets the velocity :data:`RELEASE` χ along its tangent, in the body's
+    sliding direction (``sliding``: :func:`_held`): the law then carries the sliding
+    friction μλ at t = 0 (to 5e-5), so that a₀ is the sliding acceleration rather than
+    that without friction.
+    """
+    ps.rest()
+    y = np.zeros(ps.solver.n)
+    for p in ps.providers:
+        d = sliding.get(ps.model.body(p.spec.slave).index)
+        if d is None:
+            continue
+        pos, v_T = p.slip_velocities()
+        size = np.linalg.norm(v_T, axis=1)[:, None]
+        keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
+        unit = v_T[keep] / size[keep]
+        # Along the node's tangent, turned to the sliding direction (a node's own
+        # slip in the held state may point the other way).
+        unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
+        y[pos[keep]] = RELEASE * p.spec.regularisation * unit
+    ps.add_slave_velocities(v, y)
 
 @contextlib.contextmanager
 def _undamped(model: ContactModel) -> Iterator[None]:
@@ -498,12 +380,13 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
     """
     t0 = time.perf_counter()
     with _undamped(model):
-        r = _Relaxation(model, options, stick_band)
+        r = PseudoStepper(model, options, stick_band)
         try:
-            its, kind, held = 0, "frictionless", []
+            its, kind = 0, "frictionless"
+            held: list[str] = []
             try:
                 with r.friction(0.0):
-                    res = r.stage(False)
+                    res = _stage(r, False)
             except ConvergenceError as e:
                 its += e.iterations
                 log.debug("no frictionless static state (%s)", e)
@@ -519,13 +402,13 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                 # μp, and the dynamics starts at rest from it.
                 try:
                     with r.friction(RESIDUAL_FRICTION):
-                        res = r.stage(False)
+                        res = _stage(r, False)
                 except ConvergenceError as e:
                     its += e.iterations
                     log.debug("no nearly frictionless static state (%s)", e)
             if res is None and r.has_friction:
                 try:
-                    res = r.stage(True)
+                    res = _stage(r, True)
                     kind = "frictional"
                 except ConvergenceError as e:
                     its += e.iterations
@@ -533,7 +416,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
             if res is None:
                 try:
                     with r.friction(HELD_FRICTION, HELD_FRICTION):
-                        res = r.stage(True)
+                        res = _stage(r, True)
                     kind = "held"
                 except ConvergenceError as e:
                     # E.g. a body that starts too far above its support to land in the
@@ -548,13 +431,13 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
             for f, x in zip(u, res.u, strict=True):
                 f.x.array[:] = x
             if kind == "frictional":
-                r.creep(v)
+                _creep(r, v)
             elif kind == "held":
-                held = r.held()
-                if r.sliding and not model.pairs:
+                held, sliding = _held(r)
+                if sliding and not model.pairs:
                     u_held = [f.x.array.copy() for f in r.stepper.u]
                     try:
-                        its += r.slide()
+                        its += _slide(r, sliding)
                         for f, g in zip(u, r.stepper.u, strict=True):
                             f.x.array[:] = g.x.array
                     except ConvergenceError as e:
@@ -562,67 +445,11 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                         log.debug("released from the held state (%s)", e)
                         for f, x in zip(r.stepper.u, u_held, strict=True):
                             f.x.array[:] = x
-                r.release(v)
+                _release(r, sliding, v)
             steps = r.steps
         finally:
             r.destroy()
     out = Relaxed(u, its + res.iterations, kind, held, steps, time.perf_counter() - t0)
     log.info("relaxation: %d pseudo steps, %d Newton iterations, %.2f s (%s)", steps,
              out.iterations, out.seconds, kind)
-    return out
-
-
-# --- model estimates -----------------------------------------------------------------
-
-def _extent(model: ContactModel, body: int) -> float:
-    """The bounding-box diagonal of a body (m)."""
-    x = model.bodies[body].submesh.geometry.x[:, : model.gdim]
-    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
-    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
-    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
-    return float(np.linalg.norm(hi - lo))
-
-
-def _lowest_frequency_squared(model: ContactModel) -> float:
-    """A lower estimate of ω_min² (1/s²): E/(ρL²) per body, ε_n/(ρL) per pair's slave."""
-    out = []
-    for i, b in enumerate(model.bodies):
-        mat = b.spec.material
-        out.append(mat.E / (mat.density * _extent(model, i) ** 2))
-    for penalty, slave in ([(p.penalty, model.body(p.slave).index)
-                            for p in model.surface_pairs]
-                           + [(float(p.ε_n.value), p.slave) for p in model.pairs]):
-        out.append(penalty / (model.bodies[slave].spec.material.density
-                              * _extent(model, slave)))
-    return min(out)
-
-
-def _facet_lengths(model: ContactModel, body: str, groups: Sequence[str]
-                   ) -> tuple[float, float]:
-    """Mean and largest facet length of a body's facet groups (m)."""
-    b = model.body(body)
-    fdim = model.mesh.topology.dim - 1
-    facets = model.surface_facets(body, groups)
-    facets = facets[facets < b.submesh.topology.index_map(fdim).size_local]
-    h = b.submesh.h(fdim, facets)
-    comm = model.comm
-    n = comm.allreduce(len(h))
-    return comm.allreduce(float(h.sum())) / max(n, 1), comm.allreduce(h.max(initial=0.0),
-                                                                         op=MPI.MAX)
-
-
-def _reach(model: ContactModel) -> float:
-    """The smallest contact search radius (general pairs) or interface facet length (m)."""
-    out = [p.radius if p.radius is not None else
-           _facet_lengths(model, p.master, p.master_groups)[1] for p in model.surface_pairs]
-    out += [mean_facet_length(model, p) for p in model.pairs]
-    return min(out)
-
-
-def _pair_friction(model: ContactModel) -> list[tuple[float, float, float]]:
-    """(μ, χ, mean slave facet length) of every pair."""
-    out = [(p.friction, p.regularisation, _facet_lengths(model, p.slave, (p.slave_surface,))[0])
-           for p in model.surface_pairs]
-    out += [(float(p.law.friction.μ.value), float(p.law.friction.χ.value),
-             mean_facet_length(model, p)) for p in model.pairs]
     return out

@@ -1,28 +1,24 @@
-"""The bulk of a GN22 step: M, K and the loads assembled once, A factorised per Δt.
+"""The bulk of a GN22 step: M, K and the loads assembled once, the predictor's residual.
 
 The bulk is linear, with constant M, C = αM + βK and K, so for a fixed Δt the matrix
 of the step's unknown Δa, ``A = M + β₁Δt C + ½β₂Δt² K``, never changes.
-:class:`BulkOperators` assembles M, K and the load vectors (at unit amplitude) once,
-forms the predictor's residual from matrix-vector products, and factorises A (MUMPS)
-once per distinct Δt, with ``X = A⁻¹ E`` (one solve per contact-surface unknown) and
-the interface Schur complement ``S = (X_II)⁻¹`` (cached: cut-backs come back to the same
-Δt). :class:`MonolithicLayout` is the index bookkeeping of the stacked vectors;
-:class:`Timings` the wall time of each part, for the benchmark.
+:class:`BulkOperators` assembles M, K and the load vectors (at unit amplitude) once and
+forms the predictor's residual from matrix-vector products (A is factorised per Δt by
+:mod:`breakwater.stepping.factorisations`). :func:`interface_dofs` gives the
+contact-surface unknowns. :class:`MonolithicLayout` is the index bookkeeping of the
+stacked vectors; :class:`Timings` the wall time of each part, for the benchmark.
 """
 
 from __future__ import annotations
 
 import contextlib
 import time
-from collections import OrderedDict
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import ufl
 from dolfinx import fem, la
 from dolfinx.fem import petsc as fem_petsc
-from mpi4py import MPI
 from petsc4py import PETSc
 
 from breakwater.contact.surfaces import surface_dofs
@@ -131,37 +127,22 @@ class Timings:
             self.seconds[key] += time.perf_counter() - t0
 
 
-@dataclass
-class _Factorisation:
-    """Everything that depends on Δt only."""
-
-    ksp: PETSc.KSP
-    A: PETSc.Mat
-    X: np.ndarray  # owned rows of A⁻¹ E, shape (n_owned, n_I)
-    X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
-    S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
-
-
 class BulkOperators:
-    """M, K (and C) assembled once, the load vectors at unit amplitude, A factorised per Δt.
+    """M, K (and C) assembled once, the load vectors at unit amplitude, the predictor.
+
+    A = M + β₁Δt C + ½β₂Δt² K is factorised per Δt from M and K by
+    :class:`~breakwater.stepping.factorisations.Factorisations`.
 
     Args:
         model: The contact model.
         layout: Its stacked-vector layout.
-        interface: Global stacked indices of the contact-surface DOFs (sorted).
-        beta1: GN22 β₁.
-        beta2: GN22 β₂.
-        cache: Factorisations kept (distinct Δt).
+        timings: Where the predictor's products are timed (``bulk_products``).
     """
 
-    def __init__(self, model: ContactModel, layout: MonolithicLayout, interface: np.ndarray,
-                 beta1: float, beta2: float, cache: int = 4,
-                 timings: Timings | None = None, interface_solves: bool = True) -> None:
+    def __init__(self, model: ContactModel, layout: MonolithicLayout,
+                 timings: Timings | None = None) -> None:
         self.model, self.layout = model, layout
         self.timings = timings or Timings()
-        self._interface_solves_on = interface_solves
-        self.interface = interface
-        self.beta1, self.beta2 = beta1, beta2
         trial = ufl.TrialFunctions(model.W)
 
         def matrix(form: ufl.Form) -> PETSc.Mat:
@@ -174,10 +155,7 @@ class BulkOperators:
         self._loads = self._load_vectors()
         # Dirichlet rows of the stacked vector (owned positions).
         self.bc_rows = self._bc_rows()
-        self._cache: OrderedDict[float, _Factorisation] = OrderedDict()
-        self._cache_size = cache
         self._work = [self.M.createVecLeft() for _ in range(3)]
-        self.factorisations = 0
 
     def _load_vectors(self) -> list[tuple[fem.Constant | None, PETSc.Vec]]:
         """Gravity and each surface load at unit amplitude: f(t) = Σ amplitude_k(t) f_k."""
@@ -253,94 +231,8 @@ class BulkOperators:
         out.axpy(-1.0, tmp)
         out.array[self.bc_rows] = 0.0
 
-    def factorisation(self, dt: float) -> _Factorisation:
-        """A = M + β₁Δt C + ½β₂Δt² K factorised, X and S (cached by Δt)."""
-        if dt in self._cache:
-            self._cache.move_to_end(dt)
-            return self._cache[dt]
-        with self.timings("factorisation"):
-            return self._factorise(dt)
-
-    def _factorise(self, dt: float) -> _Factorisation:
-        A = self.M.duplicate(copy=True)
-        d = self.model.damping
-        A.scale(1.0 + self.beta1 * dt * d.alpha)
-        A.axpy(0.5 * self.beta2 * dt**2 + self.beta1 * dt * d.beta, self.K)
-        A.zeroRowsColumns((self.layout.start + self.bc_rows).astype(PETSc.IntType), diag=1.0)
-        # Its one product per step (the bulk rows' residual at Newton's start, for the
-        # relative test) row by row, without PETSc's "inode" grouping of rows: 3.4×
-        # faster on these P2 matrices (0.93 against 0.27 ms at refinement 3). M and K keep
-        # the grouping: the row sums differ from it in the last bit, and the predictor's
-        # products feed the state, whose 2-rank equality (tests/test_mpi.py) the χ = 1e-10
-        # stick tangent holds to 5e-11 with it and 3.6e-10 without (2026-11-23).
-        A.setOption(PETSc.Mat.Option.USE_INODES, False)  # type: ignore[arg-type]
-        ksp = PETSc.KSP().create(self.model.comm)  # type: ignore[arg-type]
-        ksp.setOptionsPrefix(self.model.options_prefix("bulk"))
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("lu")
-        pc.setFactorSolverType("mumps")
-        ksp.setFromOptions()
-        ksp.setUp()
-        if self._interface_solves_on and len(self.interface):
-            X = self._interface_solves(ksp, A)
-            X_II = self._gather_rows(X)
-            S = np.linalg.inv(X_II)
-        else:
-            X = np.zeros((self.layout.offsets[-1], len(self.interface)))
-            X_II = S = np.zeros((len(self.interface), len(self.interface)))
-        fact = _Factorisation(ksp, A, X, X_II, S)
-        self.factorisations += 1
-        self._cache[dt] = fact
-        if len(self._cache) > self._cache_size:
-            _, old = self._cache.popitem(last=False)
-            old.ksp.destroy()
-            old.A.destroy()
-        return fact
-
-    def _interface_solves(self, ksp: PETSc.KSP, A: PETSc.Mat) -> np.ndarray:
-        """X = A⁻¹ E: one solve per contact-surface DOF (one MUMPS multi-RHS solve)."""
-        comm = self.model.comm
-        n_i = len(self.interface)
-        n_local = self.layout.offsets[-1]
-        start = self.layout.start
-        E = PETSc.Mat().createDense(((n_local, None), (None, n_i)),
-                                    comm=comm)  # type: ignore[arg-type]
-        E.setUp()
-        E.zeroEntries()
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        cols = np.flatnonzero(mine)
-        for row, col in zip(self.interface[mine], cols, strict=True):
-            E.setValue(int(row), int(col), 1.0)
-        E.assemble()
-        X = E.duplicate()
-        ksp.getPC().getFactorMatrix().matSolve(E, X)
-        out = np.array(X.getDenseArray(), copy=True)
-        E.destroy()
-        X.destroy()
-        return out
-
-    def _gather_rows(self, X: np.ndarray) -> np.ndarray:
-        """The interface rows of X (owned rows), gathered on every rank."""
-        start, n_local = self.layout.start, self.layout.offsets[-1]
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        out = np.zeros((len(self.interface), X.shape[1]))
-        out[mine] = X[self.interface[mine] - start]
-        self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        return out
-
-    def solve(self, fact: _Factorisation, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
-        """Out = A⁻¹ rhs."""
-        with self.timings("back_solves"):
-            fact.ksp.solve(rhs, out)
-
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for f in self._cache.values():
-            f.ksp.destroy()
-            f.A.destroy()
-        self._cache.clear()
         for obj in (self.M, self.K, *self._work, *(v for _, v in self._loads)):
             if obj is not None:
                 obj.destroy()

@@ -25,9 +25,16 @@ interface unknowns and a dense solve of size n_I. The Newton is a PETSc SNES on 
 interface unknowns (every rank solves the same small system, so every rank takes the same
 decisions), with the convergence test and the slip-reversal pre-check of the reference path.
 
-The contact forces come from providers (:class:`ContactForces`: ``vector()`` and
-``matrix()`` on the interface unknowns at the state Functions, summed over the list a
-:data:`ContactFactory` builds). Conforming pairs in 2D use
+The parts: :class:`~breakwater.stepping.bulk.BulkOperators` (M, K, the loads and r₀),
+:class:`~breakwater.stepping.factorisations.Factorisations` (A, X and S per Δt),
+:class:`~breakwater.stepping.interfacenewton.InterfaceNewton` (the SNES on y) and
+:mod:`breakwater.stepping.interface` (where y lives on each rank, f_c on it);
+:class:`CondensedNewton` builds them and runs a step through them.
+
+The contact forces come from providers
+(:class:`~breakwater.stepping.interface.ContactForces`: ``vector()`` and ``matrix()`` on
+the interface unknowns at the state Functions, summed over the list a
+:data:`~breakwater.stepping.interface.ContactFactory` builds). Conforming pairs in 2D use
 :class:`~breakwater.contact.nodal.NodalContactForces`, the interface forms' nodal
 quadrature evaluated on arrays (and ``left_product(X)``, the product X_II ∂f_c/∂y from
 its node-by-node structure); :class:`InterfaceAssembler` assembles the UFL of
@@ -36,10 +43,7 @@ its node-by-node structure); :class:`InterfaceAssembler` assembles the UFL of
 
 from __future__ import annotations
 
-import math
-import time
 from collections.abc import Callable, Sequence
-from typing import Protocol
 
 import dolfinx
 import numpy as np
@@ -49,41 +53,23 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from breakwater.common.errors import ConvergenceError, PenetrationError
+from breakwater.common.errors import PenetrationError
 from breakwater.common.parallel import single_threaded_blas
 from breakwater.contact.general import SurfaceContact
 from breakwater.model.model import ContactModel
-from breakwater.stepping.bulk import (
-    BulkOperators,
-    MonolithicLayout,
-    Timings,
-    _Factorisation,
-    interface_dofs,
+from breakwater.stepping.bulk import BulkOperators, MonolithicLayout, Timings, interface_dofs
+from breakwater.stepping.factorisations import Factorisations
+from breakwater.stepping.interface import (
+    ContactFactory,
+    ContactForces,
+    ContactSum,
+    InterfaceUnknowns,
 )
-from breakwater.stepping.solver import NewtonOptions, snes_reason
+from breakwater.stepping.interfacenewton import InterfaceNewton
+from breakwater.stepping.solver import NewtonOptions
+from breakwater.stepping.stepsolver import StepSolver
 
 __all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
-
-
-class ContactForces(Protocol):
-    """Contact forces on the interface unknowns, a part of f_c (summed over providers).
-
-    Evaluated at the state Functions (u, v, a at t and the step's Δa, which
-    :class:`CondensedNewton` sets before calling); both arrays are the same on every rank.
-    """
-
-    def vector(self) -> np.ndarray:
-        """f_c on the interface unknowns, shape ``(n_I,)``."""
-        ...
-
-    def matrix(self) -> np.ndarray:
-        """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
-        ...
-
-
-#: Builds the contact-force providers of a model from its stacked layout and the
-#: interface unknowns (global stacked indices, sorted).
-ContactFactory = Callable[[MonolithicLayout, np.ndarray], Sequence[ContactForces]]
 
 
 class InterfaceAssembler:
@@ -174,12 +160,15 @@ class InterfaceAssembler:
         return out.reshape(self.n, self.n)
 
 
-class CondensedNewton:
-    """SNES Newton of one GN22 step on the contact-surface unknowns (see the module doc).
+class CondensedNewton(StepSolver):
+    """The fast path's :class:`~breakwater.stepping.stepsolver.StepSolver` (see the module doc).
 
-    A drop-in for :class:`~breakwater.stepping.solver.NewtonSolver` in
-    :class:`~breakwater.stepping.gn22.GN22`: :meth:`solve` takes Newton's start from Δa, writes
-    the converged Δa and returns the iterations, or raises ConvergenceError.
+    In :class:`~breakwater.stepping.gn22.GN22`, :meth:`solve` takes Newton's start from
+    Δa, writes the converged Δa and returns the iterations, or raises ConvergenceError.
+    The bulk's operators are :attr:`bulk` (assembled once) and :attr:`factorisations`
+    (per Δt); the Newton on the interface unknowns is :attr:`newton`
+    (:class:`~breakwater.stepping.interfacenewton.InterfaceNewton`), the contact forces
+    on them :attr:`contact`.
 
     Args:
         model: The contact model.
@@ -194,7 +183,8 @@ class CondensedNewton:
         force_scale: Force norm that scales ``options.atol``.
         guard: Optional slip guard ``guard(v, step, dv_dx) -> corrected`` on local body
             arrays (:class:`~breakwater.contact.slipguard.SlipGuard`), the SNES pre-check.
-        contact: Builds the contact forces (:class:`ContactForces`, summed); None: the
+        contact: Builds the contact forces
+            (:class:`~breakwater.stepping.interface.ContactForces`, summed); None: the
             UFL of ``interface_residual`` assembled over the contact facets
             (:class:`InterfaceAssembler`).
         surface_guard: The slip guard of the general pairs (their ``precheck``), also
@@ -216,28 +206,20 @@ class CondensedNewton:
         self.u, self.v, self.a, self.da = (list(x) for x in state)
         self.dt = dt
         self.beta1, self.beta2 = beta1, beta2
-        self.options = o = options or NewtonOptions()
         self.layout = layout = MonolithicLayout(model)
         self.I = interface_dofs(model, layout) \
             if interface_residual is not None or model.surface_pairs else np.zeros(0, np.int64)
-        self.n = n = len(self.I)
+        self.n = len(self.I)
+        self.interface = InterfaceUnknowns(layout, self.I)
         self.timings = Timings()
-        self.bulk = BulkOperators(model, layout, self.I, beta1, beta2, timings=self.timings)
-        # Local (body, dof) positions of every interface entry this rank holds (owned or
-        # ghost), to write y into Δa and read the assembled interface vector.
-        self._write = []
-        for gi in layout.global_index:
-            pos = np.minimum(np.searchsorted(self.I, gi), max(n - 1, 0))
-            hit = (self.I[pos] == gi) if n else np.zeros(len(gi), bool)
-            self._write.append((np.flatnonzero(hit), pos[hit]))
-        start, n_local = layout.start, layout.offsets[-1]
-        self._owned = (self.I >= start) & (self.I < start + n_local)
-        self._owned_rows = self.I[self._owned] - start
+        self.bulk = BulkOperators(model, layout, timings=self.timings)
+        self.factorisations = Factorisations(self.bulk, self.I, beta1, beta2,
+                                             timings=self.timings)
         self.providers: list[ContactForces] = []
         if interface_residual is not None:
             self.providers = list(contact(layout, self.I)) if contact is not None else [
                 InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
-                                   self.da, self._write, self.I)]
+                                   self.da, self.interface.positions, self.I)]
         # General pairs (breakwater.contact.general): one provider each.
         self.providers += [SurfaceContact(model, p, layout, self.I,
                                           (self.u, self.v, self.a, self.da), dt, beta1, beta2)
@@ -245,52 +227,33 @@ class CondensedNewton:
         for p in self.providers:
             if isinstance(p, SurfaceContact):
                 p.timings = self.timings  # its search time: timings["contact_search"]
+        self.contact = ContactSum(self.interface, self.da, self.providers, self.timings)
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
-        self.floor = o.floor_atol * force_scale
-        self.floor_accepts = 0
-        self.iterations = 0
-        self._norms: list[float] = []
-        self._fact: _Factorisation | None = None
-        self._z_I = np.zeros(n)
-        self._v_pred_I = np.zeros(n)
-        self._fc = np.zeros(n)
-        self._w_I = np.zeros(n)
-        self._w_norm2 = 0.0
-        self._force_norm = 0.0
-        self.name = "gn22"
-        # The SNES on the interface unknowns: the same small system on every rank.
-        self.snes = snes = PETSc.SNES().create(PETSc.COMM_SELF)
-        snes.setOptionsPrefix(model.options_prefix("contact"))
-        self._x = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
-        self._r = self._x.duplicate()
-        self._Jac = PETSc.Mat().createDense((n, n), comm=PETSc.COMM_SELF)
-        self._Jac.setUp()
-        snes.setFunction(self._residual, self._r)
-        snes.setJacobian(self._jacobian, self._Jac)
-        snes.setType("newtonls")
-        snes.getLineSearch().setType("basic")
-        snes.setTolerances(rtol=o.rtol, atol=o.atol * force_scale, stol=o.stol,
-                           max_it=o.max_it)
-        snes.setMaxFunctionEvaluations(10 * o.max_it)
-        # As in NewtonSolver: the friction law makes the residual jump while the
-        # stick/slip state settles, so no divergence test on its growth.
-        snes.setDivergenceTolerance(1e300)
-        ksp = snes.getKSP()
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        snes.setConvergenceTest(self._converged)
+        self._v_pred_I = np.zeros(self.n)
         self.surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
         self.surface_flips = 0
-        if guard is not None or self.surface_guard:
-            snes.setLineSearchPreCheck(self._precheck)
-        snes.setFromOptions()
+        self.newton = InterfaceNewton(
+            self.n, self.contact, model.options_prefix("contact"), "gn22",
+            options or NewtonOptions(), force_scale, self.timings,
+            self._precheck if guard is not None or self.surface_guard else None)
+
+    @property
+    def floor_accepts(self) -> int:
+        """Solves accepted at their round-off floor (the interface Newton's)."""
+        return self.newton.floor_accepts
+
+    @floor_accepts.setter
+    def floor_accepts(self, value: int) -> None:
+        self.newton.floor_accepts = value
 
     def destroy(self) -> None:
         """Free the PETSc objects now (collective; see :meth:`NewtonSolver.destroy`)."""
-        for obj in (self.snes, self._x, self._r, self._Jac, *self._vecs.values()):
-            obj.destroy()
+        self.newton.destroy()
+        for vec in self._vecs.values():
+            vec.destroy()
+        self.factorisations.destroy()
         self.bulk.destroy()
         self.layout.vec.destroy()
 
@@ -303,82 +266,7 @@ class CondensedNewton:
         for p in self.providers:
             if isinstance(p, SurfaceContact):
                 fc += p.vector(accepted=True)
-        vec.array[self._owned_rows] += scale * fc[self._owned]
-
-    # --- the interface problem --------------------------------------------------------
-
-    def _set_interface(self, y: np.ndarray) -> None:
-        """Write y into Δa at every interface entry this rank holds."""
-        for f, (local, pos) in zip(self.da, self._write, strict=True):
-            f.x.array[local] = y[pos]
-
-    def _contact(self, y: np.ndarray) -> np.ndarray:
-        """f_c(y) on the interface unknowns (the same on every rank)."""
-        with self.timings("interface_assembly"):
-            self._set_interface(y)
-            out = self.providers[0].vector()
-            for c in self.providers[1:]:
-                out = out + c.vector()
-            return out
-
-    def _contact_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
-        """X ∂f_c/∂y on the interface unknowns (the same on every rank).
-
-        A provider with a ``left_product(X)`` method gives the product itself (from its
-        matrix's structure); the others their dense matrix.
-        """
-        out = np.zeros((self.n, self.n))
-        dense: np.ndarray | None = None
-        with self.timings("interface_assembly"):
-            self._set_interface(y)
-            for c in self.providers:
-                product = getattr(c, "left_product", None)
-                if product is not None:
-                    out += product(X)
-                else:
-                    m = c.matrix()
-                    dense = m if dense is None else dense + m
-        if dense is not None:
-            out += X @ dense
-        return out
-
-    def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
-        assert self._fact is not None
-        y = x.getArray(readonly=True)
-        self._fc = self._contact(y)
-        # G = X_II F = y − z_I + X_II f_c(y): the same root as F = S (y − z_I) + f_c, but
-        # without S's large entries of both signs, whose products carry n_I · |S| |y| of
-        # round-off into F and stalled Newton above its tolerance (35 of the 1500 Goda
-        # steps were accepted at the round-off floor, none now). The convergence test
-        # reads the force ‖F‖ = ‖S G‖ (see _converged).
-        G = y - self._z_I + self._fact.X_II @ self._fc
-        r.array[:] = G
-        self._force_norm = float(np.linalg.norm(self._fact.S @ G))
-
-    def _jacobian(self, snes: PETSc.SNES, x: PETSc.Vec, J: PETSc.Mat, P: PETSc.Mat) -> None:
-        assert self._fact is not None
-        y = x.getArray(readonly=True)
-        dense = self._contact_jacobian(y, self._fact.X_II)
-        dense[np.diag_indices_from(dense)] += 1.0
-        P.getDenseArray()[:] = dense
-        P.assemble()
-
-    def _converged(self, snes: PETSc.SNES, it: int, norms: tuple[float, float, float]) -> int:
-        xnorm, ynorm, _ = norms
-        fnorm = self._force_norm  # ‖F‖ = ‖S G‖, a force, as in the reference Newton
-        if it == 0:
-            # ‖F₀‖ of the relative test is the whole residual at Newton's start, bulk
-            # rows included, as for the reference Newton: ‖R(Δa₀)‖² = ‖w‖² − ‖w_I‖² +
-            # ‖w_I + f_c(y₀)‖² with w = A Δa₀ − r₀ (the bulk rows' residual).
-            w_I = self._w_I
-            whole = self._w_norm2 - w_I @ w_I + np.sum((w_I + self._fc) ** 2)
-            self._norms = [math.sqrt(max(float(whole), fnorm**2))]
-        else:
-            self._norms.append(fnorm)
-        reason, stalled = snes_reason(snes, self._norms, xnorm, ynorm, self.floor,
-                                      self.options.stall_its)
-        self.floor_accepts += stalled
-        return reason
+        vec.array[self.interface.owned_rows] += scale * fc[self.interface.owned]
 
     def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
         """The slip guard on the interface unknowns (SNES line-search pre-check).
@@ -397,13 +285,14 @@ class CondensedNewton:
         velocity = self._v_pred_I + dv_dx * x.getArray(readonly=True)
         step = y.getArray(readonly=True)
         v_arrays, step_arrays = self._guard_arrays
-        for va, sa, (local, pos) in zip(v_arrays, step_arrays, self._write, strict=True):
+        for va, sa, (local, pos) in zip(v_arrays, step_arrays, self.interface.positions,
+                                        strict=True):
             va[local] = velocity[pos]
             sa[local] = step[pos]
         if self.guard(v_arrays, step_arrays, dv_dx):
             owned = np.concatenate([sa[:n] for sa, n in zip(step_arrays, self.layout.sizes,
                                                             strict=True)])
-            y.array[:] = self._interface_array(owned)[0]
+            y.array[:] = self.interface.gather(owned)[0]
 
     # --- one step ---------------------------------------------------------------------
 
@@ -415,15 +304,15 @@ class CondensedNewton:
         """
         dt = float(self.dt.value)
         bulk, V, T = self.bulk, self._vecs, self.timings
-        self._fact = fact = bulk.factorisation(dt)
+        fact = self.factorisations.factorisation(dt)
         with T("bulk_products"):
             for fns, vec in ((self.u, V["u"]), (self.v, V["v"]), (self.a, V["a"]),
                              (self.da, V["da"])):
                 self.layout.assign(fns, vec)
         bulk.predictor_residual(V["u"], V["v"], V["a"], dt, V["r0"])
-        bulk.solve(fact, V["r0"], V["z"])
+        self.factorisations.solve(fact, V["r0"], V["z"])
         if self.n == 0:  # no contact: the step is linear
-            self._fc = np.zeros(0)
+            fc = np.zeros(0)
             its = 1
         else:
             # The bulk rows' residual at Newton's start, for the relative test.
@@ -431,32 +320,21 @@ class CondensedNewton:
             with T("bulk_products"):
                 fact.A.mult(V["da"], w)
                 w.axpy(-1.0, V["r0"])
-                self._w_norm2 = w.norm() ** 2
-            z, v_pred, y0, self._w_I = self._interface_array(
+                w_norm2 = w.norm() ** 2
+            z, v_pred, y0, w_I = self.interface.gather(
                 V["z"].array, V["v"].array + dt * V["a"].array, V["da"].array, w.array)
-            self._z_I, self._v_pred_I = z, v_pred
-            self._x.array[:] = y0
-            assembly = T.seconds["interface_assembly"]
-            t0 = time.perf_counter()
-            self.snes.solve(None, self._x)
-            T.seconds["newton"] += time.perf_counter() - t0 - (
-                T.seconds["interface_assembly"] - assembly)
-            reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
-            its = self.snes.getIterationNumber()
-            if reason <= 0:
-                raise ConvergenceError(
-                    f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
-                    f"iterations, residual {self.snes.getFunctionNorm():.3e})", reason, its)
+            self._v_pred_I = v_pred
+            its = self.newton.solve(fact, z, y0, w_I, w_norm2)
             self._check_penetration(its)
-        self.iterations += its
-        with T("bulk_products"):
             # The last residual evaluation was at the solution: f_c(y) is at hand.
+            fc = self.newton.fc
+        with T("bulk_products"):
             out = V["da"]
-            out.array[:] = V["z"].array - fact.X @ self._fc
+            out.array[:] = V["z"].array - fact.X @ fc
             # At the interface, Newton's converged iterate itself (z_I − X_II f_c equals it
             # only to the residual): the friction law, whose stick tangent is μp/χ, was
             # evaluated and converged there.
-            out.array[self._owned_rows] = self._x.getArray(readonly=True)[self._owned]
+            out.array[self.interface.owned_rows] = self.newton.y[self.interface.owned]
             out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             fem_petsc.assign(out, self.da)
         return its
@@ -469,17 +347,9 @@ class CondensedNewton:
                 decision on every rank: every rank holds the same interface values).
         """
         with self.timings("interface_assembly"):
-            y = self._x.getArray(readonly=True)
+            y = self.newton.y
             for p in self.providers:
                 if isinstance(p, SurfaceContact):
                     why = p.penetration(y)
                     if why is not None:
                         raise PenetrationError(why, 0, its)
-
-    def _interface_array(self, *owned: np.ndarray) -> list[np.ndarray]:
-        """Owned stacked arrays at the interface unknowns, on every rank (one reduction)."""
-        out = np.zeros((len(owned), self.n))
-        for row, arr in zip(out, owned, strict=True):
-            row[self._owned] = arr[self._owned_rows]
-        self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        return list(out)

@@ -33,6 +33,7 @@ from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, _PairData
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
+from breakwater.stepping.stepsolver import StepSolver
 
 
 @dataclass(frozen=True)
@@ -203,7 +204,11 @@ class GN22:
         self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
         self.guard = SlipGuard(self.nodes) if self.nodes else None
         self.flips = 0  # nodes whose slip reversal the guard cut, over the run
-        self.solver: NewtonSolver | CondensedNewton
+        self.solver: StepSolver
+        #: The fast path's solver, for what only it has (its bulk operators and
+        #: interface unknowns: the ledger's matrices, the relaxation); None on the
+        #: reference path.
+        self.fast: CondensedNewton | None = None
         if solver == "fast":
             state = (self.u, self.v, self.a, self.da)
             contact = None
@@ -215,7 +220,7 @@ class GN22:
                     return [NodalContactForces(model, nd, layout, interface, state, self.dt,
                                                p.beta1, p.beta2, gn22_kinematics)
                             for nd in nodes]
-            self.solver = CondensedNewton(
+            self.solver = self.fast = CondensedNewton(
                 model, state, self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
                 newton, force_scale=force_scale(model),
@@ -255,9 +260,8 @@ class GN22:
         b = fem_petsc.assemble_vector(R, kind="mpi")
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.scale(-1.0)
-        if isinstance(self.solver, CondensedNewton):
-            # The general pairs' forces are not in the UFL residual.
-            self.solver.add_surface_forces(b, -1.0)
+        # The general pairs' forces are not in the UFL residual.
+        self.solver.add_surface_forces(b, -1.0)
         fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
         ksp = PETSc.KSP().create(m.comm)  # type: ignore[arg-type]
         ksp.setOptionsPrefix("breakwater_mass_")

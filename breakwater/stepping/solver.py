@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -13,6 +14,8 @@ from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError
 from breakwater.model.model import ContactModel
+from breakwater.stepping.bulk import Timings
+from breakwater.stepping.stepsolver import StepSolver
 
 
 @dataclass(frozen=True)
@@ -110,8 +113,18 @@ def snes_reason(snes: PETSc.SNES, norms: Sequence[float], xnorm: float, ynorm: f
                               max_it=max_it, floor=floor, stall_its=stall_its)
 
 
-class NewtonSolver:
+class NewtonTimings(Timings):
+    """Wall time of the reference Newton: its SNES solves in total, under ``newton``."""
+
+    def __init__(self) -> None:
+        self.seconds = {"newton": 0.0}
+
+
+class NewtonSolver(StepSolver):
     """SNES Newton on ``F(x) = 0`` for one Function per body.
+
+    The reference path's :class:`~breakwater.stepping.stepsolver.StepSolver` (F the
+    whole residual of a GN22 step, x its Δa), and the Newton of the static problems.
 
     Args:
         model: The contact model (for the entity maps and the boundary conditions).
@@ -159,6 +172,7 @@ class NewtonSolver:
         self.snes.setDivergenceTolerance(1e300)
         self.floor = o.floor_atol * force_scale
         self.floor_accepts = 0  # solves accepted at their round-off floor
+        self.timings: Timings = NewtonTimings()
         self._norms: list[float] = []
         self.snes.setConvergenceTest(self._converged)
         if precheck is not None:
@@ -191,6 +205,9 @@ class NewtonSolver:
             if obj is not None:
                 obj.destroy()
 
+    def add_surface_forces(self, vec: PETSc.Vec, scale: float = 1.0) -> None:
+        """Nothing to add: F holds every force (the reference path has no general pair)."""
+
     def solve(self) -> int:
         """Solve from the current values of ``x``; return the Newton iterations.
 
@@ -199,7 +216,9 @@ class NewtonSolver:
                 iterate).
 
         """
+        t0 = time.perf_counter()
         self.problem.solve()
+        self.timings.seconds["newton"] += time.perf_counter() - t0
         reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
         its = self.snes.getIterationNumber()
         if reason <= 0:

@@ -1,0 +1,106 @@
+"""How a run begins: from the static equilibrium, or from the checkpoint of its folder.
+
+:func:`start` finds the initial state (:func:`~breakwater.statics.initial.initial_state`),
+builds the :class:`~breakwater.run.session.Stepped` objects of a
+:class:`~breakwater.run.session.Session` on it and records the static state (its
+history row, summary, contact quality and files). :func:`restore` builds them from
+the checkpoint instead, once it is known to fit the case and the history kept.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from breakwater.common import files
+from breakwater.outputs import summary as sm
+from breakwater.outputs.applied import AppliedLoads
+from breakwater.outputs.checkpoint import CheckpointError
+from breakwater.outputs.monitor import interface_state, pair_names
+from breakwater.outputs.surfaceoutputs import quality_inputs as surface_quality
+from breakwater.run import runstate
+from breakwater.run.session import Session, Stepped
+from breakwater.statics.initial import initial_state
+
+__all__ = ["restore", "start"]
+
+log = logging.getLogger("breakwater.run.simulation")  # the run's logger: rank 0 only in run()
+
+
+def start(r: Session) -> None:
+    """Find the initial state, start the stepper from it (collective).
+
+    The static equilibrium under gravity and the loads of the initial state, with
+    friction if needed, bodies that friction cannot hold held up to t = 0
+    (:func:`~breakwater.statics.initial.initial_state`); at rest but for the bodies'
+    initial velocities (``model.initial``).
+    """
+    m, st = r.model, r.state
+    log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
+             m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
+             len(m.bodies), len(m.pairs) + len(m.surface_pairs))
+    for info in r.extra.get("loads", {}).values():
+        for line in info.get("warnings", ()):
+            log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
+    m.set_time(0.0)
+    init = initial_state(m)
+    st.static_iterations = init.iterations
+    log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
+    r.stepped = x = Stepped(m, r.time, r.output, r.directory)
+    r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
+    s, out = x.stepper, x.files
+    s.initialise(init.u, init.v)
+    out.open_history(x.monitor.columns)
+    out.open_fields()
+    row = r.record(0.0, st.static_iterations)
+    surfaces = x.monitor.surfaces
+    interface = interface_state(m, x.nodes, s.u, surfaces)
+    st.static = sm.static_summary(m, row, interface, st.static_iterations)
+    st.static.update(init.summary())
+    st.contact = [*sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface),
+                  *surface_quality(m, surfaces, s.u)]
+    out.write_snapshot(files.STATIC, s.u, interface, 0.0)
+    r.log_quality()
+    out.write_fields(0.0, s.u, s.v)
+
+
+def restore(r: Session) -> None:
+    """Continue from the checkpoint of the output folder (collective).
+
+    Nothing in the folder changes until the checkpoint is known to fit.
+
+    Raises:
+        CheckpointError: No checkpoint, another case, a finished run, or a history
+            that does not reach the checkpoint.
+    """
+    m, comm = r.model, r.comm
+    saved = runstate.load(r.directory, r.fingerprint,
+                          [b.spec.name for b in m.bodies], r.time, comm)
+    if saved.mpi_size != comm.size:
+        log.warning("resuming on %d ranks a checkpoint written on %d: the continuation "
+                    "equals the uninterrupted run to round-off, not bit for bit",
+                    comm.size, saved.mpi_size)
+    m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
+    r.stepped = x = Stepped(m, r.time, r.output, r.directory)
+    if saved.columns != x.monitor.columns:
+        raise CheckpointError("the checkpoint's history columns are not the run's")
+    saved.restore_fields(x.functions())
+    st = r.state = saved.state
+    r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
+    x.resume(st)
+    t = st.step.t
+    try:
+        r.rows = x.files.open_history(x.monitor.columns, keep_rows=st.history_rows)
+    except (ValueError, OSError) as e:
+        raise CheckpointError(f"cannot resume: {e}") from e
+    if r.rows[-1]["t"] != t:
+        raise CheckpointError(f"cannot resume: the last history row kept (t = "
+                              f"{r.rows[-1]['t']:.6g} s) is not the checkpoint's "
+                              f"(t = {t:.6g} s)")
+    st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
+    st.field_parts += x.files.open_fields(resume=True)
+    r.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
+                      "history_rows": st.history_rows}
+    if comm.rank == 0:
+        files.remove_temporaries(r.directory)
+    log.info("resuming from the checkpoint at t = %.6g s (step %d)", t, st.steps)
+    r.log_quality()

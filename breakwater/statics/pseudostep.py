@@ -1,0 +1,222 @@
+"""One pseudo step of the relaxation: the GN22 stepper from u_k at a pseudo step size.
+
+The state of :mod:`breakwater.statics.relaxation` and its single step: a GN22 stepper
+on the fast solver (:class:`~breakwater.stepping.condensed.CondensedNewton`), started at
+u_k with (v₀, a₀) chosen for the stage and a pseudo step Δτ from the mass weight
+c = ½β₂Δτ² (:meth:`PseudoStepper.start`), and u_k advanced to the solved u₁
+(:meth:`PseudoStepper.advance`, which measures the static residual ‖M (u₁ − u_k)‖/c);
+the pairs' friction set for a stage (:meth:`PseudoStepper.friction`); and the model
+estimates the step sizes come from (c_max from the lowest frequency, c₀ from the search
+radius, the pseudo time τ from the stick band). The control of c over the steps of a
+stage is :mod:`breakwater.statics.relaxation`'s.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.contact.conforming import mean_facet_length
+from breakwater.contact.general import SurfaceContact
+from breakwater.model.model import ContactModel
+from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
+from breakwater.stepping.solver import NewtonOptions
+
+__all__ = ["GROWTH", "RATIO", "PseudoStepper"]
+
+RATIO = 1e4
+"""c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
+
+GROWTH = 100.0
+"""Growth of c per step (while the increments stay below a tenth of the search radius)."""
+
+
+class PseudoStepper:
+    """The pseudo-transient stepper of a model and its state (see the module docstring).
+
+    Args:
+        model: The contact model (undamped for the relaxation).
+        options: Newton settings of the pseudo steps.
+        stick_band: The frictional stage's stick band χτ, as a fraction of the mean
+            slave facet length.
+
+    Attributes:
+        stepper: The GN22 stepper (its u is u_k).
+        solver: Its fast solver.
+        providers: The general pairs' contact forces.
+        steps: Pseudo steps advanced, over every stage.
+        c: c of the last converged step of a stage.
+    """
+
+    def __init__(self, model: ContactModel, options: NewtonOptions | None,
+                 stick_band: float) -> None:
+        self.model = m = model
+        self.c_max = RATIO / _lowest_frequency_squared(m)
+        g = float(np.linalg.norm(m.gravity.value))
+        self.reach = _reach(m)
+        self.c0 = min(self.c_max, 0.1 * self.reach / g) if g > 0 else self.c_max / GROWTH**2
+        self.β2 = GN22Parameters().beta2
+        friction = _pair_friction(m)
+        self.has_friction = any(μ > 0 for μ, _, _ in friction)
+        self.τ = min((stick_band * h / χ for _, χ, h in friction), default=1.0)
+        Δτ_max = np.sqrt(2 * self.c_max / self.β2)
+        self.β1 = 0.5 * self.β2 * Δτ_max / self.τ
+        self.stepper = GN22(m, Δτ_max, GN22Parameters(self.β1, self.β2, allow_conditional=True),
+                            newton=options, solver="fast")
+        solver = self.stepper.fast
+        assert solver is not None  # solver="fast"
+        self.solver = solver
+        self.providers = [p for p in solver.providers if isinstance(p, SurfaceContact)]
+        self._vecs = (solver.layout.vec.duplicate(), solver.layout.vec.duplicate())
+        self.scale = force_scale(m)
+        self.steps = 0
+        self.c = self.c_max  # c of the last converged step
+
+    def destroy(self) -> None:
+        """Free the stepper's PETSc objects."""
+        for vec in self._vecs:
+            vec.destroy()
+        self.stepper.destroy()
+
+    @contextlib.contextmanager
+    def friction(self, μ: float | None, stretch: float = 1.0) -> Iterator[None]:
+        """Every pair's friction coefficient μ (None: their own) inside the block.
+
+        Their regularisation χ is multiplied by ``stretch``.
+        """
+        saved = [(p, p.spec, p.law) for p in self.providers]
+        conforming = [(p.law.friction, float(p.law.friction.μ.value),
+                       float(p.law.friction.χ.value)) for p in self.model.pairs]
+        try:
+            for p in self.providers:
+                p.spec = dataclasses.replace(
+                    p.spec, friction=p.spec.friction if μ is None else μ,
+                    regularisation=p.spec.regularisation * stretch)
+                p.law = forms.ContactLaw.of(p.spec)
+            for law, μ0, χ0 in conforming:
+                law.μ.value = μ0 if μ is None else μ
+                law.χ.value = χ0 * stretch
+            yield
+        finally:
+            for p, spec, law in saved:
+                p.spec, p.law = spec, law
+            for law, μ0, χ0 in conforming:
+                law.μ.value, law.χ.value = μ0, χ0
+
+    def start(self, c: float, frictional: bool) -> None:
+        """The GN22 start of a step from u_k (in ``u``): v₀, a₀ and Δa = 0.
+
+        Frictionless: at rest. Frictional: ``c a₁ = u₁ − u_k`` and ``v₁ = u₁/τ_c``
+        with τ_c = ½β₂Δτ/β₁ (the derivatives of u₁ and v₁ in Δa are c and β₁Δτ).
+        """
+        s = self.stepper
+        Δτ = np.sqrt(2 * c / self.β2)
+        s.dt.value = Δτ
+        if frictional:
+            τ = 0.5 * self.β2 * Δτ / self.β1
+            # (c − ½Δτ²) a₀ − Δτ v₀ = 0 and (Δτ − ½Δτ²/τ) a₀ + (1 − Δτ/τ) v₀ = u_k/τ.
+            A = np.array([[c - 0.5 * Δτ**2, -Δτ], [Δτ - 0.5 * Δτ**2 / τ, 1 - Δτ / τ]])
+            ka, kv = np.linalg.solve(A, [0.0, 1.0 / τ])
+        else:
+            ka = kv = 0.0
+        for u, v, a, d in zip(s.u, s.v, s.a, s.da, strict=True):
+            v.x.array[:] = kv * u.x.array
+            a.x.array[:] = ka * u.x.array
+            d.x.array[:] = 0.0
+
+    def advance(self, c: float) -> tuple[float, float]:
+        """u_k ← u₁ of the solved step.
+
+        Returns:
+            max|u₁ − u_k| and the static residual at u₁, ‖M (u₁ − u_k)‖/c (Dirichlet
+            rows left out).
+        """
+        s, bulk, layout = self.stepper, self.solver.bulk, self.solver.layout
+        Δτ = float(s.dt.value)
+        x, y = self._vecs
+        for u, v, a, d, lo, hi in zip(s.u, s.v, s.a, s.da, layout.offsets[:-1],
+                                      layout.offsets[1:], strict=True):
+            du = Δτ * v.x.array + 0.5 * Δτ**2 * a.x.array + c * d.x.array
+            u.x.array[:] += du
+            x.array[lo:hi] = du[: hi - lo]
+        bulk.M.mult(x, y)
+        y.array[bulk.bc_rows] = 0.0
+        self.steps += 1
+        return self._max(x.array), y.norm() / c
+
+    def _max(self, x: np.ndarray) -> float:
+        return float(self.model.comm.allreduce(np.abs(x).max(initial=0.0), op=MPI.MAX))
+
+    def rest(self) -> None:
+        """The state of the last step at its solution: a₁ = 0, u₁ = u_k, v₁ = u_k/τ."""
+        s = self.stepper
+        self.start(self.c, True)
+        for a, d in zip(s.a, s.da, strict=True):
+            d.x.array[:] = -a.x.array
+
+    def add_slave_velocities(self, v: list[fem.Function], y: np.ndarray) -> None:
+        """V += y, y given at the interface unknowns (every entry this rank holds)."""
+        self.solver.interface.add(v, y)
+
+
+# --- model estimates -----------------------------------------------------------------
+
+def _extent(model: ContactModel, body: int) -> float:
+    """The bounding-box diagonal of a body (m)."""
+    x = model.bodies[body].submesh.geometry.x[:, : model.gdim]
+    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
+    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+    return float(np.linalg.norm(hi - lo))
+
+
+def _lowest_frequency_squared(model: ContactModel) -> float:
+    """A lower estimate of ω_min² (1/s²): E/(ρL²) per body, ε_n/(ρL) per pair's slave."""
+    out = []
+    for i, b in enumerate(model.bodies):
+        mat = b.spec.material
+        out.append(mat.E / (mat.density * _extent(model, i) ** 2))
+    for penalty, slave in ([(p.penalty, model.body(p.slave).index)
+                            for p in model.surface_pairs]
+                           + [(float(p.ε_n.value), p.slave) for p in model.pairs]):
+        out.append(penalty / (model.bodies[slave].spec.material.density
+                              * _extent(model, slave)))
+    return min(out)
+
+
+def _facet_lengths(model: ContactModel, body: str, groups: Sequence[str]
+                   ) -> tuple[float, float]:
+    """Mean and largest facet length of a body's facet groups (m)."""
+    b = model.body(body)
+    fdim = model.mesh.topology.dim - 1
+    facets = model.surface_facets(body, groups)
+    facets = facets[facets < b.submesh.topology.index_map(fdim).size_local]
+    h = b.submesh.h(fdim, facets)
+    comm = model.comm
+    n = comm.allreduce(len(h))
+    return comm.allreduce(float(h.sum())) / max(n, 1), comm.allreduce(h.max(initial=0.0),
+                                                                         op=MPI.MAX)
+
+
+def _reach(model: ContactModel) -> float:
+    """The smallest contact search radius (general pairs) or interface facet length (m)."""
+    out = [p.radius if p.radius is not None else
+           _facet_lengths(model, p.master, p.master_groups)[1] for p in model.surface_pairs]
+    out += [mean_facet_length(model, p) for p in model.pairs]
+    return min(out)
+
+
+def _pair_friction(model: ContactModel) -> list[tuple[float, float, float]]:
+    """(μ, χ, mean slave facet length) of every pair."""
+    out = [(p.friction, p.regularisation, _facet_lengths(model, p.slave, (p.slave_surface,))[0])
+           for p in model.surface_pairs]
+    out += [(float(p.law.friction.μ.value), float(p.law.friction.χ.value),
+             mean_facet_length(model, p)) for p in model.pairs]
+    return out
+

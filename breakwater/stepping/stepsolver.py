@@ -1,0 +1,58 @@
+"""What the GN22 stepper and the run ask of the solver of one step: :class:`StepSolver`.
+
+Two classes implement it: :class:`~breakwater.stepping.solver.NewtonSolver` (the
+reference path, PETSc SNES on the whole residual of the step) and
+:class:`~breakwater.stepping.condensed.CondensedNewton` (the fast path, the bulk
+eliminated and Newton on the contact-surface unknowns).
+:class:`~breakwater.stepping.gn22.GN22` stages a step (Δa holds Newton's start),
+calls :meth:`StepSolver.solve` and, on success, updates the state from Δa; its initial
+acceleration adds :meth:`StepSolver.add_surface_forces`; the run counts
+:attr:`StepSolver.floor_accepts` (saved in checkpoints) and folds
+:attr:`StepSolver.timings` into the time loop's split.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from petsc4py import PETSc
+
+from breakwater.stepping.bulk import Timings
+
+__all__ = ["StepSolver"]
+
+
+class StepSolver(Protocol):
+    """The Newton of one GN22 step on the unknown Δa.
+
+    Attributes:
+        floor_accepts: Solves accepted at their round-off floor, over the run
+            (:class:`~breakwater.stepping.solver.NewtonOptions`); a resumed run sets it
+            from its checkpoint.
+        timings: Wall time of the solver's parts (s), summed until the run loop folds
+            and resets them.
+    """
+
+    floor_accepts: int
+    timings: Timings
+
+    def solve(self) -> int:
+        """Solve the staged step from the current Δa (Newton's start); return the iterations.
+
+        Raises:
+            ConvergenceError: The step did not converge (PenetrationError: it was
+                rejected); the state at t is untouched.
+        """
+        ...
+
+    def add_surface_forces(self, vec: PETSc.Vec, scale: float = 1.0) -> None:
+        """Add ``scale`` × the contact forces missing from the UFL residual to ``vec``.
+
+        At the accepted state (u, v), into the owned entries of a stacked vector: the
+        right-hand side of the initial acceleration a₀.
+        """
+        ...
+
+    def destroy(self) -> None:
+        """Free the PETSc objects now (collective: on every rank at once)."""
+        ...
