@@ -25,6 +25,7 @@ from breakwater.casefile.case import CaseError, load_case
 from breakwater.common.files import read_history
 from breakwater.config.runspec import OutputSpec, PairProbeSpec, TimeSpec
 from breakwater.energy.ledger import FIELDS
+from breakwater.model.layout import MonolithicLayout
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import (
     Body,
@@ -35,7 +36,7 @@ from breakwater.model.model import (
     Material,
 )
 from breakwater.run import simulation
-from breakwater.stepping.condensed import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.stepping.condensed import BulkOperators, interface_dofs
 from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD

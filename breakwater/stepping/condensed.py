@@ -51,15 +51,11 @@ from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError, PenetrationError
 from breakwater.common.parallel import single_threaded_blas
+from breakwater.common.timings import Timings
 from breakwater.contact.general import SurfaceContact
+from breakwater.model.layout import MonolithicLayout
 from breakwater.model.model import ContactModel
-from breakwater.stepping.bulk import (
-    BulkOperators,
-    MonolithicLayout,
-    Timings,
-    _Factorisation,
-    interface_dofs,
-)
+from breakwater.stepping.bulk import BulkOperators, _Factorisation, interface_dofs
 from breakwater.stepping.solver import NewtonOptions, snes_reason
 
 __all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]

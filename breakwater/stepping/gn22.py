@@ -30,7 +30,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
 from breakwater.contact.slipguard import SlipGuard
-from breakwater.model.model import ContactModel, _PairData
+from breakwater.model.model import ContactModel, PairData
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
@@ -155,7 +155,7 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
         solver.destroy()
 
 
-def tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
+def tangential_stiffness(model: ContactModel, pair: PairData) -> float:
     """min(ε_n, E/h) of a pair: the softer body's E over the mean facet length."""
     E = min(model.bodies[i].spec.material.E for i in (pair.slave, pair.master))
     length = model.assemble(model.form(1.0 * pair.dS))
