@@ -60,7 +60,10 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["SurfaceContact", "SurfaceForces"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceForces"]
+
+QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
+"""The history quantities of a general pair (columns ``<name>_<quantity>``)."""
 
 
 class SurfaceForces(SurfaceSearch):
@@ -268,8 +271,35 @@ class SurfaceForces(SurfaceSearch):
 class SurfaceContact(SurfaceForces):
     """One general pair: the fast solver's provider and what the outputs measure on it.
 
+    The general kind of :class:`breakwater.model.pairs.Pair`.
+
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
     """
+
+    kind = "general"
+
+    @property
+    def name(self) -> str:
+        """The pair's name (the case's ``[contact.<name>]``)."""
+        return self.spec.name
+
+    @property
+    def columns(self) -> list[str]:
+        """``<name>_force_x``, ``_force_y``, ``_contact_length``, ``_penetration``."""
+        return [f"{self.name}_{q}" for q in QUANTITIES]
+
+    def measure(self) -> dict[str, float]:
+        """The pair's history values at the accepted state (collective).
+
+        The resultant on the slave (:meth:`resultant`), the reference length of the
+        integration points where g_n ≤ 0 and the largest ⟨−g_n⟩₊ there.
+        """
+        force = self.resultant()
+        state = self.state()
+        closed = state["gap"] <= 0  # NaN (no projection): open
+        return dict(zip(self.columns, (
+            float(force[0]), float(force[1]), float(state["weight"][closed].sum()),
+            float(-state["gap"][closed].min(initial=0.0))), strict=True))
 
     def resultant(self, accepted: bool = True) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).

@@ -10,17 +10,20 @@ Nothing here imports dolfinx at module level: the case file reads these settings
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
 
 if TYPE_CHECKING:
-    import numpy as np
     import ufl
     from dolfinx import fem
 
     from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 
-__all__ = ["INTEGRATIONS", "ContactPair", "PairData", "SurfacePair", "check_pair_settings"]
+__all__ = ["INTEGRATIONS", "ContactPair", "Pair", "PairData", "SurfacePair", "check_pair_settings",
+           "max_penetration", "pair_names"]
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
@@ -162,3 +165,53 @@ class PairData:
     def ε_n(self) -> fem.Constant:
         """The normal penalty (N/m³)."""
         return self.law.normal.ε_n
+
+
+class Pair(Protocol):
+    """A contact pair as the outputs measure it, at its stepper's accepted state.
+
+    Both kinds implement it: a conforming pair
+    (:class:`breakwater.contact.pairstate.ConformingPair`) and a general pair
+    (:class:`breakwater.contact.general.SurfaceContact`); the stepper
+    (:attr:`breakwater.stepping.gn22.GN22.contacts`) builds them on its state, conforming
+    pairs first, in the model's order. The history's columns of a pair are named
+    ``<name>_<quantity>`` (:mod:`breakwater.outputs.monitor`).
+    """
+
+    @property
+    def name(self) -> str:
+        """The pair's name: the case's ``[contact.<name>]``."""
+        ...
+
+    @property
+    def kind(self) -> str:
+        """``conforming`` or ``general``."""
+        ...
+
+    @property
+    def columns(self) -> list[str]:
+        """The pair's history columns, in order."""
+        ...
+
+    def measure(self) -> dict[str, float]:
+        """The values of :attr:`columns` at the accepted state (collective, every rank)."""
+        ...
+
+
+def pair_names(pairs: Sequence[ContactPair]) -> list[str]:
+    """Names of conforming pairs: the interface group, or the index where it repeats.
+
+    The interface group is the case's ``[contact.<name>]``.
+    """
+    names = [p.interface for p in pairs]
+    return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]
+
+
+def max_penetration(gap: np.ndarray) -> float:
+    """The largest penetration ``max ⟨−g_n⟩₊`` of nodal normal gaps (0 if none).
+
+    Args:
+        gap: Nodal normal gaps g_n (m), negative where the bodies interpenetrate.
+    """
+    gap = np.asarray(gap, dtype=float)
+    return float(max(0.0, -gap.min())) if gap.size else 0.0

@@ -92,7 +92,6 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import ConvergenceError
 from breakwater.contact.conforming import RELEASE, creep_velocities, mean_facet_length
-from breakwater.contact.general import SurfaceContact
 from breakwater.model.model import ContactModel, Damping
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
@@ -162,7 +161,7 @@ class _Relaxation:
         solver = self.stepper.solver
         assert isinstance(solver, CondensedNewton)
         self.solver = solver
-        self.providers = [p for p in solver.providers if isinstance(p, SurfaceContact)]
+        self.providers = self.stepper.surfaces
         self._vecs = (solver.layout.vec.duplicate(), solver.layout.vec.duplicate())
         self.scale = force_scale(m)
         self.steps = 0

@@ -235,12 +235,12 @@ class CondensedNewton:
                 InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
                                    self.da, self._write, self.I)]
         # General pairs (breakwater.contact.general): one provider each.
-        self.providers += [SurfaceContact(model, p, layout, self.I,
-                                          (self.u, self.v, self.a, self.da), dt, beta1, beta2)
-                           for p in model.surface_pairs]
-        for p in self.providers:
-            if isinstance(p, SurfaceContact):
-                p.timings = self.timings  # its search time: timings["contact_search"]
+        self.surfaces = [SurfaceContact(model, p, layout, self.I,
+                                        (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+                         for p in model.surface_pairs]
+        self.providers += self.surfaces
+        for sp in self.surfaces:
+            sp.timings = self.timings  # its search time: timings["contact_search"]
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
@@ -296,9 +296,8 @@ class CondensedNewton:
         At (u, v), into the owned entries of a stacked vector (the right-hand side of a₀).
         """
         fc = np.zeros(self.n)
-        for p in self.providers:
-            if isinstance(p, SurfaceContact):
-                fc += p.vector(accepted=True)
+        for p in self.surfaces:
+            fc += p.vector(accepted=True)
         vec.array[self._owned_rows] += scale * fc[self._owned]
 
     # --- the interface problem --------------------------------------------------------
@@ -384,9 +383,8 @@ class CondensedNewton:
         ones the guard reads, and the step is read back where the guard cut it.
         """
         if self.surface_guard:
-            for p in self.providers:
-                if isinstance(p, SurfaceContact):
-                    self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
+            for p in self.surfaces:
+                self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
         if self.guard is None:
             return
         dv_dx = self.beta1 * float(self.dt.value)
@@ -466,11 +464,10 @@ class CondensedNewton:
         """
         with self.timings("interface_assembly"):
             y = self._x.getArray(readonly=True)
-            for p in self.providers:
-                if isinstance(p, SurfaceContact):
-                    why = p.penetration(y)
-                    if why is not None:
-                        raise PenetrationError(why, 0, its)
+            for p in self.surfaces:
+                why = p.penetration(y)
+                if why is not None:
+                    raise PenetrationError(why, 0, its)
 
     def _interface_array(self, *owned: np.ndarray) -> list[np.ndarray]:
         """Owned stacked arrays at the interface unknowns, on every rank (one reduction)."""
