@@ -34,6 +34,13 @@ rank; at each call the current u, v at the interface are reduced onto every rank
 result does not depend on the partition. The Jacobian is exact: a complex step per
 local DOF of a (slave facet, master facet) point, with the projection's Newton run in
 complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
+
+The pair's jobs are layered: :class:`~breakwater.contact.surfacesearch.SurfaceSearch`
+(the surfaces, the integration points and their projections, the state at the
+interface unknowns), :class:`SurfaceForces` (the provider: f_c, its Jacobian, the slip
+guard and the step's penetration check) and :class:`SurfaceContact` (what the outputs
+measure: resultants, energies, the integration points' state; the general kind of
+:class:`breakwater.model.pairs.Pair`).
 """
 
 from __future__ import annotations

@@ -16,11 +16,11 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.contact.conforming import InterfaceNodes
+from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.model.model import ContactModel, PairData
-from breakwater.model.pairs import max_penetration
+from breakwater.model.pairs import max_penetration, pair_names
 
-__all__ = ["QUANTITIES", "ConformingPair"]
+__all__ = ["QUANTITIES", "ConformingPair", "conforming_pairs"]
 
 QUANTITIES = ("contact_length", "normal_force", "tangential_force", "penetration")
 """The history quantities of a conforming pair (columns ``<name>_<quantity>``)."""
@@ -76,3 +76,20 @@ class ConformingPair:
                                        self.u[p.master].x.array)["gap"]
         return dict(zip(self.columns, (length, normal, tangential, max_penetration(gap)),
                         strict=True))
+
+
+def conforming_pairs(model: ContactModel, nodes: Sequence[InterfaceNodes],
+                     u: Sequence[fem.Function], v: Sequence[fem.Function]
+                     ) -> list[ConformingPair]:
+    """The model's conforming pairs measured at (u, v), named by :func:`pair_names`.
+
+    Args:
+        model: The contact model.
+        nodes: The pairs' interface nodes; empty: built here (collective).
+        u: The displacement, one Function per body.
+        v: The velocity, one Function per body.
+    """
+    nodes = nodes or interface_nodes(model)
+    names = pair_names([p.spec for p in model.pairs])
+    return [ConformingPair(model, p, nd, name, u, v)
+            for p, nd, name in zip(model.pairs, nodes, names, strict=True)]

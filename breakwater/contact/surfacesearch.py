@@ -48,7 +48,6 @@ _LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
 _EDGE = 1e-3
 
 
-
 class InterfaceValues:
     """The step's state at a pair's interface unknowns, the same on every rank.
 

@@ -29,10 +29,10 @@ from petsc4py import PETSc
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
-from breakwater.contact.pairstate import ConformingPair
+from breakwater.contact.pairstate import conforming_pairs
 from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
-from breakwater.model.pairs import Pair, pair_names
+from breakwater.model.pairs import Pair
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
@@ -180,10 +180,6 @@ class GN22:
             surfaces only (:mod:`breakwater.stepping.condensed`); ``"reference"``: Newton on the
             whole residual, assembled and factorised at every iteration.
 
-    Attributes:
-        surfaces: The general pairs (:class:`~breakwater.contact.general.SurfaceContact`)
-            the fast solver built on this stepper's state; none on the reference solver.
-
     """
 
     SOLVERS = ("fast", "reference")
@@ -233,24 +229,16 @@ class GN22:
             self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
                                        force_scale=force_scale(model),
                                        precheck=self._precheck if self.guard else None)
+        # The general pairs the fast solver built on this stepper's state (SurfaceContact).
         self.surfaces = self.solver.surfaces if isinstance(self.solver, CondensedNewton) else []
         self._contacts: list[Pair] | None = None
 
     @property
     def contacts(self) -> list[Pair]:
-        """Every contact pair measured at this stepper's state (u, v): conforming, then general.
-
-        The conforming pairs (:class:`~breakwater.contact.pairstate.ConformingPair`, built
-        on the first call) in the order of ``model.pairs``, then the general pairs
-        (:attr:`surfaces`, the fast solver's), in the order of ``model.surface_pairs``.
-        """
+        """Every pair at this stepper's state (u, v): conforming, then general (collective)."""
         if self._contacts is None:
-            m = self.model
-            nodes = self.nodes or interface_nodes(m)
-            names = pair_names([p.spec for p in m.pairs])
-            self._contacts = [ConformingPair(m, p, nd, name, self.u, self.v)
-                              for p, nd, name in zip(m.pairs, nodes, names, strict=True)]
-            self._contacts += self.surfaces
+            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v),
+                              *self.surfaces]
         return self._contacts
 
     # --- initial state ------------------------------------------------------------
