@@ -1,10 +1,11 @@
-"""The surfaces of a general contact pair: its settings and its facets on every rank.
+"""The surfaces of a general contact pair: its facets on every rank.
 
-:class:`SurfacePair` is a general pair as the model holds it (:mod:`breakwater.model.model`),
-:func:`gather_surface` the facets of one side, gathered on every rank in an order that
-does not depend on the partition, and :func:`surface_dofs` the DOFs of every pair's
-surfaces (the interface unknowns of the fast solver, :mod:`breakwater.stepping.bulk`). The pair's
-forces are :class:`breakwater.contact.general.SurfaceContact`.
+:func:`gather_surface` gives the facets of one side, gathered on every rank in an order
+that does not depend on the partition, and :func:`surface_dofs` the DOFs of every
+pair's surfaces (the interface unknowns of the fast solver,
+:mod:`breakwater.stepping.bulk`). The pair's settings, :class:`SurfacePair`, are the
+model's (:mod:`breakwater.model.pairs`, re-exported here); its forces are
+:class:`breakwater.contact.general.SurfaceContact`.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ if TYPE_CHECKING:
 
 __all__ = ["INTEGRATIONS", "Surface", "SurfacePair", "check_pair_settings", "gather_surface",
            "surface_dofs"]
+
 
 @dataclass
 class Surface:

@@ -5,6 +5,10 @@ on node), :class:`SurfacePair` a general pair (two surfaces that need not match,
 finite sliding: :mod:`breakwater.contact.general`); :class:`PairData` is what the
 model builds for a conforming pair (:mod:`breakwater.model.model`).
 
+:class:`Pair` is what the outputs ask of a pair of either kind at a stepper's state
+(its history columns, ``<name>_<quantity>``); the contact layer implements it and the
+stepper builds the pairs on its state (:attr:`breakwater.stepping.gn22.GN22.contacts`).
+
 Nothing here imports dolfinx at module level: the case file reads these settings.
 """
 
