@@ -41,8 +41,9 @@ from mpi4py import MPI
 import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
 from breakwater.casefile.case import load_case
 from breakwater.common.parallel import single_threaded_blas
+from breakwater.model.layout import MonolithicLayout
 from breakwater.run.simulation import run
-from breakwater.stepping.bulk import BulkOperators, MonolithicLayout, interface_dofs
+from breakwater.stepping.bulk import BulkOperators, interface_dofs
 from breakwater.stepping.factorisations import Factorisations
 
 HERE = pathlib.Path(__file__).resolve().parent

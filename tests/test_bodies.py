@@ -60,10 +60,10 @@ def test_three_bodies_two_pairs(folder: pathlib.Path, shared_dir: pathlib.Path) 
 
     # Static: each joint carries the weight above it. The static solve stops at a
     # residual of 1e-9 of the load norm, so 1e-6 relative is safe.
-    assert h["normal_force_1"][0] == pytest.approx(W[2], rel=1e-6)
-    assert h["normal_force_0"][0] == pytest.approx(W[1] + W[2], rel=1e-6)
+    assert h["joint1_normal_force"][0] == pytest.approx(W[2], rel=1e-6)
+    assert h["joint0_normal_force"][0] == pytest.approx(W[1] + W[2], rel=1e-6)
     for k in (0, 1):
-        assert h[f"contact_length_{k}"][0] == pytest.approx(WIDTH, rel=1e-12)
+        assert h[f"joint{k}_contact_length"][0] == pytest.approx(WIDTH, rel=1e-12)
     # The summary's static weight of the first pair is that of its slave and of the
     # block resting on it.
     assert summary["static"]["weight"] == pytest.approx(W[1] + W[2], rel=1e-9)
@@ -76,12 +76,12 @@ def test_three_bodies_two_pairs(folder: pathlib.Path, shared_dir: pathlib.Path) 
     force = np.array([pulse(t) * HEIGHTS[2] for t in h["t"]])
     sliding = force > 1.05 * μ1 * W[2]
     assert sliding.sum() >= 5
-    np.testing.assert_allclose(np.abs(h["tangential_force_1"][sliding]),
-                               μ1 * h["normal_force_1"][sliding], rtol=1e-6)
+    np.testing.assert_allclose(np.abs(h["joint1_tangential_force"][sliding]),
+                               μ1 * h["joint1_normal_force"][sliding], rtol=1e-6)
     # joint0 stays below its limit and does not slip: its slip is elastic, of order
     # (μ₁ W₂ / width) / G × the block heights ≈ 1e-8 m (measured 1.2e-8 m), against a
     # slide of the top block of 2.8e-6 m; 1e-2 of the slide separates the two.
-    assert np.all(np.abs(h["tangential_force_0"]) < μ0 * h["normal_force_0"])
+    assert np.all(np.abs(h["joint0_tangential_force"]) < μ0 * h["joint0_normal_force"])
     slide = abs(h["corner1_slip"][-1] - h["corner1_slip"][0])
     assert slide > 1e-6
     assert np.abs(h["corner0_slip"] - h["corner0_slip"][0]).max() < 1e-2 * slide

@@ -77,7 +77,7 @@ def _history(mesh: pathlib.Path, comm: MPI.Comm, general: SurfacePair | None
     stepper = GN22(model, DT)
     stepper.initialise()
     if general:
-        provider = stepper.solver.providers[-1]  # type: ignore[union-attr]
+        provider = stepper.surfaces[-1]
         assert isinstance(provider, SurfaceContact)
         resultant = provider.resultant
     else:

@@ -82,7 +82,7 @@ def hertz_run(path: pathlib.Path, fine: float, comm: MPI.Comm = COMM) -> dict[st
                            lambda t: min(t / RAMP, 1.0))])
     stepper = GN22(model, DT, GN22Parameters(1.0, 1.0))
     stepper.initialise()
-    provider = stepper.solver.providers[-1]  # type: ignore[union-attr]
+    provider = stepper.surfaces[-1]
     assert isinstance(provider, SurfaceContact)
     for _ in range(round(END / DT)):
         _advance(stepper, DT)

@@ -168,7 +168,7 @@ def test_initial_velocity_from_a_case_file(folder: pathlib.Path):
     summary = run(built.model, built.time, built.output, report=False)
     assert summary["finished"] and summary["static"]["initial_state"] == "frictionless"
     h = read_history(folder / "bars" / "history.csv")
-    t, σ = h["t"], h["normal_force_0"] / H
+    t, σ = h["t"], h["interface_normal_force"] / H
     # At t = 0 bar a moves at v0 (kinetic energy ½ ρ L H v0² per unit depth), b is at rest.
     assert h["kinetic"][0] == pytest.approx(0.5 * ρ * L * H * v0**2, rel=1e-12)
     on = σ > 1e-3 * σ_CONTACT

@@ -97,7 +97,7 @@ def _run(model: ContactModel, state: InitialState | None, dt: float, steps: int
     s = GN22(model, dt)
     s.initialise(*((state.u, state.v) if state is not None else ()))
     comm = model.comm
-    provider = s.solver.providers[-1]  # type: ignore[union-attr]
+    provider = s.surfaces[-1]
     assert isinstance(provider, SurfaceContact)
     a0 = max(comm.allreduce(float(np.abs(a.x.array).max(initial=0.0)), op=MPI.MAX)
              for a in s.a)

@@ -127,7 +127,8 @@ def test_released_block_slides_as_the_rigid_block(pairs: str, case: str, dt: flo
         ratio = [-float(r["c_force_x"]) / float(r["c_force_y"]) for r in rows]
     else:  # the slip at the block's corner; friction and normal resultants
         slide = float(rows[-1]["corner_slip"]) - float(rows[0]["corner_slip"])
-        ratio = [-float(r["tangential_force_0"]) / float(r["normal_force_0"]) for r in rows]
+        ratio = [-float(r["interface_tangential_force"]) / float(r["interface_normal_force"])
+                 for r in rows]
     reference = 0.5 * acceleration(case) * T_END**2
     if COMM.rank == 0:
         print(f"\n{pairs} {case}, dt = {dt:g} s: slide {slide:.6e} m, rigid block "

@@ -66,8 +66,8 @@ def _output(directory: pathlib.Path, **kwargs) -> OutputSpec:
 
 def _columns() -> list[str]:
     return ["t", "dt", "newton_iterations", "top_ux", "top_uy", "corner_slip",
-            "corner_opening", "contact_length_0", "normal_force_0", "tangential_force_0",
-            *FIELDS]
+            "corner_opening", "interface_contact_length", "interface_normal_force",
+            "interface_tangential_force", *FIELDS]
 
 
 def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
@@ -138,8 +138,8 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
     # Like a rigid footing on an elastic base, the pressure peaks at the edges (Fig. 17).
     assert static["edge_pressure"] > static["mean_contact_pressure"] > 0
     assert static["center_pressure"] < static["edge_pressure"]
-    assert h["normal_force_0"][0] == pytest.approx(weight, rel=1e-6)
-    assert h["contact_length_0"][0] == pytest.approx(WIDTH, rel=1e-12)
+    assert h["interface_normal_force"][0] == pytest.approx(weight, rel=1e-6)
+    assert h["interface_contact_length"][0] == pytest.approx(WIDTH, rel=1e-12)
 
     with np.load(shared_dir / "static.npz") as data:
         assert set(data["bodies"]) == {"a", "b"}
@@ -181,8 +181,8 @@ def _check_contact_fields(path: pathlib.Path, h: dict[str, np.ndarray], weight: 
             p = r.read("pressure", step_selection=[k, 1])[:, 0]
             traction = r.read("friction_traction", step_selection=[k, 1])[:, 0]
             v = r.read("slip_velocity", step_selection=[k, 1])[:, 0]
-            assert simpson(p) == pytest.approx(h["normal_force_0"][j], rel=1e-10)
-            assert simpson(traction) == pytest.approx(h["tangential_force_0"][j], rel=1e-10,
+            assert simpson(p) == pytest.approx(h["interface_normal_force"][j], rel=1e-10)
+            assert simpson(traction) == pytest.approx(h["interface_tangential_force"][j], rel=1e-10,
                                                       abs=1e-10 * weight)
             # Coulomb: where a node slides (|v_T| ≥ 1e6 χ, so that the regularised
             # sign differs from ±1 by χ²/2v_T² ≤ 5e-13) the traction is μp against v_T.
@@ -324,9 +324,9 @@ def test_contact_quality(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
     # nodes: the largest static pressure over ε_n (same numbers, round-off only).
     assert q["static_penetration"] == pytest.approx(
         summary["static"]["max_pressure"] / 1e10, rel=1e-12)
-    assert h["penetration_0"][0] == pytest.approx(q["static_penetration"], rel=1e-12)
-    k = 1 + int(np.argmax(h["penetration_0"][1:]))
-    assert q["dynamic_penetration"] == pytest.approx(h["penetration_0"][k], rel=1e-12)
+    assert h["interface_penetration"][0] == pytest.approx(q["static_penetration"], rel=1e-12)
+    k = 1 + int(np.argmax(h["interface_penetration"][1:]))
+    assert q["dynamic_penetration"] == pytest.approx(h["interface_penetration"][k], rel=1e-12)
     assert q["time_of_dynamic_penetration"] == pytest.approx(h["t"][k], rel=1e-12)
     # Settlement: a 1D (oedometric) estimate for base b under the block's pressure
     # ρ g H plus its own weight, s ≈ (ρ g H H_b + ρ g H_b²/2) / M with

@@ -47,7 +47,7 @@ MATERIAL = Material(density=2000.0, poisson=0.25, young_modulus=1e9)
 
 
 def _provider(stepper: GN22) -> SurfaceContact:
-    provider = stepper.solver.providers[-1]  # type: ignore[union-attr]
+    provider = stepper.surfaces[-1]
     assert isinstance(provider, SurfaceContact)
     return provider
 

@@ -176,7 +176,7 @@ def _model(path: pathlib.Path, comm: MPI.Comm, bodies: list[Rectangle], pair: Su
 
 
 def _provider(stepper: GN22) -> SurfaceContact:
-    provider = stepper.solver.providers[-1]  # type: ignore[union-attr]
+    provider = stepper.surfaces[-1]
     assert isinstance(provider, SurfaceContact)
     return provider
 

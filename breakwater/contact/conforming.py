@@ -21,7 +21,7 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
 from breakwater.model.mesh import group_tag
-from breakwater.model.model import ContactModel, _PairData
+from breakwater.model.model import ContactModel, PairData
 
 RELEASE = 100.0
 """Slip speed of a released body's slave nodes at t = 0, in units of χ: the law then
@@ -44,7 +44,7 @@ class InterfaceNodes:
 
     """
 
-    def __init__(self, model: ContactModel, pair: _PairData) -> None:
+    def __init__(self, model: ContactModel, pair: PairData) -> None:
         self.comm = comm = model.comm
         self.gdim = gdim = model.gdim
         self.pair = pair
@@ -79,7 +79,7 @@ class InterfaceNodes:
         self.normal = self._normals(model, pair, comm)
         self.tangents = _tangent_basis(self.normal)
 
-    def _normals(self, model: ContactModel, pair: _PairData, comm: MPI.Comm) -> np.ndarray:
+    def _normals(self, model: ContactModel, pair: PairData, comm: MPI.Comm) -> np.ndarray:
         """Average of the master outward facet normals around each node."""
         msh = model.mesh
         tdim, gdim = msh.topology.dim, self.gdim
@@ -207,7 +207,7 @@ def interface_nodes(model: ContactModel) -> Sequence[InterfaceNodes]:
     return [InterfaceNodes(model, p) for p in model.pairs]
 
 
-def creep_velocities(model: ContactModel, free: Sequence[_PairData],
+def creep_velocities(model: ContactModel, free: Sequence[PairData],
                       u: Sequence[fem.Function], v: Sequence[fem.Function], τ: float) -> None:
     """Add to the slave's interface nodes the slip velocity of the static state, Δu_T/τ.
 
@@ -227,7 +227,7 @@ def creep_velocities(model: ContactModel, free: Sequence[_PairData],
         v[p.slave].x.scatter_forward()
 
 
-def release_velocities(model: ContactModel, held: Sequence[_PairData],
+def release_velocities(model: ContactModel, held: Sequence[PairData],
                        directions: Sequence[np.ndarray], v: Sequence[fem.Function],
                        speed: float = RELEASE) -> None:
     """Start the held pairs' slave nodes sliding: ``v += speed·χ·d`` (collective).
@@ -253,7 +253,7 @@ def release_velocities(model: ContactModel, held: Sequence[_PairData],
         v[p.slave].x.scatter_forward()
 
 
-def mean_facet_length(model: ContactModel, pair: _PairData) -> float:
+def mean_facet_length(model: ContactModel, pair: PairData) -> float:
     """Mean facet length of a contact interface (m)."""
     length = model.assemble(model.form(1.0 * pair.dS))
     return length / model.comm.allreduce(len(pair.facet_data))

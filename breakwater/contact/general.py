@@ -34,64 +34,49 @@ rank; at each call the current u, v at the interface are reduced onto every rank
 result does not depend on the partition. The Jacobian is exact: a complex step per
 local DOF of a (slave facet, master facet) point, with the projection's Newton run in
 complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
+
+The pair's jobs are layered: :class:`~breakwater.contact.surfacesearch.SurfaceSearch`
+(the surfaces, the integration points and their projections, the state at the
+interface unknowns), :class:`SurfaceForces` (the provider: f_c, its Jacobian, the slip
+guard and the step's penetration check) and :class:`SurfaceContact` (what the outputs
+measure: resultants, energies, the integration points' state; the general kind of
+:class:`breakwater.model.pairs.Pair`).
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from dolfinx import fem
-from mpi4py import MPI
 
-from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.contact.penetration import StepCheck, allowed_depth, search_radius
+from breakwater.contact.penetration import StepCheck, allowed_depth
 from breakwater.contact.pointkernels import (
     DenseEntries,
     H,
     contact_geometry,
     jacobian,
-    nodal_normal_forces,
     normal_and_shares,
-    normal_forces,
-    unit_tangent,
 )
-from breakwater.contact.projection import FacetGrid, nearest_end, project, shape
-from breakwater.contact.surfaces import SurfacePair, gather_surface
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.contact.surfacesearch import SurfaceSearch
 
 if TYPE_CHECKING:
+    from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
-    from breakwater.stepping.bulk import MonolithicLayout, Timings
 
-__all__ = ["SurfaceContact"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceForces"]
 
-# A slave facet's nodes in closure order (the vertices, then the mid-edge node) on
-# [−1, 1] and their Gauss–Lobatto weights: the trapezoidal rule (P1), Simpson's (P2).
-_NODES = {2: np.array([-1.0, 1.0]), 3: np.array([-1.0, 1.0, 0.0])}
-_LOBATTO = {2: np.array([1.0, 1.0]), 3: np.array([1.0, 1.0, 4.0]) / 3}
-# A slave node a little past the end of the master surface (|ξ̄| ≤ 1 + _EDGE) still
-# presses on its end: where the two surfaces end together (a patch, a block on a block
-# as wide), the penalty's compliance puts the end node 1e-5 of a facet past the end
-# and back between Newton iterates, and a node carrying its lumped force in and out of
-# contact 2-cycles Newton. Gauss points lie inside the slave facets: 1e-9 (round-off).
-_EDGE = 1e-3
+QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
+"""The history quantities of a general pair (columns ``<name>_<quantity>``)."""
 
 
-class SurfaceContact:
-    """One general pair as a provider of the fast solver's interface (see the module doc).
+class SurfaceForces(SurfaceSearch):
+    """A general pair as a provider of the fast solver's interface: f_c and ∂f_c/∂Δa.
 
-    Args:
-        model: The contact model.
-        spec: The pair.
-        layout: The stacked-vector layout.
-        interface: Global stacked indices of the interface unknowns (sorted).
-        state: ``(u, v, a, Δa)``, one Function per body each.
-        dt: The step size constant.
-        beta1: GN22 β₁.
-        beta2: GN22 β₂.
+    Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
     """
 
     def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
@@ -99,232 +84,9 @@ class SurfaceContact:
                  state: tuple[Sequence[fem.Function], Sequence[fem.Function],
                               Sequence[fem.Function], Sequence[fem.Function]],
                  dt: fem.Constant, beta1: float, beta2: float) -> None:
-        self.spec, self.comm = spec, model.comm
-        self.small_rotations = spec.rotations == "small"
-        self._edge = _EDGE if spec.integration == "nodes" else 1e-9
-        self.law = forms.ContactLaw.of(spec)
-        self.n = n = len(interface)
-        self.u, self.v, self.a, self.da = state
-        self.dt, self.beta1, self.beta2 = dt, beta1, beta2
-        slave = gather_surface(model, layout, spec.slave, (spec.slave_surface,))
-        master = gather_surface(model, layout, spec.master, spec.master_groups)
-        # Orient each master facet so that (t_y, −t_x) points out of its cell.
-        mid = master.X.mean(axis=1)
-        chord = master.X[:, 1] - master.X[:, 0]
-        flip = np.sum((master.interior - mid) * np.stack([chord[:, 1], -chord[:, 0]], 1),
-                      axis=1) > 0
-        swap = np.arange(master.X.shape[1])
-        swap[:2] = [1, 0]
-        master.X[flip] = master.X[flip][:, swap]
-        master.dofs[flip] = master.dofs[flip][:, swap]
-        self.slave, self.master = slave, master
-        self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
-        # The Gauss rule of each integration segment on [−1, 1].
-        self._gauss = np.polynomial.legendre.leggauss(spec.points)
-        self.radius = search_radius(spec, master)
-        # Owned entries of each body at the interface unknowns (for the reduction).
-        self._owned = []
-        for i, gi in enumerate(layout.global_index):
-            local = np.arange(layout.sizes[i])
-            pos = np.searchsorted(interface, gi[local])
-            pos = np.minimum(pos, max(n - 1, 0))
-            hit = interface[pos] == gi[local] if n else np.zeros(len(local), bool)
-            self._owned.append((local[hit], pos[hit]))
-        self.searches = 0
-        self.search_seconds = 0.0
-        self.timings: Timings | None = None  # the solver's: search time also added there
-        # The slave nodes (friction acts on them): one id per node, by global DOF.
-        _, first, self.node_of = np.unique(slave.dofs[..., 0], return_index=True,
-                                             return_inverse=True)
-        self.node_of = self.node_of.reshape(slave.dofs.shape[:2])
-        self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
-        self.node_X = slave.X.reshape(-1, model.gdim)[first]
-        self._frozen_key: np.ndarray | None = None
-        self._normal_key: np.ndarray | None = None
-        self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
-        self._normal_points: dict[str, Any]  # the _points of _normal_key
-        self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
-        self._frozen_projected = np.zeros(0, bool)  # of _frozen_data: not a nearest end
-        # The start-of-step projection of the last step solved (see _friction).
-        self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.step_check = StepCheck(spec, self.radius, allowed_depth(master, self.radius),
-                                    self.node_X, self.node_pos, master.X, self.pos_m)
-
-    @staticmethod
-    def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
-        """Interface position of each DOF, −1 where it is not an unknown (Dirichlet)."""
-        if not len(interface):
-            return np.full(dofs.shape, -1, np.int64)
-        at = np.minimum(np.searchsorted(interface, dofs), len(interface) - 1)
-        return np.where(interface[at] == dofs, at, -1)
-
-    # --- the current state ----------------------------------------------------------
-
-    def _state(self, y: np.ndarray | None = None, accepted: bool = False
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """u₀, u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0).
-
-        Args:
-            y: Δa at the interface unknowns; None: read from the Δa Functions.
-            accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
-        """
-        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
-        if accepted:
-            return u, u, v
-        if y is not None:
-            da[:-1] = y
-        dt = float(self.dt.value)
-        return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
-                v + dt * a + self.beta1 * dt * da)
-
-    def interface_values(self, functions: Sequence[fem.Function]) -> np.ndarray:
-        """Values of one Function per body at the pair's interface unknowns (collective).
-
-        Returns:
-            Shape ``(n + 1,)``, the same on every rank, with a trailing 0 (the value at
-            the Dirichlet entries, position −1).
-        """
-        return self._values(functions)[0]
-
-    def _values(self, *fields: Sequence[fem.Function]) -> np.ndarray:
-        """:meth:`interface_values` of several fields, ``(len(fields), n + 1)``.
-
-        One reduction for all the fields.
-        """
-        out = np.zeros((len(fields), self.n + 1))
-        for k, functions in enumerate(fields):
-            for f, (local, pos) in zip(functions, self._owned, strict=True):
-                out[k, pos] = f.x.array[local]
-        self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        return out
-
-    def _integration(self, xs: np.ndarray, xm: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The slave integration points: (slave facet, ξ, weight) of each.
-
-        Each slave facet is cut where the master facets' vertices project onto it
-        (current configuration, ``segments``), or not at all (``gauss``); each segment
-        carries the Gauss rule. With ``nodes``: the facet's nodes, Gauss–Lobatto
-        weights. The weight is the reference length.
-        """
-        s = self.slave
-        n_f, nn = s.X.shape[:2]
-        if self.spec.integration == "nodes":
-            point_facet = np.repeat(np.arange(n_f), nn)
-            xi = np.tile(_NODES[nn], n_f)
-            _, dN, _ = shape(xi, nn)
-            jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
-            return point_facet, xi, np.tile(_LOBATTO[nn], n_f) * jac
-        facet = [np.arange(n_f), np.arange(n_f)]
-        cut = [-np.ones(n_f), np.ones(n_f)]
-        if self.spec.integration == "segments" and len(xm) and n_f:
-            vertices = xm[:, :2].reshape(-1, xm.shape[2])
-            on, xi = project(vertices, xs, FacetGrid(xs, self.radius))
-            inside = (on >= 0) & (np.abs(xi) < 1 - 1e-12)
-            facet.append(on[inside])
-            cut.append(xi[inside])
-        f, c = np.concatenate(facet), np.concatenate(cut)
-        order = np.lexsort((c, f))
-        f, c = f[order], c[order]
-        seg = np.flatnonzero((f[1:] == f[:-1]) & (c[1:] - c[:-1] > 1e-12))
-        f_seg, a, b = f[seg], c[seg], c[seg + 1]
-        g, w = self._gauss
-        xi = (0.5 * (a + b)[:, None] + 0.5 * (b - a)[:, None] * g).ravel()
-        point_facet = np.repeat(f_seg, len(g))
-        _, dN, _ = shape(xi, nn)
-        jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
-        weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
-        return point_facet, xi, weight
-
-    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
-        """The integration points and the local data of those with a projection (real).
-
-        Args:
-            u1: Displacements at the interface unknowns (a trailing 0).
-            v1: Velocities at the interface unknowns (a trailing 0).
-        """
-        s, m = self.slave, self.master
-        xs_all = s.X + u1[self.pos_s]
-        xm_all = m.X + u1[self.pos_m]
-        t0 = time.perf_counter()
-        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
-        Ns, _, _ = shape(xi_s, s.X.shape[1])
-        points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
-        facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius),
-                            tol=self._edge)
-        self.searches += 1
-        elapsed = time.perf_counter() - t0
-        self.search_seconds += elapsed
-        if self.timings is not None:
-            self.timings.seconds["contact_search"] += elapsed
-        on = np.flatnonzero(facet >= 0)
-        f_s, f_m = point_facet[on], facet[on]
-        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns[on],
-                "xs": xs_all[f_s], "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m],
-                "vm": v1[self.pos_m][f_m], "xi": xi[on], "weight": weight[on],
-                "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1),
-                "all_x": points, "all_weight": weight}
-
-    def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The projection of each slave node at the start of the step (cached).
-
-        A node with no projection (beyond the master's end) takes the nearest master
-        vertex within the search radius (ξ̄₀ = ±1).
-
-        Returns:
-            Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
-            and the unit tangent there, in the configuration at the start of the step.
-        """
-        if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
-            return self._frozen_data
-        m = self.master
-        xm = m.X + u0[self.pos_m]
-        points = self.node_X + u0[self.node_pos]
-        grid = FacetGrid(xm, self.radius)
-        facet, xi = project(points, xm, grid)
-        # A node beyond the master's end (it slid past it) keeps its friction where its
-        # facets' points still press: its master point is the surface's end vertex.
-        beyond = np.flatnonzero(facet < 0)
-        self._frozen_projected = facet >= 0
-        if len(beyond):
-            facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
-        N0, dN0, _ = shape(xi, m.X.shape[1])
-        surface = m.X if self.small_rotations else xm
-        t0 = unit_tangent(dN0, surface[np.maximum(facet, 0)]) if len(m.X) else \
-            np.zeros_like(points)
-        self._frozen_key = u0.copy()
-        self._frozen_data = (facet, N0, t0)
-        return self._frozen_data
-
-    def _normal(self, u1: np.ndarray, v1: np.ndarray
-                ) -> tuple[Any, list, np.ndarray, Any, np.ndarray]:
-        """The normal part of the current iterate.
-
-        Returns:
-            The point kernel, its groups (local arguments), the interface positions of
-            its outputs, the kernel of the points' shares of the nodal normal forces
-            and the slave node of each share.
-        """
-        key = np.concatenate([u1, v1])
-        if self._normal_key is not None and np.array_equal(self._normal_key, key):
-            return self._normal_data
-        p = self._points(u1, v1)
-        self._normal_key, self._normal_points = key, p
-        args = (self.law, p["Ns"], p["xi"], p["weight"])
-        reference = self._reference(p)
-        self._normal_data = (partial(normal_forces, *args, reference=reference),
-                             [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
-                             partial(nodal_normal_forces, *args, reference=reference),
-                             self.node_of[p["slave_facet"]])
-        return self._normal_data
-
-    def _reference(self, points: dict[str, Any]) -> np.ndarray | None:
-        """The kernels' ``reference`` for the points of :meth:`_points`.
-
-        Their master facets in the reference configuration (``rotations = "small"``),
-        or None: the current ones.
-        """
-        return self.master.X[points["facet"]] if self.small_rotations else None
+        super().__init__(model, spec, layout, interface, state, dt, beta1, beta2)
+        self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
+                                    self.node_X, self.node_pos, self.master.X, self.pos_m)
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -391,6 +153,10 @@ class SurfaceContact:
         keep = pos >= 0
         out += np.bincount(pos[keep], weights=values[keep], minlength=self.n)
         return out
+
+    def left_product(self, X: np.ndarray) -> None:
+        """None: the step solver forms the product from :meth:`matrix`."""
+        return None
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense.
@@ -510,6 +276,41 @@ class SurfaceContact:
         # u₁ as GN22.update computes it (gn22_kinematics): the next step's u₀ bit for bit.
         u1 = u + (dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da)
         return self.step_check(u, u1, lambda: (*self._frozen(u), self._frozen_projected))
+
+
+
+class SurfaceContact(SurfaceForces):
+    """One general pair: the fast solver's provider and what the outputs measure on it.
+
+    The general kind of :class:`breakwater.model.pairs.Pair`.
+
+    Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
+    """
+
+    kind = "general"
+
+    @property
+    def name(self) -> str:
+        """The pair's name (the case's ``[contact.<name>]``)."""
+        return self.spec.name
+
+    @property
+    def columns(self) -> list[str]:
+        """``<name>_force_x``, ``_force_y``, ``_contact_length``, ``_penetration``."""
+        return [f"{self.name}_{q}" for q in QUANTITIES]
+
+    def measure(self) -> dict[str, float]:
+        """The pair's history values at the accepted state (collective).
+
+        The resultant on the slave (:meth:`resultant`), the reference length of the
+        integration points where g_n ≤ 0 and the largest ⟨−g_n⟩₊ there.
+        """
+        force = self.resultant()
+        state = self.state()
+        closed = state["gap"] <= 0  # NaN (no projection): open
+        return dict(zip(self.columns, (
+            float(force[0]), float(force[1]), float(state["weight"][closed].sum()),
+            float(-state["gap"][closed].min(initial=0.0))), strict=True))
 
     def resultant(self, accepted: bool = True) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).

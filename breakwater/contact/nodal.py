@@ -31,10 +31,10 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
+from breakwater.model.layout import MonolithicLayout
 from breakwater.model.model import ContactModel
-from breakwater.stepping.bulk import MonolithicLayout
 
-__all__ = ["NodalContactForces", "nodal_contact_applies"]
+__all__ = ["NodalContactForces", "nodal_contact_applies", "quadrature_points"]
 
 
 def nodal_contact_applies(model: ContactModel) -> bool:
@@ -48,6 +48,45 @@ def nodal_contact_applies(model: ContactModel) -> bool:
         if e.family != basix.ElementFamily.P or e.degree != 2 or e.discontinuous:
             return False
     return True
+
+
+def quadrature_points(model: ContactModel, nodes: InterfaceNodes
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every quadrature point of a conforming pair: its node, weight and facet normal.
+
+    In a partition-independent order (sorted by node, then by the facet's other
+    node), the same on every rank.
+    """
+    msh, pair = model.mesh, nodes.pair
+    tdim = msh.topology.dim
+    points, weights = basix.make_quadrature(basix.CellType.interval, 3,
+                                            rule=basix.QuadratureType.gll)
+    c2f = msh.topology.connectivity(tdim, tdim - 1)
+    facets = np.array([c2f.links(c)[lf] for c, lf in pair.facet_data[:, :2]],
+                      dtype=np.int32)
+    fx = dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets)
+    cx = dolfinx.mesh.entities_to_geometry(msh, tdim, pair.facet_data[:, 0])
+    X = msh.geometry.x[:, : nodes.gdim]
+    scale = max(float(np.ptp(nodes.x, axis=0).max()), 1e-300)
+    local = []
+    for f, c in zip(fx, cx, strict=True):
+        v = X[f[:2]]
+        t = v[1] - v[0]
+        length = float(np.linalg.norm(t))
+        normal = np.array([t[1], -t[0]]) / length
+        if np.dot(X[c].mean(axis=0) - v.mean(axis=0), normal) < 0:  # into the slave
+            normal = -normal
+        for xi, w in zip(points[:, 0], weights, strict=True):
+            x = v[0] + xi * t
+            d = np.linalg.norm(nodes.x - x, axis=1)
+            k = int(np.argmin(d))
+            if d[k] > 1e-9 * scale:
+                raise ValueError(f"interface '{pair.spec.interface}': a quadrature point "
+                                 "is not a node")
+            local.append((k, w * length, *normal))
+    table = np.array([row for part in model.comm.allgather(local) for row in part])
+    table = table[np.lexsort((table[:, 3], table[:, 2], table[:, 0]))]
+    return table[:, 0].astype(np.int64), table[:, 1], table[:, 2:]
 
 
 class NodalContactForces:
@@ -84,7 +123,7 @@ class NodalContactForces:
         self.kinematics = kinematics
         self.n = n = len(interface)
         gdim = nodes.gdim
-        node, weight, normal = self._points(model)
+        node, weight, normal = quadrature_points(model, nodes)
         self._node = node
         self._weight = weight
         self._normal = normal
@@ -139,43 +178,6 @@ class NodalContactForces:
         self._constants = [c for c in constants if isinstance(c, fem.Constant)]
         self._law_key: tuple[float, ...] | None = None
         self._law = pair.law.values()
-
-    def _points(self, model: ContactModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Every quadrature point of the pair: its node, weight and facet normal.
-
-        In a partition-independent order (sorted by node, then by the facet's other
-        node), the same on every rank.
-        """
-        msh, nodes, pair = model.mesh, self.nodes, self.pair
-        tdim = msh.topology.dim
-        points, weights = basix.make_quadrature(basix.CellType.interval, 3,
-                                                rule=basix.QuadratureType.gll)
-        c2f = msh.topology.connectivity(tdim, tdim - 1)
-        facets = np.array([c2f.links(c)[lf] for c, lf in pair.facet_data[:, :2]],
-                          dtype=np.int32)
-        fx = dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets)
-        cx = dolfinx.mesh.entities_to_geometry(msh, tdim, pair.facet_data[:, 0])
-        X = msh.geometry.x[:, : nodes.gdim]
-        scale = max(float(np.ptp(nodes.x, axis=0).max()), 1e-300)
-        local = []
-        for f, c in zip(fx, cx, strict=True):
-            v = X[f[:2]]
-            t = v[1] - v[0]
-            length = float(np.linalg.norm(t))
-            normal = np.array([t[1], -t[0]]) / length
-            if np.dot(X[c].mean(axis=0) - v.mean(axis=0), normal) < 0:  # into the slave
-                normal = -normal
-            for xi, w in zip(points[:, 0], weights, strict=True):
-                x = v[0] + xi * t
-                d = np.linalg.norm(nodes.x - x, axis=1)
-                k = int(np.argmin(d))
-                if d[k] > 1e-9 * scale:
-                    raise ValueError(f"interface '{pair.spec.interface}': a quadrature point "
-                                     "is not a node")
-                local.append((k, w * length, *normal))
-        table = np.array([row for part in self.comm.allgather(local) for row in part])
-        table = table[np.lexsort((table[:, 3], table[:, 2], table[:, 0]))]
-        return table[:, 0].astype(np.int64), table[:, 1], table[:, 2:]
 
     def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """u₁, v₁ of both sides at the quadrature points (one reduction under MPI)."""

@@ -1,10 +1,11 @@
-"""The surfaces of a general contact pair: its settings and its facets on every rank.
+"""The surfaces of a general contact pair: its facets on every rank.
 
-:class:`SurfacePair` is a general pair as the model holds it (:mod:`breakwater.model.model`),
-:func:`gather_surface` the facets of one side, gathered on every rank in an order that
-does not depend on the partition, and :func:`surface_dofs` the DOFs of every pair's
-surfaces (the interface unknowns of the fast solver, :mod:`breakwater.stepping.bulk`). The pair's
-forces are :class:`breakwater.contact.general.SurfaceContact`.
+:func:`gather_surface` gives the facets of one side, gathered on every rank in an order
+that does not depend on the partition, and :func:`surface_dofs` the DOFs of every
+pair's surfaces (the interface unknowns of the fast solver,
+:mod:`breakwater.stepping.bulk`). The pair's settings, :class:`SurfacePair`, are the
+model's (:mod:`breakwater.model.pairs`, re-exported here); its forces are
+:class:`breakwater.contact.general.SurfaceContact`.
 """
 
 from __future__ import annotations
@@ -16,99 +17,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 from dolfinx import fem
 
+from breakwater.model.pairs import INTEGRATIONS, SurfacePair, check_pair_settings
+
 if TYPE_CHECKING:
+    from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
-    from breakwater.stepping.bulk import MonolithicLayout
 
 __all__ = ["INTEGRATIONS", "Surface", "SurfacePair", "check_pair_settings", "gather_surface",
            "surface_dofs"]
-
-INTEGRATIONS = ("segments", "gauss", "nodes")
-
-
-def check_pair_settings(penalty: float, friction: float, regularisation: float, slave: str,
-                        master: str) -> None:
-    """Check the law's settings and bodies of a contact pair (conforming or general).
-
-    Raises:
-        ValueError: A setting out of range, or the same body on both sides.
-    """
-    if not penalty > 0:
-        raise ValueError(f"contact penalty must be > 0 (got {penalty})")
-    if not friction >= 0:
-        raise ValueError(f"friction coefficient must be >= 0 (got {friction})")
-    if not regularisation > 0:
-        raise ValueError(f"regularisation must be > 0 (got {regularisation})")
-    if slave == master:
-        raise ValueError("a contact pair needs two different bodies")
-
-
-@dataclass(frozen=True)
-class SurfacePair:
-    """Penalty contact with regularised Coulomb friction between two surfaces.
-
-    Attributes:
-        name: The pair's name (the case's ``[contact.NAME]``).
-        slave: Body whose integration points are projected.
-        master: Body whose surface (and outward normal) they are projected on.
-        slave_surface: Facet group on the slave's boundary.
-        master_surface: Facet group on the master's boundary, or several making one
-            surface (:attr:`master_groups`).
-        penalty: Normal penalty ε_n (N/m³).
-        friction: Coulomb coefficient μ (-).
-        regularisation: Regularisation velocity χ (m/s).
-        points: Gauss points per integration segment (``segments``, ``gauss``).
-        integration: The slave's integration points: ``segments`` (each slave facet
-            cut where the master facets' vertices project onto it, ``points`` Gauss
-            points per segment: segment-to-segment, exact on a flat patch),
-            ``gauss`` (``points`` Gauss points per slave facet: Gauss-point-to-segment)
-            or ``nodes`` (the slave facet's nodes with Gauss–Lobatto weights,
-            Simpson's on a P2 facet: node-to-segment, the conforming pair's
-            quadrature).
-        rotations: ``finite``: the normal and tangent of the current master surface
-            at the projection (eq. 7); ``small``: those of the reference surface there
-            (the bodies' small rotations, as the conforming pair's fixed normal; the
-            projection, the gap and the slip still follow the current surfaces).
-        radius: Search radius (m): a point farther from the master surface has no
-            projection (out of contact); None: the longest master facet.
-    """
-
-    name: str
-    slave: str
-    master: str
-    slave_surface: str
-    master_surface: str | tuple[str, ...]
-    penalty: float
-    friction: float = 0.0
-    regularisation: float = 1e-10
-    points: int = 3
-    integration: str = "segments"
-    rotations: str = "finite"
-    radius: float | None = None
-
-    gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
-
-    def __post_init__(self) -> None:
-        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
-                            self.master)
-        if not self.points >= 1:
-            raise ValueError(f"points per facet must be >= 1 (got {self.points})")
-        if self.integration not in INTEGRATIONS:
-            raise ValueError(f"integration must be one of {', '.join(INTEGRATIONS)} "
-                             f"(got {self.integration!r})")
-        if self.rotations not in ("finite", "small"):
-            raise ValueError(f"rotations must be finite or small (got {self.rotations!r})")
-        if not self.master_groups:
-            raise ValueError("a master surface needs at least one facet group")
-        if self.radius is not None and not self.radius > 0:
-            raise ValueError(f"search radius must be > 0 (got {self.radius})")
-
-
-    @property
-    def master_groups(self) -> tuple[str, ...]:
-        """The facet groups of the master surface (one or several)."""
-        m = self.master_surface
-        return (m,) if isinstance(m, str) else tuple(m)
 
 
 @dataclass

@@ -28,7 +28,6 @@ import numpy as np
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
-from breakwater.contact.general import SurfaceContact
 from breakwater.energy import dissipation as numerical
 from breakwater.energy.bulkenergy import bulk_terms
 from breakwater.stepping.gn22 import GN22
@@ -99,8 +98,7 @@ class EnergyLedger:
         self._contact = numerical.contact_form(s, self.u0, self.v0)
         # General pairs (breakwater.contact.general): their penalty energy and friction
         # power come from the pairs themselves, at the accepted state.
-        self._surfaces = [p for p in getattr(s.solver, "providers", ())
-                          if isinstance(p, SurfaceContact)]
+        self._surfaces = s.surfaces
         self._surface_power = 0.0
         self.reference: float | None = None
         self.row = Energies()

@@ -140,13 +140,14 @@ def _energy(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None
 
 
 def _contact(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None:
-    pairs = [n.removeprefix("contact_length_") for n in h if n.startswith("contact_length_")]
+    # The conforming pairs: those with a normal and a tangential resultant.
+    pairs = [n.removesuffix("_tangential_force") for n in h if n.endswith("_tangential_force")]
     fig = Figure(figsize=(7, 8))
     axes = fig.subplots(4, 1, sharex=True)
-    for k in pairs:
-        axes[0].plot(h["t"], h[f"contact_length_{k}"], label=f"pair {k}")
-        axes[1].plot(h["t"], h[f"normal_force_{k}"], label=f"pair {k}")
-        axes[2].plot(h["t"], h[f"tangential_force_{k}"], label=f"pair {k}")
+    for name in pairs:
+        axes[0].plot(h["t"], h[f"{name}_contact_length"], label=name)
+        axes[1].plot(h["t"], h[f"{name}_normal_force"], label=name)
+        axes[2].plot(h["t"], h[f"{name}_tangential_force"], label=name)
     axes[0].set_ylabel("contact length (m)")
     axes[1].set_ylabel("normal force (N/m)")
     axes[2].set_ylabel("tangential force (N/m)")

@@ -11,16 +11,14 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-import ufl
 from dolfinx import fem
 
-from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.config.runspec import OutputSpec
 from breakwater.contact.conforming import InterfaceNodes
 from breakwater.contact.general import SurfaceContact
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
-from breakwater.outputs import quality
+from breakwater.model.pairs import pair_names as names_of
 from breakwater.outputs.probes import Probes
 from breakwater.outputs.surfaceoutputs import surface_state
 from breakwater.stepping.gn22 import GN22
@@ -33,22 +31,30 @@ class Monitor:
 
     Columns: ``t``, ``dt``, ``newton_iterations``; the probes' columns
     (:class:`~breakwater.outputs.probes.Probes`: ``<probe>_ux``, ``<probe>_uy``,
-    ``<pair probe>_<key>``); per contact pair ``k``: ``contact_length_k`` (length
-    where g_n ≤ 0), ``normal_force_k``, ``tangential_force_k`` (resultants on the
-    slave), ``penetration_k`` (largest nodal ⟨−g_n⟩₊, m); per general pair ``name``
-    (:mod:`~breakwater.contact.general`): ``<name>_force_x``, ``<name>_force_y`` (the
-    resultant on the slave), ``<name>_contact_length`` (reference length of the
-    integration points where g_n ≤ 0), ``<name>_penetration`` (largest ⟨−g_n⟩₊ there,
-    m); the ledger's :data:`~breakwater.energy.ledger.FIELDS`.
+    ``<pair probe>_<key>``); per contact pair, named by the pair (the case's
+    ``[contact.<name>]``; :class:`~breakwater.model.pairs.Pair`), ``<name>_<quantity>``:
+
+    - both kinds: ``<name>_contact_length`` (m, or m² in 3D: the length where
+      g_n ≤ 0; of a general pair, the reference length of its integration points
+      there), ``<name>_penetration`` (the largest ⟨−g_n⟩₊, m: at the nodes of a
+      conforming pair, at the integration points of a general one);
+    - a conforming pair: ``<name>_normal_force`` (∫ ε_n ⟨−g_n⟩₊ dS, the normal
+      resultant on the slave, N/m in plane strain), ``<name>_tangential_force``
+      (∫ t·t_s dS on the slave: 2D along t = (n_y, −n_x), 3D its magnitude);
+    - a general pair: ``<name>_force_x``, ``<name>_force_y`` (the resultant ∫ t_s on
+      the slave);
+
+    then the ledger's :data:`~breakwater.energy.ledger.FIELDS`.
 
     Args:
         model: The contact model.
-        stepper: The GN22 stepper (its ``u``, ``v`` are measured).
+        stepper: The GN22 stepper (its ``u``, ``v`` are measured, and its pairs,
+            :attr:`~breakwater.stepping.gn22.GN22.contacts`).
         output: The probes.
-        nodes: Interface nodes of every pair.
+        nodes: Interface nodes of every conforming pair.
 
     Attributes:
-        surfaces: The general pairs (the stepper's providers).
+        surfaces: The general pairs (the stepper's :attr:`~breakwater.stepping.gn22.GN22.surfaces`).
         probes: The probes.
 
     """
@@ -57,31 +63,11 @@ class Monitor:
                  nodes: Sequence[InterfaceNodes]) -> None:
         self.model, self.stepper = model, stepper
         self.nodes = nodes
-        self.surfaces = [p for p in getattr(stepper.solver, "providers", ())
-                         if isinstance(p, SurfaceContact)]
+        self.surfaces = stepper.surfaces
         self.probes = Probes(model, output, nodes, self.surfaces)
-        u, v = stepper.u, stepper.v
-        self._contact = []
-        for p in model.pairs:
-            us, um = u[p.slave]("+"), u[p.master]("-")
-            g_n = p.law.gap(us, um, p.n)
-            pressure = p.law.normal.pressure(g_n)
-            traction = model.traction(p, u, v)
-            if model.gdim == 2:
-                t = ufl.as_vector((p.n[1], -p.n[0]))
-                tangential = ufl.dot(traction, t)
-            else:
-                tangential = ufl.sqrt(ufl.dot(forms.tangential_part(traction, p.n),
-                                              forms.tangential_part(traction, p.n)))
-            self._contact.append(tuple(model.form(f * p.dS) for f in (
-                p.law.normal.closed(g_n), pressure, tangential)))
         self.columns = ["t", "dt", "newton_iterations", *self.probes.columns]
-        for k in range(len(model.pairs)):
-            self.columns += [f"contact_length_{k}", f"normal_force_{k}",
-                             f"tangential_force_{k}", f"penetration_{k}"]
-        for sp in self.surfaces:
-            self.columns += [f"{sp.spec.name}_{key}" for key in
-                             ("force_x", "force_y", "contact_length", "penetration")]
+        for pair in stepper.contacts:
+            self.columns += pair.columns
         self.columns += list(FIELDS)
 
     def row(self, dt: float, iterations: int, energies: Mapping[str, float]) -> dict[str, float]:
@@ -90,23 +76,8 @@ class Monitor:
         r: dict[str, float] = {"t": float(s.t.value), "dt": dt,
                                "newton_iterations": float(iterations)}
         r.update(self.probes.values(s.u))
-        resultants = self.model.assemble_many([c for forms in self._contact for c in forms])
-        for k in range(len(self._contact)):
-            length, normal, tangential = (float(x) for x in resultants[3 * k: 3 * k + 3])
-            r[f"contact_length_{k}"] = length
-            r[f"normal_force_{k}"] = normal
-            r[f"tangential_force_{k}"] = tangential
-        for k, (p, nd) in enumerate(zip(self.model.pairs, self.nodes, strict=True)):
-            gap = nd.contact_state(s.u[p.slave].x.array, s.u[p.master].x.array)["gap"]
-            r[f"penetration_{k}"] = quality.max_penetration(gap)
-        for sp in self.surfaces:
-            force = sp.resultant()
-            state = sp.state()
-            closed = state["gap"] <= 0  # NaN (no projection): open
-            name = sp.spec.name
-            r[f"{name}_force_x"], r[f"{name}_force_y"] = float(force[0]), float(force[1])
-            r[f"{name}_contact_length"] = float(state["weight"][closed].sum())
-            r[f"{name}_penetration"] = float(-state["gap"][closed].min(initial=0.0))
+        for pair in s.contacts:
+            r.update(pair.measure())
         r.update({k: float(energies[k]) for k in FIELDS})
         return r
 
@@ -143,6 +114,5 @@ def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
 
 
 def pair_names(model: ContactModel) -> list[str]:
-    """Names of the contact pairs: the interface group, or the index where it repeats."""
-    names = [p.spec.interface for p in model.pairs]
-    return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]
+    """Names of the conforming pairs (:func:`breakwater.model.pairs.pair_names`)."""
+    return names_of([p.spec for p in model.pairs])

@@ -49,6 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from breakwater.model.pairs import max_penetration
+
 __all__ = [
     "MAX_PENETRATION_OVER_H",
     "MAX_PENETRATION_OVER_SETTLEMENT",
@@ -68,16 +70,6 @@ MAX_PENETRATION_OVER_SETTLEMENT = 0.1
 """Largest static penetration accepted, as a fraction of the static settlement."""
 MAX_STIFFNESS_RATIO = 1e3
 """Largest ε_n h / E (softer side) before the penalty costs conditioning."""
-
-
-def max_penetration(gap: np.ndarray) -> float:
-    """The largest penetration ``max ⟨−g_n⟩₊`` of nodal normal gaps (0 if none).
-
-    Args:
-        gap: Nodal normal gaps g_n (m), negative where the bodies interpenetrate.
-    """
-    gap = np.asarray(gap, dtype=float)
-    return float(max(0.0, -gap.min())) if gap.size else 0.0
 
 
 def settlement(u_slave: np.ndarray, u_master: np.ndarray, normal: np.ndarray) -> float:
@@ -267,7 +259,7 @@ class PairInputs:
         static_penetration: Largest static penetration (m).
         settlement: Static settlement (m), see :func:`settlement`.
         penetration_column: The history column of the pair's largest penetration
-            (None: ``penetration_<k>``, k the pair's index).
+            (None: ``<name>_penetration``).
     """
 
     name: str

@@ -32,6 +32,7 @@ from breakwater.config.runspec import TimeSpec
 from breakwater.contact.conforming import InterfaceNodes
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
+from breakwater.model.pairs import pair_names
 from breakwater.outputs import quality
 from breakwater.outputs.probes import Probes
 from breakwater.run.runstate import RunState
@@ -81,7 +82,8 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     slave = model.pairs[0].slave
     weights = model.weight()
     weight = sum(weights[i] for i in resting_on(model, slave))
-    length, resultant = row["contact_length_0"], row["normal_force_0"]
+    name = pair_names([p.spec for p in model.pairs])[0]
+    length, resultant = row[f"{name}_contact_length"], row[f"{name}_normal_force"]
     pressure = interface["pair0_pressure"]
     first, last, centre = edge_centre(interface["pair0_x"])
     static.update({
@@ -137,10 +139,10 @@ def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mappin
             static report.
     """
     report = {}
-    for k, c in enumerate(inputs):
+    for c in inputs:
         δ, when = None, None
         if steps:
-            column = c.penetration_column or f"penetration_{k}"
+            column = c.penetration_column or f"{c.name}_penetration"
             j = int(np.argmax([r[column] for r in steps]))
             δ, when = steps[j][column], steps[j]["t"]
         report[c.name] = c.assess(δ, when)

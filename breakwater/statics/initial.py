@@ -71,7 +71,7 @@ from breakwater.contact.conforming import (
     release_velocities,
 )
 from breakwater.contact.slipguard import SlipGuard
-from breakwater.model.model import ContactModel, _PairData
+from breakwater.model.model import ContactModel, PairData
 from breakwater.statics.relaxation import relax
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
@@ -231,14 +231,14 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
     return state
 
 
-def _bonded_term(pair: _PairData, u: Sequence, w: Sequence, k: float) -> ufl.Form:
+def _bonded_term(pair: PairData, u: Sequence, w: Sequence, k: float) -> ufl.Form:
     """A tangential spring ``k`` between the two sides of a pair, ∫ k Δu_T·δw_T dS."""
     jump = forms.tangential_part(u[pair.slave]("+") - u[pair.master]("-"), pair.n)
     δw = forms.tangential_part(w[pair.slave]("+") - w[pair.master]("-"), pair.n)
     return k * ufl.dot(jump, δw) * pair.dS
 
 
-def _resultants(model: ContactModel, pair: _PairData, u: Sequence[fem.Function],
+def _resultants(model: ContactModel, pair: PairData, u: Sequence[fem.Function],
                 k: float) -> tuple[float, np.ndarray]:
     """Normal resultant ∫p and tangential resultant ∫k Δu_T of a bonded pair (N/m).
 
@@ -253,7 +253,7 @@ def _resultants(model: ContactModel, pair: _PairData, u: Sequence[fem.Function],
 
 
 def _solve(model: ContactModel, F: ufl.Form, u: list[fem.Function], options: NewtonOptions | None,
-           stabilise: Sequence[_PairData], precheck: Any = None) -> int:
+           stabilise: Sequence[PairData], precheck: Any = None) -> int:
     """Newton on F with the Jacobian-only weak tangential spring of ``solve_static``."""
     F_t = F
     for p in stabilise:
@@ -325,7 +325,7 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
 
 
 def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonOptions | None,
-                    free: Sequence[_PairData], k_b: Sequence[float], bulk: ufl.Form,
+                    free: Sequence[PairData], k_b: Sequence[float], bulk: ufl.Form,
                     normal: Sequence[ufl.Form]) -> tuple[int, float]:
     """The frictional static solve, from the bonded state in ``u`` (stage 2).
 
@@ -360,8 +360,8 @@ def _friction_solve(model: ContactModel, u: list[fem.Function], options: NewtonO
 
 
 def _release(model: ContactModel, u: list[fem.Function], v: list[fem.Function],
-             options: NewtonOptions | None, held: Sequence[tuple[_PairData, np.ndarray]],
-             free: Sequence[_PairData], τ: float) -> int:
+             options: NewtonOptions | None, held: Sequence[tuple[PairData, np.ndarray]],
+             free: Sequence[PairData], τ: float) -> int:
     """Stage 3's start: the held bodies in the state of incipient sliding (collective).
 
     Each held pair's slave nodes get the slip velocity :data:`~breakwater.contact.conforming.

@@ -23,7 +23,6 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact.conforming import mean_facet_length
-from breakwater.contact.general import SurfaceContact
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
@@ -72,7 +71,7 @@ class PseudoStepper:
         solver = self.stepper.fast
         assert solver is not None  # solver="fast"
         self.solver = solver
-        self.providers = [p for p in solver.providers if isinstance(p, SurfaceContact)]
+        self.providers = self.stepper.surfaces
         self._vecs = (solver.layout.vec.duplicate(), solver.layout.vec.duplicate())
         self.scale = force_scale(m)
         self.steps = 0

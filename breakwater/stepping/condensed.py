@@ -55,9 +55,11 @@ from petsc4py import PETSc
 
 from breakwater.common.errors import PenetrationError
 from breakwater.common.parallel import single_threaded_blas
+from breakwater.common.timings import Timings
 from breakwater.contact.general import SurfaceContact
+from breakwater.model.layout import MonolithicLayout
 from breakwater.model.model import ContactModel
-from breakwater.stepping.bulk import BulkOperators, MonolithicLayout, Timings, interface_dofs
+from breakwater.stepping.bulk import BulkOperators, interface_dofs
 from breakwater.stepping.factorisations import Factorisations
 from breakwater.stepping.interface import (
     ContactFactory,
@@ -149,6 +151,10 @@ class InterfaceAssembler:
         self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
+    def left_product(self, X: np.ndarray) -> None:
+        """None: the product is formed from :meth:`matrix` (no structure to use)."""
+        return None
+
     def matrix(self) -> np.ndarray:
         """The Jacobian at the interface unknowns, dense."""
         out = np.zeros(self.n * self.n)
@@ -221,12 +227,12 @@ class CondensedNewton(StepSolver):
                 InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
                                    self.da, self.interface.positions, self.I)]
         # General pairs (breakwater.contact.general): one provider each.
-        self.providers += [SurfaceContact(model, p, layout, self.I,
-                                          (self.u, self.v, self.a, self.da), dt, beta1, beta2)
-                           for p in model.surface_pairs]
-        for p in self.providers:
-            if isinstance(p, SurfaceContact):
-                p.timings = self.timings  # its search time: timings["contact_search"]
+        self.surfaces = [SurfaceContact(model, p, layout, self.I,
+                                        (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+                         for p in model.surface_pairs]
+        self.providers += self.surfaces
+        for sp in self.surfaces:
+            sp.timings = self.timings  # its search time: timings["contact_search"]
         self.contact = ContactSum(self.interface, self.da, self.providers, self.timings)
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
@@ -263,9 +269,8 @@ class CondensedNewton(StepSolver):
         At (u, v), into the owned entries of a stacked vector (the right-hand side of a₀).
         """
         fc = np.zeros(self.n)
-        for p in self.providers:
-            if isinstance(p, SurfaceContact):
-                fc += p.vector(accepted=True)
+        for p in self.surfaces:
+            fc += p.vector(accepted=True)
         vec.array[self.interface.owned_rows] += scale * fc[self.interface.owned]
 
     def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
@@ -276,9 +281,8 @@ class CondensedNewton(StepSolver):
         ones the guard reads, and the step is read back where the guard cut it.
         """
         if self.surface_guard:
-            for p in self.providers:
-                if isinstance(p, SurfaceContact):
-                    self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
+            for p in self.surfaces:
+                self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
         if self.guard is None:
             return
         dv_dx = self.beta1 * float(self.dt.value)
@@ -348,8 +352,7 @@ class CondensedNewton(StepSolver):
         """
         with self.timings("interface_assembly"):
             y = self.newton.y
-            for p in self.providers:
-                if isinstance(p, SurfaceContact):
-                    why = p.penetration(y)
-                    if why is not None:
-                        raise PenetrationError(why, 0, its)
+            for p in self.surfaces:
+                why = p.penetration(y)
+                if why is not None:
+                    raise PenetrationError(why, 0, its)

@@ -17,7 +17,8 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from breakwater.stepping.bulk import BulkOperators, Timings
+from breakwater.common.timings import Timings
+from breakwater.stepping.bulk import BulkOperators
 
 __all__ = ["Factorisation", "Factorisations"]
 

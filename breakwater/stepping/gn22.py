@@ -29,8 +29,10 @@ from petsc4py import PETSc
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
+from breakwater.contact.pairstate import conforming_pairs
 from breakwater.contact.slipguard import SlipGuard
-from breakwater.model.model import ContactModel, _PairData
+from breakwater.model.model import ContactModel, PairData
+from breakwater.model.pairs import Pair
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 from breakwater.stepping.stepsolver import StepSolver
@@ -156,7 +158,7 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
         solver.destroy()
 
 
-def tangential_stiffness(model: ContactModel, pair: _PairData) -> float:
+def tangential_stiffness(model: ContactModel, pair: PairData) -> float:
     """min(ε_n, E/h) of a pair: the softer body's E over the mean facet length."""
     E = min(model.bodies[i].spec.material.E for i in (pair.slave, pair.master))
     length = model.assemble(model.form(1.0 * pair.dS))
@@ -232,6 +234,17 @@ class GN22:
             self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
                                        force_scale=force_scale(model),
                                        precheck=self._precheck if self.guard else None)
+        # The general pairs the fast solver built on this stepper's state (SurfaceContact).
+        self.surfaces = self.solver.surfaces if isinstance(self.solver, CondensedNewton) else []
+        self._contacts: list[Pair] | None = None
+
+    @property
+    def contacts(self) -> list[Pair]:
+        """Every pair at this stepper's state (u, v): conforming, then general (collective)."""
+        if self._contacts is None:
+            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v),
+                              *self.surfaces]
+        return self._contacts
 
     # --- initial state ------------------------------------------------------------
 

@@ -17,7 +17,8 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from breakwater.stepping.bulk import MonolithicLayout, Timings
+from breakwater.common.timings import Timings
+from breakwater.model.layout import MonolithicLayout
 
 __all__ = ["ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns"]
 
@@ -35,6 +36,14 @@ class ContactForces(Protocol):
 
     def matrix(self) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
+        ...
+
+    def left_product(self, X: np.ndarray) -> np.ndarray | None:
+        """X ∂f_c/∂y from the provider's own structure (sparse, nodal), or None.
+
+        None: :class:`ContactSum` forms ``X @ matrix()``, summed with the other such
+        providers' matrices first (one product).
+        """
         ...
 
 
@@ -125,8 +134,8 @@ class ContactSum:
     def left_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
         """X ∂f_c/∂y on the interface unknowns (the same on every rank).
 
-        A provider with a ``left_product(X)`` method gives the product itself (from its
-        matrix's structure); the others their dense matrix.
+        A provider whose ``left_product(X)`` gives the product (from its matrix's
+        structure) adds it; the others (``None``) add their dense matrices, multiplied once.
         """
         n = self.interface.n
         out = np.zeros((n, n))
@@ -134,9 +143,9 @@ class ContactSum:
         with self.timings("interface_assembly"):
             self.set(y)
             for c in self.providers:
-                product = getattr(c, "left_product", None)
+                product = c.left_product(X)
                 if product is not None:
-                    out += product(X)
+                    out += product
                 else:
                     m = c.matrix()
                     dense = m if dense is None else dense + m

@@ -18,7 +18,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError
-from breakwater.stepping.bulk import Timings
+from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
 from breakwater.stepping.solver import NewtonOptions, snes_reason

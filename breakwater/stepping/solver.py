@@ -13,8 +13,8 @@ from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError
+from breakwater.common.timings import Timings
 from breakwater.model.model import ContactModel
-from breakwater.stepping.bulk import Timings
 from breakwater.stepping.stepsolver import StepSolver
 
 

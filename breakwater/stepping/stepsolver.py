@@ -17,7 +17,7 @@ from typing import Protocol
 
 from petsc4py import PETSc
 
-from breakwater.stepping.bulk import Timings
+from breakwater.common.timings import Timings
 
 __all__ = ["StepSolver"]
 

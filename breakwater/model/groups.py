@@ -1,0 +1,126 @@
+"""Where a contact model's groups lie: bodies by name, facet groups, fixed boundaries, loads.
+
+:class:`ModelGroups` finds the named groups of the mesh on the bodies and builds the
+Dirichlet conditions and the load measures (on the data
+:class:`~breakwater.model.model.ContactModel` builds).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from breakwater.common.errors import MeshError
+from breakwater.model.mesh import group_tag
+from breakwater.model.parts import BodyData, Fixed, LoadData, SurfaceLoad
+from breakwater.model.residual import ModelForms
+
+__all__ = ["ModelGroups"]
+
+
+class ModelGroups(ModelForms):
+    """The model's named groups on its bodies: look-ups, fixed boundaries and loads."""
+
+    _by_name: dict[str, BodyData]
+    _cell_body: np.ndarray
+    _fixed: list[tuple[str, int, tuple[int, ...]]]  # group, body, components
+    _load_data: list[tuple[int, np.ndarray]]
+
+    def body(self, name: str) -> BodyData:
+        """The data of a body by name."""
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise KeyError(f"no body named '{name}' (bodies: {', '.join(self._by_name)})") \
+                from None
+
+    def surface_facets(self, body: str, groups: Sequence[str]) -> np.ndarray:
+        """A body's facets (its submesh's, ghosts included) in any of several groups."""
+        b, fdim = self.body(body), self.mesh.topology.dim - 1
+        found = [b.facet_tags.find(group_tag(self.mesh_data, g, fdim)) for g in groups]
+        return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int32)
+
+    def _facet_counts(self, group: str) -> list[int]:
+        """The number of facets of a facet group on each body (every rank)."""
+        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
+        return [self.comm.allreduce(len(b.facet_tags.find(tag))) for b in self.bodies]
+
+    def _locate(self, group: str) -> tuple[BodyData, np.ndarray]:
+        """The body whose boundary holds a facet group, and its facets in the submesh."""
+        counts = self._facet_counts(group)
+        owners = [i for i, c in enumerate(counts) if c > 0]
+        if len(owners) != 1:
+            raise MeshError(f"facet group '{group}' must lie on exactly one body "
+                            f"(found on {len(owners)})")
+        b = self.bodies[owners[0]]
+        tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
+        return b, b.facet_tags.find(tag)
+
+    def _build_fixed(self, fixed: Fixed) -> list[fem.DirichletBC]:
+        body, facets = self._locate(fixed.group)
+        fdim = self.mesh.topology.dim - 1
+        comps = range(self.gdim) if fixed.components is None else fixed.components
+        bcs = []
+        for c in comps:
+            if not 0 <= c < self.gdim:
+                raise ValueError(f"fixed '{fixed.group}': component {c} out of range")
+            Vc = body.V.sub(c)
+            dofs = fem.locate_dofs_topological(Vc, fdim, facets)
+            bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
+        self._fixed.append((fixed.group, body.index, tuple(comps)))
+        return bcs
+
+    def fixed_on(self, body: str) -> list[tuple[str, tuple[int, ...]]]:
+        """The fixed boundaries on a body: (facet group, displacement components held)."""
+        index = self.body(body).index
+        return [(group, comps) for group, i, comps in self._fixed if i == index]
+
+    def _build_load(self, k: int, load: SurfaceLoad) -> LoadData:
+        """The load's measure: one-sided facet integrals on the loaded body.
+
+        Every load integrates over the exterior-facet pairs (cell, local facet) of its
+        body, in one shared list (dolfinx compiles a form only if all its integrals of
+        a type share one subdomain_data object); on an interface between two bodies
+        the pairs are those of the side named by ``load.body``.
+        """
+        msh, data = self.mesh, self.mesh_data
+        fdim = msh.topology.dim - 1
+        if load.field is None and len(load.direction) != self.gdim:
+            raise ValueError(f"load on '{load.group}': direction needs {self.gdim} components")
+        assert data.facet_tags is not None
+        facets = data.facet_tags.find(group_tag(data, load.group, fdim))
+        outer = np.intersect1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
+        ext = fem.compute_integration_domains(fem.IntegralType.exterior_facet, msh.topology,
+                                              outer).reshape(-1, 2)
+        inner = np.setdiff1d(facets, outer)
+        both = fem.compute_integration_domains(fem.IntegralType.interior_facet, msh.topology,
+                                               inner).reshape(-1, 4)
+        sides = np.vstack([ext, both[:, :2], both[:, 2:]])
+        local = set(np.unique(self._cell_body[sides[:, 0]]).tolist()) if len(sides) else set()
+        owners = sorted(set().union(*self.comm.allgather(local)))
+        if load.body is not None:
+            index = self.body(load.body).index
+            if index not in owners:
+                raise MeshError(f"facet group '{load.group}' is not on the boundary of "
+                                f"body '{load.body}'")
+        elif len(owners) != 1:
+            names = ", ".join(self.bodies[i].spec.name for i in owners)
+            raise MeshError(f"facet group '{load.group}' must lie on exactly one body "
+                            f"(found on {len(owners)}{': ' + names if names else ''}; name "
+                            "the body loaded)")
+        else:
+            index = owners[0]
+        if self.comm.allreduce(len(inner)) == 0:
+            entities = ext  # the exterior pairs in dolfinx's own order (as ds(tag) would)
+        else:
+            entities = sides[self._cell_body[sides[:, 0]] == index]
+        tag = 2000 + k
+        self._load_data.append((tag, entities.astype(np.int32).ravel()))
+        ds = ufl.Measure("ds", domain=msh, subdomain_data=self._load_data)(tag)
+        amp = fem.Constant(msh, dolfinx.default_scalar_type(load.amplitude(0.0)))
+        unit = load.unit_traction(ufl.SpatialCoordinate(msh), ufl.FacetNormal(msh))
+        return LoadData(load, index, ds, amp, unit)

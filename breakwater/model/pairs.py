@@ -1,0 +1,221 @@
+"""The contact pairs as the model holds them: their settings and their integration data.
+
+:class:`ContactPair` is a conforming pair (the two bodies meet on one facet group, node
+on node), :class:`SurfacePair` a general pair (two surfaces that need not match, with
+finite sliding: :mod:`breakwater.contact.general`); :class:`PairData` is what the
+model builds for a conforming pair (:mod:`breakwater.model.model`).
+
+:class:`Pair` is what the outputs ask of a pair of either kind at a stepper's state
+(its history columns, ``<name>_<quantity>``); the contact layer implements it and the
+stepper builds the pairs on its state (:attr:`breakwater.stepping.gn22.GN22.contacts`).
+
+Nothing here imports dolfinx at module level: the case file reads these settings.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import ufl
+    from dolfinx import fem
+
+    from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+
+__all__ = ["INTEGRATIONS", "ContactPair", "Pair", "PairData", "SurfacePair", "check_pair_settings",
+           "max_penetration", "pair_names"]
+
+INTEGRATIONS = ("segments", "gauss", "nodes")
+
+
+def check_pair_settings(penalty: float, friction: float, regularisation: float, slave: str,
+                        master: str) -> None:
+    """Check the law's settings and bodies of a contact pair (conforming or general).
+
+    Raises:
+        ValueError: A setting out of range, or the same body on both sides.
+    """
+    if not penalty > 0:
+        raise ValueError(f"contact penalty must be > 0 (got {penalty})")
+    if not friction >= 0:
+        raise ValueError(f"friction coefficient must be >= 0 (got {friction})")
+    if not regularisation > 0:
+        raise ValueError(f"regularisation must be > 0 (got {regularisation})")
+    if slave == master:
+        raise ValueError("a contact pair needs two different bodies")
+
+
+@dataclass(frozen=True)
+class SurfacePair:
+    """Penalty contact with regularised Coulomb friction between two surfaces.
+
+    Attributes:
+        name: The pair's name (the case's ``[contact.NAME]``).
+        slave: Body whose integration points are projected.
+        master: Body whose surface (and outward normal) they are projected on.
+        slave_surface: Facet group on the slave's boundary.
+        master_surface: Facet group on the master's boundary, or several making one
+            surface (:attr:`master_groups`).
+        penalty: Normal penalty ε_n (N/m³).
+        friction: Coulomb coefficient μ (-).
+        regularisation: Regularisation velocity χ (m/s).
+        points: Gauss points per integration segment (``segments``, ``gauss``).
+        integration: The slave's integration points: ``segments`` (each slave facet
+            cut where the master facets' vertices project onto it, ``points`` Gauss
+            points per segment: segment-to-segment, exact on a flat patch),
+            ``gauss`` (``points`` Gauss points per slave facet: Gauss-point-to-segment)
+            or ``nodes`` (the slave facet's nodes with Gauss–Lobatto weights,
+            Simpson's on a P2 facet: node-to-segment, the conforming pair's
+            quadrature).
+        rotations: ``finite``: the normal and tangent of the current master surface
+            at the projection (eq. 7); ``small``: those of the reference surface there
+            (the bodies' small rotations, as the conforming pair's fixed normal; the
+            projection, the gap and the slip still follow the current surfaces).
+        radius: Search radius (m): a point farther from the master surface has no
+            projection (out of contact); None: the longest master facet.
+    """
+
+    name: str
+    slave: str
+    master: str
+    slave_surface: str
+    master_surface: str | tuple[str, ...]
+    penalty: float
+    friction: float = 0.0
+    regularisation: float = 1e-10
+    points: int = 3
+    integration: str = "segments"
+    rotations: str = "finite"
+    radius: float | None = None
+
+    gap = 0.0  # the law's g_0: the geometry carries the initial gap of a general pair
+
+    def __post_init__(self) -> None:
+        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
+                            self.master)
+        if not self.points >= 1:
+            raise ValueError(f"points per facet must be >= 1 (got {self.points})")
+        if self.integration not in INTEGRATIONS:
+            raise ValueError(f"integration must be one of {', '.join(INTEGRATIONS)} "
+                             f"(got {self.integration!r})")
+        if self.rotations not in ("finite", "small"):
+            raise ValueError(f"rotations must be finite or small (got {self.rotations!r})")
+        if not self.master_groups:
+            raise ValueError("a master surface needs at least one facet group")
+        if self.radius is not None and not self.radius > 0:
+            raise ValueError(f"search radius must be > 0 (got {self.radius})")
+
+
+    @property
+    def master_groups(self) -> tuple[str, ...]:
+        """The facet groups of the master surface (one or several)."""
+        m = self.master_surface
+        return (m,) if isinstance(m, str) else tuple(m)
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    """Penalty contact with regularised Coulomb friction on a named facet group.
+
+    Attributes:
+        interface: Facet group where the two bodies meet (conforming).
+        slave: Body whose displacement is penalised against the master's.
+        master: Body whose outward normal defines the gap.
+        penalty: Normal penalty ε_n (N/m³).
+        friction: Coulomb coefficient μ (-); 0 for frictionless contact.
+        regularisation: Regularisation velocity χ (m/s).
+        gap: Initial normal gap g_0 (m).
+
+    The law itself is :class:`forms.ContactLaw` (in ``forms/contact.py``), built from
+    these fields by :meth:`forms.ContactLaw.of`.
+    """
+
+    interface: str
+    slave: str
+    master: str
+    penalty: float
+    friction: float = 0.0
+    regularisation: float = 1e-10
+    gap: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_pair_settings(self.penalty, self.friction, self.regularisation, self.slave,
+                            self.master)
+
+
+@dataclass
+class PairData:
+    """What the model builds for one contact pair.
+
+    Attributes:
+        law: The contact law (:class:`forms.ContactLaw`) with ``fem.Constant``
+            parameters; ``law.values()`` evaluates it on nodal arrays.
+
+    """
+
+    spec: ContactPair
+    slave: int
+    master: int
+    facet_data: np.ndarray
+    dS: ufl.Measure
+    n: ufl.core.expr.Expr
+    law: forms.ContactLaw
+
+    @property
+    def ε_n(self) -> fem.Constant:
+        """The normal penalty (N/m³)."""
+        return self.law.normal.ε_n
+
+
+class Pair(Protocol):
+    """A contact pair as the outputs measure it, at its stepper's accepted state.
+
+    Both kinds implement it: a conforming pair
+    (:class:`breakwater.contact.pairstate.ConformingPair`) and a general pair
+    (:class:`breakwater.contact.general.SurfaceContact`); the stepper
+    (:attr:`breakwater.stepping.gn22.GN22.contacts`) builds them on its state, conforming
+    pairs first, in the model's order. The history's columns of a pair are named
+    ``<name>_<quantity>`` (:mod:`breakwater.outputs.monitor`).
+    """
+
+    @property
+    def name(self) -> str:
+        """The pair's name: the case's ``[contact.<name>]``."""
+        ...
+
+    @property
+    def kind(self) -> str:
+        """``conforming`` or ``general``."""
+        ...
+
+    @property
+    def columns(self) -> list[str]:
+        """The pair's history columns, in order."""
+        ...
+
+    def measure(self) -> dict[str, float]:
+        """The values of :attr:`columns` at the accepted state (collective, every rank)."""
+        ...
+
+
+def pair_names(pairs: Sequence[ContactPair]) -> list[str]:
+    """Names of conforming pairs: the interface group, or the index where it repeats.
+
+    The interface group is the case's ``[contact.<name>]``.
+    """
+    names = [p.interface for p in pairs]
+    return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]
+
+
+def max_penetration(gap: np.ndarray) -> float:
+    """The largest penetration ``max ⟨−g_n⟩₊`` of nodal normal gaps (0 if none).
+
+    Args:
+        gap: Nodal normal gaps g_n (m), negative where the bodies interpenetrate.
+    """
+    gap = np.asarray(gap, dtype=float)
+    return float(max(0.0, -gap.min())) if gap.size else 0.0

@@ -1,0 +1,178 @@
+"""The parts of a contact model: materials, bodies, boundary conditions, loads, damping.
+
+The settings a model is built from (:class:`Material`, :class:`Body`, :class:`Fixed`,
+:class:`SurfaceLoad`, :class:`Damping`) and what the model builds for a body
+(:class:`BodyData`) and a load (:class:`LoadData`); the pairs are
+:mod:`breakwater.model.pairs`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import dolfinx
+import ufl
+from dolfinx import fem
+
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.loads.fields import TractionField
+
+__all__ = ["Body", "BodyData", "Damping", "Fixed", "LoadData", "Material", "SurfaceLoad"]
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear isotropic elastic material.
+
+    Give exactly one of ``shear_modulus`` or ``young_modulus``.
+
+    Attributes:
+        density: Mass density ρ (kg/m³).
+        poisson: Poisson's ratio ν (-), in (-1, 1/2).
+        shear_modulus: Shear modulus G (Pa).
+        young_modulus: Young's modulus E (Pa).
+
+    """
+
+    density: float
+    poisson: float
+    shear_modulus: float | None = None
+    young_modulus: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.shear_modulus is None) == (self.young_modulus is None):
+            raise ValueError("give exactly one of shear_modulus and young_modulus")
+        if not self.density > 0:
+            raise ValueError(f"density must be > 0 (got {self.density})")
+        if not -1.0 < self.poisson < 0.5:
+            raise ValueError(f"poisson must be in (-1, 0.5) (got {self.poisson})")
+        modulus = self.shear_modulus if self.young_modulus is None else self.young_modulus
+        if not modulus > 0:  # type: ignore[operator]
+            raise ValueError(f"elastic modulus must be > 0 (got {modulus})")
+
+    @property
+    def G(self) -> float:
+        """Shear modulus (Pa)."""
+        return self.lame[1]
+
+    @property
+    def E(self) -> float:
+        """Young's modulus (Pa)."""
+        return 2.0 * self.G * (1.0 + self.poisson)
+
+    @property
+    def lame(self) -> tuple[float, float]:
+        """Lamé parameters (λ, μ) in Pa."""
+        if self.shear_modulus is not None:
+            return forms.lame_from_shear(self.shear_modulus, self.poisson)
+        assert self.young_modulus is not None
+        return forms.lame_from_young(self.young_modulus, self.poisson)
+
+    @property
+    def p_wave_speed(self) -> float:
+        """Speed of dilatational waves, sqrt((λ + 2μ)/ρ) (m/s)."""
+        λ, μ = self.lame
+        return math.sqrt((λ + 2.0 * μ) / self.density)
+
+    @property
+    def constrained_modulus(self) -> float:
+        """Oedometric modulus λ + 2μ (Pa): the 1D plane-strain bar modulus."""
+        λ, μ = self.lame
+        return λ + 2.0 * μ
+
+
+@dataclass(frozen=True)
+class Body:
+    """A deformable body: a named cell group and its material."""
+
+    name: str
+    material: Material
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """Zero displacement on a named facet group.
+
+    Attributes:
+        group: Facet group name.
+        components: Displacement components fixed (0 = x, 1 = y, 2 = z); None for all.
+
+    """
+
+    group: str
+    components: tuple[int, ...] | None = None
+
+
+@dataclass(frozen=True)
+class SurfaceLoad:
+    """A traction ``amplitude(t) × field`` (Pa) on a named facet group.
+
+    Attributes:
+        group: Facet group on the boundary of one body (or an interface between two
+            bodies, with ``body`` naming the side loaded).
+        direction: Traction per unit amplitude (a vector of the geometric dimension);
+            empty when ``field`` gives it.
+        amplitude: Time function t ↦ scale factor.
+        field: Traction per unit amplitude as a UFL expression of the position and the
+            outward normal of the body (:mod:`breakwater.loads.fields`); None: the
+            constant ``direction``.
+        body: The body loaded; None: the one body whose boundary holds the group.
+        name: The load of the case it comes from (the summary's applied loads).
+
+    """
+
+    group: str
+    direction: tuple[float, ...]
+    amplitude: Callable[[float], float]
+    field: TractionField | None = None
+    body: str | None = None
+    name: str | None = None
+
+    def unit_traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr
+                      ) -> ufl.core.expr.Expr:
+        """The traction per unit amplitude at ``x`` (outward normal ``n``)."""
+        if self.field is not None:
+            return self.field.traction(x, n)
+        return ufl.as_vector(self.direction)
+
+
+@dataclass(frozen=True)
+class Damping:
+    """Rayleigh damping C = αM + βK (α in 1/s, β in s), the same for every body."""
+
+    alpha: float = 0.0
+    beta: float = 0.0
+
+
+@dataclass
+class BodyData:
+    """What the model builds for one body."""
+
+    spec: Body
+    index: int
+    submesh: dolfinx.mesh.Mesh
+    cell_map: dolfinx.mesh.EntityMap
+    facet_tags: dolfinx.mesh.MeshTags
+    V: fem.FunctionSpace
+    dx: ufl.Measure
+    ρ: fem.Constant
+    λ: fem.Constant
+    μ: fem.Constant
+
+
+@dataclass
+class LoadData:
+    """What the model builds for one load: ``traction = amplitude × unit``."""
+
+    spec: SurfaceLoad
+    body: int
+    ds: ufl.Measure
+    amplitude: fem.Constant
+    unit: ufl.core.expr.Expr
+    traction: ufl.core.expr.Expr = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.traction = self.amplitude * self.unit
+
