@@ -25,7 +25,7 @@ the overrides, the origin of each key); the machinery lives beside it, one job e
 dataclass), :mod:`~breakwater.config.tomlfiles` (reading, merging, the origin of keys),
 :mod:`~breakwater.config.convert` (TOML data to dataclasses),
 :mod:`~breakwater.config.overrides` (``--set``) and :mod:`~breakwater.config.reference`
-(the table of every key). Their public names are importable from here too.
+(the table of every key).
 """
 
 from __future__ import annotations
@@ -38,32 +38,11 @@ from typing import Any
 from breakwater.common.errors import CaseError
 from breakwater.config import convert
 from breakwater.config import reference as _reference
-from breakwater.config.fields import (
-    InvalidField,
-    describe,
-    positive,
-    printable,
-    schema_keys,
-    setting,
-    suggest,
-    to_toml,
-)
+from breakwater.config.fields import InvalidField, describe, printable
 from breakwater.config.overrides import OVERRIDE, apply_override, path_key
-from breakwater.config.tomlfiles import (
-    INTEGER_RANGE,
-    OUT_OF_RANGE,
-    display,
-    merge,
-    origin,
-    out_of_range,
-    read_toml,
-    record,
-    resolved,
-)
+from breakwater.config.tomlfiles import display, merge, origin, read_toml, record, resolved
 
-__all__ = ["INTEGER_RANGE", "OUT_OF_RANGE", "OVERRIDE", "InvalidField", "Schema", "display",
-           "out_of_range", "positive", "printable", "schema_keys", "setting", "suggest",
-           "to_toml"]
+__all__ = ["Schema"]
 
 
 @dataclass(frozen=True)
