@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 from breakwater import cli
 from breakwater.casefile.case import BUILTIN_CASES, Case, CaseError, case_reference, load_case
-from breakwater.config.schema import schema_keys
+from breakwater.config.fields import schema_keys
 from breakwater.loads.signals import Pulse, impact_velocity, pendulum_impulse
 from breakwater.model.mesh import read_mesh
 

@@ -32,7 +32,7 @@ from mpi4py import MPI
 from breakwater import cli
 from breakwater.casefile.case import CaseError, load_case
 from breakwater.casefile.godaface import check_goda_face
-from breakwater.casefile.loads import load_summary
+from breakwater.casefile.meshloads import load_summary
 from breakwater.loads.wavepressure import (
     GodaRangeError,
     breaking_height,

@@ -31,7 +31,7 @@ from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
 from breakwater.casefile.case import CaseError, load_case
-from breakwater.casefile.loads import load_summary
+from breakwater.casefile.meshloads import load_summary
 from breakwater.common.errors import MeshError
 from breakwater.loads.fields import Pressure
 from breakwater.loads.signals import Constant, Pulse, Ramp, Table, TableEnded, read_table

@@ -53,7 +53,8 @@ from hypothesis import strategies as st
 from breakwater import cli
 from breakwater.casefile.case import BUILTIN_CASES, Case, load_case
 from breakwater.common.errors import CaseError
-from breakwater.config.schema import display, schema_keys
+from breakwater.config.fields import schema_keys
+from breakwater.config.tomlfiles import display
 from breakwater.studies.studyfile import check_points, load_study, toml_literal
 
 EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))

@@ -6,6 +6,9 @@ The functions behind :meth:`Case.mesh_file <breakwater.casefile.case.Case.mesh_f
 :meth:`~breakwater.casefile.case.Case.calibrate` and
 :meth:`~breakwater.casefile.case.Case.build`. The case is never changed: :func:`build`
 returns the case as run (with a calibrated modulus written in) in its :class:`BuiltCase`.
+They take the case's settings (:class:`~breakwater.casefile.settings.CaseSettings`, the
+data of a :class:`~breakwater.casefile.case.Case`): reading a case does not import
+this module, which needs the solver stack.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from mpi4py import MPI
 
 from breakwater.casefile.godaface import check_goda_face
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
-from breakwater.casefile.loads import load_summary, surface_loads
+from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.contact.surfaces import SurfacePair
@@ -31,7 +34,7 @@ from breakwater.statics.initial import velocity_conflict
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
 
-    from breakwater.casefile.case import Case
+    from breakwater.casefile.settings import CaseSettings
     from breakwater.statics.calibrate import CalibrationResult
 
 __all__ = ["BuiltCase", "build", "build_model", "calibrate", "mesh_file", "read_mesh"]
@@ -52,7 +55,7 @@ class BuiltCase:
 
     """
 
-    case: Case
+    case: CaseSettings
     model: ContactModel
     time: TimeSpec
     output: OutputSpec
@@ -63,7 +66,7 @@ class BuiltCase:
         return iter((self.model, self.time, self.output, self.extra))
 
 
-def mesh_file(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None = None
+def mesh_file(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path | None = None
               ) -> pathlib.Path:
     """The gmsh ``.msh`` file of the case (collective).
 
@@ -88,7 +91,7 @@ def mesh_file(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None =
                            refinement=case.mesh.refinement, comm=comm)
 
 
-def read_mesh(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None = None
+def read_mesh(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path | None = None
               ) -> gmshio.MeshData:
     """Generate (or find) and read the mesh of the case, distributed over ``comm``.
 
@@ -102,7 +105,7 @@ def read_mesh(case: Case, comm: MPI.Comm, directory: str | pathlib.Path | None =
         raise CaseError(f"mesh.source: {e}") from e
 
 
-def build_model(case: Case, data: gmshio.MeshData,
+def build_model(case: CaseSettings, data: gmshio.MeshData,
                 shear_moduli: Mapping[str, float] | None = None,
                 dynamic: bool = True) -> ContactModel:
     """The contact model of the case on a mesh.
@@ -154,7 +157,7 @@ def build_model(case: Case, data: gmshio.MeshData,
     return model
 
 
-def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None
+def calibrate(case: CaseSettings, data: gmshio.MeshData, target: float | None = None
               ) -> CalibrationResult:
     """Calibrate the shear modulus of ``calibration.body`` (see :mod:`.calibrate`).
 
@@ -186,7 +189,7 @@ def calibrate(case: Case, data: gmshio.MeshData, target: float | None = None
                                    cal.max_iterations)
 
 
-def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
+def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     """Mesh, calibrate (if asked) and build what the run layer needs (collective).
 
     The Goda mesh is generated into ``<output directory>/mesh/goda.msh`` (a ``.geo``
@@ -262,7 +265,7 @@ def build(case: Case, comm: MPI.Comm | None = None) -> BuiltCase:
     return BuiltCase(case, model, case.time, output, extra)
 
 
-def _mesh_summary(case: Case, data: gmshio.MeshData) -> dict[str, Any]:
+def _mesh_summary(case: CaseSettings, data: gmshio.MeshData) -> dict[str, Any]:
     msh = data.mesh
     tdim = msh.topology.dim
     nlocal = msh.topology.index_map(tdim).size_local

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from breakwater.casefile.loads import RESOLVED_STEPS
 from breakwater.loads.fields import PressureProfile
 from breakwater.loads.signals import Pulse
 
@@ -21,12 +22,9 @@ if TYPE_CHECKING:
     from breakwater.casefile import loads as loadcase
     from breakwater.model.model import ContactModel
 
-__all__ = ["RESOLVED_STEPS", "SAMPLING_TOLERANCE", "face_problems", "profile_area",
+__all__ = ["SAMPLING_TOLERANCE", "face_problems", "profile_area",
            "pulse_warning", "sampled_pulse"]
 
-
-RESOLVED_STEPS = 10
-"""A pulse shorter than this many nominal steps is warned about as under-resolved."""
 
 SAMPLING_TOLERANCE = 0.01
 """The impulse the steps sample may differ from the requested by this fraction."""
@@ -62,9 +60,9 @@ def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: fl
     """What the nominal steps make of a pulse, and a one-line warning if it is poor.
 
     A pulse ending after the end time is applied in part; one lasting fewer than
-    :data:`RESOLVED_STEPS` steps, or whose sampled impulse differs from its own by more
-    than :data:`SAMPLING_TOLERANCE`, is under-resolved: the warning gives the time step
-    that samples it to that tolerance.
+    :data:`~breakwater.casefile.loads.RESOLVED_STEPS` steps, or whose sampled impulse
+    differs from its own by more than :data:`SAMPLING_TOLERANCE`, is under-resolved: the
+    warning gives the time step that samples it to that tolerance.
 
     Returns:
         The warning (None: none) and the summary's ``sampled`` entry: the ratios of the

@@ -12,7 +12,7 @@ import pathlib
 from dataclasses import dataclass
 from typing import Literal
 
-from breakwater.config.schema import InvalidField, positive, setting
+from breakwater.config.fields import InvalidField, positive, setting
 
 __all__ = ["MAX_CUTBACKS", "InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec",
            "TimeSpec"]

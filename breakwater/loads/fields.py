@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-import ufl
+
+if TYPE_CHECKING:  # ufl when a field is assembled: a case file is read without it
+    import ufl
 
 __all__ = ["Pressure", "PressureProfile", "TractionField"]
 
@@ -88,6 +90,8 @@ class PressureProfile:
 
     def ufl_pressure(self, x: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         """p(s(x)) as a UFL expression (a sum of one linear piece per interval)."""
+        import ufl
+
         s = ufl.dot(x - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
         p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
         pts = self.points

@@ -35,7 +35,6 @@ from breakwater.model.model import ContactModel
 from breakwater.model.pairs import pair_names
 from breakwater.outputs import quality
 from breakwater.outputs.probes import Probes
-from breakwater.run.runstate import RunState
 
 __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_quality",
            "dynamic_summary", "energy_summary", "format_report", "merge", "quality_inputs",
@@ -306,7 +305,8 @@ def balance_warning(energy: Mapping[str, Any]) -> str | None:
 
 
 def run_summary(*, case_name: str, finished: bool, status: str, error: str | None,
-                time: TimeSpec, state: RunState, rows: Sequence[Mapping[str, float]],
+                time: TimeSpec, static: dict[str, Any],
+                resumed_from: list[dict[str, Any]], rows: Sequence[Mapping[str, float]],
                 probes: Probes | None, contact_quality: Mapping[str, quality.ContactQuality],
                 solver: Mapping[str, Any], checkpoint: Mapping[str, Any] | None,
                 outputs: Mapping[str, Any], comm: MPI.Comm, extra: Mapping[str, Any]
@@ -319,7 +319,10 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         status: ``running``, ``finished``, ``failed`` or ``interrupted``.
         error: Why the run stopped early.
         time: The time settings.
-        state: The run's bookkeeping (static summary, resumed parts).
+        static: The ``static`` entry (:func:`static_summary`; empty before the static
+            state is solved).
+        resumed_from: Where each earlier part of a resumed run ended (``t``, ``steps``,
+            ``mpi_size``).
         rows: The history rows (the static state's first).
         probes: The run's probes (None before they exist).
         contact_quality: The contact quality of each pair.
@@ -336,14 +339,14 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         "error": error,
         "time": {"end_time": time.end_time, "dt": time.dt,
                  "reached": rows[-1]["t"] if rows else None},
-        "static": state.static,
+        "static": static,
         "dynamic": (dynamic_summary(rows, probes.names, probes.pair_names)
                     if probes is not None else {}),
         "contact_quality": {name: q.as_dict() for name, q in contact_quality.items()},
         "solver": dict(solver),
         "energy": energy_summary(rows),
         "checkpoint": checkpoint,
-        "resumed_from": state.resumed_from,
+        "resumed_from": resumed_from,
         "outputs": dict(outputs),
         "versions": versions(comm),
     }

@@ -251,7 +251,7 @@ class Session:
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))
         return {**sm.run_summary(
             case_name=self.output.case_name, finished=finished, status=status, error=error,
-            time=self.time, state=st, rows=self.rows,
+            time=self.time, static=st.static, resumed_from=st.resumed_from, rows=self.rows,
             probes=x.monitor.probes if x is not None else None,
             contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
             checkpoint=self.checkpointed, outputs=outputs, comm=self.comm,

@@ -63,7 +63,6 @@ from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import ConvergenceError
-from breakwater.config.schema import setting
 from breakwater.contact.conforming import (
     creep_velocities,
     interface_nodes,
@@ -76,7 +75,7 @@ from breakwater.statics.relaxation import relax
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
-__all__ = ["STICK_BAND", "InitialCase", "InitialState", "initial_state", "initial_velocities",
+__all__ = ["STICK_BAND", "InitialState", "initial_state", "initial_velocities",
            "velocity_conflict"]
 
 log = logging.getLogger("breakwater.statics.initial")
@@ -89,19 +88,6 @@ GN22 step's Newton (χ·½β₂Δt²/(β₁Δt) ≈ 5e-15 m at χ = 1e-10 m/s, �
 
 BONDING = 1.0
 """Tangential spring of a bonded (or held) interface, as a multiple of the pair's ε_n."""
-
-
-@dataclass(frozen=True)
-class InitialCase:
-    """``[initial]``: the loads of the initial state.
-
-    The load names are checked by :class:`~breakwater.casefile.case.Case`; a body's initial
-    velocity is ``bodies.<name>.initial_velocity``.
-    """
-
-    loads: tuple[str, ...] | None = setting(None, doc="names of the loads in the static "
-                                            "initial state, at their values at t = 0 (default: "
-                                            "every load; [] none: gravity only)")
 
 
 @dataclass

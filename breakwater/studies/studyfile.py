@@ -63,7 +63,9 @@ from typing import TYPE_CHECKING, Any
 
 from breakwater.common.errors import CaseError
 from breakwater.common.files import name_problem, path_problem
-from breakwater.config.schema import OUT_OF_RANGE, OVERRIDE, out_of_range, printable, suggest
+from breakwater.config.fields import printable, suggest
+from breakwater.config.overrides import OVERRIDE
+from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range
 
 if TYPE_CHECKING:
     from breakwater.casefile.case import Case
@@ -464,7 +466,7 @@ def _relative_to_study(study: Study, values: Mapping[str, Any]) -> dict[str, Any
     folder = study.path.parent
     return {k: str((folder / v).resolve()) if not isinstance(v, _Literal)
             and is_file_value(k, v) and path_problem(v) is None else v  # else the case's
-            for k, v in values.items()}  # error names the path (schema._resolved)
+            for k, v in values.items()}  # error names the path (tomlfiles.resolved)
 
 
 def case_of(study: Study, point: Point, folder: pathlib.Path) -> Case:

@@ -1,0 +1,222 @@
+"""A case's loads on a mesh: the model's surface loads, the loaded lengths, the summary.
+
+The mesh side of the ``[loads.<name>]`` tables (:mod:`breakwater.casefile.loads`):
+:func:`surface_loads` turns a load into the model's
+:class:`~breakwater.model.model.SurfaceLoad` (two for a Goda load with uplift: the
+uplift under the base, :func:`uplift_profile`); :func:`load_summary` describes it for
+the run's summary (a pulse's patch length and peak traction, Goda's pressures and the
+part of the profile the face receives). All are collective.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from breakwater.casefile.godaface import check_goda_face, goda_applied
+from breakwater.loads.fields import Pressure, PressureProfile, TractionField
+
+if TYPE_CHECKING:
+    from dolfinx.io import gmsh as gmshio
+
+    from breakwater.casefile.loads import GodaCase, LoadCase
+    from breakwater.model.model import SurfaceLoad
+
+__all__ = ["group_length", "load_length", "load_summary", "surface_loads", "uplift_profile"]
+
+
+def group_length(data: gmshio.MeshData, group: str) -> float:
+    """Length (m) of a facet group (exterior or interface), summed over the ranks."""
+    import dolfinx
+    import numpy as np
+    import ufl
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    from breakwater.common.errors import CaseError
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    tag = group_tag(data, group, fdim)
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=data.facet_tags)(tag)
+    one = fem.Constant(msh, dolfinx.default_scalar_type(1.0))
+    length = msh.comm.allreduce(fem.assemble_scalar(fem.form(one * ds)), op=MPI.SUM)
+    # Interface facets (not on the boundary: ds leaves them out) by their lengths.
+    assert data.facet_tags is not None
+    msh.topology.create_connectivity(fdim, fdim + 1)
+    facets = data.facet_tags.find(tag)
+    inner = np.setdiff1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
+    inner = inner[inner < msh.topology.index_map(fdim).size_local]
+    if msh.comm.allreduce(len(inner)):
+        length += msh.comm.allreduce(float(msh.h(fdim, inner).sum()) if len(inner) else 0.0,
+                                     op=MPI.SUM)
+    if not length > 0:
+        raise CaseError(f"facet group '{group}' has zero length")
+    return float(length)
+
+
+def load_length(load: LoadCase, data: gmshio.MeshData) -> float:
+    """Length (m) of a load's groups (``group``, then ``groups``) on a mesh."""
+    return sum(group_length(data, g) for g in (load.group, *load.groups))
+
+
+def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
+    """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
+    import dolfinx
+    import numpy as np
+
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    assert data.facet_tags is not None
+    facets = data.facet_tags.find(group_tag(data, group, fdim))
+    nodes = dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()
+    x = msh.geometry.x[nodes, :2]
+    lo = x.min(axis=0) if len(x) else np.full(2, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(2, -np.inf)
+    return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))
+
+
+def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
+                   ) -> tuple[PressureProfile, float]:
+    """The triangular uplift on the base and the base width B (m).
+
+    p_u at the base's edge nearest the front face, falling linearly to 0 at the heel.
+    """
+    assert goda.uplift_group is not None
+    lo, hi = _extent(data, goda.uplift_group)
+    ends = [_extent(data, g) for g in front]
+    front_x = 0.5 * (min(e[0][0] for e in ends) + max(e[1][0] for e in ends))
+    width = float(hi[0] - lo[0])
+    if abs(front_x - lo[0]) <= abs(front_x - hi[0]):
+        origin, axis = (float(lo[0]), 0.0), (1.0, 0.0)
+    else:
+        origin, axis = (float(hi[0]), 0.0), (-1.0, 0.0)
+    pu = goda.pressure().uplift
+    return PressureProfile(((0.0, pu), (width, 0.0)), axis, origin), width
+
+
+def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
+                  ) -> list[SurfaceLoad]:
+    """The model loads of a case's load on a mesh.
+
+    One per group (``group``, then ``groups``), plus the uplift of a Goda load.
+
+    Raises:
+        CaseError: A Goda profile entirely off its loaded face (:func:`check_goda_face`;
+            part of it off: a warning).
+
+    """
+    from breakwater.model.model import SurfaceLoad
+
+    if load.goda is not None:
+        check_goda_face(load, data, warn=False)  # warned by casefile.build.build
+
+    groups = (load.group, *load.groups)
+    if load.kind == "pulse":
+        pulse = load.pulse(out_of_plane_length, load_length(load, data))
+        return [SurfaceLoad(g, load.direction, pulse, body=load.body, name=load.name)
+                for g in groups]
+    factor = load.time_factor()
+    d = load.direction
+    field: TractionField | None = None
+    t = 0.0
+    if load.force is not None:
+        t = load.force / out_of_plane_length / load_length(load, data)
+    elif load.traction is not None:
+        t = load.traction
+    elif load.pressure is not None:
+        field = Pressure(load.pressure)
+    elif load.profile is not None:
+        field = load.profile.field()
+    else:
+        assert load.goda is not None
+        field = load.goda.front()
+    direction = (t * d[0], t * d[1]) if field is None else ()
+    loads = [SurfaceLoad(g, direction, factor, field, load.body, load.name) for g in groups]
+    if load.goda is not None and load.goda.uplift_group is not None:
+        profile, _ = uplift_profile(load.goda, data, groups)
+        body = load.body or _owner(data, load.group)
+        loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body, load.name))
+    return loads
+
+
+def _owner(data: gmshio.MeshData, group: str) -> str:
+    """The name of the one cell group next to a facet group (the loaded body)."""
+    from breakwater.common.errors import CaseError
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    tdim = msh.topology.dim
+    assert data.facet_tags is not None and data.cell_tags is not None
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    f2c = msh.topology.connectivity(tdim - 1, tdim)
+    cell_tag = dict(zip(data.cell_tags.indices.tolist(), data.cell_tags.values.tolist(),
+                        strict=True))
+    values = {cell_tag[c] for f in data.facet_tags.find(group_tag(data, group, tdim - 1))
+              for c in f2c.links(f).tolist() if c in cell_tag}
+    values = set().union(*msh.comm.allgather(values))
+    names = [name for name, (dim, tag) in data.physical_groups.items()
+             if dim == tdim and tag in values]
+    if len(names) != 1:
+        raise CaseError(f"facet group '{group}' borders {len(names)} bodies: name the body "
+                        "loaded (body = ...)")
+    return names[0]
+
+
+def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
+                 ) -> dict[str, Any]:
+    """The load as the run's summary describes it."""
+    h = load_length(load, data)
+    info: dict[str, Any] = {"group": load.group}
+    if load.groups:
+        info["groups"] = list(load.groups)
+    if load.kind == "pulse":
+        pulse = load.pulse(out_of_plane_length, h)
+        info.update({
+            "impulse": load.total_impulse,
+            "impulse_per_length": load.total_impulse / out_of_plane_length,
+            "patch_length": h,
+            "shape": load.shape,
+            "duration": load.duration,
+            "start": load.start,
+            "peak_traction": pulse.maximum,
+            "peak_force_per_length": pulse.maximum * h,
+            "direction": list(load.direction),
+        })
+        if load.pendulum is not None:
+            info["impact_velocity"] = load.pendulum.velocity
+        return info
+    info.update({"time_function": load.kind, "magnitude": load.magnitude,
+                 "patch_length": h, "start": load.start})
+    if load.rise is not None:
+        info["rise"] = load.rise
+    if load.force is not None:
+        info["force_per_length"] = load.force / out_of_plane_length
+        info["traction"] = load.force / out_of_plane_length / h
+    elif load.traction is not None:
+        info["traction"] = load.traction
+        info["force_per_length"] = load.traction * h
+    elif load.pressure is not None:
+        info["pressure"] = load.pressure
+    elif load.goda is not None:
+        g = load.goda.pressure()
+        applied = goda_applied(load, data)
+        info.update({"wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
+                     "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3,
+                     "p4": g.p4, "uplift_pressure": g.uplift,
+                     "horizontal_force_per_length": applied.force,
+                     "horizontal_moment_per_length": applied.moment,
+                     "applied_fraction": applied.fraction,
+                     "face_elevations": list(applied.face),
+                     "profile_elevations": list(applied.profile),
+                     "goda_force_per_length": g.force,
+                     "goda_moment_per_length": g.moment})
+        if g.alpha_impulsive is not None:
+            info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
+        if load.goda.uplift_group is not None:
+            _, width = uplift_profile(load.goda, data, (load.group, *load.groups))
+            info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),
+                         "uplift_moment_per_length": g.uplift_moment(width)})
+    return info
