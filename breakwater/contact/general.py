@@ -73,6 +73,14 @@ QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
 
 
+def scatter_add(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """out[pos] += values (skipping Dirichlet entries, −1), in array order; out returned."""
+    pos, values = pos.ravel(), values.ravel()
+    keep = pos >= 0
+    out += np.bincount(pos[keep], weights=values[keep], minlength=len(out))
+    return out
+
+
 class SurfaceForces(SurfaceSearch):
     """A general pair as a provider of the fast solver's interface: f_c and ∂f_c/∂Δa.
 
@@ -138,20 +146,13 @@ class SurfaceForces(SurfaceSearch):
         """
         u0, u1, v1 = self._state(accepted=accepted)
         kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
-        out = self._add(np.zeros(self.n), pos, kernel(groups))
+        out = scatter_add(np.zeros(self.n), pos, kernel(groups))
         if self.spec.friction:
             self._step_frozen = self._frozen(u0)
             fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
             if fr is not None:
-                self._add(out, fr["pos_s"], -fr["force"])
-                self._add(out, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
-        return out
-
-    def _add(self, out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """out[pos] += values (skipping Dirichlet entries, −1), in array order."""
-        pos, values = pos.ravel(), values.ravel()
-        keep = pos >= 0
-        out += np.bincount(pos[keep], weights=values[keep], minlength=self.n)
+                scatter_add(out, fr["pos_s"], -fr["force"])
+                scatter_add(out, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
         return out
 
     def left_product(self, X: np.ndarray) -> None:

@@ -166,6 +166,42 @@ def tangential_stiffness(model: ContactModel, pair: PairData) -> float:
     return min(float(pair.ε_n.value), E * n_facets / length)
 
 
+def initial_acceleration(model: ContactModel, solver: StepSolver, u: Sequence[fem.Function],
+                         v: Sequence[fem.Function], a: Sequence[fem.Function]) -> None:
+    """Solve M a₀ = f(t₀) − C v₀ − K u₀ − f_c(u₀, v₀) for a₀, into ``a``.
+
+    The loads are the model's at its current time. f_c includes the forces the UFL
+    residual does not hold (the general pairs', from ``solver``), so that a₀ vanishes in
+    their static state (:mod:`breakwater.statics.relaxation`).
+    """
+    m = model
+    for f in a:
+        f.x.array[:] = 0.0
+    trial = ufl.TrialFunctions(m.W)
+    M = fem_petsc.assemble_matrix(m.form(ufl.extract_blocks(m.mass(trial))), bcs=m.bcs,
+                                  kind="mpi")
+    M.assemble()
+    R = m.form(ufl.extract_blocks(m.residual(u, v, a)))
+    b = fem_petsc.assemble_vector(R, kind="mpi")
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    b.scale(-1.0)
+    # The general pairs' forces are not in the UFL residual.
+    solver.add_surface_forces(b, -1.0)
+    fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
+    ksp = PETSc.KSP().create(m.comm)  # type: ignore[arg-type]
+    ksp.setOptionsPrefix("breakwater_mass_")
+    ksp.setOperators(M)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    x = b.duplicate()
+    ksp.solve(b, x)
+    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    fem_petsc.assign(x, a)
+    for obj in (ksp, M, b, x):
+        obj.destroy()
+
+
 class GN22:
     """GN22 integrator of a contact model.
 
@@ -235,7 +271,7 @@ class GN22:
                                        force_scale=force_scale(model),
                                        precheck=self._precheck if self.guard else None)
         # The general pairs the fast solver built on this stepper's state (SurfaceContact).
-        self.surfaces = self.solver.surfaces if isinstance(self.solver, CondensedNewton) else []
+        self.surfaces = self.fast.surfaces if self.fast is not None else []
         self._contacts: list[Pair] | None = None
 
     @property
@@ -250,44 +286,15 @@ class GN22:
 
     def initialise(self, u0: Sequence[fem.Function] | None = None,
                    v0: Sequence[fem.Function] | None = None) -> None:
-        """Set u₀, v₀ and solve M a₀ = f(t₀) − C v₀ − K u₀ − f_c(u₀, v₀) for a₀.
-
-        f_c includes the general pairs' forces at (u₀, v₀), so that a₀ vanishes in
-        their static state (:mod:`breakwater.statics.relaxation`).
-        """
+        """Set u₀, v₀ (None: zero) and a₀ from them (:func:`initial_acceleration`)."""
         for dst, src in ((self.u, u0), (self.v, v0)):
             for f, g in zip(dst, src or [None] * len(dst), strict=True):
                 if g is None:
                     f.x.array[:] = 0.0
                 else:
                     f.x.array[:] = g.x.array
-        m = self.model
-        m.set_time(float(self.t.value))
-        for f in self.a:
-            f.x.array[:] = 0.0
-        trial = ufl.TrialFunctions(m.W)
-        M = fem_petsc.assemble_matrix(m.form(ufl.extract_blocks(m.mass(trial))), bcs=m.bcs,
-                                      kind="mpi")
-        M.assemble()
-        R = m.form(ufl.extract_blocks(m.residual(self.u, self.v, self.a)))
-        b = fem_petsc.assemble_vector(R, kind="mpi")
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        b.scale(-1.0)
-        # The general pairs' forces are not in the UFL residual.
-        self.solver.add_surface_forces(b, -1.0)
-        fem_petsc.set_bc(b, fem.bcs_by_block(fem.extract_function_spaces(R), m.bcs), alpha=0.0)
-        ksp = PETSc.KSP().create(m.comm)  # type: ignore[arg-type]
-        ksp.setOptionsPrefix("breakwater_mass_")
-        ksp.setOperators(M)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
-        x = b.duplicate()
-        ksp.solve(b, x)
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        fem_petsc.assign(x, self.a)
-        for obj in (ksp, M, b, x):
-            obj.destroy()
+        self.model.set_time(float(self.t.value))
+        initial_acceleration(self.model, self.solver, self.u, self.v, self.a)
 
     # --- one step -----------------------------------------------------------------
 
