@@ -31,7 +31,7 @@ conforming interface, with the master's outward unit normal ``n`` (pointing from
 the master into the slave):
 
 - normal gap            g_n = (u_s − u_m)·n + g_0                     (eq. 7)
-- penalty pressure      p = ε_n ⟨−g_n⟩₊, active at g_n ≤ 0            (eq. 12)
+- penalty pressure      p = ε_n ⟨−g_n⟩₊, active at g_n ≤ 0  (eq. 11 penalised, as in eq. 23)
 - relative tangential velocity   v_T = (I − n⊗n)(v_s − v_m)           (eqs. 9-10)
 - regularised Coulomb   t_T = −μ p v_T / sqrt(|v_T|² + χ²)           (eqs. 14-15)
 - traction on the slave t_s = p n + t_T; the master receives −t_s     (eq. 23)
@@ -147,7 +147,7 @@ class PenaltyContact:
         return _ops(g_n, self.ε_n).where_closed(g_n, closed, open_)
 
     def pressure(self, g_n):
-        """Penalty contact pressure p = ε_n ⟨−g_n⟩₊ (Pa, eq. 12)."""
+        """Penalty contact pressure p = ε_n ⟨−g_n⟩₊ (Pa; eq. 11 penalised, as in eq. 23)."""
         return self.ε_n * self.closed(g_n, -g_n, 0.0)
 
     def energy(self, g_n):
@@ -236,7 +236,7 @@ class ContactLaw:
         return self.normal.gap(u_s, u_m, n)
 
     def pressure(self, u_s, u_m, n):
-        """Contact pressure p = ε_n ⟨−g_n⟩₊ of the displacements (eq. 12)."""
+        """Contact pressure p = ε_n ⟨−g_n⟩₊ of the displacements (eq. 11 penalised; eq. 23)."""
         return self.normal.pressure(self.gap(u_s, u_m, n))
 
     def traction(self, u_s, u_m, n, v_s=None, v_m=None):

@@ -7,9 +7,9 @@
   :func:`breakwater.run.simulation.run`): the pair probe's slip is the rigid block's
   (F − μN) t²/(2m) (Coulomb friction, constant acceleration) and its sides are the
   point probes' displacements; its opening is −p/ε_n with p = N/w the mean pressure
-  (the penalty law, the paper's eq. 12); the ParaView pressure on the slave surface
-  integrates to the normal resultant of the history; the snapshots hold the slave
-  surface's arrays; the contact-quality report has the conforming pairs' keys.
+  (the penalty law: the paper's eq. 11 penalised, as in its eq. 23); the ParaView pressure
+  on the slave surface integrates to the normal resultant of the history; the snapshots
+  hold the slave surface's arrays; the contact-quality report has the conforming pairs' keys.
 - The example case with a pair probe through the command line, figures included.
 - A run killed after its checkpoint resumes to the same probe history and report.
 """

@@ -77,7 +77,8 @@ def normal_forces(law: forms.ContactLaw, Ns: np.ndarray, xi: np.ndarray, weight:
     The point ``x_s = Σ N_s x_k`` of the slave facet is projected onto the master facet
     (``refine`` Newton steps from ξ, in the inputs' arithmetic, so that a complex step
     carries the implicit derivative of the projection); ``g_n = (x_s − x̄)·n̄``
-    (eq. 7), ``p = ε_n ⟨−g_n⟩₊`` (eq. 12), from :class:`forms.ContactLaw`.
+    (eq. 7), ``p = ε_n ⟨−g_n⟩₊`` (eq. 11 penalised, as in eq. 23), from
+    :class:`forms.ContactLaw`.
 
     Args:
         law: The contact law (float parameters).
