@@ -67,7 +67,7 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceForces"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces"]
 
 QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
@@ -288,8 +288,6 @@ class SurfaceContact(SurfaceForces):
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
     """
 
-    kind = "general"
-
     @property
     def name(self) -> str:
         """The pair's name (the case's ``[contact.<name>]``)."""
@@ -375,6 +373,11 @@ class SurfaceContact(SurfaceForces):
                 power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
         return energy, power
 
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> SurfaceEnergy:
+        """The pair's ledger terms (:class:`SurfaceEnergy`; ``u0``, ``v0`` unused)."""
+        return SurfaceEnergy(self)
+
     def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
         """Every normal integration point (every rank), as :meth:`resultant`.
 
@@ -401,3 +404,24 @@ class SurfaceContact(SurfaceForces):
             out["facet"][i] = p["facet"]
             out["xi"][i] = xi
         return out
+
+
+class SurfaceEnergy:
+    """A general pair's ledger terms: :meth:`SurfaceContact.energies` as a rank's share.
+
+    The pair's energies are the same on every rank: rank 0's share is the whole, the
+    others' zero, so that the ledger's one reduction over the ranks gives them
+    exactly. No numerical dissipation share: the pair's law is not a form.
+
+    Args:
+        contact: The pair.
+    """
+
+    def __init__(self, contact: SurfaceContact) -> None:
+        self.contact = contact
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`; collective)."""
+        energy, power = self.contact.energies()
+        first = self.contact.comm.rank == 0
+        return np.array([energy, power, 0.0]) if first else np.zeros(3)

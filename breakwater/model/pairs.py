@@ -26,8 +26,8 @@ if TYPE_CHECKING:
 
     from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 
-__all__ = ["INTEGRATIONS", "ContactPair", "Pair", "PairData", "SurfacePair", "check_pair_settings",
-           "max_penetration", "pair_names"]
+__all__ = ["INTEGRATIONS", "ContactPair", "EnergyTerms", "Pair", "PairData", "SurfacePair",
+           "check_pair_settings", "max_penetration", "pair_names"]
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
@@ -171,25 +171,50 @@ class PairData:
         return self.law.normal.ε_n
 
 
+class EnergyTerms(Protocol):
+    """A pair's terms of the energy ledger (:class:`breakwater.energy.ledger.EnergyLedger`).
+
+    Built once per ledger (:meth:`Pair.energy_terms`) on the ledger's copies of the
+    state at the start of the step.
+    """
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share of the pair's ledger terms, shape (3,), to be summed over the ranks.
+
+        The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊²`` and the friction power ``P_F`` at the
+        stepper's accepted state, then the interface share of the step's numerical
+        dissipation (:mod:`breakwater.energy.dissipation`; 0 with ``step`` False, at
+        the first record, and for a pair whose law is not a form).
+
+        Args:
+            step: The state is the end of a step, not the first record.
+        """
+        ...
+
+
 class Pair(Protocol):
-    """A contact pair as the outputs measure it, at its stepper's accepted state.
+    """A contact pair at a stepper's accepted state: what everything after the step asks of it.
+
+    Ownership: the model owns the pairs' settings and integration data
+    (:attr:`breakwater.model.model.ContactModel.pairs`, conforming: :class:`PairData`;
+    ``surface_pairs``, general: :class:`SurfacePair`); the stepper owns the pair
+    *objects* on its state (:attr:`breakwater.stepping.gn22.GN22.contacts`, conforming
+    pairs first, then the general ones, each kind in the model's order), because a
+    pair is measured at a state and one model can have several steppers (the
+    relaxation's and the run's). The energy ledger, the monitor, the probes, the
+    fields, the snapshots and the quality report reach the pairs through
+    ``stepper.contacts`` only, and never ask which kind a pair is.
 
     Both kinds implement it: a conforming pair
     (:class:`breakwater.contact.pairstate.ConformingPair`) and a general pair
-    (:class:`breakwater.contact.general.SurfaceContact`); the stepper
-    (:attr:`breakwater.stepping.gn22.GN22.contacts`) builds them on its state, conforming
-    pairs first, in the model's order. The history's columns of a pair are named
-    ``<name>_<quantity>`` (:mod:`breakwater.outputs.monitor`).
+    (:class:`breakwater.contact.general.SurfaceContact`). Everything a pair writes is
+    named by the pair: history columns ``<name>_<quantity>``
+    (:mod:`breakwater.outputs.monitor`).
     """
 
     @property
     def name(self) -> str:
         """The pair's name: the case's ``[contact.<name>]``."""
-        ...
-
-    @property
-    def kind(self) -> str:
-        """``conforming`` or ``general``."""
         ...
 
     @property
@@ -199,6 +224,16 @@ class Pair(Protocol):
 
     def measure(self) -> dict[str, float]:
         """The values of :attr:`columns` at the accepted state (collective, every rank)."""
+        ...
+
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> EnergyTerms:
+        """The pair's ledger terms (:class:`EnergyTerms`; collective).
+
+        Args:
+            u0: The ledger's displacements at the start of the step (one per body).
+            v0: Its velocities there.
+        """
         ...
 
 

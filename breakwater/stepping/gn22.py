@@ -278,7 +278,7 @@ class GN22:
     def contacts(self) -> list[Pair]:
         """Every pair at this stepper's state (u, v): conforming, then general (collective)."""
         if self._contacts is None:
-            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v),
+            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v, self.dt),
                               *self.surfaces]
         return self._contacts
 
