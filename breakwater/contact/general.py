@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
+from breakwater.contact import slavepoints
 from breakwater.contact.penetration import StepCheck, allowed_depth
 from breakwater.contact.pointkernels import (
     DenseEntries,
@@ -62,6 +63,7 @@ from breakwater.contact.pointkernels import (
 )
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
+from breakwater.model.pairs import FieldNodes, StaticMeasures
 
 if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
@@ -288,6 +290,8 @@ class SurfaceContact(SurfaceForces):
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
     """
 
+    _field_points: slavepoints.SlavePoints | None = None  # the slave nodes, on first use
+
     @property
     def name(self) -> str:
         """The pair's name (the case's ``[contact.<name>]``)."""
@@ -377,6 +381,37 @@ class SurfaceContact(SurfaceForces):
                      ) -> SurfaceEnergy:
         """The pair's ledger terms (:class:`SurfaceEnergy`; ``u0``, ``v0`` unused)."""
         return SurfaceEnergy(self)
+
+    # --- the outputs at the slave surface's material points (contact.slavepoints) ---
+
+    def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+        """The slave nodes' state (:func:`breakwater.contact.slavepoints.snapshot`)."""
+        return slavepoints.snapshot(self, u)
+
+    def field_nodes(self) -> FieldNodes:
+        """The slave surface, the slave's degree and the slave surface's nodes."""
+        if self._field_points is None:
+            self._field_points = slavepoints.SlavePoints.nodes(self)
+        return FieldNodes(self.spec.slave_surface, self.model.body(self.spec.slave).index,
+                          self._field_points.X)
+
+    def field_values(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None
+                     ) -> dict[str, np.ndarray]:
+        """:meth:`breakwater.contact.slavepoints.SlavePoints.evaluate` at the slave nodes."""
+        if self._field_points is None:
+            self._field_points = slavepoints.SlavePoints.nodes(self)
+        return self._field_points.evaluate(self.interface_values(u),
+                                           None if v is None else self.interface_values(v))
+
+    def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
+        """:func:`breakwater.contact.slavepoints.static_measures` at ``u``."""
+        E = (self.model.body(self.spec.slave).spec.material.E,
+             self.model.body(self.spec.master).spec.material.E)
+        return slavepoints.static_measures(self, self.state(), u, E)
+
+    def probe(self, point: Sequence[float], name: str) -> slavepoints.SurfaceProbe:
+        """A :class:`breakwater.contact.slavepoints.SurfaceProbe` at ``point``."""
+        return slavepoints.SurfaceProbe(self, np.asarray(point, float), name)
 
     def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
         """Every normal integration point (every rank), as :meth:`resultant`.

@@ -153,7 +153,7 @@ class SurfaceSearch(InterfaceValues):
         why = initial_overlap(model, spec)
         if why is not None:
             raise MeshError(why)
-        self.spec = spec
+        self.model, self.spec = model, spec
         self.small_rotations = spec.rotations == "small"
         self._edge = _EDGE if spec.integration == "nodes" else 1e-9
         self.law = forms.ContactLaw.of(spec)
