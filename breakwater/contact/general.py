@@ -53,7 +53,7 @@ import numpy as np
 from dolfinx import fem
 
 from breakwater.contact import slavepoints
-from breakwater.contact.penetration import StepCheck, allowed_depth
+from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.pointkernels import (
     DenseEntries,
     H,
@@ -408,6 +408,13 @@ class SurfaceContact(SurfaceForces):
         E = (self.model.body(self.spec.slave).spec.material.E,
              self.model.body(self.spec.master).spec.material.E)
         return slavepoints.static_measures(self, self.state(), u, E)
+
+    def static_check(self) -> str | None:
+        """Why the bodies start overlapped beyond what the search sees (None: they do not).
+
+        :func:`breakwater.contact.penetration.initial_overlap` (collective).
+        """
+        return initial_overlap(self.model, self.spec)
 
     def probe(self, point: Sequence[float], name: str) -> slavepoints.SurfaceProbe:
         """A :class:`breakwater.contact.slavepoints.SurfaceProbe` at ``point``."""

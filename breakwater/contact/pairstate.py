@@ -132,6 +132,14 @@ class ConformingPair:
             static_penetration=max_penetration(nd.contact_state(*self._sides(u))["gap"]),
             settlement=settlement(us, um, nd.normal))
 
+    def static_check(self) -> str | None:
+        """None: the two sides share their interface nodes, so they cannot start overlapped.
+
+        (The model checks, when it builds the pair, that its interface is one of
+        facets shared by two cells: :class:`breakwater.model.model.ContactModel`.)
+        """
+        return None
+
     def probe(self, point: Sequence[float], name: str) -> ConformingProbe:
         """A :class:`ConformingProbe` at ``point``."""
         return ConformingProbe(self, point, name)

@@ -322,6 +322,17 @@ class Pair(Protocol):
         """The measures of the pair's contact quality at the static state ``u`` (collective)."""
         ...
 
+    def static_check(self) -> str | None:
+        """Why the pair cannot start from the meshed configuration, or None (collective).
+
+        The static stage calls it for every pair before it looks for the initial state
+        (:class:`breakwater.statics.pseudostep.PseudoStepper`), which raises
+        :class:`~breakwater.common.errors.MeshError` with the reason: a general pair's
+        bodies overlapped beyond what its search sees
+        (:func:`breakwater.contact.penetration.initial_overlap`).
+        """
+        ...
+
     def probe(self, point: Sequence[float], name: str) -> PairProbe:
         """A pair probe at ``point`` (reference coordinates) named ``name`` (collective).
 
