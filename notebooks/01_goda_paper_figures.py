@@ -350,7 +350,7 @@ show("static_uy.png")
 # %%
 show("static_syy.png")
 
-x, p = static_state["pair0_x"][:, 0], static_state["pair0_pressure"]
+x, p = static_state["contact_interface_x"][:, 0], static_state["contact_interface_pressure"]
 order = np.argsort(x)
 fig, ax = plt.subplots(figsize=(7, 3.5))
 ax.plot(1e3 * x[order], p[order], "o-", ms=3, label="interface nodes")
@@ -414,7 +414,7 @@ show("pair_probes_ux.png")
 # %%
 show("max_ux_deformed.png")
 
-x, gap = snapshot["pair0_x"][:, 0], snapshot["pair0_gap"]
+x, gap = snapshot["contact_interface_x"][:, 0], snapshot["contact_interface_gap"]
 order = np.argsort(x)
 fig, ax = plt.subplots(figsize=(7, 3))
 ax.plot(1e3 * x[order], 1e3 * gap[order], "o-", ms=3)

@@ -164,9 +164,9 @@ if sliding.any():
 
 # %%
 static = np.load(block / "static.npz")
-x = static["surface_sliding_x"][:, 0]
+x = static["contact_sliding_x"][:, 0]
 order = np.argsort(x)
-pressure = static["surface_sliding_pressure"][order]
+pressure = static["contact_sliding_pressure"][order]
 width = x.max() - x.min()
 resultant = np.trapezoid(pressure, x[order])  # the P2 nodes: a fair quadrature
 fig, ax = plt.subplots(figsize=(7, 3))

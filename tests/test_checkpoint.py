@@ -307,7 +307,7 @@ def test_sigterm_stops_checkpoints_and_resumes(mesh_path: pathlib.Path,
     with np.load(reference[0] / "snapshot_max_ux.npz") as a, \
             np.load(shared_dir / "snapshot_max_ux.npz") as b:
         assert float(a["time"]) == float(b["time"]) == pytest.approx(8 * DT, rel=1e-12)
-        for k in ("a_ux", "a_uy", "b_ux", "pair0_gap"):
+        for k in ("a_ux", "a_uy", "b_ux", "contact_interface_gap"):
             np.testing.assert_allclose(b[k], a[k], rtol=0,
                                        atol=_tolerance(k) * np.abs(a[k]).max(), err_msg=k)
 

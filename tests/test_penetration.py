@@ -5,13 +5,14 @@ of the master surface (the longest master facet). A block thrown at 20 m/s onto 
 0.1 m base of tests/bad_cases/run/p2_tunnelling_block.toml with Δt = 1 ms moves 20 mm
 per step, twice r = 10 mm: it used to end its first step 20 mm inside the base, unseen,
 and go through it with a contact force of zero (exit 0). The step is now cut back until
-the contact sees it; a mesh that starts overlapped beyond r is refused when the model
-and its pair are built (tests/bad_cases/run/p3_overlapping_start.toml).
+the contact sees it; a mesh that starts overlapped beyond r is refused by the static
+stage, the pair's static check (tests/bad_cases/run/p3_overlapping_start.toml).
 """
 
 from __future__ import annotations
 
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -29,6 +30,8 @@ from breakwater.contact.penetration import allowed_depth, step_penetration
 from breakwater.contact.surfaces import Surface, SurfacePair
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, Fixed, Material
+from breakwater.statics.initial import STICK_BAND
+from breakwater.statics.pseudostep import PseudoStepper
 from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
@@ -116,22 +119,24 @@ def test_tunnelling_block_is_cut_back_and_caught(shared_dir: pathlib.Path) -> No
 def test_initial_overlap(sunk: float, shared_dir: pathlib.Path) -> None:
     """A block meshed ``sunk`` into its base (10 mm facets: r = 10 mm, cells 20 mm high):
     touching or 1 mm in is a start the penalty resolves (the static state pushes it
-    out); 30 mm, beyond r, is refused with the pair, the node and the depth when the
-    pair is built (with the fast solver that holds it)."""
+    out); 30 mm, beyond r, is refused with the pair, the node and the depth by the
+    pair's static check (Pair.static_check), which the static stage runs for every pair
+    before it looks for the initial state."""
     mesh = rectangles(shared_dir / "overlap.msh", COMM,
                       [Rectangle("base", -0.2, -0.1, 0.4, 0.1, 40, 5),
                        Rectangle("block", -0.1, -sunk, 0.2, 0.1, 7, 4)])
     steel = Material(7800.0, 0.3, young_modulus=2e11)
     pair = SurfacePair("sliding", "block", "base", "block_bottom", "base_top", 1e10)
-
-    def build() -> GN22:
-        model = ContactModel(read_mesh(mesh, COMM), [Body("block", steel), Body("base", steel)],
-                             fixed=[Fixed("base_bottom")], surface_pairs=[pair])
-        return GN22(model, 1e-3)
-
+    model = ContactModel(read_mesh(mesh, COMM), [Body("block", steel), Body("base", steel)],
+                         fixed=[Fixed("base_bottom")], surface_pairs=[pair])
+    stepper = GN22(model, 1e-3)
+    why = [p.static_check() for p in stepper.contacts]
+    stepper.destroy()
     if sunk < 0.01:
-        build()
+        assert why == [None]
         return
-    with pytest.raises(MeshError, match=r"contact 'sliding': slave node at \(-0\.1, -0\.03\) m "
-                       r"starts inside the master 'base', 0\.03 m from its contact surface"):
-        build()
+    message = (r"contact 'sliding': slave node at \(-0\.1, -0\.03\) m starts inside the "
+               r"master 'base', 0\.03 m from its contact surface")
+    assert why[0] is not None and re.match(message, why[0])
+    with pytest.raises(MeshError, match=message):  # the static stage
+        PseudoStepper(model, None, STICK_BAND)

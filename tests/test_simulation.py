@@ -147,7 +147,8 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
         np.testing.assert_allclose(data["a_x"].min(axis=0), [-WIDTH / 2, HEIGHT], atol=1e-12)
         np.testing.assert_allclose(data["a_x"].max(axis=0), [WIDTH / 2, 2 * HEIGHT],
                                    atol=1e-12)
-        assert data["pair0_pressure"].shape == (len(data["pair0_x"]),)
+        assert list(data["contacts"]) == ["interface"]  # the pairs: contact_<name>_*
+        assert data["contact_interface_pressure"].shape == (len(data["contact_interface_x"]),)
 
     # The contact fields for ParaView, read back (serially: a file written on several
     # ranks holds one block per rank).

@@ -33,12 +33,12 @@ from breakwater.common.errors import MeshError
 from breakwater.common.files import read_history
 from breakwater.config.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.contact.general import SurfaceContact
+from breakwater.contact.slavepoints import SlavePoints
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, Damping, Fixed, Material, SurfaceLoad
 from breakwater.outputs import quality
 from breakwater.outputs.probes import PointProbe
-from breakwater.outputs.surfaceoutputs import SlavePoints, SurfaceProbe
 from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
@@ -77,8 +77,8 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
         return (-θ * (X + d) - δ) / np.sqrt(1 + θ**2)
 
     for point in ((0.25, 0.0), (0.4, 0.0), (1.0, 0.0)):
-        probe = SurfaceProbe(contact, PairProbeSpec("p", "c", point))
-        value = probe.value(stepper.u)
+        probe = contact.probe(point, "p")
+        value = probe.values(COMM.allreduce(probe.local(stepper.u)))
         us = PointProbe(model, "block", point).value(stepper.u)
         um = PointProbe(model, "base", point).value(stepper.u)
         np.testing.assert_allclose([value["slave_ux"], value["slave_uy"]], us, atol=1e-15)
@@ -100,7 +100,7 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
                                np.where(past, 0.0, pair.penalty * -state["gap"]), rtol=1e-12)
     # A point off the slave surface is an error.
     with pytest.raises(MeshError, match="not on the slave surface 'block_bottom'"):
-        SurfaceProbe(contact, PairProbeSpec("off", "c", (0.5, 0.1)))
+        contact.probe((0.5, 0.1), "off")
     stepper.destroy()
 
 
@@ -248,17 +248,18 @@ def test_snapshots_and_quality_of_a_general_pair(pushed: pathlib.Path) -> None:
     and the dynamic penetration the history's largest."""
     h = read_history(pushed / "history.csv")
     with np.load(pushed / "static.npz") as data:
-        x = data["surface_c_x"]
+        assert list(data["contacts"]) == ["c"]  # the pairs, in order: contact_<name>_*
+        x = data["contact_c_x"]
         assert x.shape == (7, 2)  # 3 P2 facets
         np.testing.assert_allclose(x[:, 1], 0.0, atol=1e-15)
         assert np.all(np.diff(x[:, 0]) > 0)
         for key in ("normal", "gap", "slip", "pressure"):
-            assert len(data[f"surface_c_{key}"]) == 7, key
+            assert len(data[f"contact_c_{key}"]) == 7, key
     with np.load(pushed / "snapshot_max_ux.npz") as data:
         assert float(data["time"]) == pytest.approx(END)
-        p = data["surface_c_pressure"]
+        p = data["contact_c_pressure"]
         assert p.mean() == pytest.approx(WEIGHT / WIDTH, rel=0.02)
-        np.testing.assert_allclose(data["surface_c_slip"], h["pmid_slip"][-1], rtol=1e-5)
+        np.testing.assert_allclose(data["contact_c_slip"], h["pmid_slip"][-1], rtol=1e-5)
     with open(pushed / "summary.json", encoding="utf-8") as f:
         summary = json.load(f)
     q = summary["contact_quality"]["c"]

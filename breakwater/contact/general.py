@@ -52,7 +52,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact.penetration import StepCheck, allowed_depth
+from breakwater.contact import slavepoints
+from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.pointkernels import (
     DenseEntries,
     H,
@@ -62,12 +63,13 @@ from breakwater.contact.pointkernels import (
 )
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
+from breakwater.model.pairs import FieldNodes, StaticMeasures
 
 if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceForces"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces"]
 
 QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
@@ -288,7 +290,7 @@ class SurfaceContact(SurfaceForces):
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
     """
 
-    kind = "general"
+    _field_points: slavepoints.SlavePoints | None = None  # the slave nodes, on first use
 
     @property
     def name(self) -> str:
@@ -375,6 +377,49 @@ class SurfaceContact(SurfaceForces):
                 power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
         return energy, power
 
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> SurfaceEnergy:
+        """The pair's ledger terms (:class:`SurfaceEnergy`; ``u0``, ``v0`` unused)."""
+        return SurfaceEnergy(self)
+
+    # --- the outputs at the slave surface's material points (contact.slavepoints) ---
+
+    def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+        """The slave nodes' state (:func:`breakwater.contact.slavepoints.snapshot`)."""
+        return slavepoints.snapshot(self, u)
+
+    def field_nodes(self) -> FieldNodes:
+        """The slave surface, the slave's degree and the slave surface's nodes."""
+        if self._field_points is None:
+            self._field_points = slavepoints.SlavePoints.nodes(self)
+        return FieldNodes(self.spec.slave_surface, self.model.body(self.spec.slave).index,
+                          self._field_points.X)
+
+    def field_values(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None
+                     ) -> dict[str, np.ndarray]:
+        """:meth:`breakwater.contact.slavepoints.SlavePoints.evaluate` at the slave nodes."""
+        if self._field_points is None:
+            self._field_points = slavepoints.SlavePoints.nodes(self)
+        return self._field_points.evaluate(self.interface_values(u),
+                                           None if v is None else self.interface_values(v))
+
+    def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
+        """:func:`breakwater.contact.slavepoints.static_measures` at ``u``."""
+        E = (self.model.body(self.spec.slave).spec.material.E,
+             self.model.body(self.spec.master).spec.material.E)
+        return slavepoints.static_measures(self, self.state(), u, E)
+
+    def static_check(self) -> str | None:
+        """Why the bodies start overlapped beyond what the search sees (None: they do not).
+
+        :func:`breakwater.contact.penetration.initial_overlap` (collective).
+        """
+        return initial_overlap(self.model, self.spec)
+
+    def probe(self, point: Sequence[float], name: str) -> slavepoints.SurfaceProbe:
+        """A :class:`breakwater.contact.slavepoints.SurfaceProbe` at ``point``."""
+        return slavepoints.SurfaceProbe(self, np.asarray(point, float), name)
+
     def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
         """Every normal integration point (every rank), as :meth:`resultant`.
 
@@ -401,3 +446,24 @@ class SurfaceContact(SurfaceForces):
             out["facet"][i] = p["facet"]
             out["xi"][i] = xi
         return out
+
+
+class SurfaceEnergy:
+    """A general pair's ledger terms: :meth:`SurfaceContact.energies` as a rank's share.
+
+    The pair's energies are the same on every rank: rank 0's share is the whole, the
+    others' zero, so that the ledger's one reduction over the ranks gives them
+    exactly. No numerical dissipation share: the pair's law is not a form.
+
+    Args:
+        contact: The pair.
+    """
+
+    def __init__(self, contact: SurfaceContact) -> None:
+        self.contact = contact
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`; collective)."""
+        energy, power = self.contact.energies()
+        first = self.contact.comm.rank == 0
+        return np.array([energy, power, 0.0]) if first else np.zeros(3)

@@ -5,22 +5,35 @@
 length ``∫ [g_n ≤ 0] dS``, the normal resultant ``∫ ε_n ⟨−g_n⟩₊ dS`` and the tangential
 resultant ``∫ t·t_s dS`` on the slave (the traction of the paper's eq. 23; 2D: along
 t = (n_y, −n_x), 3D: its magnitude) over the pair's interface, and the largest nodal
-penetration ``max ⟨−g_n⟩₊``.
+penetration ``max ⟨−g_n⟩₊``; its terms of the energy ledger (:class:`ConformingEnergy`:
+UFL forms over the interface), its nodal state for the snapshots and the ParaView fields
+(at the interface nodes, where the law acts: :meth:`InterfaceNodes.contact_state`), its
+static measures of contact quality and its probes (:class:`ConformingProbe`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
 import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.model.model import ContactModel, PairData
-from breakwater.model.pairs import max_penetration, pair_names
+from breakwater.model.pairs import (
+    PROBE_KEYS,
+    FieldNodes,
+    StaticMeasures,
+    max_penetration,
+    pair_names,
+    settlement,
+)
+from breakwater.model.pointprobe import PointProbe
 
-__all__ = ["QUANTITIES", "ConformingPair", "conforming_pairs"]
+__all__ = ["QUANTITIES", "ConformingEnergy", "ConformingPair", "ConformingProbe",
+           "conforming_pairs"]
 
 QUANTITIES = ("contact_length", "normal_force", "tangential_force", "penetration")
 """The history quantities of a conforming pair (columns ``<name>_<quantity>``)."""
@@ -36,15 +49,15 @@ class ConformingPair:
         name: Its name (:func:`breakwater.model.pairs.pair_names`).
         u: The displacement, one Function per body.
         v: The velocity, one Function per body.
+        dt: The stepper's time step.
     """
 
-    kind = "conforming"
-
     def __init__(self, model: ContactModel, pair: PairData, nodes: InterfaceNodes, name: str,
-                 u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
+                 u: Sequence[fem.Function], v: Sequence[fem.Function],
+                 dt: fem.Constant) -> None:
         self.model, self.pair, self.nodes = model, pair, nodes
         self.name = name
-        self.u, self.v = u, v
+        self.u, self.v, self.dt = u, v, dt
         self._forms: list[fem.Form] | None = None  # compiled on the first measure
 
     @property
@@ -77,9 +90,145 @@ class ConformingPair:
         return dict(zip(self.columns, (length, normal, tangential, max_penetration(gap)),
                         strict=True))
 
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> ConformingEnergy:
+        """The pair's ledger terms (:class:`ConformingEnergy`)."""
+        return ConformingEnergy(self, u0, v0)
+
+    def _sides(self, f: Sequence[fem.Function]) -> tuple[np.ndarray, np.ndarray]:
+        """The slave's and the master's arrays of one Function per body."""
+        return f[self.pair.slave].x.array, f[self.pair.master].x.array
+
+    def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+        """The interface nodes' state (:meth:`breakwater.model.pairs.Pair.snapshot`)."""
+        nd = self.nodes
+        state = nd.contact_state(*self._sides(u))
+        out = {"x": nd.x, "normal": nd.normal, "gap": state["gap"]}
+        if self.model.gdim == 2:
+            out["slip"] = np.sum(state["slip"] * nd.tangents[:, 0], axis=1)
+        out["pressure"] = state["pressure"]
+        return out
+
+    def field_nodes(self) -> FieldNodes:
+        """The interface group, the slave's degree and the interface nodes."""
+        return FieldNodes(self.pair.spec.interface, self.pair.slave, self.nodes.x)
+
+    def field_values(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None
+                     ) -> dict[str, np.ndarray]:
+        """:meth:`InterfaceNodes.contact_state` at the interface nodes."""
+        return self.nodes.contact_state(*self._sides(u),
+                                        *(self._sides(v) if v is not None else (None, None)))
+
+    def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
+        """h: the interface's length over its facets; δ and s at its nodes."""
+        m, p, nd = self.model, self.pair, self.nodes
+        us, um = nd.gather(*self._sides(u))
+        length = m.assemble(m.form(1.0 * p.dS))
+        facets = m.comm.allreduce(len(p.facet_data))
+        return StaticMeasures(
+            penalty=p.spec.penalty, element_size=length / facets,
+            young_moduli=(m.bodies[p.slave].spec.material.E,
+                          m.bodies[p.master].spec.material.E),
+            static_penetration=max_penetration(nd.contact_state(*self._sides(u))["gap"]),
+            settlement=settlement(us, um, nd.normal))
+
+    def static_check(self) -> str | None:
+        """None: the two sides share their interface nodes, so they cannot start overlapped.
+
+        (The model checks, when it builds the pair, that its interface is one of
+        facets shared by two cells: :class:`breakwater.model.model.ContactModel`.)
+        """
+        return None
+
+    def probe(self, point: Sequence[float], name: str) -> ConformingProbe:
+        """A :class:`ConformingProbe` at ``point``."""
+        return ConformingProbe(self, point, name)
+
+
+def _tangent(n: np.ndarray) -> np.ndarray:
+    """2D unit tangent t = (n_y, −n_x): +x on a horizontal interface with n = +y."""
+    return np.array([n[1], -n[0]])
+
+
+class ConformingProbe:
+    """Slip and opening (slave minus master) at a point of a conforming interface.
+
+    The normal is the master's outward normal at the nearest interface node;
+    slip is along ``t = (n_y, −n_x)`` in 2D (the tangential magnitude in 3D).
+    The sides' displacements are point probes of the two bodies (their traces).
+
+    Args:
+        pair: The pair.
+        point: The probe's point (reference coordinates).
+        name: The probe's name.
+
+    Raises:
+        MeshError: The point is not in one of the two bodies.
+    """
+
+    def __init__(self, pair: ConformingPair, point: Sequence[float], name: str) -> None:
+        m, p, nd = pair.model, pair.pair, pair.nodes
+        self.slave = PointProbe(m, m.bodies[p.slave].spec.name, point, f"{name}_slave")
+        self.master = PointProbe(m, m.bodies[p.master].spec.name, point, f"{name}_master")
+        x = np.zeros(m.gdim)
+        x[:] = np.asarray(point, dtype=float)[: m.gdim]
+        self.normal = nd.normal[np.argmin(np.linalg.norm(nd.x - x, axis=1))]
+        self.gdim = m.gdim
+
+    def local(self, u: Sequence[fem.Function]) -> np.ndarray:
+        """The two sides' displacements at the point, this rank's share (no reduction)."""
+        return np.concatenate([self.slave.local_value(u), self.master.local_value(u)])
+
+    def values(self, local: np.ndarray) -> dict[str, float]:
+        """Slip, opening and both sides' displacements (:data:`PROBE_KEYS`)."""
+        us, um = local[: self.slave.size], local[self.slave.size:]
+        jump = us - um
+        opening = float(jump @ self.normal)
+        if self.gdim == 2:
+            slip = float(jump @ _tangent(self.normal))
+        else:
+            slip = float(np.linalg.norm(jump - opening * self.normal))
+        return dict(zip(PROBE_KEYS, (slip, opening, float(us[0]), float(us[1]),
+                                     float(um[0]), float(um[1])), strict=True))
+
+
+class ConformingEnergy:
+    """A conforming pair's ledger terms: UFL forms over its interface.
+
+    The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊² dS`` and the friction power
+    ``∫ μp |v_T|²/sqrt(|v_T|² + χ²) dS`` at (u, v), and the interface share of the
+    step's numerical dissipation (:func:`forms.gn22_contact_dissipation`: the
+    penalty's trapezoidal error where the active set switches within the step, the
+    friction traction on the slip increment's mismatch), from (u0, v0) to (u, v).
+
+    Args:
+        pair: The pair.
+        u0: Displacements at the start of the step (the ledger's copies).
+        v0: Velocities at the start of the step.
+    """
+
+    def __init__(self, pair: ConformingPair, u0: Sequence[fem.Function],
+                 v0: Sequence[fem.Function]) -> None:
+        m, p, u, v = pair.model, pair.pair, pair.u, pair.v
+        s, t = p.slave, p.master
+        self.model = m
+        self._state = [
+            m.form(forms.penalty_energy(p.law, u[s]("+"), u[t]("-"), p.n, p.dS)),
+            m.form(forms.friction_power(p.law, u[s]("+"), u[t]("-"), v[s]("+"), v[t]("-"),
+                                        p.n, p.dS))]
+        self._step = m.form(forms.gn22_contact_dissipation(
+            p.law, u0[s]("+"), u0[t]("-"), v0[s]("+"), v0[t]("-"), u[s]("+"), u[t]("-"),
+            v[s]("+"), v[t]("-"), p.n, pair.dt, p.dS))
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`)."""
+        if step:
+            return self.model.assemble_local([*self._state, self._step])
+        return np.append(self.model.assemble_local(self._state), 0.0)
+
 
 def conforming_pairs(model: ContactModel, nodes: Sequence[InterfaceNodes],
-                     u: Sequence[fem.Function], v: Sequence[fem.Function]
+                     u: Sequence[fem.Function], v: Sequence[fem.Function], dt: fem.Constant
                      ) -> list[ConformingPair]:
     """The model's conforming pairs measured at (u, v), named by :func:`pair_names`.
 
@@ -88,8 +237,9 @@ def conforming_pairs(model: ContactModel, nodes: Sequence[InterfaceNodes],
         nodes: The pairs' interface nodes; empty: built here (collective).
         u: The displacement, one Function per body.
         v: The velocity, one Function per body.
+        dt: The stepper's time step.
     """
     nodes = nodes or interface_nodes(model)
     names = pair_names([p.spec for p in model.pairs])
-    return [ConformingPair(model, p, nd, name, u, v)
+    return [ConformingPair(model, p, nd, name, u, v, dt)
             for p, nd, name in zip(model.pairs, nodes, names, strict=True)]

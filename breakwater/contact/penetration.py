@@ -8,7 +8,8 @@ other silently (a block at 20 m/s with Δt = 1e-3 s moves 2 cm per step, twice t
 10 mm radius of the sliding-block example's base: it went through the 0.1 m base with a
 contact force of zero). Two checks keep every slave node where the search sees it:
 
-- **At t = 0** (:func:`initial_overlap`, when the model is built): a slave node inside a
+- **At t = 0** (:func:`initial_overlap`, the pair's static check, which the static
+  stage runs for every pair before it looks for the initial state): a slave node inside a
   master cell (reference configuration, dolfinx's bounding-box tree on the master body)
   deeper than :func:`allowed_depth` below the master surface, or with no master surface
   point within r, is an overlap of the meshes that the penalty cannot resolve: refused,

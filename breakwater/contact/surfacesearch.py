@@ -6,8 +6,9 @@ step's state at the pair's interface unknowns (every rank, one reduction), and
 :class:`SurfaceSearch` gathers the pair's two surfaces, cuts the slave into integration
 points and projects them onto the master in the current configuration (the paper's
 eqs. 5-7), with the start-of-step projection of the slave nodes that friction uses.
-Building the search checks the pair's initial overlap
-(:func:`breakwater.contact.penetration.initial_overlap`).
+Whether the pair's bodies start overlapped beyond what the search sees is the pair's
+static check (:meth:`breakwater.contact.general.SurfaceContact.static_check`, which the
+static stage calls).
 """
 
 from __future__ import annotations
@@ -22,8 +23,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.common.errors import MeshError
-from breakwater.contact.penetration import initial_overlap, search_radius
+from breakwater.contact.penetration import search_radius
 from breakwater.contact.pointkernels import nodal_normal_forces, normal_forces, unit_tangent
 from breakwater.contact.projection import FacetGrid, nearest_end, project, shape
 from breakwater.contact.surfaces import SurfacePair, gather_surface
@@ -139,9 +139,6 @@ class SurfaceSearch(InterfaceValues):
         dt: The step size constant.
         beta1: GN22 β₁.
         beta2: GN22 β₂.
-
-    Raises:
-        MeshError: The pair's bodies overlap at t = 0 beyond what the search sees.
     """
 
     def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
@@ -150,10 +147,7 @@ class SurfaceSearch(InterfaceValues):
                               Sequence[fem.Function], Sequence[fem.Function]],
                  dt: fem.Constant, beta1: float, beta2: float) -> None:
         super().__init__(model.comm, layout, interface, state, dt, beta1, beta2)
-        why = initial_overlap(model, spec)
-        if why is not None:
-            raise MeshError(why)
-        self.spec = spec
+        self.model, self.spec = model, spec
         self.small_rotations = spec.rotations == "small"
         self._edge = _EDGE if spec.integration == "nodes" else 1e-9
         self.law = forms.ContactLaw.of(spec)

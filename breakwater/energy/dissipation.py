@@ -8,7 +8,8 @@ Computed from the scheme's discrete energy identity (derivation in
   M v̄, M Δa and K v̄ of the fast solver's cached M, K (:func:`bulk_coefficients`);
 - contact: the penalty's trapezoidal error where the active set switches within a step,
   and the friction traction on the mismatch between the slip increment and Δt × the
-  slip velocity the law saw, one form over the interfaces (:func:`contact_form`).
+  slip velocity the law saw, one form over each conforming pair's interface
+  (:class:`breakwater.contact.pairstate.ConformingEnergy`, the pair's ledger terms).
 
 The ledger's balance, E(t) − E(0) + D_R + D_F + D_num − W, then vanishes to the
 equilibrium's residual, and checks that the solved state, the ledger's energies and its
@@ -26,7 +27,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 if TYPE_CHECKING:
     from breakwater.stepping.gn22 import GN22
 
-__all__ = ["bulk_coefficients", "bulk_form", "contact_form"]
+__all__ = ["bulk_coefficients", "bulk_form"]
 
 
 def bulk_form(stepper: GN22) -> fem.Form | None:
@@ -73,24 +74,3 @@ def bulk_coefficients(dt: float, beta1: float, beta2: float, alpha: float,
     g, c = beta1 - 0.5, 0.5 * (beta2 - beta1)
     return c * alpha * dt**2 - g * dt, c * dt**2, -0.5 * c * dt**2, c * beta * dt**2
 
-
-def contact_form(stepper: GN22, u0: list[fem.Function],
-                 v0: list[fem.Function]) -> fem.Form | None:
-    """The interface share of the last step's numerical dissipation (None: no pairs).
-
-    Args:
-        stepper: The stepper, after :meth:`~breakwater.stepping.gn22.GN22.update` (``u``, ``v``
-            at the end of the step, ``dt``).
-        u0: Displacements at the start of the step (one Function per body).
-        v0: Velocities at the start of the step.
-
-    """
-    s, m = stepper, stepper.model
-    if not m.pairs:
-        return None
-    return m.form(sum(
-        forms.gn22_contact_dissipation(
-            p.law, u0[p.slave]("+"), u0[p.master]("-"), v0[p.slave]("+"),
-            v0[p.master]("-"), s.u[p.slave]("+"), s.u[p.master]("-"),
-            s.v[p.slave]("+"), s.v[p.master]("-"), p.n, s.dt, p.dS)
-        for p in m.pairs))

@@ -27,8 +27,6 @@ import dolfinx
 import numpy as np
 from dolfinx import fem
 
-from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
-from breakwater.energy import dissipation as numerical
 from breakwater.energy.bulkenergy import bulk_terms
 from breakwater.stepping.gn22 import GN22
 
@@ -70,7 +68,8 @@ class EnergyLedger:
     The terms over the whole mesh (kinetic, strain, Rayleigh, external work, the bulk
     numerical dissipation) come from :mod:`breakwater.energy.bulkenergy`: on the fast solver
     from its cached M, K and load vectors, on the reference solver from UFL forms; the
-    interface terms are forms over the contact facets (and the general pairs' own).
+    interface terms from the stepper's pairs (:attr:`~breakwater.stepping.gn22.GN22.contacts`,
+    :meth:`breakwater.model.pairs.Pair.energy_terms`).
 
     Args:
         stepper: The stepper.
@@ -85,21 +84,10 @@ class EnergyLedger:
         self._amp0 = [fem.Constant(m.mesh, dolfinx.default_scalar_type(0.0)) for _ in m.loads]
         # The whole-mesh terms: the fast solver's cached M, K, or UFL forms.
         self.bulk = bulk_terms(s, self.u0, self.v0, self._amp0, source)
-        # The interface terms: forms over the contact facets.
-        self._penalty = m.form(sum(
-            forms.penalty_energy(p.law, s.u[p.slave]("+"), s.u[p.master]("-"), p.n, p.dS)
-            for p in m.pairs)) if m.pairs else None
-        self._friction = [
-            m.form(sum(forms.friction_power(p.law, u[p.slave]("+"), u[p.master]("-"),
-                                            v[p.slave]("+"), v[p.master]("-"), p.n, p.dS)
-                       for p in m.pairs))
-            if m.pairs else None
-            for u, v in ((s.u, s.v), (self.u0, self.v0))]
-        self._contact = numerical.contact_form(s, self.u0, self.v0)
-        # General pairs (breakwater.contact.general): their penalty energy and friction
-        # power come from the pairs themselves, at the accepted state.
-        self._surfaces = s.surfaces
-        self._surface_power = 0.0
+        # The pairs' terms (breakwater.model.pairs.EnergyTerms): forms over a
+        # conforming pair's interface, a general pair's own sums.
+        self.pairs = [pair.energy_terms(self.u0, self.v0) for pair in s.contacts]
+        self._power0 = 0.0  # the pairs' friction power at the start of the step
         self.reference: float | None = None
         self.row = Energies()
         self._t0 = 0.0
@@ -112,14 +100,14 @@ class EnergyLedger:
         """
         return {"reference": self.reference, "row": self.row.as_dict(), "t0": self._t0,
                 "amp0": [float(a.value) for a in self._amp0],
-                "surface_power": self._surface_power}
+                "friction_power": self._power0}
 
     def restore(self, state: dict[str, Any]) -> None:
         """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller)."""
         self.reference = state["reference"]
         self.row = Energies(**state["row"])
         self._t0 = state["t0"]
-        self._surface_power = state.get("surface_power", 0.0)
+        self._power0 = state["friction_power"]
         for a0, value in zip(self._amp0, state["amp0"], strict=True):
             a0.value = value
 
@@ -129,23 +117,18 @@ class EnergyLedger:
         t = float(s.t.value)
         first = self.reference is None
         # Every term at once (one reduction); the step's terms from the second row on.
-        values = m.reduce(np.concatenate([
-            self.bulk.local(not first),
-            m.assemble_local([self._penalty] if first else
-                             [self._penalty, *self._friction, self._contact])]))
-        kin, strain, rayleigh, work, bulk, pen = (float(x) for x in values[:6])
-        surface = [sp.energies() for sp in self._surfaces]
-        pen += sum(e for e, _ in surface)
-        power = sum(p for _, p in surface)
+        values = m.reduce(np.concatenate([self.bulk.local(not first),
+                                          *(p.local(not first) for p in self.pairs)]))
+        kin, strain, rayleigh, work, bulk = (float(x) for x in values[:5])
+        pen, power, contact = (float(sum(column.tolist()))  # the pairs' in order
+                               for column in values[5:].reshape(-1, 3).T)
         r = self.row
         if self.reference is None:
             self.reference = kin + strain + pen
         else:
-            friction1, friction0, contact = (float(x) for x in values[6:])
             Δt = t - self._t0
             r.rayleigh_dissipation += Δt * rayleigh
-            r.friction_dissipation += 0.5 * Δt * (friction1 + friction0 + power
-                                                  + self._surface_power)
+            r.friction_dissipation += 0.5 * Δt * (power + self._power0)
             r.external_work += work
             r.numerical_dissipation += bulk + contact
             r.numerical_dissipation_contact += contact
@@ -159,7 +142,7 @@ class EnergyLedger:
         for a0, ld in zip(self._amp0, m.loads, strict=True):
             a0.value = ld.amplitude.value
         self._t0 = t
-        self._surface_power = power
+        self._power0 = power
         return Energies(**r.as_dict())
 
     def destroy(self) -> None:

@@ -173,9 +173,9 @@ class ContactModel(ModelGroups):
         A surface group may lie on several bodies (a conforming interface shared by the
         two, or one group naming facets of both): each side of the pair takes the
         group's facets on its own body (:func:`breakwater.contact.surfaces.surface_dofs`).
-        Whether the bodies start overlapped beyond what the pair's search sees is checked
-        when the pair's forces are built (:class:`breakwater.contact.surfacesearch.SurfaceSearch`,
-        by the fast solver), before any step.
+        Whether the bodies start overlapped beyond what the pair's search sees is the
+        pair's static check (:meth:`breakwater.model.pairs.Pair.static_check`), which the
+        static stage runs before it looks for the initial state.
         """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
                                   *(("master", pair.master, g) for g in pair.master_groups)):

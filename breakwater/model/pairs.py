@@ -5,8 +5,11 @@ on node), :class:`SurfacePair` a general pair (two surfaces that need not match,
 finite sliding: :mod:`breakwater.contact.general`); :class:`PairData` is what the
 model builds for a conforming pair (:mod:`breakwater.model.model`).
 
-:class:`Pair` is what the outputs ask of a pair of either kind at a stepper's state
-(its history columns, ``<name>_<quantity>``); the contact layer implements it and the
+:class:`Pair` is what everything after a step asks of a pair of either kind at a
+stepper's state: its history columns (``<name>_<quantity>``), its ledger terms
+(:class:`EnergyTerms`), its probes (:class:`PairProbe`), its nodal state for the
+snapshots and the ParaView fields (:class:`FieldNodes`) and its static measures of
+contact quality (:class:`StaticMeasures`). The contact layer implements it and the
 stepper builds the pairs on its state (:attr:`breakwater.stepping.gn22.GN22.contacts`).
 
 Nothing here imports dolfinx at module level: the case file reads these settings.
@@ -26,8 +29,9 @@ if TYPE_CHECKING:
 
     from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 
-__all__ = ["INTEGRATIONS", "ContactPair", "Pair", "PairData", "SurfacePair", "check_pair_settings",
-           "max_penetration", "pair_names"]
+__all__ = ["INTEGRATIONS", "PROBE_KEYS", "ContactPair", "EnergyTerms", "FieldNodes", "Pair",
+           "PairData", "PairProbe", "StaticMeasures", "SurfacePair", "check_pair_settings",
+           "max_penetration", "pair_names", "probed_pair", "settlement"]
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
@@ -171,25 +175,106 @@ class PairData:
         return self.law.normal.ε_n
 
 
+PROBE_KEYS = ("slip", "opening", "slave_ux", "slave_uy", "master_ux", "master_uy")
+"""The values of a pair probe (its history columns ``<probe>_<key>``)."""
+
+
+@dataclass(frozen=True)
+class StaticMeasures:
+    """The static measures of one pair that its contact quality is assessed from.
+
+    Plain numbers (:class:`breakwater.outputs.quality.PairInputs` adds the pair's name).
+
+    Attributes:
+        penalty: ε_n (N/m³).
+        element_size: Mean interface facet length h (m).
+        young_moduli: Young's moduli (slave, master) (Pa).
+        static_penetration: Largest static penetration (m).
+        settlement: Static settlement (m), see :func:`settlement`.
+    """
+
+    penalty: float
+    element_size: float
+    young_moduli: tuple[float, float]
+    static_penetration: float
+    settlement: float
+
+
+@dataclass(frozen=True)
+class FieldNodes:
+    """Where a pair's ParaView fields live (:meth:`Pair.field_values` gives their values).
+
+    Attributes:
+        group: The facet group of the fields' submesh (gmsh physical name).
+        body: The body whose Lagrange degree the fields take (its index).
+        x: Reference coordinates of the nodes of :meth:`Pair.field_values`, ``(n, gdim)``.
+    """
+
+    group: str
+    body: int
+    x: np.ndarray
+
+
+class PairProbe(Protocol):
+    """A pair probe: slip and opening (slave minus master) at a point of a pair.
+
+    Its values (:data:`PROBE_KEYS`) are a function of the sums over the ranks of
+    :meth:`local`, so that the probes of a run take one reduction.
+    """
+
+    def local(self, u: Sequence[fem.Function]) -> np.ndarray:
+        """The rank's share of the probe's data at the state ``u`` (collective)."""
+        ...
+
+    def values(self, local: np.ndarray) -> dict[str, float]:
+        """The :data:`PROBE_KEYS` from the sum over the ranks of :meth:`local`."""
+        ...
+
+
+class EnergyTerms(Protocol):
+    """A pair's terms of the energy ledger (:class:`breakwater.energy.ledger.EnergyLedger`).
+
+    Built once per ledger (:meth:`Pair.energy_terms`) on the ledger's copies of the
+    state at the start of the step.
+    """
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share of the pair's ledger terms, shape (3,), to be summed over the ranks.
+
+        The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊²`` and the friction power ``P_F`` at the
+        stepper's accepted state, then the interface share of the step's numerical
+        dissipation (:mod:`breakwater.energy.dissipation`; 0 with ``step`` False, at
+        the first record, and for a pair whose law is not a form).
+
+        Args:
+            step: The state is the end of a step, not the first record.
+        """
+        ...
+
+
 class Pair(Protocol):
-    """A contact pair as the outputs measure it, at its stepper's accepted state.
+    """A contact pair at a stepper's accepted state: what everything after the step asks of it.
+
+    Ownership: the model owns the pairs' settings and integration data
+    (:attr:`breakwater.model.model.ContactModel.pairs`, conforming: :class:`PairData`;
+    ``surface_pairs``, general: :class:`SurfacePair`); the stepper owns the pair
+    *objects* on its state (:attr:`breakwater.stepping.gn22.GN22.contacts`, conforming
+    pairs first, then the general ones, each kind in the model's order), because a
+    pair is measured at a state and one model can have several steppers (the
+    relaxation's and the run's). The energy ledger, the monitor, the probes, the
+    fields, the snapshots and the quality report reach the pairs through
+    ``stepper.contacts`` only, and never ask which kind a pair is.
 
     Both kinds implement it: a conforming pair
     (:class:`breakwater.contact.pairstate.ConformingPair`) and a general pair
-    (:class:`breakwater.contact.general.SurfaceContact`); the stepper
-    (:attr:`breakwater.stepping.gn22.GN22.contacts`) builds them on its state, conforming
-    pairs first, in the model's order. The history's columns of a pair are named
-    ``<name>_<quantity>`` (:mod:`breakwater.outputs.monitor`).
+    (:class:`breakwater.contact.general.SurfaceContact`). Everything a pair writes is
+    named by the pair: history columns ``<name>_<quantity>``
+    (:mod:`breakwater.outputs.monitor`).
     """
 
     @property
     def name(self) -> str:
         """The pair's name: the case's ``[contact.<name>]``."""
-        ...
-
-    @property
-    def kind(self) -> str:
-        """``conforming`` or ``general``."""
         ...
 
     @property
@@ -199,6 +284,61 @@ class Pair(Protocol):
 
     def measure(self) -> dict[str, float]:
         """The values of :attr:`columns` at the accepted state (collective, every rank)."""
+        ...
+
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> EnergyTerms:
+        """The pair's ledger terms (:class:`EnergyTerms`; collective).
+
+        Args:
+            u0: The ledger's displacements at the start of the step (one per body).
+            v0: Its velocities there.
+        """
+        ...
+
+    def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+        """The pair's nodal state at ``u`` for the ``.npz`` snapshots (every rank; collective).
+
+        ``x`` (reference coordinates of the nodes, sorted by x then y), ``normal``
+        (the master's outward normal), ``gap`` (g_n), ``slip`` (2D: along
+        t = (n_y, −n_x)) and ``pressure`` (ε_n ⟨−g_n⟩₊).
+        """
+        ...
+
+    def field_nodes(self) -> FieldNodes:
+        """Where the pair's ParaView fields live (collective on the first call)."""
+        ...
+
+    def field_values(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None
+                     ) -> dict[str, np.ndarray]:
+        """The contact state at :meth:`field_nodes`, for ParaView (collective).
+
+        ``pressure``, ``gap`` (shape ``(n,)``), ``slip``, ``slip_velocity`` and
+        ``friction_traction`` (shape ``(n, gdim)``); ``v`` None: at rest.
+        """
+        ...
+
+    def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
+        """The measures of the pair's contact quality at the static state ``u`` (collective)."""
+        ...
+
+    def static_check(self) -> str | None:
+        """Why the pair cannot start from the meshed configuration, or None (collective).
+
+        The static stage calls it for every pair before it looks for the initial state
+        (:class:`breakwater.statics.pseudostep.PseudoStepper`), which raises
+        :class:`~breakwater.common.errors.MeshError` with the reason: a general pair's
+        bodies overlapped beyond what its search sees
+        (:func:`breakwater.contact.penetration.initial_overlap`).
+        """
+        ...
+
+    def probe(self, point: Sequence[float], name: str) -> PairProbe:
+        """A pair probe at ``point`` (reference coordinates) named ``name`` (collective).
+
+        Raises:
+            MeshError: The point is not on the pair's interface (slave surface).
+        """
         ...
 
 
@@ -211,6 +351,33 @@ def pair_names(pairs: Sequence[ContactPair]) -> list[str]:
     return [n if names.count(n) == 1 else str(k) for k, n in enumerate(names)]
 
 
+def probed_pair(probe: str, pair: int | str, conforming: int, general: Sequence[str]) -> int:
+    """The index among the stepper's pairs of the pair a pair probe names.
+
+    The stepper's pairs (:attr:`breakwater.stepping.gn22.GN22.contacts`) are the
+    conforming pairs, then the general ones, each kind in the model's order.
+
+    Args:
+        probe: The probe's name (for the messages).
+        pair: The probe's pair (:class:`breakwater.config.runspec.PairProbeSpec`): a
+            conforming pair's index in ``model.pairs``, or a general pair's name.
+        conforming: The number of conforming pairs.
+        general: The names of the general pairs.
+
+    Raises:
+        ValueError: No such pair.
+    """
+    if isinstance(pair, str):
+        if pair not in general:
+            raise ValueError(f"pair probe '{probe}': no general contact pair '{pair}' "
+                             f"(the model has {', '.join(general) or 'none'})")
+        return conforming + list(general).index(pair)
+    if not 0 <= pair < conforming:
+        raise ValueError(f"pair probe '{probe}': no contact pair {pair} "
+                         f"(the model has {conforming})")
+    return pair
+
+
 def max_penetration(gap: np.ndarray) -> float:
     """The largest penetration ``max ⟨−g_n⟩₊`` of nodal normal gaps (0 if none).
 
@@ -219,3 +386,17 @@ def max_penetration(gap: np.ndarray) -> float:
     """
     gap = np.asarray(gap, dtype=float)
     return float(max(0.0, -gap.min())) if gap.size else 0.0
+
+
+def settlement(u_slave: np.ndarray, u_master: np.ndarray, normal: np.ndarray) -> float:
+    """Static settlement: ``|mean(½(u_s + u_m)·n)|`` over the interface nodes (m).
+
+    Args:
+        u_slave: Slave displacements at the interface nodes, shape (n, gdim).
+        u_master: Master displacements at the same nodes, shape (n, gdim).
+        normal: Unit normals at the nodes, shape (n, gdim).
+    """
+    u = 0.5 * (np.asarray(u_slave, float) + np.asarray(u_master, float))
+    if not len(u):
+        return 0.0
+    return float(abs(np.mean(np.sum(u * np.asarray(normal, float), axis=1))))

@@ -48,8 +48,12 @@ __all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_fingerprint", "check
            "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
-FORMAT = 2
-"""Version of the checkpoint layout; a checkpoint of another version is refused."""
+FORMAT = 3
+"""Version of the checkpoint layout; a checkpoint of another version is refused.
+
+3: the ledger's state holds ``friction_power``, every pair's friction power at the
+last record (2 held ``surface_power``, the general pairs' only).
+"""
 
 _MATCH_TOL = 1e-9
 """Node coordinates match within this fraction of the body's bounding-box size."""

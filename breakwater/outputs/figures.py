@@ -206,21 +206,18 @@ def _contours(data: Any, field: str, factor: float, label: str, title: str,
 
 def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
                      ) -> pathlib.Path | None:
-    # Conforming pairs (pair<k>_*) and general pairs (surface_<name>_*, on the slave).
-    keys = sorted(str(k).removesuffix("_x") for k in data.files
-                  if str(k).startswith(("pair", "surface_")) and str(k).endswith("_x"))
-    if not keys:
+    # Every pair's nodal state, contact_<name>_* (a general pair's on its slave).
+    names = [str(n) for n in data["contacts"]] if "contacts" in data.files else []
+    if not names:
         return None
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
-    for key in keys:
-        x = data[f"{key}_x"]
+    for name in names:
+        x = data[f"contact_{name}_x"]
         # Abscissa along the interface: x for a horizontal one, else the arc length.
         span = np.ptp(x, axis=0)
         s = x[:, 0] if span[0] >= span[1] else x[:, 1]
-        label = f"pair {key.removeprefix('pair')}" if key.startswith("pair") else \
-            f"contact {key.removeprefix('surface_')}"
-        ax.plot(s, data[f"{key}_pressure"], "o-", ms=3, label=label)
+        ax.plot(s, data[f"contact_{name}_pressure"], "o-", ms=3, label=f"contact {name}")
     static = summary.get("static", {})
     mean = static.get("mean_contact_pressure")
     if mean is not None:

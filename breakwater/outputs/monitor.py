@@ -2,8 +2,8 @@
 
 :class:`Monitor` is the one object whose :meth:`Monitor.row` the time loop calls per
 accepted step (and once for the static state); everything the history records is
-measured there. :func:`interface_state` gives the nodal interface data of every
-pair (for the static and peak snapshots).
+measured there. :func:`interface_state` gives the nodal state of every pair (for the
+static and peak snapshots).
 """
 
 from __future__ import annotations
@@ -14,13 +14,11 @@ import numpy as np
 from dolfinx import fem
 
 from breakwater.config.runspec import OutputSpec
-from breakwater.contact.conforming import InterfaceNodes
-from breakwater.contact.general import SurfaceContact
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
+from breakwater.model.pairs import Pair
 from breakwater.model.pairs import pair_names as names_of
 from breakwater.outputs.probes import Probes
-from breakwater.outputs.surfaceoutputs import surface_state
 from breakwater.stepping.gn22 import GN22
 
 __all__ = ["Monitor", "interface_state", "pair_names"]
@@ -51,20 +49,15 @@ class Monitor:
         stepper: The GN22 stepper (its ``u``, ``v`` are measured, and its pairs,
             :attr:`~breakwater.stepping.gn22.GN22.contacts`).
         output: The probes.
-        nodes: Interface nodes of every conforming pair.
 
     Attributes:
-        surfaces: The general pairs (the stepper's :attr:`~breakwater.stepping.gn22.GN22.surfaces`).
         probes: The probes.
 
     """
 
-    def __init__(self, model: ContactModel, stepper: GN22, output: OutputSpec,
-                 nodes: Sequence[InterfaceNodes]) -> None:
+    def __init__(self, model: ContactModel, stepper: GN22, output: OutputSpec) -> None:
         self.model, self.stepper = model, stepper
-        self.nodes = nodes
-        self.surfaces = stepper.surfaces
-        self.probes = Probes(model, output, nodes, self.surfaces)
+        self.probes = Probes(model, output, stepper.contacts)
         self.columns = ["t", "dt", "newton_iterations", *self.probes.columns]
         for pair in stepper.contacts:
             self.columns += pair.columns
@@ -82,34 +75,24 @@ class Monitor:
         return r
 
 
-def interface_state(model: ContactModel, nodes: Sequence[InterfaceNodes],
-                    u: Sequence[fem.Function], surfaces: Sequence[SurfaceContact] = ()
+def interface_state(pairs: Sequence[Pair], u: Sequence[fem.Function]
                     ) -> dict[str, np.ndarray]:
-    """Nodal interface data of every pair (same on all ranks; collective).
+    """The nodal state of every pair at ``u``, for the snapshots (every rank; collective).
 
     Args:
-        model: The contact model.
-        nodes: Interface nodes of every conforming pair.
+        pairs: The pairs (the stepper's :attr:`~breakwater.stepping.gn22.GN22.contacts`).
         u: The state (one Function per body).
-        surfaces: The general pairs (:attr:`Monitor.surfaces`).
 
     Returns:
-        ``pair<k>_x`` node coordinates (sorted), ``pair<k>_normal``, ``pair<k>_gap``
-        (normal gap g_n), ``pair<k>_slip`` (2D: along t = (n_y, −n_x)) and
-        ``pair<k>_pressure`` (ε_n ⟨−g_n⟩₊); per general pair the same at the slave
-        surface's nodes, ``surface_<name>_x`` ...
-        (:func:`~breakwater.outputs.surfaceoutputs.surface_state`).
+        ``contacts``: the pairs' names, in order; per pair ``contact_<name>_<field>``
+        for the fields of :meth:`~breakwater.model.pairs.Pair.snapshot`: ``x`` (node
+        coordinates, sorted), ``normal``, ``gap`` (normal gap g_n), ``slip`` (2D: along
+        the tangent) and ``pressure`` (ε_n ⟨−g_n⟩₊), at a conforming pair's interface
+        nodes and at a general pair's slave nodes.
     """
-    data: dict[str, np.ndarray] = {}
-    for k, (p, nd) in enumerate(zip(model.pairs, nodes, strict=True)):
-        state = nd.contact_state(u[p.slave].x.array, u[p.master].x.array)
-        data[f"pair{k}_x"] = nd.x
-        data[f"pair{k}_normal"] = nd.normal
-        data[f"pair{k}_gap"] = state["gap"]
-        if model.gdim == 2:
-            data[f"pair{k}_slip"] = np.sum(state["slip"] * nd.tangents[:, 0], axis=1)
-        data[f"pair{k}_pressure"] = state["pressure"]
-    data.update(surface_state(surfaces, u))
+    data: dict[str, np.ndarray] = {"contacts": np.array([p.name for p in pairs], dtype=str)}
+    for p in pairs:
+        data.update({f"contact_{p.name}_{k}": a for k, a in p.snapshot(u).items()})
     return data
 
 

@@ -40,7 +40,8 @@ current ε_n is inside the range exactly when the verdict is ``ok``. When the lo
 above the upper one the criteria cannot both hold: refine the mesh at the interface.
 
 Everything here is a pure function of numbers (no dolfinx): the run layer measures
-the inputs (:class:`PairInputs`, in :mod:`breakwater.outputs.summary`).
+the inputs (each pair's :meth:`breakwater.model.pairs.Pair.static_measures`, made
+:class:`PairInputs` in :mod:`breakwater.outputs.summary`).
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from breakwater.model.pairs import max_penetration
+from breakwater.model.pairs import StaticMeasures, max_penetration, settlement
 
 __all__ = [
     "MAX_PENETRATION_OVER_H",
@@ -70,20 +71,6 @@ MAX_PENETRATION_OVER_SETTLEMENT = 0.1
 """Largest static penetration accepted, as a fraction of the static settlement."""
 MAX_STIFFNESS_RATIO = 1e3
 """Largest ε_n h / E (softer side) before the penalty costs conditioning."""
-
-
-def settlement(u_slave: np.ndarray, u_master: np.ndarray, normal: np.ndarray) -> float:
-    """Static settlement: ``|mean(½(u_s + u_m)·n)|`` over the interface nodes (m).
-
-    Args:
-        u_slave: Slave displacements at the interface nodes, shape (n, gdim).
-        u_master: Master displacements at the same nodes, shape (n, gdim).
-        normal: Unit normals at the nodes, shape (n, gdim).
-    """
-    u = 0.5 * (np.asarray(u_slave, float) + np.asarray(u_master, float))
-    if not len(u):
-        return 0.0
-    return float(abs(np.mean(np.sum(u * np.asarray(normal, float), axis=1))))
 
 
 def stiffness_ratio(penalty: float, h: float, young_modulus: float) -> float:
@@ -258,8 +245,9 @@ class PairInputs:
         young_moduli: Young's moduli (slave, master) (Pa).
         static_penetration: Largest static penetration (m).
         settlement: Static settlement (m), see :func:`settlement`.
-        penetration_column: The history column of the pair's largest penetration
-            (None: ``<name>_penetration``).
+
+    The pair's largest penetration over a run is its history column
+    ``<name>_penetration``.
     """
 
     name: str
@@ -268,7 +256,6 @@ class PairInputs:
     young_moduli: tuple[float, float]
     static_penetration: float
     settlement: float
-    penetration_column: str | None = None
 
     def __post_init__(self) -> None:
         a, b = self.young_moduli  # (a list when read back from JSON)
@@ -280,3 +267,9 @@ class PairInputs:
         return assess(self.name, self.penalty, self.element_size, self.young_moduli,
                       self.static_penetration, self.settlement, dynamic_penetration,
                       time_of_dynamic_penetration)
+
+    @classmethod
+    def of(cls, name: str, measures: StaticMeasures) -> PairInputs:
+        """The inputs of the pair ``name`` from its static measures."""
+        return cls(name, measures.penalty, measures.element_size, measures.young_moduli,
+                   measures.static_penetration, measures.settlement)

@@ -1,7 +1,8 @@
 """The summary of a run (``summary.json``) and its on-screen report.
 
 Everything here reads what a run produced, the history rows and the nodal interface
-data of the static state, and steps or solves nothing:
+data of the static state, and steps or solves nothing (but :func:`quality_inputs`,
+which asks the pairs):
 
 - :func:`static_summary`: the first contact pair's static state (the paper's Fig. 17:
   contact resultant against the weight it carries, mean, edge and centre pressure);
@@ -29,10 +30,9 @@ from mpi4py import MPI
 
 from breakwater import __version__  # type: ignore[attr-defined]
 from breakwater.config.runspec import TimeSpec
-from breakwater.contact.conforming import InterfaceNodes
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
-from breakwater.model.pairs import pair_names
+from breakwater.model.pairs import Pair, pair_names
 from breakwater.outputs import quality
 from breakwater.outputs.probes import Probes
 
@@ -83,8 +83,8 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     weight = sum(weights[i] for i in resting_on(model, slave))
     name = pair_names([p.spec for p in model.pairs])[0]
     length, resultant = row[f"{name}_contact_length"], row[f"{name}_normal_force"]
-    pressure = interface["pair0_pressure"]
-    first, last, centre = edge_centre(interface["pair0_x"])
+    pressure = interface[f"contact_{name}_pressure"]
+    first, last, centre = edge_centre(interface[f"contact_{name}_x"])
     static.update({
         "slave": model.bodies[slave].spec.name,
         "weight": weight,
@@ -102,30 +102,15 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
 
 # --- contact quality --------------------------------------------------------------
 
-def quality_inputs(model: ContactModel, nodes: Sequence[InterfaceNodes], names: Sequence[str],
-                   u: Sequence[fem.Function], interface: Mapping[str, np.ndarray]
+def quality_inputs(pairs: Sequence[Pair], u: Sequence[fem.Function]
                    ) -> list[quality.PairInputs]:
     """The static measures of each pair's contact quality (collective).
 
     Args:
-        model: The contact model.
-        nodes: Interface nodes of every pair.
-        names: The pairs' names.
+        pairs: The pairs (the stepper's :attr:`~breakwater.stepping.gn22.GN22.contacts`).
         u: The static state (one Function per body).
-        interface: Its nodal interface data.
     """
-    inputs = []
-    for k, (p, nd, name) in enumerate(zip(model.pairs, nodes, names, strict=True)):
-        us, um = nd.gather(u[p.slave].x.array, u[p.master].x.array)
-        length = model.assemble(model.form(1.0 * p.dS))
-        facets = model.comm.allreduce(len(p.facet_data))
-        inputs.append(quality.PairInputs(
-            name=name, penalty=p.spec.penalty, element_size=length / facets,
-            young_moduli=(model.bodies[p.slave].spec.material.E,
-                          model.bodies[p.master].spec.material.E),
-            static_penetration=quality.max_penetration(interface[f"pair{k}_gap"]),
-            settlement=quality.settlement(us, um, nd.normal)))
-    return inputs
+    return [quality.PairInputs.of(p.name, p.static_measures(u)) for p in pairs]
 
 
 def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mapping[str, float]]
@@ -141,7 +126,7 @@ def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mappin
     for c in inputs:
         δ, when = None, None
         if steps:
-            column = c.penetration_column or f"{c.name}_penetration"
+            column = f"{c.name}_penetration"
             j = int(np.argmax([r[column] for r in steps]))
             δ, when = steps[j][column], steps[j]["t"]
         report[c.name] = c.assess(δ, when)

@@ -16,8 +16,10 @@ Output files of a run (in the output directory):
   of each body, as discontinuous P2 fields (exact for P2 displacements), for ParaView.
 - ``contact_<pair>.bp``: contact pressure, normal gap, slip, slip velocity and
   friction traction of each contact pair, as P2 fields on the interface (a general
-  pair's on its slave surface: :class:`~breakwater.outputs.surfaceoutputs.SurfaceFields`).
-- ``static.npz``: the static state (P1 nodal values per body and interface pressures).
+  pair's on its slave surface): :class:`PairFields`.
+- ``static.npz``: the static state (P1 nodal values per body, ``<body>_<field>``, and
+  each pair's nodal state, ``contact_<pair>_<field>``:
+  :func:`breakwater.outputs.monitor.interface_state`).
 - ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
   probe.
 - ``figures/``: see :mod:`breakwater.outputs.figures`.
@@ -46,13 +48,13 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common.errors import cannot_write
 from breakwater.common.files import HISTORY, atomic_savez, atomic_write_text, read_history, writing
 from breakwater.common.parallel import on_rank_zero
-from breakwater.contact.conforming import InterfaceNodes
-from breakwater.contact.general import SurfaceContact
+from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
-from breakwater.outputs.surfaceoutputs import SurfaceFields, group_fields
+from breakwater.model.pairs import Pair
+from breakwater.outputs.checkpoint import match_nodes
 
-__all__ = ["BodyFields", "FieldWriter", "HistoryWriter", "InterfaceFields", "RunFiles",
-           "read_history", "snapshot_arrays"]
+__all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
+           "RunFiles", "read_history", "snapshot_arrays"]
 
 # --- step history -----------------------------------------------------------------
 
@@ -275,38 +277,72 @@ class BodyFields:
         return out
 
 
-class InterfaceFields:
-    """The contact state of one pair as P_k fields on its interface, for ParaView.
+SCALARS = ("pressure", "gap")
+"""The scalar contact fields written for ParaView (every pair)."""
+VECTORS = ("slip", "slip_velocity", "friction_traction")
+"""The vector contact fields written for ParaView."""
 
-    The interface facets form a mesh of their own (a submesh of dimension one less);
-    its P_k nodes are the interface nodes, where the contact law acts (the
-    Gauss–Lobatto points of the interface measure), so nodal values are exact. Fields:
-    ``pressure`` and ``gap`` (scalars), ``slip``, ``slip_velocity`` and
-    ``friction_traction`` (vectors), as in :meth:`InterfaceNodes.contact_state`.
+
+def group_fields(model: ContactModel, group: str, degree: int, nodes: np.ndarray
+                 ) -> tuple[dict[str, fem.Function], np.ndarray]:
+    """The contact fields as P_degree Functions on the submesh of a facet group.
+
+    Also returns the index of each of ``nodes`` among their (scalar) dofs. The fields
+    are :data:`SCALARS` and :data:`VECTORS`.
 
     Args:
         model: The contact model.
-        nodes: The node pairs of the contact pair.
-        name: The pair's name: the fields go to ``contact_<name>.bp``.
+        group: The facet group (gmsh physical name).
+        degree: The Lagrange degree of the fields.
+        nodes: The points where the contact state is evaluated, shape ``(n, gdim)``.
+    """
+    msh, gdim = model.mesh, model.gdim
+    fdim = msh.topology.dim - 1
+    assert model.mesh_data.facet_tags is not None
+    facets = model.mesh_data.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
+    S = fem.functionspace(sub, ("Lagrange", degree))
+    V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
+    values = {k: fem.Function(S, name=k) for k in SCALARS}
+    values.update({k: fem.Function(V, name=k) for k in VECTORS})
+    # The blocked space has the scalar space's dof layout: one index per node.
+    x = S.tabulate_dof_coordinates()[:, :gdim]
+    extent = max(float(np.ptp(nodes, axis=0).max()), 1e-300) if len(nodes) else 1.0
+    return values, match_nodes(nodes, x, 1e-8 * extent)
 
+
+class PairFields:
+    """The contact state of one pair as P_k fields for ParaView (``contact_<name>.bp``).
+
+    The pair's facet group (a conforming pair's interface, a general pair's slave
+    surface: :meth:`~breakwater.model.pairs.Pair.field_nodes`) forms a mesh of its own
+    (a submesh of dimension one less); its P_k nodes are the pair's nodes, where the
+    fields hold the pair's nodal state (:meth:`~breakwater.model.pairs.Pair.field_values`;
+    interpolated between them). Fields: ``pressure`` and ``gap`` (scalars), ``slip``,
+    ``slip_velocity`` and ``friction_traction`` (vectors). At a conforming pair's
+    nodes the law acts (the Gauss–Lobatto points of the interface measure), so nodal
+    values are exact; a general pair's residual integrates the law at its own points,
+    so the integral of ``pressure`` equals the normal resultant to the interpolation
+    error.
+
+    Args:
+        model: The contact model.
+        pair: The pair (one of the stepper's
+            :attr:`~breakwater.stepping.gn22.GN22.contacts`).
     """
 
-    def __init__(self, model: ContactModel, nodes: InterfaceNodes, name: str) -> None:
-        self.filename = f"contact_{name}.bp"
-        self.nodes = nodes
-        self.slave, self.master = nodes.pair.slave, nodes.pair.master
-        degree = model.bodies[self.slave].V.ufl_element().embedded_superdegree
-        self.values, self._index = group_fields(model, nodes.pair.spec.interface, degree,
-                                                nodes.x)
+    def __init__(self, model: ContactModel, pair: Pair) -> None:
+        self.filename = f"contact_{pair.name}.bp"
+        self.pair = pair
+        where = pair.field_nodes()
+        degree = model.bodies[where.body].V.ufl_element().embedded_superdegree
+        self.values, self._index = group_fields(model, where.group, degree, where.x)
         self.functions = list(self.values.values())
 
     def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
                ) -> None:
         """Evaluate the fields of the state ``(u, v)`` (one Function per body; collective)."""
-        s, m = self.slave, self.master
-        state = self.nodes.contact_state(u[s].x.array, u[m].x.array,
-                                         None if v is None else v[s].x.array,
-                                         None if v is None else v[m].x.array)
+        state = self.pair.field_values(u, v)
         for k, f in self.values.items():
             shape = (len(self._index), f.function_space.dofmap.index_map_bs)
             f.x.array.reshape(shape)[:] = state[k][self._index].reshape(shape)
@@ -324,12 +360,11 @@ class FieldWriter:
     """
 
     def __init__(self, fields: Sequence[BodyFields],
-                 interfaces: Sequence[InterfaceFields | SurfaceFields],
+                 interfaces: Sequence[PairFields],
                  directory: pathlib.Path, comm: MPI.Comm) -> None:
         self.fields = list(fields)
         self.interfaces = list(interfaces)
-        files: list[BodyFields | InterfaceFields | SurfaceFields] = [*self.fields,
-                                                                     *self.interfaces]
+        files: list[BodyFields | PairFields] = [*self.fields, *self.interfaces]
         self.paths = [directory / f.filename for f in files]
         # The mesh is the reference configuration: written once (warp by displacement).
         self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
@@ -380,24 +415,18 @@ class RunFiles:
 
     Args:
         model: The contact model.
-        nodes: Interface nodes of every pair.
-        names: The pairs' names (``contact_<name>.bp``).
+        pairs: The pairs (the stepper's :attr:`~breakwater.stepping.gn22.GN22.contacts`:
+            ``contact_<name>.bp``).
         directory: The output folder.
         field_interval: Steps between ParaView outputs (0: none).
-        surfaces: The general pairs (``contact_<name>.bp`` on their slave surfaces).
 
     """
 
-    def __init__(self, model: ContactModel, nodes: Sequence[InterfaceNodes],
-                 names: Sequence[str], directory: pathlib.Path, field_interval: int,
-                 surfaces: Sequence[SurfaceContact] = ()) -> None:
+    def __init__(self, model: ContactModel, pairs: Sequence[Pair], directory: pathlib.Path,
+                 field_interval: int) -> None:
         self.directory, self.comm, self.interval = directory, model.comm, field_interval
         self.bodies = [BodyFields(model, i) for i in range(len(model.bodies))]
-        self.interfaces: list[InterfaceFields | SurfaceFields] = []
-        if field_interval > 0:
-            self.interfaces += [InterfaceFields(model, nd, name)
-                                for nd, name in zip(nodes, names, strict=True)]
-            self.interfaces += [SurfaceFields(model, c) for c in surfaces]
+        self.interfaces = [PairFields(model, p) for p in pairs] if field_interval > 0 else []
         self.history: HistoryWriter | None = None
         self.writer: FieldWriter | None = None
 

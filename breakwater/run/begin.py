@@ -15,8 +15,7 @@ from breakwater.common import files
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
 from breakwater.outputs.checkpoint import CheckpointError
-from breakwater.outputs.monitor import interface_state, pair_names
-from breakwater.outputs.surfaceoutputs import quality_inputs as surface_quality
+from breakwater.outputs.monitor import interface_state
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
@@ -52,12 +51,10 @@ def start(r: Session) -> None:
     out.open_history(x.monitor.columns)
     out.open_fields()
     row = r.record(0.0, st.static_iterations)
-    surfaces = x.monitor.surfaces
-    interface = interface_state(m, x.nodes, s.u, surfaces)
+    interface = interface_state(s.contacts, s.u)
     st.static = sm.static_summary(m, row, interface, st.static_iterations)
     st.static.update(init.summary())
-    st.contact = [*sm.quality_inputs(m, x.nodes, pair_names(m), s.u, interface),
-                  *surface_quality(m, surfaces, s.u)]
+    st.contact = sm.quality_inputs(s.contacts, s.u)
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)
     r.log_quality()
     out.write_fields(0.0, s.u, s.v)

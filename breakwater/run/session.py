@@ -25,12 +25,11 @@ from dolfinx import fem
 from breakwater.common import files
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
-from breakwater.contact.conforming import interface_nodes
 from breakwater.energy.ledger import EnergyLedger
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
-from breakwater.outputs.monitor import Monitor, interface_state, pair_names
+from breakwater.outputs.monitor import Monitor, interface_state
 from breakwater.outputs.writers import RunFiles
 from breakwater.run import runstate
 from breakwater.run.runstate import RunState
@@ -52,8 +51,8 @@ class Stepped:
         directory: The output folder.
 
     Attributes:
-        stepper: The GN22 stepper.
-        nodes: Interface nodes of every pair.
+        stepper: The GN22 stepper (its pairs, :attr:`~breakwater.stepping.gn22.GN22.contacts`,
+            are the ones every object here measures).
         ledger: The energy ledger.
         monitor: Measures one history row per step.
         peak: The state at the largest |u_x| of the first probe.
@@ -67,12 +66,10 @@ class Stepped:
                                max_it=time.newton_max_it)
         params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
         self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=time.solver)
-        self.nodes = s.nodes or interface_nodes(model)
         self.ledger = EnergyLedger(s)
-        self.monitor = Monitor(model, s, output, self.nodes)
+        self.monitor = Monitor(model, s, output)
         self.peak = sm.PeakSnapshot(model, self.monitor.probes.names)
-        self.files = RunFiles(model, self.nodes, pair_names(model), directory,
-                              output.field_interval, self.monitor.surfaces)
+        self.files = RunFiles(model, s.contacts, directory, output.field_interval)
 
     def functions(self) -> list[list[fem.Function]]:
         """The Functions of each body that a checkpoint saves."""
@@ -194,8 +191,7 @@ class Session:
                 x.files.write_fields(t, s.u, s.v)
             x.files.close()
             if x.peak.time is not None:
-                interface = interface_state(self.model, x.nodes, x.peak.u,
-                                            x.monitor.surfaces)
+                interface = interface_state(x.stepper.contacts, x.peak.u)
                 x.files.write_snapshot(files.SNAPSHOT, x.peak.u, interface, x.peak.time)
         summary = self.summary(finished, error, status)
         if finished:

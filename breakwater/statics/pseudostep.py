@@ -22,6 +22,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.errors import MeshError
 from breakwater.contact.conforming import mean_facet_length
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
@@ -44,6 +45,10 @@ class PseudoStepper:
         options: Newton settings of the pseudo steps.
         stick_band: The frictional stage's stick band χτ, as a fraction of the mean
             slave facet length.
+
+    Raises:
+        MeshError: A pair cannot start from the meshed configuration (its static check,
+            :meth:`breakwater.model.pairs.Pair.static_check`).
 
     Attributes:
         stepper: The GN22 stepper (its u is u_k).
@@ -68,6 +73,11 @@ class PseudoStepper:
         self.β1 = 0.5 * self.β2 * Δτ_max / self.τ
         self.stepper = GN22(m, Δτ_max, GN22Parameters(self.β1, self.β2, allow_conditional=True),
                             newton=options, solver="fast")
+        for pair in self.stepper.contacts:  # the pairs' static pre-check
+            why = pair.static_check()
+            if why is not None:
+                self.stepper.destroy()
+                raise MeshError(why)
         solver = self.stepper.fast
         assert solver is not None  # solver="fast"
         self.solver = solver

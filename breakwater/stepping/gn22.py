@@ -270,15 +270,20 @@ class GN22:
             self.solver = NewtonSolver(model, F, self.da, "gn22", newton,
                                        force_scale=force_scale(model),
                                        precheck=self._precheck if self.guard else None)
-        # The general pairs the fast solver built on this stepper's state (SurfaceContact).
+        # The general pairs the fast solver built on this stepper's state (SurfaceContact),
+        # as the solver's force providers (the relaxation's); measured: self.contacts.
         self.surfaces = self.fast.surfaces if self.fast is not None else []
         self._contacts: list[Pair] | None = None
 
     @property
     def contacts(self) -> list[Pair]:
-        """Every pair at this stepper's state (u, v): conforming, then general (collective)."""
+        """Every pair at this stepper's state (u, v): conforming, then general (collective).
+
+        The one route from a run's objects (ledger, monitor, probes, fields, snapshots,
+        quality) to the pairs (:class:`breakwater.model.pairs.Pair`); built on first use.
+        """
         if self._contacts is None:
-            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v),
+            self._contacts = [*conforming_pairs(self.model, self.nodes, self.u, self.v, self.dt),
                               *self.surfaces]
         return self._contacts
 

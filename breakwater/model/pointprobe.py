@@ -1,0 +1,85 @@
+"""A body's field at a point of the reference configuration, the same on every rank.
+
+:class:`PointProbe` is the point probe of the outputs
+(:mod:`breakwater.outputs.probes`) and the two sides of a conforming pair's probe
+(:class:`breakwater.contact.pairstate.ConformingProbe`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import dolfinx
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+
+from breakwater.common.errors import MeshError
+from breakwater.model.model import ContactModel
+
+__all__ = ["PointProbe"]
+
+
+class PointProbe:
+    """Evaluate a body's fields at a fixed point of the reference configuration.
+
+    Points on a boundary or an interface are allowed: the field of the named body
+    is taken (its trace), so two probes at one interface node, one per body, give
+    the slip and opening of the interface there.
+
+    Args:
+        model: The contact model.
+        body: Name of the body to evaluate.
+        point: Coordinates (gdim or 3 values).
+        name: Label for outputs.
+    """
+
+    def __init__(self, model: ContactModel, body: str, point: Sequence[float],
+                 name: str | None = None) -> None:
+        self.model = model
+        self.body = b = model.body(body)
+        self.name = name or f"{body}@{tuple(point)}"
+        x = np.zeros(3)
+        x[: len(point)] = point
+        self.point = x
+        msh = b.submesh
+        tdim = msh.topology.dim
+        owned = np.arange(msh.topology.index_map(tdim).size_local, dtype=np.int32)
+        tree = dolfinx.geometry.bb_tree(msh, tdim, entities=owned)
+        candidates = dolfinx.geometry.compute_collisions_points(tree, x.reshape(1, 3))
+        cells = dolfinx.geometry.compute_colliding_cells(msh, candidates, x.reshape(1, 3))
+        local = cells.links(0)
+        comm = model.comm
+        self.owner = comm.allreduce(comm.rank if len(local) else comm.size, op=MPI.MIN)
+        if self.owner == comm.size:
+            raise MeshError(f"probe '{self.name}': point {tuple(point)} is not in body "
+                            f"'{body}'")
+        self._cell = int(local[0]) if len(local) else -1
+        # The value is Σ φ_j(x) u_j over the cell's DOF blocks: the basis functions at
+        # the point, found once by evaluating each of them (the owner only).
+        V = b.V
+        self.size = V.dofmap.index_map_bs
+        self._blocks = np.zeros(0, np.int32)
+        self._phi = np.zeros(0)
+        unit = fem.Function(V)  # collective (its vector's scatter), on every rank
+        if comm.rank == self.owner:
+            self._blocks = V.dofmap.cell_dofs(self._cell).copy()
+            phi = []
+            for blk in self._blocks:
+                unit.x.array[:] = 0.0
+                unit.x.array[blk * self.size] = 1.0
+                phi.append(unit.eval(x.reshape(1, 3), np.array([self._cell], np.int32)).ravel()[0])
+            self._phi = np.array(phi)
+
+    def local_value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
+        """The value at the point on the owning rank; zeros on the others (no reduction)."""
+        f = functions if isinstance(functions, fem.Function) else functions[self.body.index]
+        if not len(self._blocks):
+            return np.zeros(self.size)
+        return self._phi @ f.x.array.reshape(-1, self.size)[self._blocks]
+
+    def value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
+        """The value at the point of the body's Function (or of a list, one per body)."""
+        out = self.local_value(functions)
+        self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out
