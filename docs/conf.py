@@ -104,8 +104,10 @@ def _api() -> str:
     for title, package in API_SECTIONS.items():
         lines += [f"## {title}", ""]
         for name in _modules(package):
-            # A package's own page is its docstring: its members are its modules'.
-            options = [] if name == package else ["   :members:"]
+            # A package's own page is its docstring: its members are its modules'. A
+            # module's members are those it defines (not the names its __all__ re-exports
+            # from another module, which would be documented twice: ambiguous references).
+            options = [] if name == package else ["   :members:", "   :ignore-module-all:"]
             lines += ["```{eval-rst}", f".. automodule:: {name}", *options, "```", ""]
     listed = {m for p in API_SECTIONS.values() for m in _modules(p)}
     packages = [m.name for m in pkgutil.iter_modules(breakwater.__path__, "breakwater.")
