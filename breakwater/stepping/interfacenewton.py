@@ -17,11 +17,10 @@ from collections.abc import Callable
 import numpy as np
 from petsc4py import PETSc
 
-from breakwater.common.errors import ConvergenceError
 from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
-from breakwater.stepping.solver import NewtonOptions, snes_reason
+from breakwater.stepping.solver import NewtonOptions, converged_iterations, snes_reason
 
 __all__ = ["InterfaceNewton"]
 
@@ -118,13 +117,7 @@ class InterfaceNewton:
         self.snes.solve(None, self._x)
         T.seconds["newton"] += time.perf_counter() - t0 - (
             T.seconds["interface_assembly"] - assembly)
-        reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
-        its = self.snes.getIterationNumber()
-        if reason <= 0:
-            raise ConvergenceError(
-                f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
-                f"iterations, residual {self.snes.getFunctionNorm():.3e})", reason, its)
-        return its
+        return converged_iterations(self.snes, self.name)
 
     def _residual(self, snes: PETSc.SNES, x: PETSc.Vec, r: PETSc.Vec) -> None:
         assert self._fact is not None

@@ -113,6 +113,21 @@ def snes_reason(snes: PETSc.SNES, norms: Sequence[float], xnorm: float, ynorm: f
                               max_it=max_it, floor=floor, stall_its=stall_its)
 
 
+def converged_iterations(snes: PETSc.SNES, name: str) -> int:
+    """The iterations of a solved SNES.
+
+    Raises:
+        ConvergenceError: It did not converge (its reason, iterations and residual).
+    """
+    reason: int = snes.getConvergedReason()  # type: ignore[assignment]
+    its = snes.getIterationNumber()
+    if reason <= 0:
+        raise ConvergenceError(
+            f"{name}: Newton did not converge (SNES reason {reason}, {its} iterations, "
+            f"residual {snes.getFunctionNorm():.3e})", reason, its)
+    return its
+
+
 class NewtonTimings(Timings):
     """Wall time of the reference Newton: its SNES solves in total, under ``newton``."""
 
@@ -219,10 +234,4 @@ class NewtonSolver(StepSolver):
         t0 = time.perf_counter()
         self.problem.solve()
         self.timings.seconds["newton"] += time.perf_counter() - t0
-        reason: int = self.snes.getConvergedReason()  # type: ignore[assignment]
-        its = self.snes.getIterationNumber()
-        if reason <= 0:
-            raise ConvergenceError(
-                f"{self.name}: Newton did not converge (SNES reason {reason}, "
-                f"{its} iterations, residual {self.snes.getFunctionNorm():.3e})", reason, its)
-        return its
+        return converged_iterations(self.snes, self.name)
