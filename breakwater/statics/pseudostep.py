@@ -22,7 +22,6 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.common.errors import MeshError
 from breakwater.contact.conforming import mean_facet_length
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
@@ -48,7 +47,7 @@ class PseudoStepper:
 
     Raises:
         MeshError: A pair cannot start from the meshed configuration (its static check,
-            :meth:`breakwater.model.pairs.Pair.static_check`).
+            :meth:`breakwater.model.pairs.Pair.static_check`, run by the GN22 stepper).
 
     Attributes:
         stepper: The GN22 stepper (its u is u_k).
@@ -73,11 +72,6 @@ class PseudoStepper:
         self.β1 = 0.5 * self.β2 * Δτ_max / self.τ
         self.stepper = GN22(m, Δτ_max, GN22Parameters(self.β1, self.β2, allow_conditional=True),
                             newton=options, solver="fast")
-        for pair in self.stepper.contacts:  # the pairs' static pre-check
-            why = pair.static_check()
-            if why is not None:
-                self.stepper.destroy()
-                raise MeshError(why)
         solver = self.stepper.fast
         assert solver is not None  # solver="fast"
         self.solver = solver

@@ -27,6 +27,7 @@ from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.errors import MeshError
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
 from breakwater.contact.pairstate import conforming_pairs
@@ -217,6 +218,9 @@ class GN22:
             surfaces only (:mod:`breakwater.stepping.condensed`); ``"reference"``: Newton on the
             whole residual, assembled and factorised at every iteration.
 
+    Raises:
+        MeshError: A pair cannot start from the meshed configuration
+            (:meth:`breakwater.model.pairs.Pair.static_check`).
     """
 
     SOLVERS = ("fast", "reference")
@@ -274,6 +278,13 @@ class GN22:
         # as the solver's force providers (the relaxation's); measured: self.contacts.
         self.surfaces = self.fast.surfaces if self.fast is not None else []
         self._contacts: list[Pair] | None = None
+        # Every stepper refuses a pair that cannot start from the meshed configuration
+        # (Pair.static_check: a general pair's bodies overlapped beyond its search).
+        for pair in self.contacts:
+            why = pair.static_check()
+            if why is not None:
+                self.destroy()
+                raise MeshError(why)
 
     @property
     def contacts(self) -> list[Pair]:
