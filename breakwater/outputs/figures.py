@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import json
 import pathlib
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -204,20 +205,49 @@ def _contours(data: Any, field: str, factor: float, label: str, title: str,
     return _save(fig, path)
 
 
+#: A conforming pair's history columns before they were named by the pair (issue 21):
+#: ``<quantity>_<k>``, read as ``<k>_<quantity>``.
+_LEGACY_COLUMN = re.compile(r"^(contact_length|normal_force|tangential_force|penetration)_(\d+)$")
+#: Snapshot keys before ``contact_<name>_<field>``: ``pair<k>_<field>``, ``surface_<name>_<field>``.
+_LEGACY_KEY = re.compile(r"^(?:pair(\d+)|surface_(.+))_(x|normal|gap|slip|pressure)$")
+
+
+def _legacy_columns(h: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A history written before the pair-named columns, with the pair-named columns."""
+    renamed = {}
+    for column, values in h.items():
+        m = _LEGACY_COLUMN.match(column)
+        renamed[f"{m[2]}_{m[1]}" if m else column] = values
+    return renamed
+
+
+def _pair_arrays(data: Any) -> dict[str, dict[str, np.ndarray]]:
+    """The snapshot's arrays of each pair, by pair name (old snapshot keys read too)."""
+    if "contacts" in data.files:
+        return {str(n): {f: data[f"contact_{n}_{f}"] for f in ("x", "pressure")}
+                for n in data["contacts"]}
+    pairs: dict[str, dict[str, np.ndarray]] = {}
+    for key in data.files:
+        m = _LEGACY_KEY.match(key)
+        if m:
+            pairs.setdefault(m[1] if m[1] is not None else m[2], {})[m[3]] = data[key]
+    return {n: a for n, a in pairs.items() if "x" in a and "pressure" in a}
+
+
 def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
                      ) -> pathlib.Path | None:
     # Every pair's nodal state, contact_<name>_* (a general pair's on its slave).
-    names = [str(n) for n in data["contacts"]] if "contacts" in data.files else []
-    if not names:
+    pairs = _pair_arrays(data)
+    if not pairs:
         return None
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
-    for name in names:
-        x = data[f"contact_{name}_x"]
+    for name, arrays in pairs.items():
+        x = arrays["x"]
         # Abscissa along the interface: x for a horizontal one, else the arc length.
         span = np.ptp(x, axis=0)
         s = x[:, 0] if span[0] >= span[1] else x[:, 1]
-        ax.plot(s, data[f"contact_{name}_pressure"], "o-", ms=3, label=f"contact {name}")
+        ax.plot(s, arrays["pressure"], "o-", ms=3, label=f"contact {name}")
     static = summary.get("static", {})
     mean = static.get("mean_contact_pressure")
     if mean is not None:
@@ -249,7 +279,7 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
     t_peak = summary.get("dynamic", {}).get("time_of_max_ux")
     drawn: list[pathlib.Path | None] = []
     if (directory / HISTORY).is_file():
-        h = read_history(directory / HISTORY)
+        h = _legacy_columns(read_history(directory / HISTORY))
         if len(h.get("t", ())) > 0:
             drawn += [_probes(h, t_peak, folder / "probes_ux.png"),
                       _pair_probes(h, t_peak, "x", folder / "pair_probes_ux.png"),

@@ -1,0 +1,65 @@
+"""Figures redrawn from output folders, including folders written before the pair-named
+columns and snapshot keys (issue 21): ``python -m breakwater.outputs.figures DIR`` draws
+the same contact figures from an old folder as from a new one with the same numbers."""
+
+from __future__ import annotations
+
+import gc
+import pathlib
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from breakwater.outputs import figures
+
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(autouse=True)
+def _collect():
+    yield
+    gc.collect()
+    COMM.barrier()
+
+
+def _folder(path: pathlib.Path, columns: dict[str, str], keys: dict[str, str]) -> pathlib.Path:
+    """An output folder with a history and a static snapshot of one conforming pair.
+
+    ``columns``/``keys``: quantity → the column/key name it is written under.
+    """
+    path.mkdir()
+    t = np.linspace(0.0, 0.01, 11)
+    history = {"t": t, "dt": np.full_like(t, 1e-3), "newton_iterations": np.full_like(t, 3),
+               columns["length"]: 0.2 - t, columns["normal"]: 900.0 + 1e4 * t,
+               columns["tangential"]: -50.0 * np.sin(300 * t)}
+    header = ",".join(history)
+    rows = np.column_stack(list(history.values()))
+    np.savetxt(path / "history.csv", rows, delimiter=",", header=header, comments="")
+    x = np.column_stack([np.linspace(-0.1, 0.1, 9), np.zeros(9)])
+    # One body of two triangles, for the contour figures the static snapshot also gives.
+    corners = np.array([[-0.1, 0.0], [0.1, 0.0], [0.1, 0.2], [-0.1, 0.2]])
+    body = {"bodies": np.array(["block"]), "block_x": corners,
+            "block_triangles": np.array([[0, 1, 2], [0, 2, 3]]),
+            **{f"block_{k}": np.array([0.0, 1.0, 2.0, 3.0]) * 1e-4
+               for k in ("ux", "uy", "von_mises", "stress_yy")}}
+    np.savez(path / "static.npz", **body,
+             **{keys["x"]: x, keys["pressure"]: 4e3 + 1e5 * x[:, 0] ** 2},
+             **keys.get("extra", {}))
+    return path
+
+
+def test_old_folders_draw_the_same_contact_figures(tmp_path: pathlib.Path) -> None:
+    old = _folder(tmp_path / "old", {"length": "contact_length_0", "normal": "normal_force_0",
+                                     "tangential": "tangential_force_0"},
+                  {"x": "pair0_x", "pressure": "pair0_pressure"})
+    new = _folder(tmp_path / "new", {"length": "0_contact_length", "normal": "0_normal_force",
+                                     "tangential": "0_tangential_force"},
+                  {"x": "contact_0_x", "pressure": "contact_0_pressure",
+                   "extra": {"contacts": np.array(["0"])}})
+    drawn = {f.name for f in figures.make_figures(old)}
+    assert {"contact.png", "static_pressure.png"} <= drawn
+    assert {f.name for f in figures.make_figures(new)} == drawn
+    for name in ("contact.png", "static_pressure.png"):
+        # The same numbers under the old and the new names: the same picture.
+        assert (old / "figures" / name).read_bytes() == (new / "figures" / name).read_bytes()
