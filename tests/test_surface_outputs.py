@@ -1,4 +1,4 @@
-"""Outputs of general contact pairs (:mod:`breakwater.outputs.surfaceoutputs`, issue 12 item 4).
+"""Outputs of general contact pairs (:mod:`breakwater.contact.slavepoints`, issue 12 item 4).
 
 - Matching meshes: a general pair's probe gives the conforming pairs' slip
   (u_s − u_m)·t exactly and their opening (u_s − u_m)·n to second order in the

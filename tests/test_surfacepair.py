@@ -284,7 +284,7 @@ def test_patch_non_matching_node_to_segment(shared_dir: pathlib.Path) -> None:
     conforming pair's quadrature): it does not pass the patch test, as expected of
     the scheme (the slave nodes' lumped forces on a finer master), but it converges
     (≤ 10 Newton iterations a step: the slave's end node, 1e-5 of a facet past the
-    master's end, stays on it, see ``surfacepair._EDGE``) and holds the load: the
+    master's end, stays on it, see ``contact.surfacesearch._EDGE``) and holds the load: the
     resultant is p × 1 m to 1e-6 (the remaining dynamics, as above). Measured: nodal
     pressures 0.91-1.20 p, σ_yy off by 79 % (lower block, at the interface) and 14 %
     (upper); asked: pressures within 0.8-1.3 p, every node in contact."""
