@@ -20,7 +20,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.contact.conforming import InterfaceNodes, interface_nodes
+from breakwater.contact.conforming import InterfaceNodes, interface_nodes, mean_facet_length
 from breakwater.model.model import ContactModel, PairData
 from breakwater.model.pairs import (
     PROBE_KEYS,
@@ -123,10 +123,8 @@ class ConformingPair:
         """h: the interface's length over its facets; δ and s at its nodes."""
         m, p, nd = self.model, self.pair, self.nodes
         us, um = nd.gather(*self._sides(u))
-        length = m.assemble(m.form(1.0 * p.dS))
-        facets = m.comm.allreduce(len(p.facet_data))
         return StaticMeasures(
-            penalty=p.spec.penalty, element_size=length / facets,
+            penalty=p.spec.penalty, element_size=mean_facet_length(m, p),
             young_moduli=(m.bodies[p.slave].spec.material.E,
                           m.bodies[p.master].spec.material.E),
             static_penetration=max_penetration(nd.contact_state(*self._sides(u))["gap"]),
