@@ -1,0 +1,27 @@
+"""Compiled kernels: the fast step's per-iteration arithmetic in machine code (numba).
+
+The fast GN22 step (:mod:`breakwater.stepping.condensed`) spends its time in small
+loops over the interface's nodes and a few dense interface-sized matrices: in NumPy each
+of them is a handful of calls whose overhead is larger than their arithmetic. They are
+written as plain loops and compiled with numba's ``njit``, as the dolfinx demos compile
+their custom kernels. :func:`kernel` is the one decorator: compiled once per machine
+(``cache=True``: numba keeps the machine code beside the module, or in its user cache
+directory where the package is read-only), without fast-math (the kernels must give the
+numbers of the NumPy and UFL references they are tested against, to round-off).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
+
+import numba
+
+__all__ = ["kernel"]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def kernel(function: F) -> F:
+    """``numba.njit(cache=True)``: ``function`` compiled on its first call."""
+    return cast(F, numba.njit(cache=True)(function))
