@@ -13,15 +13,13 @@ numbers of the NumPy and UFL references they are tested against, to round-off).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, TypeVar, cast
+from typing import Any, cast
 
 import numba
 
 __all__ = ["kernel"]
 
-F = TypeVar("F", bound=Callable[..., Any])
 
-
-def kernel(function: F) -> F:
+def kernel[F: Callable[..., Any]](function: F) -> F:
     """``numba.njit(cache=True)``: ``function`` compiled on its first call."""
     return cast(F, numba.njit(cache=True)(function))
