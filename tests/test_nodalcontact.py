@@ -2,8 +2,8 @@
 
 :class:`breakwater.contact.nodal.NodalContactForces` evaluates the contact law on the
 interface nodes, which are the points of the interface forms' Gauss–Lobatto quadrature
-on P2 facets, with the law's nodal derivatives
-(:meth:`forms.ContactLaw.nodal`). Its f_c and ∂f_c/∂y must be those of the UFL
+on P2 facets, with the law's nodal derivatives, in compiled kernels
+(:mod:`breakwater.contact.nodalkernels`). Its f_c and ∂f_c/∂y must be those of the UFL
 forms assembled by dolfinx (:class:`breakwater.stepping.condensed.InterfaceAssembler`) to
 round-off: the quadrature is the same and the basis functions are Kronecker deltas at
 its points up to basix's points (1e-16 off the facet's ends). Checked at random states
@@ -52,12 +52,26 @@ def _compare(stepper: GN22) -> None:
         solver.interface.positions, solver.I)
     for seed in range(3):
         _random_state(stepper, seed)
-        f = sum(p.vector() for p in providers)
-        J = sum(p.matrix() for p in providers)
+        # The providers read the state at begin() and take the iterate y = Δa_I.
+        y = _interface_values(stepper)
+        f = np.zeros(solver.n)
+        for p in providers:
+            p.begin()
+            p.add_vector(y, f)
+        J = sum(p.matrix(y) for p in providers)
         f_ref, J_ref = forms.vector(), forms.matrix()
         assert np.abs(f_ref).max() > 0 and np.abs(J_ref).max() > 0
         np.testing.assert_allclose(f, f_ref, rtol=0, atol=1e-12 * np.abs(f_ref).max())
         np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12 * np.abs(J_ref).max())
+
+
+def _interface_values(stepper: GN22) -> np.ndarray:
+    """Δa at the interface unknowns, the same on every rank."""
+    solver = stepper.fast
+    assert solver is not None
+    owned = np.concatenate([f.x.array[:n] for f, n in zip(stepper.da, solver.layout.sizes,
+                                                          strict=True)])
+    return solver.interface.gather(owned)[0]
 
 
 def test_goda_nodal_equals_forms() -> None:
@@ -94,9 +108,41 @@ def test_left_product_is_the_dense_product() -> None:
         _random_state(stepper, 5)
         provider = stepper.solver.providers[0]
         n = provider.n
+        provider.begin()
+        y = _interface_values(stepper)
         X = np.random.default_rng(7).standard_normal((n + 3, n))
-        expected = X @ provider.matrix()
-        np.testing.assert_allclose(provider.left_product(X), expected, rtol=0,
+        expected = X @ provider.matrix(y)
+        product = np.zeros_like(X)
+        assert provider.add_left_product(y, X, product)
+        np.testing.assert_allclose(product, expected, rtol=0,
                                    atol=1e-12 * np.abs(expected).max())
+    finally:
+        stepper.destroy()
+
+
+def test_compiled_guard_equals_slip_guard() -> None:
+    # The nodal providers' compiled slip guard cuts the same steps as SlipGuard on body
+    # arrays (the assembled path's guard), at random velocities of both signs well
+    # outside the band χ and steps that reverse about half of them.
+    model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
+    stepper = GN22(model, 1e-4)
+    try:
+        solver = stepper.fast
+        assert solver is not None and solver.guard is not None
+        rng = np.random.default_rng(11)  # the same on every rank: interface arrays
+        n, dv_dx = solver.n, solver.beta1 * float(solver.dt.value)  # as _body_guard
+        for trial in range(3):
+            x = 1e-2 * rng.standard_normal(n)
+            v_pred = 1e-6 * rng.standard_normal(n)
+            step = 3e-2 * rng.standard_normal(n)
+            expected = step.copy()
+            solver._v_pred_I = v_pred
+            cut_ref = solver._body_guard(x, expected)
+            got = step.copy()
+            cut = sum(p.precheck(x, got, v_pred, dv_dx) for p in solver.providers)
+            assert cut == cut_ref > 0, trial
+            assert not np.array_equal(got, step)
+            np.testing.assert_allclose(got, expected, rtol=0,
+                                       atol=1e-12 * np.abs(expected).max())
     finally:
         stepper.destroy()

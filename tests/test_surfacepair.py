@@ -208,7 +208,7 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
     y = np.zeros(solver.n)
     y[provider.pos_s[..., 1][provider.pos_s[..., 1] >= 0]] = -1e-5 / cu
     y += np.random.default_rng(3).normal(size=solver.n) * 1e-7 / cu
-    solver.contact.set(y)
+    solver.interface.write(solver.da, y)
     J = provider.matrix()
     fd = np.zeros_like(J)
     h = 1e-9 / cu  # 1e-9 m: round-off of the positions (1e-16 m) is 1e-7 of it
@@ -216,7 +216,7 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
         for sign in (1, -1):
             z = y.copy()
             z[j] += sign * h
-            solver.contact.set(z)
+            solver.interface.write(solver.da, z)
             fd[:, j] += sign * provider.vector() / (2 * h)
     assert np.abs(J).max() > 0
     # Tolerance: central differences of step 1e-9 m on a penalty residual of curvature

@@ -9,19 +9,19 @@ over (facet, node) points of the law at the node with that facet's normal,
     f_s = −Σ w t(u_s − u_m, v_s − v_m, n_f),       f_m = +Σ w t(...),
 
 and its derivative in Δa, through u₁ = ũ + ½β₂Δt² Δa and v₁ = ṽ + β₁Δt Δa, is made of
-the law's nodal derivatives (:meth:`forms.ContactLaw.nodal`).
-:class:`NodalContactForces` evaluates these with NumPy on the interface nodes (gathered
-on every rank in a partition-independent order: no form assembly, at most one
-reduction per call), the same numbers as the UFL assembly to round-off
+the law's nodal derivatives. :class:`NodalContactForces` evaluates these in compiled
+kernels (:mod:`breakwater.contact.nodalkernels`) on the interface nodes, gathered on
+every rank in a partition-independent order once per step (no form assembly, no
+communication per Newton iteration): the same numbers as the UFL assembly to round-off
 (``tests/test_nodalcontact.py``). :func:`nodal_contact_applies` says when it is exact
-(2D, affine geometry, P2 Lagrange bodies); elsewhere the fast solver assembles the UFL
-forms (:class:`~breakwater.stepping.condensed.InterfaceAssembler`).
+(2D, affine geometry, P2 Lagrange bodies, the penalty and regularised Coulomb laws the
+kernels encode); elsewhere the fast solver assembles the UFL forms
+(:class:`~breakwater.stepping.condensed.InterfaceAssembler`).
 """
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import basix
 import dolfinx
@@ -31,6 +31,7 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
+from breakwater.contact.nodalkernels import guard_steps, nodal_left_product, nodal_residual
 from breakwater.model.layout import MonolithicLayout
 from breakwater.model.model import ContactModel
 
@@ -38,9 +39,17 @@ __all__ = ["NodalContactForces", "nodal_contact_applies", "quadrature_points"]
 
 
 def nodal_contact_applies(model: ContactModel) -> bool:
-    """Whether the nodal evaluation equals the forms' (2D, affine cells, P2 Lagrange)."""
+    """Whether the nodal evaluation equals the forms'.
+
+    2D, affine cells, P2 Lagrange bodies, and every pair's law the one the kernels
+    encode (:class:`forms.PenaltyContact`, :class:`forms.RegularisedCoulomb`).
+    """
     if model.gdim != 2 or model.mesh.topology.dim != 2:
         return False
+    for p in model.pairs:
+        if (type(p.law.normal) is not forms.PenaltyContact
+                or type(p.law.friction) is not forms.RegularisedCoulomb):
+            return False
     if model.mesh.geometry.cmaps[0].degree != 1:
         return False
     for b in model.bodies:
@@ -90,11 +99,16 @@ def quadrature_points(model: ContactModel, nodes: InterfaceNodes
 
 
 class NodalContactForces:
-    """f_c and ∂f_c/∂Δa of one conforming pair on the interface unknowns, from nodal arrays.
+    """f_c and X ∂f_c/∂y of one conforming pair on the interface unknowns, compiled.
 
-    The provider protocol of :class:`~breakwater.stepping.condensed.CondensedNewton`:
-    :meth:`vector` and :meth:`matrix` at the current state Functions (u, v, a at t and
-    the step's Δa), the same on every rank.
+    A :class:`~breakwater.stepping.interface.ContactForces` provider of
+    :class:`~breakwater.stepping.condensed.CondensedNewton`: :meth:`begin` gathers the
+    pair's nodal state at the start of a step (u, v, a at t, the staged Δa; one
+    reduction), then :meth:`add_vector` and :meth:`add_left_product` evaluate the law
+    at an iterate y of the interface unknowns without touching the Functions and
+    without communication (the same numbers on every rank), in the kernels of
+    :mod:`breakwater.contact.nodalkernels`. :meth:`precheck` is the pair's slip guard on
+    the interface unknowns.
 
     Args:
         model: The contact model.
@@ -105,28 +119,24 @@ class NodalContactForces:
         dt: The step size constant.
         beta1: GN22 β₁.
         beta2: GN22 β₂.
-        kinematics: The GN22 update ``(u, v, a, Δa, Δt, β₁, β₂) -> (u₁, v₁, a₁)`` on
-            arrays (:func:`breakwater.stepping.gn22.gn22_kinematics`).
+        guard: Whether :meth:`precheck` guards slip reversals (the stepper's
+            ``flip_guard``).
     """
 
     def __init__(self, model: ContactModel, nodes: InterfaceNodes, layout: MonolithicLayout,
                  interface: np.ndarray,
                  state: tuple[Sequence[fem.Function], Sequence[fem.Function],
                               Sequence[fem.Function], Sequence[fem.Function]],
-                 dt: fem.Constant, beta1: float, beta2: float,
-                 kinematics: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]) -> None:
+                 dt: fem.Constant, beta1: float, beta2: float, guard: bool = True) -> None:
         self.comm = model.comm
+        self.guarded = guard
         self.nodes = nodes
         self.pair = pair = nodes.pair
         self.u, self.v, self.a, self.da = state
         self.dt, self.beta1, self.beta2 = dt, beta1, beta2
-        self.kinematics = kinematics
         self.n = n = len(interface)
         gdim = nodes.gdim
-        node, weight, normal = quadrature_points(model, nodes)
-        self._node = node
-        self._weight = weight
-        self._normal = normal
+        self._node, self._weight, self._normal = quadrature_points(model, nodes)
         # Interface position of each node's components on each side (−1: not an unknown).
         where = np.full((2, nodes.size, gdim), -1, np.int64)
         for k, (body, (blocks, pos)) in enumerate(((pair.slave, nodes._slave),
@@ -137,30 +147,14 @@ class NodalContactForces:
             hit = interface[at] == g if n else np.zeros(len(g), bool)
             where[k, pos] = np.where(hit, at, -1).reshape(-1, gdim)
         self.comm.Allreduce(MPI.IN_PLACE, where, op=MPI.MAX)
-        # Residual rows: slave rows get −w t, master rows +w t, at each point's node.
-        rows = np.concatenate([where[0][node], where[1][node]]).reshape(-1)
-        self._rows_keep = np.flatnonzero(rows >= 0)
-        self._rows = rows[self._rows_keep]
-        # Jacobian entries: blocks (s,s) −wD, (s,m) +wD, (m,s) +wD, (m,m) −wD.
-        r_idx = [where[0][node], where[1][node]]  # (q, gdim) each
-        flat, sign = [], []
-        for a_side, b_side, sgn in ((0, 0, -1.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, -1.0)):
-            ri = r_idx[a_side][:, :, None]
-            ci = r_idx[b_side][:, None, :]
-            valid = (ri >= 0) & (ci >= 0)
-            flat.append(np.where(valid, ri * n + ci, -1))
-            sign.append(sgn)
-        flat_all = np.stack(flat)  # (4, q, gdim, gdim)
-        self._sign = np.array(sign)[:, None, None, None]
-        self._flat_keep = np.flatnonzero(flat_all.reshape(-1) >= 0)
-        self._flat = flat_all.reshape(-1)[self._flat_keep]
-        # For left_product: the points of each node (sorted by node: runs), each node's
-        # columns on both sides (−1 → a zero column n of an extended X).
-        self._runs = np.flatnonzero(np.r_[True, node[1:] != node[:-1]])
-        self._run_nodes = node[self._runs]
-        self._cols = [np.where(where[k][self._run_nodes] >= 0, where[k][self._run_nodes], n)
-                      for k in (0, 1)]
-        self._extended: tuple[np.ndarray, np.ndarray] | None = None
+        self._pos = where
+        # The points of each node (sorted by node: runs) and the node's unknowns.
+        node = self._node
+        starts = np.flatnonzero(np.r_[True, node[1:] != node[:-1]])
+        self._runs = np.append(starts, len(node)).astype(np.int64)
+        self._run_slave = np.ascontiguousarray(where[0][node[starts]])
+        self._run_master = np.ascontiguousarray(where[1][node[starts]])
+        self._W = np.zeros((len(starts), gdim, gdim))
         # The owned entries of the pair's nodes in each side's local arrays, and their
         # places in the gathered nodal arrays (node-major, component-minor).
         comps = np.arange(gdim)
@@ -170,88 +164,73 @@ class NodalContactForces:
             arrays = [f[body].x.array for f in (self.u, self.v, self.a, self.da)]
             self._take.append(((blocks[:, None] * bs + comps).ravel(),
                                (pos[:, None] * gdim + comps).ravel(), arrays))
-        self._gathered = np.zeros((2, 2, nodes.size * gdim))
-        # Point values from the gathered arrays: the node of each point, per component.
-        self._at_points = (node[:, None] * gdim + comps).ravel()
-        constants = [getattr(part, f.name) for part in (pair.law.normal, pair.law.friction)
-                     for f in dataclasses.fields(part)]
-        self._constants = [c for c in constants if isinstance(c, fem.Constant)]
-        self._law_key: tuple[float, ...] | None = None
-        self._law = pair.law.values()
+        self._base = np.zeros((5, 2, nodes.size, gdim))
+        self._U = np.zeros((2, nodes.size, gdim))
+        self._V = np.zeros((2, nodes.size, gdim))
+        self._coefficients = (0.0, 0.0)
+        self._law = (0.0, 0.0, 0.0, 0.0)
+        self._tangents = nodes.tangents.astype(float)
 
-    def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """u₁, v₁ of both sides at the quadrature points (one reduction under MPI)."""
-        gdim = self.nodes.gdim
-        out = self._gathered
-        if self.comm.size > 1:
-            out[:] = 0.0  # the other ranks' nodes: their values come in the sum
-        dt = float(self.dt.value)
-        for k, (local, place, arrays) in enumerate(self._take):
-            u1, v1, _ = self.kinematics(*(x[local] for x in arrays), dt, self.beta1,
-                                        self.beta2)
-            out[0, k, place] = u1
-            out[1, k, place] = v1
-        if self.comm.size > 1:
-            self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        at = out[:, :, self._at_points].reshape(2, 2, -1, gdim)
-        return at[0, 0], at[0, 1], at[1, 0], at[1, 1]
+    def begin(self) -> None:
+        """Gather the nodal state of the staged step (collective: one reduction).
 
-    def _values(self) -> forms.ContactLaw:
-        """The pair's law with float parameters (their values now)."""
-        key = tuple(float(c.value) for c in self._constants)
-        if key != self._law_key:
-            self._law, self._law_key = self.pair.law.values(), key
-        return self._law
-
-    def vector(self) -> np.ndarray:
-        """f_c on the interface unknowns (the same on every rank)."""
-        us, um, vs, vm = self._state()
-        law = self._values()
-        t = law.nodal(us, um, self._normal, vs, vm)
-        wt = self._weight[:, None] * t
-        values = np.concatenate([-wt, wt]).reshape(-1)[self._rows_keep]
-        return np.bincount(self._rows, weights=values, minlength=self.n)
-
-    def matrix(self) -> np.ndarray:
-        """∂f_c/∂y on the interface unknowns, dense (the same on every rank)."""
-        D = self._point_tangents()
-        values = (self._sign * D[None]).reshape(-1)[self._flat_keep]
-        out = np.bincount(self._flat, weights=values, minlength=self.n * self.n)
-        return out.reshape(self.n, self.n)
-
-    def _node_tangents(self) -> np.ndarray:
-        """W_k = Σ w ∂t/∂y over the points of each node k, shape ``(nodes, gdim, gdim)``."""
-        return np.add.reduceat(self._point_tangents(), self._runs, axis=0)
-
-    def _point_tangents(self) -> np.ndarray:
-        """The weighted tangent w ∂t/∂y at each point, shape ``(points, gdim, gdim)``.
-
-        ∂y = ½β₂Δt² ∂u + β₁Δt ∂v: the step's unknown moves u and v together.
+        u₀, Δt v₀ + ½Δt² a₀, v₀, Δt a₀ and the staged Δa at the pair's nodes (the
+        terms of :func:`breakwater.stepping.gn22.gn22_kinematics`), and the law's
+        parameters and the step's coefficients ½β₂Δt², β₁Δt now.
         """
-        us, um, vs, vm = self._state()
         dt = float(self.dt.value)
-        _, t_u, t_v = self._values().nodal(us, um, self._normal, vs, vm, derivatives=True)
-        return self._weight[:, None, None] * (0.5 * self.beta2 * dt**2 * t_u
-                                              + self.beta1 * dt * t_v)
+        base = self._base.reshape(5, 2, -1)
+        if self.comm.size > 1:
+            base[:] = 0.0  # the other ranks' nodes: their values come in the sum
+        for side, (local, place, (u, v, a, da)) in enumerate(self._take):
+            a_ = a[local]
+            v_ = v[local]
+            base[0, side, place] = u[local]
+            base[1, side, place] = dt * v_ + 0.5 * dt**2 * a_
+            base[2, side, place] = v_
+            base[3, side, place] = dt * a_
+            base[4, side, place] = da[local]
+        if self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, base, op=MPI.SUM)
+        self._coefficients = (0.5 * self.beta2 * dt**2, self.beta1 * dt)
+        law = self.pair.law.values()
+        self._law = (float(law.normal.ε_n), float(law.normal.g0), float(law.friction.μ),
+                     float(law.friction.χ) ** 2)
 
-    def left_product(self, X: np.ndarray) -> np.ndarray:
-        """X @ :meth:`matrix` for a dense X of n_I columns, from the matrix's structure.
+    def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
+        """Add f_c(y) on the interface unknowns to ``out``."""
+        nodal_residual(y, self._pos, self._base, *self._coefficients, self._node,
+                       self._weight, self._normal, *self._law, self._U, self._V, out)
 
-        The matrix couples only the two sides of one node: its slave columns of node k
-        are −W_k and its master columns +W_k, times the rows ``s_k − m_k``, so
-        ``(X ∂f_c)[:, s_k] = −R_k W_k`` and ``[:, m_k] = R_k W_k`` with
-        ``R_k = X[:, s_k] − X[:, m_k]``: O(n_I²) work instead of the dense O(n_I³).
+    def add_left_product(self, y: np.ndarray, X: np.ndarray, out: np.ndarray) -> bool:
+        """Add X ∂f_c/∂y at y to ``out`` (X: n_I columns), from the node tangents.
+
+        The matrix couples only the two sides of one node: O(rows · nodes) work
+        (:func:`~breakwater.contact.nodalkernels.tangent_left_product`).
         """
-        W = self._node_tangents()
-        if self._extended is None or self._extended[0] is not X:
-            Xe = np.zeros((X.shape[0], self.n + 1))
-            Xe[:, : self.n] = X
-            self._extended = (X, Xe)
-        Xe = self._extended[1]
-        R = Xe[:, self._cols[0]] - Xe[:, self._cols[1]]  # (rows, nodes, gdim)
-        Y = np.einsum("aki,kij->akj", R, W)
-        out = np.zeros((X.shape[0], self.n + 1))
-        out[:, self._cols[0]] = -Y
-        out[:, self._cols[1]] = Y  # the −1 columns land in the extra column n
-        return out[:, : self.n]
+        nodal_left_product(y, self._pos, self._base, *self._coefficients, self._node,
+                           self._weight, self._normal, self._runs, *self._law,
+                           self._run_slave, self._run_master, X, self._U, self._V, self._W,
+                           out)
+        return True
 
+    def matrix(self, y: np.ndarray) -> np.ndarray:
+        """∂f_c/∂y at y on the interface unknowns, dense (the product with I)."""
+        out = np.zeros((self.n, self.n))
+        self.add_left_product(y, np.eye(self.n), out)
+        return out
+
+    def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        """The pair's slip guard on the interface unknowns; the nodes corrected.
+
+        :func:`~breakwater.contact.nodalkernels.guard_steps` with the nodes' averaged
+        normals and tangent bases and the law's stick band, as
+        :class:`~breakwater.contact.slipguard.SlipGuard` does on body arrays (nothing
+        without the guard).
+        """
+        if not self.guarded:
+            return 0
+        band = self.pair.law.friction.stick_band
+        return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
+                               self._tangents, float(getattr(band, "value", band))))

@@ -142,12 +142,13 @@ def crash_reason(error: BaseException) -> str:
 def _finite(comm: MPI.Comm, *functions: fem.Function) -> bool:
     """Whether every value of the Functions is finite, on every rank."""
     ok = all(np.isfinite(f.x.array).all() for f in functions)
-    return bool(comm.allreduce(ok, op=MPI.LAND))
+    return ok if comm.size == 1 else bool(comm.allreduce(ok, op=MPI.LAND))
 
 
 def _check_stop(r: Session, stop: StopSignal) -> None:
     """Stop (all ranks together) when a rank received a stop signal; checkpoint first."""
-    signum = r.comm.allreduce(stop.received, op=MPI.MAX)
+    signum = stop.received if r.comm.size == 1 else r.comm.allreduce(stop.received,
+                                                                     op=MPI.MAX)
     if not signum:
         return
     saved = r.output.checkpoint_interval > 0

@@ -66,6 +66,7 @@ from breakwater.stepping.interface import (
     ContactForces,
     ContactSum,
     InterfaceUnknowns,
+    StateForces,
 )
 from breakwater.stepping.interfacenewton import InterfaceNewton
 from breakwater.stepping.solver import NewtonOptions
@@ -188,13 +189,15 @@ class CondensedNewton(StepSolver):
         options: Convergence settings.
         force_scale: Force norm that scales ``options.atol``.
         guard: Optional slip guard ``guard(v, step, dv_dx) -> corrected`` on local body
-            arrays (:class:`~breakwater.contact.slipguard.SlipGuard`), the SNES pre-check.
+            arrays (:class:`~breakwater.contact.slipguard.SlipGuard`) for the conforming
+            pairs of the assembled provider (``contact`` None), a pre-check of Newton's
+            steps; the providers ``contact`` builds guard their own pairs.
         contact: Builds the contact forces
             (:class:`~breakwater.stepping.interface.ContactForces`, summed); None: the
             UFL of ``interface_residual`` assembled over the contact facets
             (:class:`InterfaceAssembler`).
         surface_guard: The slip guard of the general pairs (their ``precheck``), also
-            a pre-check.
+            a pre-check. The nodes every guard corrected count in ``newton.flips``.
     """
 
     def __init__(self, model: ContactModel,
@@ -224,26 +227,27 @@ class CondensedNewton(StepSolver):
         self.providers: list[ContactForces] = []
         if interface_residual is not None:
             self.providers = list(contact(layout, self.I)) if contact is not None else [
-                InterfaceAssembler(model, layout, ufl.extract_blocks(interface_residual),
-                                   self.da, self.interface.positions, self.I)]
-        # General pairs (breakwater.contact.general): one provider each.
+                StateForces(InterfaceAssembler(
+                    model, layout, ufl.extract_blocks(interface_residual), self.da,
+                    self.interface.positions, self.I), self.interface, self.da,
+                    self._body_guard if guard is not None else None)]
+        # General pairs (breakwater.contact.general): one provider each, with its guard.
         self.surfaces = [SurfaceContact(model, p, layout, self.I,
                                         (self.u, self.v, self.a, self.da), dt, beta1, beta2)
                          for p in model.surface_pairs]
-        self.providers += self.surfaces
+        surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
+        self.providers += [StateForces(sp, self.interface, self.da,
+                                       sp.precheck if surface_guard else None)
+                           for sp in self.surfaces]
         for sp in self.surfaces:
             sp.timings = self.timings  # its search time: timings["contact_search"]
-        self.contact = ContactSum(self.interface, self.da, self.providers, self.timings)
+        self.contact = ContactSum(self.n, self.providers, self.timings)
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
         self._v_pred_I = np.zeros(self.n)
-        self.surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
-        self.surface_flips = 0
-        self.newton = InterfaceNewton(
-            self.n, self.contact, model.options_prefix("contact"), "gn22",
-            options or NewtonOptions(), force_scale, self.timings,
-            self._precheck if guard is not None or self.surface_guard else None)
+        self.newton = InterfaceNewton(self.n, self.contact, "gn22", options or NewtonOptions(),
+                                      force_scale, self.timings)
 
     @property
     def floor_accepts(self) -> int:
@@ -256,7 +260,6 @@ class CondensedNewton(StepSolver):
 
     def destroy(self) -> None:
         """Free the PETSc objects now (collective; see :meth:`NewtonSolver.destroy`)."""
-        self.newton.destroy()
         for vec in self._vecs.values():
             vec.destroy()
         self.factorisations.destroy()
@@ -273,30 +276,28 @@ class CondensedNewton(StepSolver):
             fc += p.vector(accepted=True)
         vec.array[self.interface.owned_rows] += scale * fc[self.interface.owned]
 
-    def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        """The slip guard on the interface unknowns (SNES line-search pre-check).
+    def _body_guard(self, x: np.ndarray, step: np.ndarray) -> int:
+        """The conforming pairs' slip guard on body arrays, for the assembled providers.
 
-        The guard works on local body arrays: the iterate's velocities
-        v₁ = ṽ + β₁Δt y and the step are written at the interface entries, the only
-        ones the guard reads, and the step is read back where the guard cut it.
+        The guard (:class:`~breakwater.contact.slipguard.SlipGuard`) works on local body
+        arrays: the iterate's velocities v₁ = ṽ + β₁Δt x and the step are written at the
+        interface entries, the only ones the guard reads, and the step is read back
+        where the guard cut it.
         """
-        if self.surface_guard:
-            for p in self.surfaces:
-                self.surface_flips += p.precheck(x.getArray(readonly=True), y.array)
-        if self.guard is None:
-            return
+        assert self.guard is not None
         dv_dx = self.beta1 * float(self.dt.value)
-        velocity = self._v_pred_I + dv_dx * x.getArray(readonly=True)
-        step = y.getArray(readonly=True)
+        velocity = self._v_pred_I + dv_dx * x
         v_arrays, step_arrays = self._guard_arrays
         for va, sa, (local, pos) in zip(v_arrays, step_arrays, self.interface.positions,
                                         strict=True):
             va[local] = velocity[pos]
             sa[local] = step[pos]
-        if self.guard(v_arrays, step_arrays, dv_dx):
+        corrected = self.guard(v_arrays, step_arrays, dv_dx)
+        if corrected:
             owned = np.concatenate([sa[:n] for sa, n in zip(step_arrays, self.layout.sizes,
                                                             strict=True)])
-            y.array[:] = self.interface.gather(owned)[0]
+            step[:] = self.interface.gather(owned)[0]
+        return corrected
 
     # --- one step ---------------------------------------------------------------------
 
@@ -328,7 +329,8 @@ class CondensedNewton(StepSolver):
             z, v_pred, y0, w_I = self.interface.gather(
                 V["z"].array, V["v"].array + dt * V["a"].array, V["da"].array, w.array)
             self._v_pred_I = v_pred
-            its = self.newton.solve(fact, z, y0, w_I, w_norm2)
+            self.contact.begin()
+            its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
             self._check_penetration(its)
             # The last residual evaluation was at the solution: f_c(y) is at hand.
             fc = self.newton.fc

@@ -245,7 +245,7 @@ class GN22:
             for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)), strict=True))
         self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
         self.guard = SlipGuard(self.nodes) if self.nodes else None
-        self.flips = 0  # nodes whose slip reversal the guard cut, over the run
+        self._flips = 0  # nodes the guard cut outside the fast solver's Newton
         self.solver: StepSolver
         #: The fast path's solver, for what only it has (its bulk operators and
         #: interface unknowns: the ledger's matrices, the relaxation); None on the
@@ -260,13 +260,13 @@ class GN22:
 
                 def contact(layout, interface):  # type: ignore[no-untyped-def]
                     return [NodalContactForces(model, nd, layout, interface, state, self.dt,
-                                               p.beta1, p.beta2, gn22_kinematics)
+                                               p.beta1, p.beta2, guard=flip_guard)
                             for nd in nodes]
             self.solver = self.fast = CondensedNewton(
                 model, state, self.dt, p.beta1, p.beta2,
                 model.interface_residual(self.u1, self.v1) if model.pairs else None,
                 newton, force_scale=force_scale(model),
-                guard=self._guard_counted if self.guard else None, contact=contact,
+                guard=self.guard, contact=contact,
                 surface_guard=flip_guard)
         else:
             self._y = model.functions("step")
@@ -285,6 +285,17 @@ class GN22:
             if why is not None:
                 self.destroy()
                 raise MeshError(why)
+
+    @property
+    def flips(self) -> int:
+        """Nodes whose slip reversal the slip guards cut, over the run."""
+        return self._flips + (self.fast.newton.flips if self.fast is not None else 0)
+
+    @flips.setter
+    def flips(self, value: int) -> None:
+        self._flips = value
+        if self.fast is not None:
+            self.fast.newton.flips = 0
 
     @property
     def contacts(self) -> list[Pair]:
@@ -363,14 +374,6 @@ class GN22:
         return its
 
     # --- Newton safeguard for the regularised friction law ------------------------
-
-    def _guard_counted(self, v: Sequence[np.ndarray], step: Sequence[np.ndarray],
-                       dv_dx: float) -> int:
-        """The slip guard, its corrections counted in :attr:`flips`."""
-        assert self.guard is not None
-        corrected = self.guard(v, step, dv_dx)
-        self.flips += corrected
-        return corrected
 
     def _precheck(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
         """SNES line-search pre-check: the slip guard (:mod:`breakwater.contact.slipguard`).

@@ -20,31 +20,114 @@ from mpi4py import MPI
 from breakwater.common.timings import Timings
 from breakwater.model.layout import MonolithicLayout
 
-__all__ = ["ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns"]
+__all__ = ["ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns", "StateForces",
+           "StateProvider"]
 
 
 class ContactForces(Protocol):
     """Contact forces on the interface unknowns, a part of f_c (summed over providers).
 
-    Evaluated at the state Functions (u, v, a at t and the step's Δa, which
-    :class:`ContactSum` sets before calling); both arrays are the same on every rank.
+    Evaluated at an iterate y of the interface unknowns (the step's Δa there), the
+    state at t staged; the arrays are the same on every rank. :meth:`begin` is called
+    once per step before the Newton (collective), the others per Newton iteration (on
+    every rank together).
     """
 
-    def vector(self) -> np.ndarray:
-        """f_c on the interface unknowns, shape ``(n_I,)``."""
+    def begin(self) -> None:
+        """Take the staged step's state (u, v, a at t, Δt, the staged Δa)."""
         ...
 
-    def matrix(self) -> np.ndarray:
+    def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
+        """Add f_c(y) on the interface unknowns, shape ``(n_I,)``, to ``out``."""
+        ...
+
+    def add_left_product(self, y: np.ndarray, X: np.ndarray, out: np.ndarray) -> bool:
+        """Add X ∂f_c/∂y to ``out`` from the provider's own structure (sparse, nodal).
+
+        Returns:
+            False where there is no structure to use (nothing added): the caller then
+            forms ``X @ matrix(y)``, summed with the other such providers' first.
+        """
+        ...
+
+    def matrix(self, y: np.ndarray) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
         ...
 
-    def left_product(self, X: np.ndarray) -> np.ndarray | None:
-        """X ∂f_c/∂y from the provider's own structure (sparse, nodal), or None.
+    def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        """The provider's slip guard on Newton's step (next iterate ``x − step``).
 
-        None: :class:`ContactSum` forms ``X @ matrix()``, summed with the other such
-        providers' matrices first (one product).
+        ``v_pred + dv_dx x`` are the iterate's velocities; ``step`` is cut in place.
+
+        Returns:
+            The nodes corrected (0: ``step`` untouched).
         """
         ...
+
+
+class StateProvider(Protocol):
+    """Contact forces evaluated at the state Functions (Δa holding the iterate)."""
+
+    def vector(self) -> np.ndarray:
+        """f_c on the interface unknowns."""
+        ...
+
+    def left_product(self, X: np.ndarray) -> np.ndarray | None:
+        """X ∂f_c/∂y from the provider's structure, or None."""
+        ...
+
+    def matrix(self) -> np.ndarray:
+        """∂f_c/∂y on the interface unknowns, dense."""
+        ...
+
+
+class StateForces:
+    """A :class:`ContactForces` of a provider that reads the state Functions.
+
+    Each evaluation writes y into Δa first (the provider assembles forms or projects
+    points at the state: :class:`~breakwater.stepping.condensed.InterfaceAssembler`,
+    :class:`~breakwater.contact.general.SurfaceContact`).
+
+    Args:
+        provider: The provider.
+        interface: The interface unknowns.
+        da: The step's unknown Δa, one Function per body.
+        guard: The provider's slip guard ``(x, step) -> corrected``, or None.
+    """
+
+    def __init__(self, provider: StateProvider, interface: InterfaceUnknowns,
+                 da: Sequence[fem.Function],
+                 guard: Callable[[np.ndarray, np.ndarray], int] | None = None) -> None:
+        self.provider, self.interface, self.da = provider, interface, da
+        self.guard = guard
+
+    def begin(self) -> None:
+        """Nothing to take: the provider reads the Functions."""
+
+    def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
+        """Add the provider's ``vector()`` at Δa = y."""
+        self.interface.write(self.da, y)
+        out += self.provider.vector()
+
+    def add_left_product(self, y: np.ndarray, X: np.ndarray, out: np.ndarray) -> bool:
+        """Add the provider's ``left_product(X)`` at Δa = y, if it has one."""
+        self.interface.write(self.da, y)
+        product = self.provider.left_product(X)
+        if product is None:
+            return False
+        out += product
+        return True
+
+    def matrix(self, y: np.ndarray) -> np.ndarray:
+        """The provider's ``matrix()`` at Δa = y."""
+        self.interface.write(self.da, y)
+        return self.provider.matrix()
+
+    def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        """The provider's guard, if any."""
+        return self.guard(x, step) if self.guard is not None else 0
 
 
 #: Builds the contact-force providers of a model from its stacked layout and the
@@ -103,52 +186,49 @@ class InterfaceUnknowns:
 class ContactSum:
     """f_c(y) and its Jacobian on the interface unknowns, summed over the providers.
 
-    Each evaluation writes y into Δa first (the providers read the state Functions).
-
     Args:
-        interface: The interface unknowns.
-        da: The step's unknown Δa, one Function per body.
+        n: Number of interface unknowns.
         providers: The contact-force providers (the list is read at each evaluation).
         timings: Where the evaluations are timed (``interface_assembly``).
     """
 
-    def __init__(self, interface: InterfaceUnknowns, da: Sequence[fem.Function],
-                 providers: Sequence[ContactForces], timings: Timings) -> None:
-        self.interface, self.da = interface, da
+    def __init__(self, n: int, providers: Sequence[ContactForces], timings: Timings) -> None:
+        self.n = n
         self.providers = providers
         self.timings = timings
 
-    def set(self, y: np.ndarray) -> None:
-        """Write y into Δa at every interface entry this rank holds."""
-        self.interface.write(self.da, y)
+    def begin(self) -> None:
+        """Every provider takes the staged step's state (collective)."""
+        with self.timings("interface_assembly"):
+            for c in self.providers:
+                c.begin()
 
     def vector(self, y: np.ndarray) -> np.ndarray:
         """f_c(y) on the interface unknowns (the same on every rank)."""
         with self.timings("interface_assembly"):
-            self.set(y)
-            out = self.providers[0].vector()
-            for c in self.providers[1:]:
-                out = out + c.vector()
+            out = np.zeros(self.n)
+            for c in self.providers:
+                c.add_vector(y, out)
             return out
 
     def left_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
         """X ∂f_c/∂y on the interface unknowns (the same on every rank).
 
-        A provider whose ``left_product(X)`` gives the product (from its matrix's
-        structure) adds it; the others (``None``) add their dense matrices, multiplied once.
+        A provider with structure adds its product; the others' dense matrices are
+        summed and multiplied once.
         """
-        n = self.interface.n
-        out = np.zeros((n, n))
+        out = np.zeros((X.shape[0], self.n))
         dense: np.ndarray | None = None
         with self.timings("interface_assembly"):
-            self.set(y)
             for c in self.providers:
-                product = c.left_product(X)
-                if product is not None:
-                    out += product
-                else:
-                    m = c.matrix()
+                if not c.add_left_product(y, X, out):
+                    m = c.matrix(y)
                     dense = m if dense is None else dense + m
         if dense is not None:
             out += X @ dense
         return out
+
+    def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        """Every provider's slip guard, in turn, on the step; the nodes corrected."""
+        return sum(c.precheck(x, step, v_pred, dv_dx) for c in self.providers)
