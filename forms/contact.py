@@ -13,7 +13,12 @@ Where to change the friction law: here, in :class:`RegularisedCoulomb` (or a new
 class with the same methods, built in :meth:`ContactLaw.of`). If the new law needs a
 new parameter, it also needs an entry in the case schema (``[contact.<interface>]``,
 :mod:`breakwater.casefile.case`) and the field of :class:`breakwater.model.model.ContactPair` that
-carries it to :meth:`ContactLaw.of`.
+carries it to :meth:`ContactLaw.of`. The fast solver's compiled kernels
+(``breakwater/contact/nodalkernels.py``) repeat these two laws' formulas, and their
+derivatives, for the conforming pairs' inner loop: a pair whose law is another class
+takes the UFL forms there (``nodal_contact_applies``), and a change to the formulas of
+:class:`PenaltyContact` or :class:`RegularisedCoulomb` must be made in the kernels too
+(``tests/test_nodalcontact.py`` compares the kernels with these forms).
 
 Each law evaluates on UFL expressions (for forms) and on NumPy arrays of nodal
 values (for outputs and nodal algorithms) with the same arithmetic: the few
@@ -257,45 +262,6 @@ class ContactLaw:
             return op.scale(p, n)
         v_T = tangential_part(v_s - v_m, n)
         return op.scale(p, n) + self.friction.traction(p, v_T)
-
-    def nodal(self, u_s, u_m, n, v_s, v_m, derivatives=False):
-        """:meth:`traction` on nodal arrays, and its derivatives, in plain NumPy.
-
-        For the fast step solver's inner loop, where :meth:`traction`'s
-        backend-generic arithmetic costs more than the arithmetic itself; the same
-        formulas (``tests/test_nodalcontact.py`` checks them against the UFL forms).
-        Float parameters only (:meth:`values`). Per node, with ``u = u_s − u_m``,
-        ``v = v_s − v_m``, the closed indicator c and ``φ = v_T / s``,
-        ``s = sqrt(|v_T|² + χ²)``::
-
-            ∂t_s/∂u = −ε_n c (n − μ φ) ⊗ n
-            ∂t_s/∂v = −μ p (I − φ ⊗ φ) / s · (I − n ⊗ n)
-
-        the derivatives UFL takes of :meth:`traction` (the active set's conditional
-        differentiated branch by branch).
-
-        Returns:
-            The traction ``(n, gdim)``; with ``derivatives``, ``(t_s, T_u, T_v)``, the
-            derivatives of shape ``(n, gdim, gdim)``, ``T[k, i, j] = ∂t_i/∂x_j`` at
-            node k.
-        """
-        ε_n, g0 = self.normal.ε_n, self.normal.g0
-        μ, χ = self.friction.μ, self.friction.χ
-        g_n = np.einsum("ki,ki->k", u_s - u_m, n) + g0
-        closed = g_n <= 0.0
-        p = np.where(closed, -ε_n * g_n, 0.0)
-        v_T = tangential_part(v_s - v_m, n)
-        s = np.sqrt(np.einsum("ki,ki->k", v_T, v_T) + χ**2)
-        φ = v_T / s[:, None]
-        t_s = p[:, None] * (n - μ * φ)
-        if not derivatives:
-            return t_s
-        T_u = (-ε_n * closed)[:, None, None] * np.einsum("ki,kj->kij", n - μ * φ, n)
-        # (I − φφ)(I − nn) = I − nn − φφ + (φ·n) φn, and φ·n = 0 (φ is tangential).
-        eye = np.eye(n.shape[-1])
-        P = eye - np.einsum("ki,kj->kij", n, n)
-        T_v = (-μ * p / s)[:, None, None] * (P - np.einsum("ki,kj->kij", φ, φ))
-        return t_s, T_u, T_v
 
 
 def contact_residual(t_s, w_s, w_m, dS: ufl.Measure) -> ufl.Form:
