@@ -7,9 +7,9 @@ friction of :class:`breakwater.contact.general.SurfaceForces`) in loops
 steps, the master's normal, the penalty traction; real or complex), :func:`residual`
 the normal part of ``vector()`` with the slave nodes' normal forces λ,
 :func:`friction` its friction part, :func:`jacobian` the dense ∂f_c/∂Δa of
-``matrix()`` (complex steps of :func:`point`, in the reference's summation order),
-:func:`left_product` ``X @ J`` over J's nonzero entries and :func:`slip_guard` the
-pre-check. The interface arrays carry a trailing entry (position −1: Dirichlet, 0).
+``matrix()`` (:func:`point_tangents`: the derivatives of :func:`point` that the
+reference takes by complex steps, in forward mode, summed in the reference's order),
+:func:`slip_guard` the pre-check. The interface arrays carry a trailing entry (position −1: Dirichlet, 0).
 ``tests/test_forcekernels.py`` checks each against its reference.
 """
 
@@ -20,7 +20,8 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
-__all__ = ["friction", "jacobian", "left_product", "point", "residual", "slip_guard"]
+__all__ = ["add_friction", "friction", "jacobian", "point", "point_tangents", "residual",
+           "slip_guard"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -89,6 +90,132 @@ def point(Ns, xi0, xs, xm, ref, small, eps, g0, w, forces, shares, nodal):  # ty
     for k in range(ns):
         shares[k] = share * Ns[k]
     return g, xi
+
+
+@kernel
+def _shape3(xi, nn):  # type: ignore[no-untyped-def]
+    """N, N', N'' at ξ (real), each padded to 3 entries."""
+    if nn == 2:
+        return (0.5 * (1 - xi), 0.5 * (1 + xi), 0.0), (-0.5, 0.5, 0.0), (0.0, 0.0, 0.0)
+    return ((0.5 * xi * (xi - 1), 0.5 * xi * (xi + 1), 1 - xi * xi), (xi - 0.5, xi + 0.5, -2 * xi),
+            (1.0, 1.0, -2.0))
+
+
+@kernel
+def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type: ignore[no-untyped-def]
+    """∂(forces, shares)/∂Δa of one point, all local DOFs at once (forward mode).
+
+    The derivatives :func:`point`'s complex steps take (``i h cu`` per local DOF: the
+    imaginary parts follow these product rules; the terms of order h² vanish), in
+    one pass: each quantity carries its tangents along the ``2 (ns + nm)`` local DOFs
+    (the slave's nodes, then the master's, x then y). The active set and the
+    projection's clip are decided on the values, as there on the real parts.
+
+    Args:
+        Ns, xi0, xs, xm, ref, small, eps, g0, w: As :func:`point` (real).
+        cu: ∂x/∂Δa.
+        J: Out, ``(2 (ns + nm), 2 (ns + nm))``: ∂forces/∂Δa (forces flattened).
+        Jl: Out, ``(ns, 2 (ns + nm))``: ∂shares/∂Δa (the ``normal_and_shares`` shares).
+    """
+    ns, nm = len(Ns), xm.shape[0]
+    L = 2 * (ns + nm)
+    x0, x1 = 0.0, 0.0
+    for k in range(ns):
+        x0 += Ns[k] * xs[k, 0]
+        x1 += Ns[k] * xs[k, 1]
+    dx0 = np.zeros(L)
+    dx1 = np.zeros(L)
+    for k in range(ns):
+        dx0[2 * k] = Ns[k] * cu
+        dx1[2 * k + 1] = Ns[k] * cu
+    xi = xi0
+    dxi = np.zeros(L)
+    m0 = 2 * ns  # the master's first local DOF
+    for _ in range(2):
+        N, D, D2 = _shape3(xi, nm)
+        c0 = c1 = t0 = t1 = s0 = s1 = 0.0
+        for b in range(nm):
+            c0 += N[b] * xm[b, 0]
+            c1 += N[b] * xm[b, 1]
+            t0 += D[b] * xm[b, 0]
+            t1 += D[b] * xm[b, 1]
+            s0 += D2[b] * xm[b, 0]
+            s1 += D2[b] * xm[b, 1]
+        r0, r1 = c0 - x0, c1 - x1
+        f = r0 * t0 + r1 * t1
+        den = (t0 * t0 + t1 * t1) + (r0 * s0 + r1 * s1)
+        step = f / den
+        new = xi - step
+        clip = abs(new) > 2
+        for j in range(L):
+            # Tangents of c, x', x'' at ξ: through ξ, and the master's own nodes.
+            dc0, dc1 = t0 * dxi[j], t1 * dxi[j]
+            dt0, dt1 = s0 * dxi[j], s1 * dxi[j]
+            ds0, ds1 = 0.0, 0.0
+            if j >= m0:
+                b, d = (j - m0) // 2, (j - m0) % 2
+                if d == 0:
+                    dc0 += N[b] * cu
+                    dt0 += D[b] * cu
+                    ds0 += D2[b] * cu
+                else:
+                    dc1 += N[b] * cu
+                    dt1 += D[b] * cu
+                    ds1 += D2[b] * cu
+            dr0, dr1 = dc0 - dx0[j], dc1 - dx1[j]
+            df = (dr0 * t0 + r0 * dt0) + (dr1 * t1 + r1 * dt1)
+            dden = 2 * (t0 * dt0 + t1 * dt1) + (dr0 * s0 + r0 * ds0) + (dr1 * s1 + r1 * ds1)
+            dxi[j] = 0.0 if clip else dxi[j] - (df * den - f * dden) / (den * den)
+        xi = min(max(new, -2.0), 2.0) if clip else new
+    N, D, D2 = _shape3(xi, nm)
+    nodes = ref if small else xm
+    t0 = t1 = c0 = c1 = a0 = a1 = b0 = b1 = 0.0
+    for b in range(nm):
+        t0 += D[b] * nodes[b, 0]
+        t1 += D[b] * nodes[b, 1]
+        a0 += D2[b] * nodes[b, 0]
+        a1 += D2[b] * nodes[b, 1]
+        c0 += N[b] * xm[b, 0]
+        c1 += N[b] * xm[b, 1]
+        b0 += D[b] * xm[b, 0]
+        b1 += D[b] * xm[b, 1]
+    s = np.sqrt(t0 * t0 + t1 * t1)
+    u0, u1 = t0 / s, t1 / s
+    n0, n1 = u1, -u0
+    g = ((x0 - c0) * n0 + (x1 - c1) * n1) + g0
+    closed = g <= 0.0
+    p = eps * -g if closed else 0.0
+    tw0, tw1 = p * n0 * w, p * n1 * w
+    share = tw0 * n0 + tw1 * n1
+    for j in range(L):
+        dt0, dt1 = a0 * dxi[j], a1 * dxi[j]
+        dc0, dc1 = b0 * dxi[j], b1 * dxi[j]
+        if j >= m0:
+            b, d = (j - m0) // 2, (j - m0) % 2
+            if d == 0:
+                dc0 += N[b] * cu
+                if not small:
+                    dt0 += D[b] * cu
+            else:
+                dc1 += N[b] * cu
+                if not small:
+                    dt1 += D[b] * cu
+        ds = (t0 * dt0 + t1 * dt1) / s
+        du0, du1 = (dt0 * s - t0 * ds) / (s * s), (dt1 * s - t1 * ds) / (s * s)
+        dn0, dn1 = du1, -du0
+        dg = ((dx0[j] - dc0) * n0 + (x0 - c0) * dn0) + ((dx1[j] - dc1) * n1 + (x1 - c1) * dn1)
+        dp = -eps * dg if closed else 0.0
+        dtw0, dtw1 = (dp * n0 + p * dn0) * w, (dp * n1 + p * dn1) * w
+        for k in range(ns):
+            J[2 * k, j], J[2 * k + 1, j] = -Ns[k] * dtw0, -Ns[k] * dtw1
+        for b in range(nm):
+            dN = D[b] * dxi[j]
+            J[m0 + 2 * b, j] = dN * tw0 + N[b] * dtw0
+            J[m0 + 2 * b + 1, j] = dN * tw1 + N[b] * dtw1
+        dshare = (dtw0 * n0 + tw0 * dn0) + (dtw1 * n1 + tw1 * dn1)
+        for k in range(ns):
+            Jl[k, j] = dshare * Ns[k]
+    return share
 
 
 @kernel
@@ -221,9 +348,10 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
              mu, chi):  # type: ignore[no-untyped-def]
     """∂f_c/∂Δa, dense ``(n, n)`` (``matrix()``).
 
-    The normal part and dλ/dΔa by complex steps of :func:`point` (each local DOF of a
-    point stepped by ``i h cu``), the friction part by the chain rule through λ_k and
-    v_T (∂φ/∂v_T by complex steps), summed in the order of the reference.
+    The normal part and dλ/dΔa by :func:`point_tangents` (the reference's complex
+    steps ``i h cu`` of each local DOF of a point, in forward mode), the friction part
+    by the chain rule through λ_k and v_T (∂φ/∂v_T by complex steps), summed in the
+    order of the reference.
     """
     K, ns, nm = len(f_s), sX.shape[1], mX.shape[1]
     n = len(u1) - 1
@@ -231,33 +359,21 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
     local = (ns + nm) * 2
     rows = np.empty((K, local), np.int64)
     Jl = np.zeros((K, ns, local))
-    forces = np.zeros((ns + nm, 2), np.complex128)
-    shares = np.zeros(ns, np.complex128)
+    Jp = np.zeros((local, local))
     for p in range(K):
         for a in range(ns + nm):
             for d in range(2):
                 rows[p, 2 * a + d] = pos_s[f_s[p], a, d] if a < ns else pos_m[f_m[p], a - ns, d]
-        xs = _local(sX, pos_s, f_s[p], u1).astype(np.complex128)
-        xm = _local(mX, pos_m, f_m[p], u1).astype(np.complex128)
-        for j in range(local):
-            a, d = j // 2, j % 2
-            if a < ns:
-                xs[a, d] += 1j * H * cu
-            else:
-                xm[a - ns, d] += 1j * H * cu
-            point(Ns[p], xi[p], xs, xm, mX[f_m[p]], small, eps, g0, weight[p], forces,
-                  shares, False)
-            if a < ns:
-                xs[a, d] = xs[a, d].real
-            else:
-                xm[a - ns, d] = xm[a - ns, d].real
-            c = rows[p, j]
-            for o in range(local):
-                r = rows[p, o]
-                if r >= 0 and c >= 0:
-                    A[r, c] += forces[o // 2, o % 2].imag / H
-            for b in range(ns):
-                Jl[p, b, j] = shares[b].imag / H
+        point_tangents(Ns[p], xi[p], _local(sX, pos_s, f_s[p], u1), _local(mX, pos_m, f_m[p], u1),
+                       mX[f_m[p]], small, eps, g0, weight[p], cu, Jp, Jl[p])
+        for o in range(local):
+            r = rows[p, o]
+            if r < 0:
+                continue
+            for j in range(local):
+                c = rows[p, j]
+                if c >= 0:
+                    A[r, c] += Jp[o, j]
     if not use_friction or len(k) == 0:
         return A
     # The blocks in the reference's order: the normal part above, then per point.
@@ -313,31 +429,6 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
                         if c >= 0:
                             A[q, c] += f * B[i, a, b]
     return A
-
-
-@kernel
-def left_product(X, A):  # type: ignore[no-untyped-def]
-    """``X @ A`` over A's nonzero entries (A sparse: O(rows(X) · nnz(A)))."""
-    n = A.shape[0]
-    nnz = 0
-    for r in range(n):
-        for c in range(A.shape[1]):
-            if A[r, c] != 0.0:
-                nnz += 1
-    rr = np.empty(nnz, np.int64)
-    cc = np.empty(nnz, np.int64)
-    vv = np.empty(nnz)
-    e = 0
-    for r in range(n):
-        for c in range(A.shape[1]):
-            if A[r, c] != 0.0:
-                rr[e], cc[e], vv[e] = r, c, A[r, c]
-                e += 1
-    out = np.zeros((X.shape[0], A.shape[1]))
-    for i in range(X.shape[0]):
-        for e in range(nnz):
-            out[i, cc[e]] += X[i, rr[e]] * vv[e]
-    return out
 
 
 @kernel

@@ -75,6 +75,15 @@ def scatter_add(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndar
     return out
 
 
+def nonzero_product(X: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """``X @ A`` from A's rows and columns that hold a nonzero entry (one dense product)."""
+    rows = np.flatnonzero(A.any(axis=1))
+    cols = np.flatnonzero(A.any(axis=0))
+    out = np.zeros((X.shape[0], A.shape[1]))
+    out[:, cols] = X[:, rows] @ A[np.ix_(rows, cols)]
+    return out
+
+
 class SurfaceForces(SurfaceSearch):
     """A general pair as a provider of the fast solver's interface: f_c and ∂f_c/∂Δa.
 
@@ -147,7 +156,7 @@ class SurfaceForces(SurfaceSearch):
         nodes' start-of-step master facets): O(rows(X) · nnz) instead of the dense
         product's O(n³).
         """
-        return forcekernels.left_product(np.ascontiguousarray(X, dtype=float), self.matrix())
+        return nonzero_product(X, self.matrix())
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense.
