@@ -9,8 +9,9 @@ the normal part of ``vector()`` with the slave nodes' normal forces λ,
 :func:`friction` its friction part, :func:`jacobian` the dense ∂f_c/∂Δa of
 ``matrix()`` (:func:`point_tangents`: the derivatives of :func:`point` that the
 reference takes by complex steps, in forward mode, summed in the reference's order),
-:func:`slip_guard` the pre-check. The interface arrays carry a trailing entry (position −1: Dirichlet, 0).
-``tests/test_forcekernels.py`` checks each against its reference.
+:func:`slip_guard` the pre-check. The interface arrays carry a trailing entry
+(position −1: Dirichlet, 0). ``tests/test_contactkernels.py`` checks each against its
+reference.
 """
 
 from __future__ import annotations
@@ -112,7 +113,15 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type:
     projection's clip are decided on the values, as there on the real parts.
 
     Args:
-        Ns, xi0, xs, xm, ref, small, eps, g0, w: As :func:`point` (real).
+        Ns: The slave shape functions at the point.
+        xi0: The projection's ξ̄ (Newton's start).
+        xs: The slave facet's nodes (real).
+        xm: The master facet's nodes (oriented).
+        ref: Its reference nodes (the normal's facet if ``small``).
+        small: Small rotations (the reference normal).
+        eps: ε_n.
+        g0: The initial gap.
+        w: The point's weight.
         cu: ∂x/∂Δa.
         J: Out, ``(2 (ns + nm), 2 (ns + nm))``: ∂forces/∂Δa (forces flattened).
         Jl: Out, ``(ns, 2 (ns + nm))``: ∂shares/∂Δa (the ``normal_and_shares`` shares).
