@@ -31,9 +31,13 @@ unknown Δa on the interface unknowns. The surfaces' data (reference node coordi
 interface positions of their DOFs, sorted by coordinates) are gathered once on every
 rank; at each call the current u, v at the interface are reduced onto every rank (one
 ``Allreduce``) and every rank evaluates the same points in the same order, so the
-result does not depend on the partition. The Jacobian is exact: a complex step per
-local DOF of a (slave facet, master facet) point, with the projection's Newton run in
-complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
+result does not depend on the partition. The Jacobian is exact: the derivative a complex
+step per local DOF of a (slave facet, master facet) point takes, with the projection's
+Newton differentiated too, so the implicit dependence of ξ̄ on the nodes is included.
+The per-iteration work (the search, f_c, its Jacobian, the slip guard) runs in compiled
+kernels (:mod:`breakwater.contact.searchkernels`, :mod:`breakwater.contact.forcekernels`)
+with the arithmetic of the NumPy references (:mod:`breakwater.contact.projection`,
+:mod:`breakwater.contact.pointkernels`; ``tests/test_contactkernels.py``).
 
 The pair's jobs are layered: :class:`~breakwater.contact.surfacesearch.SurfaceSearch`
 (the surfaces, the integration points and their projections, the state at the
