@@ -182,6 +182,19 @@ def test_segment_points(nn: int) -> None:
     facet, xi = searchkernels.project(points, xm_all, 0.1, 1e-9)
     np.testing.assert_array_equal(facet >= 0, ref["on"])
     np.testing.assert_allclose(xi[facet >= 0], ref["xi"], rtol=0, atol=1e-13)
+    # The whole search (segments, and the fixed points of nodes).
+    empty = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros((0, nn)))
+    got = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, True, *empty, 0.1, 1e-9,
+                               g, w)
+    nodes = _points(p, "nodes", 1e-3)
+    fixed = (nodes["point_facet"], nodes["xi_s"], nodes["weight"], nodes["Ns"])
+    got_nodes = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, False, *fixed, 0.1,
+                                     1e-3, g, w)
+    for r, out in ((ref, got), (nodes, got_nodes)):
+        expected = (r["point_facet"], r["points"], r["weight"], np.flatnonzero(r["on"]),
+                    r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"])
+        for a, b in zip(out, expected, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)
 
 
 def _law(friction: float = 0.5) -> forms.ContactLaw:

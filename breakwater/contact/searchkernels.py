@@ -17,8 +17,8 @@ import numpy as np
 
 from breakwater.common.jit import kernel
 
-__all__ = ["candidates", "closest_points", "curve_at", "frozen", "nearest_end", "project",
-           "segment_points", "shape_values", "slave_points"]
+__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "nearest_end",
+           "project", "search", "segment_points", "shape_values", "slave_points"]
 
 
 @kernel
@@ -333,3 +333,53 @@ def frozen(points, xm, surface, radius):  # type: ignore[no-untyped-def]
             s = np.sqrt(a * a + b * b)
             t0[k, 0], t0[k, 1] = a / s, b / s
     return facet, N0, t0, projected
+
+
+@kernel
+def current(X, pos, u):  # type: ignore[no-untyped-def]
+    """The facets' current nodes ``X + u[pos]`` (position −1: u's trailing entry)."""
+    out = np.empty(X.shape)
+    for f in range(X.shape[0]):
+        for a in range(X.shape[1]):
+            for d in range(2):
+                out[f, a, d] = X[f, a, d] + u[pos[f, a, d]]
+    return out
+
+
+@kernel
+def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weight,
+           fixed_N, radius, edge, g, w):  # type: ignore[no-untyped-def]
+    """A general pair's integration points and their projections at the state u1.
+
+    Args:
+        sX: The slave facets' reference nodes.
+        mX: The master's (oriented).
+        pos_s: The slave's interface positions (−1: Dirichlet).
+        pos_m: The master's.
+        u1: Displacements at the interface unknowns (a trailing 0).
+        segments: Cut the slave facets (:func:`segment_points`); else the fixed points.
+        fixed_facet: The fixed points' slave facets.
+        fixed_xi: Their ξ.
+        fixed_weight: Their weights.
+        fixed_N: Their slave shape functions.
+        radius: The search radius.
+        edge: A projection at ``|ξ̄| ≤ 1 + edge`` is inside its facet.
+        g: The Gauss points of a segment.
+        w: Their weights.
+
+    Returns:
+        Every point's slave facet, position and weight; of those with a projection:
+        their index, slave facet, master facet, shape functions, ξ̄ and weight.
+    """
+    xs = current(sX, pos_s, u1)
+    xm = current(mX, pos_m, u1)
+    if segments:
+        point_facet, xi_s, weight = segment_points(xs, xm, sX, radius, g, w)
+        Ns = shape_values(xi_s, sX.shape[1])
+    else:
+        point_facet, weight, Ns = fixed_facet, fixed_weight, fixed_N
+    points = slave_points(xs, point_facet, Ns)
+    facet, xi = project(points, xm, radius, edge)
+    on = np.flatnonzero(facet >= 0)
+    return (point_facet, points, weight, on, point_facet[on], facet[on],
+            np.ascontiguousarray(Ns[on]), xi[on], weight[on])

@@ -194,6 +194,8 @@ class SurfaceSearch(InterfaceValues):
         if spec.integration != "segments" or not len(master.X):
             f, xi, w = self._integration(slave.X, master.X)
             self._fixed_points = (f, xi, w, np.ascontiguousarray(shape(xi, slave.X.shape[1])[0]))
+        self._no_points = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0),
+                           np.zeros((0, slave.X.shape[1])))
         self._frozen_projected = np.zeros(0, bool)  # of _frozen_data: not a nearest end
         # The start-of-step projection of the last step solved (see _friction).
         self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -253,27 +255,19 @@ class SurfaceSearch(InterfaceValues):
         Args:
             u1: Displacements at the interface unknowns (a trailing 0).
         """
-        xs_all = self._sX + u1[self._ps]
-        xm_all = self._mX + u1[self._pm]
         t0 = time.perf_counter()
-        if self._fixed_points is not None:
-            point_facet, xi_s, weight, Ns = self._fixed_points
-        else:
-            g, w = self._gauss
-            point_facet, xi_s, weight = searchkernels.segment_points(xs_all, xm_all, self._sX,
-                                                                     self.radius, g, w)
-            Ns = searchkernels.shape_values(xi_s, self._sX.shape[1])
-        points = searchkernels.slave_points(xs_all, point_facet, Ns)
-        facet, xi = searchkernels.project(points, xm_all, self.radius, self._edge)
+        f0, xi0, w0, N0 = self._fixed_points or self._no_points
+        g, w = self._gauss
+        (_, points, weight, on, f_s, f_m, Ns, xi, w_on) = searchkernels.search(
+            self._sX, self._mX, self._ps, self._pm, u1, self._fixed_points is None, f0, xi0,
+            w0, N0, self.radius, self._edge, g, w)
         self.searches += 1
         elapsed = time.perf_counter() - t0
         self.search_seconds += elapsed
         if self.timings is not None:
             self.timings.seconds["contact_search"] += elapsed
-        on = np.flatnonzero(facet >= 0)
-        return {"index": on, "facet": facet[on], "slave_facet": point_facet[on],
-                "Ns": Ns[on], "xi": xi[on], "weight": weight[on], "all_x": points,
-                "all_weight": weight}
+        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns, "xi": xi,
+                "weight": w_on, "all_x": points, "all_weight": weight}
 
     def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The projection of each slave node at the start of the step (cached).
