@@ -355,24 +355,53 @@ def add_friction(out, k, force, facet0, N0, node_pos, pos_m):  # type: ignore[no
 def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0, node_of,
              n_nodes, cu, cv, use_friction, lam, k, v_T, unit, facet0, N0, t0, node_pos,
              mu, chi):  # type: ignore[no-untyped-def]
-    """∂f_c/∂Δa, dense ``(n, n)`` (``matrix()``).
+    """∂f_c/∂Δa (``matrix()``) on the interface unknowns it couples.
 
     The normal part and dλ/dΔa by :func:`point_tangents` (the reference's complex
     steps ``i h cu`` of each local DOF of a point, in forward mode), the friction part
-    by the chain rule through λ_k and v_T (∂φ/∂v_T by complex steps), summed in the
-    order of the reference.
+    by the chain rule through λ_k and v_T (∂φ/∂v_T by complex steps), each entry summed
+    in the order of the reference.
+
+    Returns:
+        The unknowns the matrix couples (sorted: the DOFs of the points with a
+        projection and of the friction's nodes) and the matrix on them, ``A[act, act]``
+        (zero elsewhere).
     """
     K, ns, nm = len(f_s), sX.shape[1], mX.shape[1]
     n = len(u1) - 1
-    A = np.zeros((n, n))
     local = (ns + nm) * 2
     rows = np.empty((K, local), np.int64)
-    Jl = np.zeros((K, ns, local))
-    Jp = np.zeros((local, local))
+    where = np.full(n + 1, -1, np.int64)
     for p in range(K):
         for a in range(ns + nm):
             for d in range(2):
-                rows[p, 2 * a + d] = pos_s[f_s[p], a, d] if a < ns else pos_m[f_m[p], a - ns, d]
+                q = pos_s[f_s[p], a, d] if a < ns else pos_m[f_m[p], a - ns, d]
+                rows[p, 2 * a + d] = q
+                if q >= 0:
+                    where[q] = 0
+    friction = use_friction and len(k) > 0
+    m = len(k) if friction else 0
+    R = nm + 1
+    row_pos = np.empty((m, R, 2), np.int64)
+    sign = np.empty((m, R))
+    for i in range(m):
+        row_pos[i, 0] = node_pos[k[i]]
+        sign[i, 0] = -1.0
+        for b in range(nm):
+            row_pos[i, b + 1] = pos_m[facet0[k[i]], b]
+            sign[i, b + 1] = N0[k[i], b]
+        for r in range(R):
+            for a in range(2):
+                if row_pos[i, r, a] >= 0:
+                    where[row_pos[i, r, a]] = 0
+    act = np.flatnonzero(where[:n] >= 0)
+    na = len(act)
+    for i in range(na):
+        where[act[i]] = i
+    A = np.zeros((na, na))
+    Jl = np.zeros((K, ns, local))
+    Jp = np.zeros((local, local))
+    for p in range(K):
         point_tangents(Ns[p], xi[p], _local(sX, pos_s, f_s[p], u1), _local(mX, pos_m, f_m[p], u1),
                        mX[f_m[p]], small, eps, g0, weight[p], cu, Jp, Jl[p])
         for o in range(local):
@@ -382,18 +411,17 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
             for j in range(local):
                 c = rows[p, j]
                 if c >= 0:
-                    A[r, c] += Jp[o, j]
-    if not use_friction or len(k) == 0:
-        return A
+                    A[where[r], where[c]] += Jp[o, j]
+    if not friction:
+        return act, A
     # The blocks in the reference's order: the normal part above, then per point.
-    dlam = np.zeros((n_nodes, n))
+    dlam = np.zeros((n_nodes, na))
     for p in range(K):
         for b in range(ns):
             for j in range(local):
                 c = rows[p, j]
                 if c >= 0:
-                    dlam[node_of[f_s[p], b], c] += Jl[p, b, j]
-    m = len(k)
+                    dlam[node_of[f_s[p], b], where[c]] += Jl[p, b, j]
     B = np.zeros((m, 2, 2))
     for i in range(m):
         D = np.zeros((2, 2))
@@ -408,22 +436,13 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
             for b in range(2):
                 B[i, a, b] = cv * ((D[a, 0] * t[0] * t[b]) + (D[a, 1] * t[1] * t[b]))
     # Rows (and columns): the slave node, then the master nodes of its f₀.
-    R = nm + 1
-    row_pos = np.empty((m, R, 2), np.int64)
-    sign = np.empty((m, R))
-    for i in range(m):
-        row_pos[i, 0] = node_pos[k[i]]
-        sign[i, 0] = -1.0
-        for b in range(nm):
-            row_pos[i, b + 1] = pos_m[facet0[k[i]], b]
-            sign[i, b + 1] = N0[k[i], b]
     for r in range(R):
         for i in range(m):
             for a in range(2):
                 q = row_pos[i, r, a]
                 if q >= 0:
-                    for c in range(n):
-                        A[q, c] += sign[i, r] * (unit[i, a] * dlam[k[i], c])
+                    for c in range(na):
+                        A[where[q], c] += sign[i, r] * (unit[i, a] * dlam[k[i], c])
     for r in range(R):
         for cc in range(R):
             for i in range(m):
@@ -436,8 +455,8 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
                     for b in range(2):
                         c = row_pos[i, cc, b]
                         if c >= 0:
-                            A[q, c] += f * B[i, a, b]
-    return A
+                            A[where[q], where[c]] += f * B[i, a, b]
+    return act, A
 
 
 @kernel
