@@ -9,7 +9,8 @@ the normal part of ``vector()`` with the slave nodes' normal forces λ,
 :func:`friction` its friction part, :func:`jacobian` the dense ∂f_c/∂Δa of
 ``matrix()`` (:func:`point_tangents`: the derivatives of :func:`point` that the
 reference takes by complex steps, in forward mode, summed in the reference's order),
-:func:`slip_guard` the pre-check. The interface arrays carry a trailing entry
+:func:`left_product` ``X @ J`` from J's structure and :func:`slip_guard` the
+pre-check. The interface arrays carry a trailing entry
 (position −1: Dirichlet, 0). ``tests/test_contactkernels.py`` checks each against its
 reference.
 """
@@ -21,8 +22,8 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
-__all__ = ["add_friction", "friction", "jacobian", "point", "point_tangents", "residual",
-           "slip_guard"]
+__all__ = ["add_friction", "friction", "jacobian", "left_product", "point", "point_tangents",
+           "residual", "slip_guard"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -457,6 +458,34 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
                         if c >= 0:
                             A[where[q], where[c]] += f * B[i, a, b]
     return act, A
+
+
+@kernel
+def left_product(X, act, A):  # type: ignore[no-untyped-def]
+    """``X @ M`` for the matrix M that is ``A`` on ``act × act`` and zero elsewhere.
+
+    ``(rows(X), n)``; only A's nonzero rows are visited (single-threaded: no BLAS
+    threads for these small products).
+    """
+    n, na = X.shape[1], len(act)
+    out = np.zeros((X.shape[0], n))
+    nonzero = np.zeros(na, np.bool_)
+    for k in range(na):
+        for j in range(na):
+            if A[k, j] != 0.0:
+                nonzero[k] = True
+                break
+    rows = np.flatnonzero(nonzero)
+    row = np.zeros(na)
+    for i in range(X.shape[0]):
+        row[:] = 0.0
+        for k in rows:
+            a = X[i, act[k]]
+            for j in range(na):
+                row[j] += a * A[k, j]
+        for j in range(na):
+            out[i, act[j]] = row[j]
+    return out
 
 
 @kernel

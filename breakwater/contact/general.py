@@ -149,13 +149,11 @@ class SurfaceForces(SurfaceSearch):
 
         The matrix couples only the DOFs of the points in contact and of the slave
         nodes' start-of-step master facets (``act``): ``X[:, act] @ A[act, act]`` in the
-        columns ``act``, O(rows(X) · |act|²) instead of the dense product's O(n³).
+        columns ``act``, O(rows(X) · |act|²) instead of the dense product's O(n³)
+        (:func:`~breakwater.contact.forcekernels.left_product`).
         """
         act, A = self._jacobian()
-        out = np.zeros((X.shape[0], self.n))
-        if len(act):
-            out[:, act] = X[:, act] @ A
-        return out
+        return forcekernels.left_product(np.ascontiguousarray(X, dtype=float), act, A)
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense.
