@@ -210,6 +210,10 @@ def test_jacobian_matches_finite_differences(options: dict[str, str],
     y += np.random.default_rng(3).normal(size=solver.n) * 1e-7 / cu
     solver.interface.write(solver.da, y)
     J = provider.matrix()
+    # The left product the fast solver takes (from the matrix's structure) is X J.
+    X = np.random.default_rng(4).normal(size=(solver.n, solver.n))
+    np.testing.assert_allclose(provider.left_product(X), X @ J, rtol=0,
+                               atol=1e-13 * np.abs(X @ J).max())
     fd = np.zeros_like(J)
     h = 1e-9 / cu  # 1e-9 m: round-off of the positions (1e-16 m) is 1e-7 of it
     for j in range(solver.n):

@@ -31,9 +31,13 @@ unknown Δa on the interface unknowns. The surfaces' data (reference node coordi
 interface positions of their DOFs, sorted by coordinates) are gathered once on every
 rank; at each call the current u, v at the interface are reduced onto every rank (one
 ``Allreduce``) and every rank evaluates the same points in the same order, so the
-result does not depend on the partition. The Jacobian is exact: a complex step per
-local DOF of a (slave facet, master facet) point, with the projection's Newton run in
-complex arithmetic, so the implicit dependence of ξ̄ on the nodes is included.
+result does not depend on the partition. The Jacobian is exact: the derivative a complex
+step per local DOF of a (slave facet, master facet) point takes, with the projection's
+Newton differentiated too, so the implicit dependence of ξ̄ on the nodes is included.
+The per-iteration work (the search, f_c, its Jacobian, the slip guard) runs in compiled
+kernels (:mod:`breakwater.contact.searchkernels`, :mod:`breakwater.contact.forcekernels`)
+with the arithmetic of the NumPy references (:mod:`breakwater.contact.projection`,
+:mod:`breakwater.contact.pointkernels`; ``tests/test_contactkernels.py``).
 
 The pair's jobs are layered: :class:`~breakwater.contact.surfacesearch.SurfaceSearch`
 (the surfaces, the integration points and their projections, the state at the
@@ -46,21 +50,13 @@ measure: resultants, energies, the integration points' state; the general kind o
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact import slavepoints
+from breakwater.contact import forcekernels, slavepoints
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
-from breakwater.contact.pointkernels import (
-    DenseEntries,
-    H,
-    contact_geometry,
-    jacobian,
-    normal_and_shares,
-)
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
 from breakwater.model.pairs import FieldNodes, StaticMeasures
@@ -105,7 +101,7 @@ class SurfaceForces(SurfaceSearch):
         Per slave node k in contact (λ_k > 0, a projection at the start of the step),
         the force ``−μ λ_k φ(v_T)`` (:class:`forms.ContactLaw`'s friction with the
         nodal normal force λ_k in place of the pressure), with
-        ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``.
+        ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))`` (:func:`~breakwater.contact.forcekernels.friction`).
 
         Args:
             u0: Displacements at the start of the step (the projection ξ̄₀).
@@ -120,23 +116,13 @@ class SurfaceForces(SurfaceSearch):
             facet, N0, t0 = self._step_frozen
         else:
             facet, N0, t0 = self._frozen(u0)
-        k = np.flatnonzero((facet >= 0) & (λ > 0))
+        _, _, mu, chi = self._law
+        k, v_T, force, unit = forcekernels.friction(λ, facet, N0, t0, self._node_pos, self._pm,
+                                                    v1, mu, chi)
         if not len(k):
             return None
-        pos_m = self.pos_m[facet[k]]
-        slip = v1[self.node_pos[k]] - np.einsum("kn,knd->kd", N0[k], v1[pos_m])
-        t = t0[k]
-        v_T = t * np.sum(slip * t, axis=1)[:, None]
-        friction = self.law.friction
-        force = friction.traction(λ[k], v_T)
-        return {"k": k, "pos_s": self.node_pos[k], "pos_m": pos_m, "N0": N0[k], "t": t,
-                "v_T": v_T, "force": force, "unit": friction.traction(np.ones(len(k)), v_T)}
-
-    def _nodal_forces(self, kernel: Any, groups: list, node: np.ndarray) -> np.ndarray:
-        """λ: the slave nodes' normal forces ∫ p N_k."""
-        share = kernel(groups)
-        return np.bincount(node.ravel(), weights=share.ravel(),
-                           minlength=len(self.node_pos))
+        return {"k": k, "pos_s": self.node_pos[k], "pos_m": self.pos_m[facet[k]], "N0": N0[k],
+                "t": t0[k], "v_T": v_T, "force": force, "unit": unit}
 
     # --- the provider ---------------------------------------------------------------
 
@@ -147,83 +133,63 @@ class SurfaceForces(SurfaceSearch):
             accepted: At the stepper's accepted state (u, v) instead of the iterate.
         """
         u0, u1, v1 = self._state(accepted=accepted)
-        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
-        out = scatter_add(np.zeros(self.n), pos, kernel(groups))
+        p = self._normal(u1)
+        out = p["out"].copy()
         if self.spec.friction:
-            self._step_frozen = self._frozen(u0)
-            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
-            if fr is not None:
-                scatter_add(out, fr["pos_s"], -fr["force"])
-                scatter_add(out, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
+            self._step_frozen = facet, N0, t0 = self._frozen(u0)
+            _, _, mu, chi = self._law
+            k, _, force, _ = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
+                                                   self._pm, v1, mu, chi)
+            if len(k):
+                forcekernels.add_friction(out, k, force, facet, N0, self._node_pos, self._pm)
         return out
 
-    def left_product(self, X: np.ndarray) -> None:
-        """None: the step solver forms the product from :meth:`matrix`."""
-        return None
+    def left_product(self, X: np.ndarray) -> np.ndarray:
+        """X @ :meth:`matrix` from the matrix's structure.
+
+        The matrix couples only the DOFs of the points in contact and of the slave
+        nodes' start-of-step master facets (``act``): ``X[:, act] @ A[act, act]`` in the
+        columns ``act``, O(rows(X) · |act|²) instead of the dense product's O(n³)
+        (:func:`~breakwater.contact.forcekernels.left_product`).
+        """
+        act, A = self._jacobian()
+        return forcekernels.left_product(np.ascontiguousarray(X, dtype=float), act, A)
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense.
 
-        The normal part by complex steps of the point kernel (the projection's Newton
-        in complex arithmetic: exact, its implicit dependence included); the friction
-        part by the chain rule through λ_k (complex steps of the point shares) and
-        v_T (linear in Δa; ∂φ/∂v_T by complex steps).
+        The normal part by the complex steps' derivatives of the point kernel (the
+        projection's Newton differentiated: exact, its implicit dependence included);
+        the friction part by the chain rule through λ_k (the points' shares) and v_T
+        (linear in Δa; ∂φ/∂v_T by complex steps)
+        (:func:`~breakwater.contact.forcekernels.jacobian`).
         """
+        act, A = self._jacobian()
+        out = np.zeros((self.n, self.n))
+        out[np.ix_(act, act)] = A
+        return out
+
+    def _jacobian(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`matrix` on the unknowns it couples: ``(act, A[act, act])``."""
         dt = float(self.dt.value)
         cu, cv = 0.5 * self.beta2 * dt**2, self.beta1 * dt
-        n = self.n
         u0, u1, v1 = self._state()
-        kernel, groups, pos, lam_kernel, node = self._normal(u1, v1)
-        out = DenseEntries(n)
-        if not len(pos):  # no slave point has a projection: no contact
-            return out.matrix()
-        both = jacobian(partial(normal_and_shares, *kernel.args, **kernel.keywords), groups,
-                        cu, cv)
-        size = pos.shape[1] * pos.shape[2]
-        J, Jl = both[:, :size], both[:, size:]  # the forces' and the nodal shares'
-        rows = pos.reshape(len(J), -1)
-        out.block(rows, rows, J)
-        if not self.spec.friction:
-            return out.matrix()
-        lam = self._nodal_forces(lam_kernel, groups, node)
-        fr = self._friction(u0, v1, lam)
-        if fr is None:
-            return out.matrix()
-        # dλ/dΔa (slave nodes × interface), from the points' shares.
-        cols = np.broadcast_to(rows[:, None, :], Jl.shape)
-        nodes = np.broadcast_to(node[:, :, None], Jl.shape)
-        keep = cols >= 0
-        dlam = np.bincount((nodes * n + cols)[keep], weights=Jl[keep],
-                           minlength=len(self.node_pos) * n).reshape(-1, n)
-        k, t, N0 = fr["k"], fr["t"], fr["N0"]
-        gdim = t.shape[1]
-        # ∂force/∂v_T by complex steps of the law (2 components).
-        D = np.zeros((len(k), gdim, gdim))
-        for c in range(gdim):
-            v = fr["v_T"].astype(complex)
-            v[:, c] += 1j * H
-            D[:, :, c] = self.law.friction.traction(lam[k], v).imag / H
-        B = cv * np.einsum("kij,kj,kl->kil", D, t, t)  # ∂force/∂(slave node Δa)
-        # Rows: the slave node (−force) and the master nodes of f₀ (+N0 force).
-        row_pos = np.concatenate([fr["pos_s"][:, None, :], fr["pos_m"]], axis=1)
-        sign = np.concatenate([-np.ones((len(k), 1)), N0], axis=1)  # (k, 1 + nn)
-        # λ part: force = unit · λ.
-        dforce_lam = fr["unit"][:, :, None] * dlam[k][:, None, :]  # (k, gdim, n)
-        for r in range(row_pos.shape[1]):
-            rp = row_pos[:, r, :]
-            vals = sign[:, r, None, None] * dforce_lam
-            rr = np.broadcast_to(rp[:, :, None], vals.shape)
-            cc = np.broadcast_to(np.arange(n)[None, None, :], vals.shape)
-            ok = rr >= 0
-            out.add((rr * n + cc)[ok], vals[ok])
-        # v_T part: slave node columns (B), master f₀ node columns (−N0_j B).
-        col_pos = row_pos
-        col_sign = np.concatenate([np.ones((len(k), 1)), -N0], axis=1)
-        for r in range(row_pos.shape[1]):
-            for c in range(col_pos.shape[1]):
-                block = (sign[:, r] * col_sign[:, c])[:, None, None] * B
-                out.block(row_pos[:, r, :], col_pos[:, c, :], block)
-        return out.matrix()
+        p = self._normal(u1)
+        eps, g0, mu, chi = self._law
+        facet = N0 = t0 = None
+        k = np.zeros(0, np.int64)
+        v_T = unit = np.zeros((0, 2))
+        if self.spec.friction and len(p["index"]):
+            facet, N0, t0 = self._frozen(u0)
+            k, v_T, _, unit = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
+                                                    self._pm, v1, mu, chi)
+        if facet is None:
+            facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
+        return forcekernels.jacobian(
+            self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
+            p["xi"], p["weight"], self.small_rotations, eps, g0, self._node_of,
+            len(self._node_pos), cu, cv, bool(self.spec.friction), p["lam"], k, v_T, unit,
+            facet, N0, t0, self._node_pos, mu, chi)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
         """Newton's slip guard (:mod:`breakwater.contact.slipguard`) at the slave nodes.
@@ -233,7 +199,7 @@ class SurfaceForces(SurfaceSearch):
         projection at the start of the step, along the tangent there) from outside the
         stick band χ, the node's tangential step is cut so that it lands at zero slip
         velocity, where the stick tangent is exact. The slip velocity is linear in Δa,
-        so the landing is exact.
+        so the landing is exact (:func:`~breakwater.contact.forcekernels.slip_guard`).
 
         Args:
             x: The current iterate (Δa at the interface unknowns).
@@ -246,26 +212,8 @@ class SurfaceForces(SurfaceSearch):
             return 0
         u0, _, v1 = self._state(x)
         facet, N0, t0 = self._frozen(u0)
-        keep = np.flatnonzero((facet >= 0) & np.all(self.node_pos >= 0, axis=1))
-        if not len(keep):
-            return 0
-        pos, N, t = self.node_pos[keep], N0[keep], t0[keep]
-        dv = self.beta1 * float(self.dt.value)
-        ext = np.append(step, 0.0)
-        pos_m = self.pos_m[facet[keep]]
-        v_m = np.einsum("kn,knd->kd", N, v1[pos_m])
-        y_m = np.einsum("kn,knd->kd", N, ext[pos_m])
-        y_s = ext[pos]
-        c0 = np.sum((v1[pos] - v_m) * t, axis=1)
-        c1 = c0 - dv * np.sum((y_s - y_m) * t, axis=1)
-        fix = (c0 * c1 < 0) & (np.abs(c0) > self.law.friction.stick_band)
-        if not fix.any():
-            return 0
-        # The slave's step: normal part kept, tangential part landing at c = 0.
-        t, ys = t[fix], y_s[fix]
-        along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
-        step[pos[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
-        return int(fix.sum())
+        return int(forcekernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
+                                           self.beta1 * float(self.dt.value), self._law[3]))
 
     def penetration(self, y: np.ndarray) -> str | None:
         """Why the step's solution Δa = y leaves a slave node beyond what the search sees.
@@ -328,14 +276,13 @@ class SurfaceContact(SurfaceForces):
     def resultants(self, accepted: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """The normal (pressure) and friction parts of :meth:`resultant`."""
         u0, u1, v1 = self._state(accepted=accepted)
-        kernel, groups, _, lam_kernel, node = self._normal(u1, v1)
+        p = self._normal(u1)
         nn = self.slave.X.shape[1]
         # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
-        normal = -kernel(groups)[:, :nn].sum(axis=(0, 1))
+        normal = -p["forces"][:, :nn].sum(axis=(0, 1))
         friction = np.zeros_like(normal)
         if self.spec.friction:
-            fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node),
-                                accepted)
+            fr = self._friction(u0, v1, p["lam"], accepted)
             if fr is not None:
                 friction = fr["force"].sum(axis=0)
         return normal, friction
@@ -351,8 +298,7 @@ class SurfaceContact(SurfaceForces):
         if not self.spec.friction:
             return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
         u0, u1, v1 = self._state()
-        _, groups, _, lam_kernel, node = self._normal(u1, v1)
-        fr = self._friction(u0, v1, self._nodal_forces(lam_kernel, groups, node))
+        fr = self._friction(u0, v1, self._normal(u1)["lam"])
         if fr is None:
             return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
         return fr["pos_s"], fr["v_T"]
@@ -370,8 +316,7 @@ class SurfaceContact(SurfaceForces):
         power = 0.0
         if self.spec.friction:
             u0, u1, v1 = self._state(accepted=True)
-            _, groups, _, lam_kernel, node = self._normal(u1, v1)
-            lam = self._nodal_forces(lam_kernel, groups, node)
+            lam = self._normal(u1)["lam"]
             fr = self._friction(u0, v1, lam, accepted=True)
             if fr is not None:
                 power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
@@ -428,23 +373,20 @@ class SurfaceContact(SurfaceForces):
             ``pressure``, ``weight`` (reference length), ``facet`` (master facet, −1:
             none), ``xi`` (its local coordinate).
         """
-        _, u1, v1 = self._state(accepted=accepted)
-        self._normal(u1, v1)  # the points of this state (cached: the search once)
-        p = self._normal_points
+        _, u1, _ = self._state(accepted=accepted)
+        p = self._normal(u1)  # the points of this state (cached: the search once)
         points = p["all_x"]
         total = len(points)
         out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
                                "gap": np.full(total, np.nan), "pressure": np.zeros(total),
                                "facet": np.full(total, -1), "xi": np.zeros(total)}
         if len(p["index"]):
-            x_s, xi, _, x_bar, n = contact_geometry(p["Ns"], p["xi"], p["xs"], p["xm"], 2,
-                                                    self._reference(p))
-            gap = self.law.gap(x_s, x_bar, n)
+            gap = p["gap"]
             i = p["index"]
             out["gap"][i] = gap
             out["pressure"][i] = self.law.normal.pressure(gap)
             out["facet"][i] = p["facet"]
-            out["xi"][i] = xi
+            out["xi"][i] = p["xi_bar"]
         return out
 
 

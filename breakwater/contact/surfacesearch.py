@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,9 +22,9 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.contact import forcekernels, searchkernels
 from breakwater.contact.penetration import search_radius
-from breakwater.contact.pointkernels import nodal_normal_forces, normal_forces, unit_tangent
-from breakwater.contact.projection import FacetGrid, nearest_end, project, shape
+from breakwater.contact.projection import FacetGrid, project, shape
 from breakwater.contact.surfaces import SurfacePair, gather_surface
 
 if TYPE_CHECKING:
@@ -77,6 +76,8 @@ class InterfaceValues:
             pos = np.minimum(pos, max(n - 1, 0))
             hit = interface[pos] == gi[local] if n else np.zeros(len(local), bool)
             self._owned.append((local[hit], pos[hit]))
+        # The state Functions' arrays (a view per access otherwise: 8 per evaluation).
+        self._arrays = {id(f): f.x.array for fs in state for f in fs}
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -121,7 +122,8 @@ class InterfaceValues:
         out = np.zeros((len(fields), self.n + 1))
         for k, functions in enumerate(fields):
             for f, (local, pos) in zip(functions, self._owned, strict=True):
-                out[k, pos] = f.x.array[local]
+                array = self._arrays.get(id(f))
+                out[k, pos] = (f.x.array if array is None else array)[local]
         self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
@@ -178,9 +180,22 @@ class SurfaceSearch(InterfaceValues):
         self.node_X = slave.X.reshape(-1, model.gdim)[first]
         self._frozen_key: np.ndarray | None = None
         self._normal_key: np.ndarray | None = None
-        self._normal_data: tuple[Any, list, np.ndarray, Any, np.ndarray]
-        self._normal_points: dict[str, Any]  # the _points of _normal_key
+        self._normal_points: dict[str, Any]  # the points and normal part of _normal_key
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
+        # The kernels' arrays (contiguous, typed) and the law's parameters.
+        self._sX, self._mX = (np.ascontiguousarray(x.X, dtype=float) for x in (slave, master))
+        self._ps, self._pm = (np.ascontiguousarray(p, dtype=np.int64)
+                              for p in (self.pos_s, self.pos_m))
+        self._node_of = np.ascontiguousarray(self.node_of, dtype=np.int64)
+        self._node_pos = np.ascontiguousarray(self.node_pos, dtype=np.int64)
+        self._law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
+        # Integration points that do not move (nodes, gauss): once.
+        self._fixed_points: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        if spec.integration != "segments" or not len(master.X):
+            f, xi, w = self._integration(slave.X, master.X)
+            self._fixed_points = (f, xi, w, np.ascontiguousarray(shape(xi, slave.X.shape[1])[0]))
+        self._no_points = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0),
+                           np.zeros((0, slave.X.shape[1])))
         self._frozen_projected = np.zeros(0, bool)  # of _frozen_data: not a nearest end
         # The start-of-step projection of the last step solved (see _friction).
         self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -224,34 +239,35 @@ class SurfaceSearch(InterfaceValues):
         weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
         return point_facet, xi, weight
 
-    def _points(self, u1: np.ndarray, v1: np.ndarray) -> dict[str, Any]:
-        """The integration points and the local data of those with a projection (real).
+    @property
+    def _law(self) -> tuple[float, float, float, float]:
+        """ε_n, g₀, μ and χ of :attr:`law` (which a stage may replace) as floats."""
+        law = self.law
+        if self._law_floats is None or self._law_floats[0] is not law:
+            self._law_floats = (law, tuple(float(x) for x in (  # type: ignore[assignment]
+                law.normal.ε_n, law.normal.g0, law.friction.μ, law.friction.χ)))
+        assert self._law_floats is not None
+        return self._law_floats[1]
+
+    def _points(self, u1: np.ndarray) -> dict[str, Any]:
+        """The integration points and the data of those with a projection (compiled).
 
         Args:
             u1: Displacements at the interface unknowns (a trailing 0).
-            v1: Velocities at the interface unknowns (a trailing 0).
         """
-        s, m = self.slave, self.master
-        xs_all = s.X + u1[self.pos_s]
-        xm_all = m.X + u1[self.pos_m]
         t0 = time.perf_counter()
-        point_facet, xi_s, weight = self._integration(xs_all, xm_all)
-        Ns, _, _ = shape(xi_s, s.X.shape[1])
-        points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
-        facet, xi = project(points, xm_all, FacetGrid(xm_all, self.radius),
-                            tol=self._edge)
+        f0, xi0, w0, N0 = self._fixed_points or self._no_points
+        g, w = self._gauss
+        (_, points, weight, on, f_s, f_m, Ns, xi, w_on) = searchkernels.search(
+            self._sX, self._mX, self._ps, self._pm, u1, self._fixed_points is None, f0, xi0,
+            w0, N0, self.radius, self._edge, g, w)
         self.searches += 1
         elapsed = time.perf_counter() - t0
         self.search_seconds += elapsed
         if self.timings is not None:
             self.timings.seconds["contact_search"] += elapsed
-        on = np.flatnonzero(facet >= 0)
-        f_s, f_m = point_facet[on], facet[on]
-        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns[on],
-                "xs": xs_all[f_s], "vs": v1[self.pos_s][f_s], "xm": xm_all[f_m],
-                "vm": v1[self.pos_m][f_m], "xi": xi[on], "weight": weight[on],
-                "pos": np.concatenate([self.pos_s[f_s], self.pos_m[f_m]], axis=1),
-                "all_x": points, "all_weight": weight}
+        return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns, "xi": xi,
+                "weight": w_on, "all_x": points, "all_weight": weight}
 
     def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The projection of each slave node at the start of the step (cached).
@@ -265,52 +281,30 @@ class SurfaceSearch(InterfaceValues):
         """
         if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
             return self._frozen_data
-        m = self.master
-        xm = m.X + u0[self.pos_m]
-        points = self.node_X + u0[self.node_pos]
-        grid = FacetGrid(xm, self.radius)
-        facet, xi = project(points, xm, grid)
-        # A node beyond the master's end (it slid past it) keeps its friction where its
-        # facets' points still press: its master point is the surface's end vertex.
-        beyond = np.flatnonzero(facet < 0)
-        self._frozen_projected = facet >= 0
-        if len(beyond):
-            facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
-        N0, dN0, _ = shape(xi, m.X.shape[1])
-        surface = m.X if self.small_rotations else xm
-        t0 = unit_tangent(dN0, surface[np.maximum(facet, 0)]) if len(m.X) else \
-            np.zeros_like(points)
+        xm = self._mX + u0[self._pm]
+        points = self.node_X + u0[self._node_pos]
+        surface = self._mX if self.small_rotations else xm
+        facet, N0, t0, self._frozen_projected = searchkernels.frozen(points, xm, surface,
+                                                                     self.radius)
         self._frozen_key = u0.copy()
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
 
-    def _normal(self, u1: np.ndarray, v1: np.ndarray
-                ) -> tuple[Any, list, np.ndarray, Any, np.ndarray]:
-        """The normal part of the current iterate.
+    def _normal(self, u1: np.ndarray) -> dict[str, Any]:
+        """The normal part of the state u1 (cached: the search once per state).
 
         Returns:
-            The point kernel, its groups (local arguments), the interface positions of
-            its outputs, the kernel of the points' shares of the nodal normal forces
-            and the slave node of each share.
+            :meth:`_points`' dict with ``out`` (f_c's normal part), ``lam`` (the slave
+            nodes' normal forces ∫ p N_k), ``forces`` (each point's nodal forces),
+            ``gap`` and ``xi_bar`` (the points' g_n and refined ξ̄).
         """
-        key = np.concatenate([u1, v1])
-        if self._normal_key is not None and np.array_equal(self._normal_key, key):
-            return self._normal_data
-        p = self._points(u1, v1)
-        self._normal_key, self._normal_points = key, p
-        args = (self.law, p["Ns"], p["xi"], p["weight"])
-        reference = self._reference(p)
-        self._normal_data = (partial(normal_forces, *args, reference=reference),
-                             [(p["xs"], p["vs"]), (p["xm"], p["vm"])], p["pos"],
-                             partial(nodal_normal_forces, *args, reference=reference),
-                             self.node_of[p["slave_facet"]])
-        return self._normal_data
-
-    def _reference(self, points: dict[str, Any]) -> np.ndarray | None:
-        """The kernels' ``reference`` for the points of :meth:`_points`.
-
-        Their master facets in the reference configuration (``rotations = "small"``),
-        or None: the current ones.
-        """
-        return self.master.X[points["facet"]] if self.small_rotations else None
-
+        if self._normal_key is not None and np.array_equal(self._normal_key, u1):
+            return self._normal_points
+        p = self._points(u1)
+        eps, g0, _, _ = self._law
+        p["out"], p["lam"], p["forces"], p["gap"], p["xi_bar"] = forcekernels.residual(
+            self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
+            p["xi"], p["weight"], self.small_rotations, eps, g0, self._node_of,
+            len(self._node_pos))
+        self._normal_key, self._normal_points = u1.copy(), p
+        return p

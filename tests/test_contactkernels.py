@@ -1,0 +1,345 @@
+"""The compiled kernels of the general pairs against their NumPy references (issue 22).
+
+:mod:`breakwater.contact.searchkernels` against :mod:`breakwater.contact.projection` and
+the NumPy integration of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`;
+:mod:`breakwater.contact.forcekernels` against :mod:`breakwater.contact.pointkernels` and
+the NumPy friction, Jacobian assembly and slip guard the pair used before the kernels
+(restated below). Random curved (P2) and straight (P1) surfaces, a slave pressed into
+a master and sliding on it, some DOFs Dirichlet. The search's decisions must be the
+same, the numbers equal to round-off (1e-12 relative; the residual bit for bit).
+Pure array tests: under ``mpiexec -n 2`` every rank runs them.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from breakwater import forms  # type: ignore[attr-defined]
+from breakwater.contact import forcekernels, searchkernels
+from breakwater.contact.pointkernels import (
+    DenseEntries,
+    H,
+    jacobian,
+    nodal_normal_forces,
+    normal_and_shares,
+    normal_forces,
+    unit_tangent,
+)
+from breakwater.contact.projection import FacetGrid, closest_point, nearest_end, project, shape
+from breakwater.contact.surfacesearch import SurfaceSearch
+
+RTOL = 1e-12
+
+
+def _surface(rng: np.random.Generator, x: np.ndarray, y: float, nn: int, bend: float,
+             reverse: bool) -> np.ndarray:
+    """Facets ``(F, nn, 2)`` between consecutive x at height y, mid-nodes bent."""
+    ends = np.stack([x, y + 1e-3 * rng.normal(size=len(x))], axis=1)
+    a, b = ends[:-1], ends[1:]
+    if reverse:
+        a, b = b, a
+    if nn == 2:
+        return np.stack([a, b], axis=1)
+    mid = 0.5 * (a + b) + np.array([0.0, bend]) * rng.uniform(-1, 1, size=(len(a), 1))
+    return np.stack([a, b, mid], axis=1)
+
+
+def _pair(seed: int, nn: int):  # type: ignore[no-untyped-def]
+    """A slave surface above a master (oriented: (t_y, −t_x) up), shared nodes numbered,
+    interface positions (some −1), a state pressing and sliding the slave."""
+    rng = np.random.default_rng(seed)
+    sX = _surface(rng, np.sort(rng.uniform(-0.4, 0.4, 7)), 0.0, nn, 0.01, False)
+    mX = _surface(rng, np.sort(rng.uniform(-0.5, 0.5, 11)), 0.0, nn, 0.01, True)
+
+    def numbered(X: np.ndarray, start: int) -> np.ndarray:
+        _, ids = np.unique(np.round(X.reshape(-1, 2), 12), axis=0, return_inverse=True)
+        ids = ids.reshape(X.shape[:2])
+        return start + np.stack([2 * ids, 2 * ids + 1], axis=2)
+
+    dofs_s = numbered(sX, 0)
+    dofs_m = numbered(mX, int(dofs_s.max()) + 1)
+    n = int(dofs_m.max()) + 1
+    dirichlet = rng.choice(n, 4, replace=False)
+    keep = np.setdiff1d(np.arange(n), dirichlet)
+    position = np.full(n, -1)
+    position[keep] = np.arange(len(keep))
+    pos_s, pos_m = position[dofs_s], position[dofs_m]
+    n = len(keep)
+    u1 = np.append(1e-4 * rng.normal(size=n), 0.0)
+    u1[pos_s[..., 1][pos_s[..., 1] >= 0]] -= 2e-3  # pressed in
+    v1 = np.append(rng.normal(size=n) * 0.05, 0.0)
+    v1[pos_s[..., 0][pos_s[..., 0] >= 0]] += 0.1  # sliding
+    _, first, node_of = np.unique(dofs_s[..., 0], return_index=True, return_inverse=True)
+    node_of = node_of.reshape(dofs_s.shape[:2])
+    node_pos = pos_s.reshape(-1, 2)[first]
+    node_X = sX.reshape(-1, 2)[first]
+    return SimpleNamespace(sX=sX, mX=mX, pos_s=pos_s, pos_m=pos_m, n=n, u1=u1, v1=v1,
+                           node_of=node_of, node_pos=node_pos, node_X=node_X, rng=rng)
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+def test_candidates_and_projection(nn: int) -> None:
+    """The grid's candidates (same pairs, same order), the lockstep Newton, the
+    projection (same facets) and the nearest ends against projection.py."""
+    p = _pair(1, nn)
+    xm = p.mX + p.u1[p.pos_m]
+    rng = np.random.default_rng(5)
+    points = np.stack([rng.uniform(-0.6, 0.6, 400), rng.uniform(-0.05, 0.05, 400)], axis=1)
+    for radius in (0.02, 0.1):
+        grid = FacetGrid(xm, radius)
+        ref = grid.candidates(points)
+        got = searchkernels.candidates(points, xm, radius)
+        for a, b in zip(ref, got, strict=True):
+            np.testing.assert_array_equal(a, b)
+        for tol in (1e-9, 1e-3):
+            f_ref, xi_ref = project(points, xm, grid, tol=tol)
+            f, xi = searchkernels.project(points, xm, radius, tol)
+            np.testing.assert_array_equal(f, f_ref)
+            np.testing.assert_allclose(xi, xi_ref, rtol=0, atol=1e-13)
+            assert (f >= 0).sum() > 100
+        f_ref, xi_ref = nearest_end(points, xm, grid)
+        f, xi = searchkernels.nearest_end(points, xm, radius)
+        np.testing.assert_array_equal(f, f_ref)
+        np.testing.assert_array_equal(xi, xi_ref)
+    point, cand = ref
+    start = searchkernels.chord_start(points, point, xm, cand)
+    for iterations, tol in ((8, 1e-14), (2, 0.0)):
+        xi = start.copy()
+        searchkernels.closest_points(points, point, xm, cand, xi, iterations, tol)
+        expected = closest_point(points[point], xm[cand], iterations=iterations, tol=tol)
+        np.testing.assert_allclose(xi, expected, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(searchkernels.shape_values(start, nn), shape(start, nn)[0],
+                               rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+@pytest.mark.parametrize("small", [False, True])
+def test_start_of_step_projection(nn: int, small: bool) -> None:
+    """searchkernels.frozen against SurfaceSearch._frozen's NumPy arithmetic (some nodes
+    beyond the master's end take its nearest end)."""
+    p = _pair(2, nn)
+    xm = p.mX + p.u1[p.pos_m]
+    points = p.node_X + p.u1[p.node_pos] + np.array([0.0, 0.004])
+    points[0, 0] = xm[..., 0].max() + 0.01  # beyond the end: the nearest end
+    radius = 0.1
+    grid = FacetGrid(xm, radius)
+    facet, xi = project(points, xm, grid)
+    projected = facet >= 0
+    beyond = np.flatnonzero(~projected)
+    assert len(beyond)
+    facet[beyond], xi[beyond] = nearest_end(points[beyond], xm, grid)
+    N0, dN0, _ = shape(xi, nn)
+    surface = p.mX if small else xm
+    t0 = unit_tangent(dN0, surface[np.maximum(facet, 0)])
+    got = searchkernels.frozen(points, xm, surface, radius)
+    np.testing.assert_array_equal(got[0], facet)
+    np.testing.assert_array_equal(got[3], projected)
+    np.testing.assert_allclose(got[1], N0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(got[2], t0, rtol=0, atol=1e-14)
+
+
+def _points(p: SimpleNamespace, integration: str, edge: float) -> dict[str, np.ndarray]:
+    """The integration points and projections of the NumPy references."""
+    xs_all = p.sX + p.u1[p.pos_s]
+    xm_all = p.mX + p.u1[p.pos_m]
+    this = SimpleNamespace(slave=SimpleNamespace(X=p.sX), radius=0.1,
+                           spec=SimpleNamespace(integration=integration),
+                           _gauss=np.polynomial.legendre.leggauss(2))
+    point_facet, xi_s, weight = SurfaceSearch._integration(this, xs_all, xm_all)  # type: ignore[arg-type]
+    Ns = shape(xi_s, p.sX.shape[1])[0]
+    points = np.einsum("kn,knd->kd", Ns, xs_all[point_facet])
+    facet, xi = project(points, xm_all, FacetGrid(xm_all, 0.1), tol=edge)
+    on = facet >= 0
+    return {"point_facet": point_facet, "xi_s": xi_s, "weight": weight, "Ns": Ns,
+            "points": points, "on": on, "f_s": point_facet[on], "f_m": facet[on],
+            "xi": xi[on], "w": weight[on], "Ns_on": Ns[on], "xs": xs_all[point_facet[on]],
+            "xm": xm_all[facet[on]]}
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+def test_segment_points(nn: int) -> None:
+    """The segments' cuts, Gauss points and weights and the points' projections."""
+    p = _pair(3, nn)
+    ref = _points(p, "segments", 1e-9)
+    xs_all = p.sX + p.u1[p.pos_s]
+    xm_all = p.mX + p.u1[p.pos_m]
+    g, w = np.polynomial.legendre.leggauss(2)
+    point_facet, xi_s, weight = searchkernels.segment_points(xs_all, xm_all, p.sX, 0.1, g, w)
+    assert len(point_facet) > 2 * len(p.sX)  # cut: more than one segment per facet
+    np.testing.assert_array_equal(point_facet, ref["point_facet"])
+    np.testing.assert_allclose(xi_s, ref["xi_s"], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(weight, ref["weight"], rtol=RTOL, atol=0)
+    Ns = searchkernels.shape_values(xi_s, nn)
+    points = searchkernels.slave_points(xs_all, point_facet, Ns)
+    np.testing.assert_allclose(points, ref["points"], rtol=0, atol=1e-15)
+    facet, xi = searchkernels.project(points, xm_all, 0.1, 1e-9)
+    np.testing.assert_array_equal(facet >= 0, ref["on"])
+    np.testing.assert_allclose(xi[facet >= 0], ref["xi"], rtol=0, atol=1e-13)
+    # The whole search (segments, and the fixed points of nodes).
+    empty = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros((0, nn)))
+    got = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, True, *empty, 0.1, 1e-9,
+                               g, w)
+    nodes = _points(p, "nodes", 1e-3)
+    fixed = (nodes["point_facet"], nodes["xi_s"], nodes["weight"], nodes["Ns"])
+    got_nodes = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, False, *fixed, 0.1,
+                                     1e-3, g, w)
+    for r, out in ((ref, got), (nodes, got_nodes)):
+        expected = (r["point_facet"], r["points"], r["weight"], np.flatnonzero(r["on"]),
+                    r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"])
+        for a, b in zip(out, expected, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-15)
+
+
+def _law(friction: float = 0.5) -> forms.ContactLaw:
+    return forms.ContactLaw(forms.PenaltyContact(1e10, 0.0),
+                            forms.RegularisedCoulomb(friction, 1e-3))
+
+
+def _reference_friction(law, lam, facet, N0, t0, node_pos, pos_m, v1):  # type: ignore[no-untyped-def]
+    """SurfaceForces._friction before the kernels."""
+    k = np.flatnonzero((facet >= 0) & (lam > 0))
+    pm = pos_m[facet[k]]
+    slip = v1[node_pos[k]] - np.einsum("kn,knd->kd", N0[k], v1[pm])
+    t = t0[k]
+    v_T = t * np.sum(slip * t, axis=1)[:, None]
+    return {"k": k, "pos_s": node_pos[k], "pos_m": pm, "N0": N0[k], "t": t, "v_T": v_T,
+            "force": law.friction.traction(lam[k], v_T),
+            "unit": law.friction.traction(np.ones(len(k)), v_T)}
+
+
+def _scatter(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
+    pos, values = pos.ravel(), values.ravel()
+    keep = pos >= 0
+    out += np.bincount(pos[keep], weights=values[keep], minlength=len(out))
+    return out
+
+
+def _reference_matrix(law, r, pos, node, n_nodes, lam, fr, cu, cv, n, small):  # type: ignore[no-untyped-def]
+    """SurfaceForces.matrix before the kernels (NumPy, complex steps)."""
+    groups = [(r["xs"], np.zeros_like(r["xs"])), (r["xm"], np.zeros_like(r["xm"]))]
+    both = jacobian(_kernel(normal_and_shares, law, r, small), groups, cu, cv)
+    size = pos.shape[1] * pos.shape[2]
+    J, Jl = both[:, :size], both[:, size:]
+    rows = pos.reshape(len(J), -1)
+    out = DenseEntries(n)
+    out.block(rows, rows, J)
+    cols = np.broadcast_to(rows[:, None, :], Jl.shape)
+    nodes = np.broadcast_to(node[:, :, None], Jl.shape)
+    keep = cols >= 0
+    dlam = np.bincount((nodes * n + cols)[keep], weights=Jl[keep],
+                       minlength=n_nodes * n).reshape(-1, n)
+    k, t, N0 = fr["k"], fr["t"], fr["N0"]
+    D = np.zeros((len(k), 2, 2))
+    for c in range(2):
+        v = fr["v_T"].astype(complex)
+        v[:, c] += 1j * H
+        D[:, :, c] = law.friction.traction(lam[k], v).imag / H
+    B = cv * np.einsum("kij,kj,kl->kil", D, t, t)
+    row_pos = np.concatenate([fr["pos_s"][:, None, :], fr["pos_m"]], axis=1)
+    sign = np.concatenate([-np.ones((len(k), 1)), N0], axis=1)
+    dforce_lam = fr["unit"][:, :, None] * dlam[k][:, None, :]
+    for a in range(row_pos.shape[1]):
+        vals = sign[:, a, None, None] * dforce_lam
+        rr = np.broadcast_to(row_pos[:, a, :, None], vals.shape)
+        cc = np.broadcast_to(np.arange(n)[None, None, :], vals.shape)
+        ok = rr >= 0
+        out.add((rr * n + cc)[ok], vals[ok])
+    col_sign = np.concatenate([np.ones((len(k), 1)), -N0], axis=1)
+    for a in range(row_pos.shape[1]):
+        for c in range(row_pos.shape[1]):
+            out.block(row_pos[:, a, :], row_pos[:, c, :],
+                      (sign[:, a] * col_sign[:, c])[:, None, None] * B)
+    return out.matrix()
+
+
+def _kernel(function, law, r, small):  # type: ignore[no-untyped-def]
+    from functools import partial
+    return partial(function, law, r["Ns_on"], r["xi"], r["w"],
+                   reference=r["mX_on"] if small else None)
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+@pytest.mark.parametrize("integration", ["segments", "nodes"])
+@pytest.mark.parametrize("small", [False, True])
+def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) -> None:
+    """f_c's normal part and λ (bit for bit), the friction forces, ∂f_c/∂Δa (normal and
+    friction parts), X ∂f_c/∂Δa and the slip guard against the NumPy references."""
+    p = _pair(4, nn)
+    law = _law()
+    r = _points(p, integration, 1e-3 if integration == "nodes" else 1e-9)
+    r["mX_on"] = p.mX[r["f_m"]]
+    assert len(r["f_s"]) > 10
+    groups = [(r["xs"], np.zeros_like(r["xs"])), (r["xm"], np.zeros_like(r["xm"]))]
+    pos = np.concatenate([p.pos_s[r["f_s"]], p.pos_m[r["f_m"]]], axis=1)
+    node = p.node_of[r["f_s"]]
+    n_nodes = len(p.node_pos)
+    forces = _kernel(normal_forces, law, r, small)(groups)
+    expected = _scatter(np.zeros(p.n), pos, forces)
+    shares = _kernel(nodal_normal_forces, law, r, small)(groups)
+    lam_ref = np.bincount(node.ravel(), weights=shares.ravel(), minlength=n_nodes)
+    out, lam, f_got, gap, _ = forcekernels.residual(
+        p.sX, p.mX, p.pos_s, p.pos_m, p.u1, r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"],
+        small, 1e10, 0.0, p.node_of, n_nodes)
+    assert (gap < 0).sum() > 5 and np.abs(out).max() > 0
+    np.testing.assert_array_equal(out, expected)
+    np.testing.assert_array_equal(lam, lam_ref)
+    np.testing.assert_array_equal(f_got, forces)
+    # Friction at the slave nodes' start-of-step projection.
+    xm0 = p.mX + p.u1[p.pos_m]
+    facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0,
+                                            p.mX if small else xm0, 0.1)
+    fr = _reference_friction(law, lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1)
+    assert len(fr["k"]) > 3
+    k, v_T, force, unit = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1,
+                                                0.5, 1e-3)
+    np.testing.assert_array_equal(k, fr["k"])
+    for a, b in ((v_T, fr["v_T"]), (force, fr["force"]), (unit, fr["unit"])):
+        np.testing.assert_array_equal(a, b)
+    total = expected.copy()
+    _scatter(total, fr["pos_s"], -fr["force"])
+    _scatter(total, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
+    forcekernels.add_friction(out, k, force, facet, N0, p.node_pos, p.pos_m)
+    np.testing.assert_array_equal(out, total)
+    # The Jacobian.
+    cu, cv = 0.5 * 0.605 * 1e-6, 0.5 * 1e-3
+    A_ref = _reference_matrix(law, r, pos, node, n_nodes, lam, fr, cu, cv, p.n, small)
+    act, A_act = forcekernels.jacobian(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, r["f_s"], r["f_m"],
+                              r["Ns_on"], r["xi"], r["w"], small, 1e10, 0.0, p.node_of,
+                              n_nodes, cu, cv, True, lam, k, v_T, unit, facet, N0, t0,
+                              p.node_pos, 0.5, 1e-3)
+    A = np.zeros((p.n, p.n))
+    A[np.ix_(act, act)] = A_act
+    scale = np.abs(A_ref).max()
+    assert scale > 0 and len(act) < p.n
+    np.testing.assert_allclose(A, A_ref, rtol=0, atol=RTOL * scale)
+    # Zero outside act: the left product X[:, act] A[act, act] is X A.
+    X = np.random.default_rng(6).normal(size=(p.n + 3, p.n))
+    np.testing.assert_allclose(forcekernels.left_product(X, act, A_act), X @ A, rtol=0,
+                               atol=RTOL * np.abs(X).max() * scale * p.n)
+    # The slip guard (SurfaceForces.precheck before the kernels).
+    step = np.random.default_rng(7).normal(size=p.n) * 1e3
+    dv, chi = 0.5e-3, 1e-3
+    keep = np.flatnonzero((facet >= 0) & np.all(p.node_pos >= 0, axis=1))
+    ps, N, t = p.node_pos[keep], N0[keep], t0[keep]
+    ext = np.append(step, 0.0)
+    pm = p.pos_m[facet[keep]]
+    v_m = np.einsum("kn,knd->kd", N, p.v1[pm])
+    y_m = np.einsum("kn,knd->kd", N, ext[pm])
+    y_s = ext[ps]
+    c0 = np.sum((p.v1[ps] - v_m) * t, axis=1)
+    c1 = c0 - dv * np.sum((y_s - y_m) * t, axis=1)
+    fix = (c0 * c1 < 0) & (np.abs(c0) > chi)
+    expected_step = step.copy()
+    t, ys = t[fix], y_s[fix]
+    along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
+    expected_step[ps[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
+    assert fix.sum() > 0
+    assert forcekernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
+                                   chi) == fix.sum()
+    np.testing.assert_allclose(step, expected_step, rtol=0, atol=1e-12 * np.abs(step).max())
