@@ -6,10 +6,10 @@ length ``∫ [g_n ≤ 0] dS``, the normal resultant ``∫ ε_n ⟨−g_n⟩₊ d
 resultant ``∫ t·t_s dS`` on the slave (the traction of the paper's eq. 23; 2D: along
 t = (n_y, −n_x), 3D: its magnitude) over the pair's interface, and the largest nodal
 penetration ``max ⟨−g_n⟩₊``; its terms of the energy ledger (:class:`ConformingEnergy`:
-UFL forms over the interface). Where the interface quadrature is nodal (2D, affine, P2)
-the forms are evaluated as compiled sums over the interface nodes
-(:class:`~breakwater.contact.pairkernels.NodalPairSums`; the forms stay the reference), its nodal state for the snapshots and the ParaView fields
-(at the interface nodes, where the law acts: :meth:`InterfaceNodes.contact_state`), its
+UFL forms over the interface; where the interface quadrature is nodal, 2D affine P2,
+both are evaluated as compiled sums over the interface nodes,
+:class:`~breakwater.contact.pairkernels.NodalPairSums`, the forms staying the reference),
+its nodal state for the snapshots and the ParaView fields (at the interface nodes, where the law acts: :meth:`InterfaceNodes.contact_state`), its
 static measures of contact quality and its probes (:class:`ConformingProbe`).
 """
 
