@@ -10,7 +10,8 @@ UFL forms over the interface; where the interface quadrature is nodal, 2D affine
 both are evaluated as compiled sums over the interface nodes,
 :class:`~breakwater.contact.pairkernels.NodalPairSums`, the forms staying the reference),
 its nodal state for the snapshots and the ParaView fields (at the interface nodes, where
-the law acts: :meth:`InterfaceNodes.contact_state`), its static measures of contact quality and its probes (:class:`ConformingProbe`).
+the law acts: :meth:`InterfaceNodes.contact_state`), its static measures of contact
+quality and its probes (:class:`ConformingProbe`).
 """
 
 from __future__ import annotations
