@@ -158,6 +158,10 @@ class NodalPairSums:
         self._parameters = [np.asarray(getattr(c, "value", c), dtype=np.float64)
                             for c in (law.normal.ε_n, law.normal.g0, law.friction.μ,
                                       law.friction.χ)]
+        # Compiled (or loaded from numba's cache) now, not in the time loop.
+        zero = np.zeros((2, 2, nodes.size, self.gdim))
+        self.resultants(zero)
+        self.energies(zero, zero, 1.0)
 
     def parameters(self) -> tuple[float, float, float, float]:
         """The law's ε_n, g₀, μ, χ now (floats; ``fem.Constant`` s' values)."""

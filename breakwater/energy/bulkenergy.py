@@ -234,6 +234,10 @@ class MatrixTerms:
                                          zip(fns, np.diff(self.layout.offsets), strict=True)])
                            for k, fns in enumerate((stepper.u, u0, stepper.v, v0, stepper.a,
                                                     stepper.da))]
+            if self._csr:  # compiled (or loaded from numba's cache) now, not in the time loop
+                ptr, col, m_val, k_val = self._csr
+                matrix_sums(ptr, col, m_val, k_val, self._x, self._loads,
+                            np.ones(self._loads.shape[1]), 0.0, 0.0, True)
 
     def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
         """The owned entries of one Function per body, stacked."""
