@@ -20,7 +20,7 @@ slip-velocity changes.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import dolfinx
@@ -56,7 +56,7 @@ class Energies:
 
     def as_dict(self) -> dict[str, float]:
         """The fields by name (see :data:`FIELDS`)."""
-        return asdict(self)
+        return {name: getattr(self, name) for name in FIELDS}
 
 
 class EnergyLedger:
@@ -143,7 +143,7 @@ class EnergyLedger:
             a0.value = ld.amplitude.value
         self._t0 = t
         self._power0 = power
-        return Energies(**r.as_dict())
+        return replace(r)
 
     def destroy(self) -> None:
         """Free the PETSc objects of the bulk terms now (collective)."""
