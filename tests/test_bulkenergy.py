@@ -133,3 +133,34 @@ def test_source_is_checked(folder: pathlib.Path) -> None:
     with pytest.raises(ValueError, match="source must be one of auto, forms, matrices"):
         EnergyLedger(reference, "cached")
     reference.destroy()
+
+
+def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
+    # On one rank the ledger's bulk terms are one compiled pass over M's and K's CSR
+    # arrays (breakwater.energy.bulkenergy.matrix_sums); MatMatMult and NumPy's dot
+    # products (MatrixTerms.local_products, the path on several ranks) are the
+    # reference: the same row products, the dot products summed in another order, so
+    # equal to 1e-12 of each term (measured 2e-15), at the first record and along the
+    # pendulum pulse (work, damping, numerical dissipation all nonzero).
+    case = load_case(None, ["mesh.refinement=0.7", "time.end_time=0.006",
+                            f"output.directory={(shared_dir / 'goda_sums').as_posix()}"])
+    model, spec, _, _ = case.build(COMM)
+    model.set_time(0.0)
+    init = initial_state(model)
+    stepper = GN22(model, spec.dt, GN22Parameters(spec.beta1, spec.beta2))
+    stepper.initialise(init.u, init.v)
+    ledger = EnergyLedger(stepper)
+    bulk = ledger.bulk
+    assert type(bulk).__name__ == "MatrixTerms"
+    compiled = bool(bulk._csr)  # type: ignore[union-attr]
+    assert compiled == (COMM.size == 1)  # several ranks: MatMatMult (ghost exchange)
+    for k in range(12):
+        if k:
+            stepper.step()
+        got, ref = bulk.local(k > 0), bulk.local_products(k > 0)  # type: ignore[union-attr]
+        if k > 0:
+            assert np.all(np.abs(ref) > 0)
+        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=0)
+        ledger.record()
+    ledger.destroy()
+    stepper.destroy()

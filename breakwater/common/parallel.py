@@ -44,6 +44,8 @@ def on_rank_zero[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
             pickle).
 
     """
+    if comm.size == 1:  # nothing to share
+        return action()
     if comm.rank == 0:
         try:
             result = action()

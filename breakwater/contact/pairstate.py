@@ -6,9 +6,12 @@ length ``∫ [g_n ≤ 0] dS``, the normal resultant ``∫ ε_n ⟨−g_n⟩₊ d
 resultant ``∫ t·t_s dS`` on the slave (the traction of the paper's eq. 23; 2D: along
 t = (n_y, −n_x), 3D: its magnitude) over the pair's interface, and the largest nodal
 penetration ``max ⟨−g_n⟩₊``; its terms of the energy ledger (:class:`ConformingEnergy`:
-UFL forms over the interface), its nodal state for the snapshots and the ParaView fields
-(at the interface nodes, where the law acts: :meth:`InterfaceNodes.contact_state`), its
-static measures of contact quality and its probes (:class:`ConformingProbe`).
+UFL forms over the interface; where the interface quadrature is nodal, 2D affine P2,
+both are evaluated as compiled sums over the interface nodes,
+:class:`~breakwater.contact.pairkernels.NodalPairSums`, the forms staying the reference),
+its nodal state for the snapshots and the ParaView fields (at the interface nodes, where
+the law acts: :meth:`InterfaceNodes.contact_state`), its static measures of contact
+quality and its probes (:class:`ConformingProbe`).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes, mean_facet_length
+from breakwater.contact.pairkernels import NodalGather, NodalPairSums, nodal_sums_apply
 from breakwater.model.model import ContactModel, PairData
 from breakwater.model.pairs import (
     PROBE_KEYS,
@@ -58,7 +62,18 @@ class ConformingPair:
         self.model, self.pair, self.nodes = model, pair, nodes
         self.name = name
         self.u, self.v, self.dt = u, v, dt
-        self._forms: list[fem.Form] | None = None  # compiled on the first measure
+        self._forms: list[fem.Form] | None = None  # compiled on the first use
+        self._sums: NodalPairSums | None = None  # built on the first use
+        self._nodal: bool | None = None  # whether the quadrature is nodal
+        self._gather: NodalGather | None = None
+
+    def nodal_sums(self) -> NodalPairSums | None:
+        """The pair's forms as nodal sums (None where the quadrature is not nodal)."""
+        if self._nodal is None:
+            self._nodal = nodal_sums_apply(self.model)
+            if self._nodal:
+                self._sums = NodalPairSums(self.model, self.nodes)
+        return self._sums
 
     @property
     def columns(self) -> list[str]:
@@ -81,7 +96,21 @@ class ConformingPair:
         return self._forms
 
     def measure(self) -> dict[str, float]:
-        """The pair's history values at (u, v) (collective)."""
+        """The pair's history values at (u, v) (collective).
+
+        The resultants are the :meth:`resultant_forms`, summed over the nodes
+        (:class:`~breakwater.contact.pairkernels.NodalPairSums`) where the quadrature is
+        nodal; the penetration is at the nodes, with their averaged normals.
+        """
+        sums = self.nodal_sums()
+        if sums is None:
+            return self.measure_forms()
+        if self._gather is None:
+            self._gather = sums.gatherer([self.u, self.v])
+        return dict(zip(self.columns, sums.resultants(self._gather()).tolist(), strict=True))
+
+    def measure_forms(self) -> dict[str, float]:
+        """:meth:`measure` from the assembled forms (the reference; collective)."""
         length, normal, tangential = (float(x) for x in
                                       self.model.assemble_many(self.resultant_forms()))
         p = self.pair
@@ -191,13 +220,16 @@ class ConformingProbe:
 
 
 class ConformingEnergy:
-    """A conforming pair's ledger terms: UFL forms over its interface.
+    """A conforming pair's ledger terms: UFL forms over its interface, or their nodal sums.
 
     The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊² dS`` and the friction power
     ``∫ μp |v_T|²/sqrt(|v_T|² + χ²) dS`` at (u, v), and the interface share of the
     step's numerical dissipation (:func:`forms.gn22_contact_dissipation`: the
     penalty's trapezoidal error where the active set switches within the step, the
     friction traction on the slip increment's mismatch), from (u0, v0) to (u, v).
+    Where the quadrature is nodal the forms are evaluated as sums over the nodes
+    (:class:`~breakwater.contact.pairkernels.NodalPairSums`); they stay the reference
+    (:meth:`local_forms`).
 
     Args:
         pair: The pair.
@@ -209,7 +241,11 @@ class ConformingEnergy:
                  v0: Sequence[fem.Function]) -> None:
         m, p, u, v = pair.model, pair.pair, pair.u, pair.v
         s, t = p.slave, p.master
-        self.model = m
+        self.model, self.u, self.v, self.u0, self.v0 = m, u, v, u0, v0
+        self.dt = pair.dt
+        self.sums = sums = pair.nodal_sums()
+        self._gather = [sums.gatherer([u, v]), sums.gatherer([u, v, u0, v0])] \
+            if sums is not None else []
         self._state = [
             m.form(forms.penalty_energy(p.law, u[s]("+"), u[t]("-"), p.n, p.dS)),
             m.form(forms.friction_power(p.law, u[s]("+"), u[t]("-"), v[s]("+"), v[t]("-"),
@@ -219,7 +255,21 @@ class ConformingEnergy:
             v[s]("+"), v[t]("-"), p.n, pair.dt, p.dS))
 
     def local(self, step: bool) -> np.ndarray:
-        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`)."""
+        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`).
+
+        From the nodal sums (the same on every rank: rank 0 gives them, the others 0),
+        else from the forms.
+        """
+        sums = self.sums
+        if sums is None:
+            return self.local_forms(step)
+        gathered = self._gather[step]()
+        values = sums.energies(gathered[:2], gathered[2:] if step else None,
+                               float(self.dt.value))
+        return values if self.model.comm.rank == 0 else np.zeros(3)
+
+    def local_forms(self, step: bool) -> np.ndarray:
+        """:meth:`local` from the assembled forms (the reference)."""
         if step:
             return self.model.assemble_local([*self._state, self._step])
         return np.append(self.model.assemble_local(self._state), 0.0)

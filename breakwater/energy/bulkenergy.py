@@ -18,7 +18,11 @@ quadrature, summed in another order):
 - :class:`MatrixTerms`: the fast solver's M, K and load vectors
   (:class:`~breakwater.stepping.bulk.BulkOperators`, assembled once). Per step two sparse
   products, each a batch of columns in one pass over the matrix (``MatMatMult`` with a
-  dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries.
+  dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries. On one
+  rank, one compiled pass over copies of the matrices' CSR arrays (one sparsity pattern)
+  instead (:func:`matrix_sums`): each row's products (the same numbers as
+  ``MatMatMult``'s) and their terms at once, the dot products summed row by row (in
+  another order than NumPy's: equal to round-off).
   BulkOperators assembles M and K without the Dirichlet conditions (only the step
   matrix A has its fixed rows and columns replaced), so their quadratic forms are the
   integrals above; the fixed DOFs are zero anyway.
@@ -36,10 +40,12 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
+from breakwater.common.jit import kernel
 from breakwater.energy import dissipation as numerical
 from breakwater.stepping.gn22 import GN22
 
-__all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms"]
+__all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms",
+           "matrix_sums"]
 
 #: The bulk terms, in the order of :meth:`BulkTerms.local`.
 TERMS = ("kinetic", "strain", "rayleigh_power", "external_work", "numerical_dissipation")
@@ -102,6 +108,71 @@ class FormTerms:
         """Nothing to free (the forms hold no PETSc object)."""
 
 
+@kernel
+def matrix_sums(ptr: np.ndarray, col: np.ndarray, m_val: np.ndarray, k_val: np.ndarray,
+                x: np.ndarray, loads: np.ndarray, amplitudes: np.ndarray, k2: float,
+                k3: float, step: bool) -> np.ndarray:
+    """The dot products of the bulk terms, from M and K in CSR and the step's vectors.
+
+    With v̄ = ½(v₀ + v₁), Δu = u₁ − u₀ and f = Σ_l amplitudes_l loads[:, l], the sums
+    ``[v·Mv, u·Ku, v̄·Mv̄, v̄·Kv̄, f·Δu, Δa·Mv̄, (MΔa)·(k₂a + k₃Δa), Δa·Kv̄]`` (with
+    ``step`` False only the first two; the rest 0). M and K share their sparsity
+    pattern: one pass over it forms each row's five products (each summed in the row's
+    order, as ``MatMatMult`` sums it: the same products) and adds their terms at once.
+
+    Args:
+        ptr: Row starts (n + 1,) of M and K.
+        col: Column of each entry.
+        m_val: M's entries.
+        k_val: K's entries.
+        x: Rows u₁, u₀, v₁, v₀, a₁, Δa (owned entries), shape (6, n).
+        loads: The load vectors at unit amplitude, shape (n, loads).
+        amplitudes: Their amplitudes over the step.
+        k2: The coefficient of a₁·MΔa
+            (:func:`~breakwater.energy.dissipation.bulk_coefficients`).
+        k3: The coefficient of Δa·MΔa.
+        step: The state is the end of a step (else the first record: two sums only).
+    """
+    n = ptr.shape[0] - 1
+    u, u0, v, v0, a, da = x[0], x[1], x[2], x[3], x[4], x[5]
+    out = np.zeros(8)
+    if not step:
+        for i in range(n):
+            mv = ku = 0.0
+            for p in range(ptr[i], ptr[i + 1]):
+                j = col[p]
+                mv += m_val[p] * v[j]
+                ku += k_val[p] * u[j]
+            out[0] += v[i] * mv
+            out[1] += u[i] * ku
+        return out
+    vb = np.empty(n)
+    for i in range(n):
+        vb[i] = (v0[i] + v[i]) * 0.5
+    for i in range(n):
+        mv = mvb = mda = ku = kvb = 0.0
+        for p in range(ptr[i], ptr[i + 1]):
+            j = col[p]
+            c, d = m_val[p], k_val[p]
+            mv += c * v[j]
+            mvb += c * vb[j]
+            mda += c * da[j]
+            ku += d * u[j]
+            kvb += d * vb[j]
+        f = 0.0
+        for q in range(amplitudes.shape[0]):
+            f += loads[i, q] * amplitudes[q]
+        out[0] += v[i] * mv
+        out[1] += u[i] * ku
+        out[2] += vb[i] * mvb
+        out[3] += vb[i] * kvb
+        out[4] += f * (u[i] - u0[i])
+        out[5] += da[i] * mvb
+        out[6] += mda * (k2 * a[i] + k3 * da[i])
+        out[7] += da[i] * kvb
+    return out
+
+
 class MatrixTerms:
     """The bulk terms from the fast solver's cached M, K and load vectors.
 
@@ -149,6 +220,24 @@ class MatrixTerms:
             assert a is not None
             self._amplitudes.append(a)
         self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
+        # One rank: copies of the matrices' CSR arrays (M and K do not change; one
+        # sparsity pattern) for matrix_sums, the rows of its vectors, and views of the
+        # Functions' owned entries (their storage does not move).
+        self._csr: list[np.ndarray] = []
+        if m.comm.size == 1:
+            (mp, mc, mv), (kp, kc, kv) = (A.getValuesCSR() for A in (bulk.M, bulk.K))
+            if np.array_equal(mp, kp) and np.array_equal(mc, kc):  # one pattern (else PETSc)
+                self._csr = [np.array(mp, dtype=np.int64), np.array(mc, dtype=np.int32),
+                             np.array(mv, dtype=np.float64), np.array(kv, dtype=np.float64)]
+            self._x = np.zeros((6, n))
+            self._views = [(self._x[k], [f.x.array[:n_b] for f, n_b in
+                                         zip(fns, np.diff(self.layout.offsets), strict=True)])
+                           for k, fns in enumerate((stepper.u, u0, stepper.v, v0, stepper.a,
+                                                    stepper.da))]
+            if self._csr:  # compiled (or loaded from numba's cache) now, not in the time loop
+                ptr, col, m_val, k_val = self._csr
+                matrix_sums(ptr, col, m_val, k_val, self._x, self._loads,
+                            np.ones(self._loads.shape[1]), 0.0, 0.0, True)
 
     def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
         """The owned entries of one Function per body, stacked."""
@@ -182,8 +271,49 @@ class MatrixTerms:
             products.append({c: y[:, k] for c, k in self._columns[name].items()})
         return x, products[0], products[1]
 
+    def _amplitudes_over_step(self) -> np.ndarray:
+        """Gravity's 1, then each load's mean amplitude over the step."""
+        return np.array([1.0, *(0.5 * (float(a0.value) + float(a1.value))
+                                for a0, a1 in zip(self.amp0, self._amplitudes, strict=True))])
+
     def local(self, step: bool) -> np.ndarray:
         """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
+        if self._csr:
+            return self._local_sums(step)
+        return self.local_products(step)
+
+    def _local_sums(self, step: bool) -> np.ndarray:
+        """:meth:`local` on one rank: :func:`matrix_sums`."""
+        s = self.stepper
+        offsets = self.layout.offsets
+        for row, arrays in self._views:
+            for lo, hi, array in zip(offsets[:-1], offsets[1:], arrays, strict=True):
+                row[lo:hi] = array
+        numerical_on = "Δa" in self._columns["M"]
+        k1, k2, k3, k4 = numerical.bulk_coefficients(
+            float(s.dt.value), self.beta1, self.beta2, self.alpha, self.beta) \
+            if step and numerical_on else (0.0, 0.0, 0.0, 0.0)
+        ptr, col, m_val, k_val = self._csr
+        sums = matrix_sums(ptr, col, m_val, k_val, self._x, self._loads,
+                           self._amplitudes_over_step() if step else np.ones(0), k2, k3, step)
+        out = np.zeros(len(TERMS))
+        out[0] = 0.5 * sums[0]
+        out[1] = 0.5 * sums[1]
+        if not step:
+            return out
+        if self.alpha:
+            out[2] += self.alpha * sums[2]
+        if self.beta:
+            out[2] += self.beta * sums[3]
+        out[3] = sums[4]
+        if numerical_on:
+            out[4] = k1 * sums[5] + sums[6]
+            if self.beta:
+                out[4] += k4 * sums[7]
+        return out
+
+    def local_products(self, step: bool) -> np.ndarray:
+        """:meth:`local` from ``MatMatMult`` products and NumPy dot products (any ranks)."""
         s = self.stepper
         x, Mx, Kx = self._products()
         u, v = x["u"], x["v"]
@@ -196,9 +326,7 @@ class MatrixTerms:
             out[2] += self.alpha * _dot(x["v̄"], Mx["v̄"])
         if self.beta:
             out[2] += self.beta * _dot(x["v̄"], Kx["v̄"])
-        amplitudes = np.array([1.0, *(0.5 * (float(a0.value) + float(a1.value))
-                                      for a0, a1 in zip(self.amp0, self._amplitudes,
-                                                        strict=True))])
+        amplitudes = self._amplitudes_over_step()
         out[3] = _dot(np.einsum("ij,j->i", self._loads, amplitudes), u - self._owned(self.u0))
         if "Δa" in Mx:
             Δa = x["Δa"]

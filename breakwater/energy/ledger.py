@@ -20,7 +20,7 @@ slip-velocity changes.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import dolfinx
@@ -56,7 +56,7 @@ class Energies:
 
     def as_dict(self) -> dict[str, float]:
         """The fields by name (see :data:`FIELDS`)."""
-        return asdict(self)
+        return {name: getattr(self, name) for name in FIELDS}
 
 
 class EnergyLedger:
@@ -88,6 +88,10 @@ class EnergyLedger:
         # conforming pair's interface, a general pair's own sums.
         self.pairs = [pair.energy_terms(self.u0, self.v0) for pair in s.contacts]
         self._power0 = 0.0  # the pairs' friction power at the start of the step
+        # The end state copied into (u0, v0) after each record: views of the arrays
+        # (a Function's storage does not move).
+        self._copies = [(a.x.array, b.x.array) for dst, src in ((self.u0, s.u), (self.v0, s.v))
+                        for a, b in zip(dst, src, strict=True)]
         self.reference: float | None = None
         self.row = Energies()
         self._t0 = 0.0
@@ -136,14 +140,13 @@ class EnergyLedger:
         r.balance_error = (r.stored - self.reference + r.rayleigh_dissipation
                            + r.friction_dissipation + r.numerical_dissipation
                            - r.external_work)
-        for dst, src in ((self.u0, s.u), (self.v0, s.v)):
-            for a, b in zip(dst, src, strict=True):
-                a.x.array[:] = b.x.array
+        for a, b in self._copies:
+            a[:] = b
         for a0, ld in zip(self._amp0, m.loads, strict=True):
             a0.value = ld.amplitude.value
         self._t0 = t
         self._power0 = power
-        return Energies(**r.as_dict())
+        return replace(r)
 
     def destroy(self) -> None:
         """Free the PETSc objects of the bulk terms now (collective)."""

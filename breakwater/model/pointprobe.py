@@ -70,13 +70,20 @@ class PointProbe:
                 unit.x.array[blk * self.size] = 1.0
                 phi.append(unit.eval(x.reshape(1, 3), np.array([self._cell], np.int32)).ravel()[0])
             self._phi = np.array(phi)
+        # The entries of the blocks, (blocks, components): u.x.array[_entries] is
+        # u.x.array.reshape(-1, size)[_blocks]; and the array last read (a view: a
+        # Function's storage does not move).
+        self._entries = self._blocks[:, None].astype(np.int64) * self.size + np.arange(self.size)
+        self._last: tuple[fem.Function | None, np.ndarray] = (None, np.zeros(0))
 
     def local_value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
         """The value at the point on the owning rank; zeros on the others (no reduction)."""
         f = functions if isinstance(functions, fem.Function) else functions[self.body.index]
         if not len(self._blocks):
             return np.zeros(self.size)
-        return self._phi @ f.x.array.reshape(-1, self.size)[self._blocks]
+        if self._last[0] is not f:
+            self._last = (f, f.x.array)
+        return self._phi @ self._last[1][self._entries]
 
     def value(self, functions: Sequence[fem.Function] | fem.Function) -> np.ndarray:
         """The value at the point of the body's Function (or of a list, one per body)."""

@@ -213,9 +213,48 @@ class BodyFields:
         self.functions = [self.displacement, self.velocity, self.stress, self.von_mises,
                           self.stress_yy]
         self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace] | None = None
+        # The fast path of update: the P_k nodes of a cell are the discontinuous
+        # space's (the same element, the same points), so displacement and velocity are
+        # copies of the nodal values, and von Mises and σ_yy follow from the stress at
+        # the same points (their Expressions stay the reference: update_interpolated).
+        V = body.V
+        cg, dg = V.dofmap.list, Vd.dofmap.list
+        same = (cg.shape == dg.shape and V.dofmap.index_map_bs == Vd.dofmap.index_map_bs
+                and np.array_equal(S.dofmap.list, dg) and np.array_equal(T.dofmap.list, dg)
+                and V.ufl_element().basix_element.points.tolist()
+                == Vd.ufl_element().basix_element.points.tolist())
+        self._copy = (cg.ravel().astype(np.int64), dg.ravel().astype(np.int64)) if same \
+            else None
 
     def update(self, u: fem.Function, v: fem.Function | None = None) -> None:
-        """Evaluate the fields of the state ``(u, v)`` of this body."""
+        """Evaluate the fields of the state ``(u, v)`` of this body.
+
+        The nodal values of u and v copied, the stress interpolated (its Expression),
+        von Mises sqrt(3/2 s:s) and σ_yy from the stress at the same points: the
+        numbers of :meth:`update_interpolated` to round-off.
+        """
+        if self._copy is None:
+            self.update_interpolated(u, v)
+            return
+        self.u.x.array[:] = u.x.array
+        cg, dg = self._copy
+        gdim = self.gdim
+        self.displacement.x.array.reshape(-1, gdim)[dg] = u.x.array.reshape(-1, gdim)[cg]
+        if v is None:
+            self.velocity.x.array[:] = 0.0
+        else:
+            self.velocity.x.array.reshape(-1, gdim)[dg] = v.x.array.reshape(-1, gdim)[cg]
+        self.stress.interpolate(self._σ)
+        σ = self.stress.x.array.reshape(-1, 3, 3)
+        mean = (σ[:, 0, 0] + σ[:, 1, 1] + σ[:, 2, 2]) / 3.0
+        s = σ.copy()
+        for i in range(3):
+            s[:, i, i] -= mean
+        self.von_mises.x.array[:] = np.sqrt(1.5 * np.einsum("kij,kij->k", s, s))
+        self.stress_yy.x.array[:] = σ[:, 1, 1]
+
+    def update_interpolated(self, u: fem.Function, v: fem.Function | None = None) -> None:
+        """:meth:`update` by interpolation into each field's space (the reference)."""
         self.u.x.array[:] = u.x.array
         self.v.x.array[:] = 0.0 if v is None else v.x.array
         self.displacement.interpolate(self.u)
