@@ -203,6 +203,34 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
         A[np.ix_(B, B)], A[np.ix_(B, interface)])
     # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
     np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
+    # X = A⁻¹ E is kept by body: each block against the dense one's (owned rows), and
+    # zero, exactly, on the other body's rows (A couples no two bodies).
+    X = np.zeros((n, len(interface)))
+    X[:, :] = np.linalg.solve(A, np.eye(n)[:, interface])
+    assert fact.X_blocks is not None and len(fact.X_blocks) == 2  # the rule keeps X here
+    seen = np.zeros((hi - lo, len(interface)), bool)
+    for b in fact.X_blocks:
+        np.testing.assert_allclose(b.X, X[lo + b.rows.start: lo + b.rows.stop][:, b.cols],
+                                   rtol=0, atol=1e-8 * np.abs(X).max())
+        seen[b.rows, b.cols[:, None]] = True
+    assert not np.any(X[lo:hi][~seen]), "X is nonzero outside its body blocks"
+    # The step's Δa = z − X f_c from the blocks equals A⁻¹(r − E f_c), a second back-solve
+    # (the other way of factorisations.keep_X), to round-off.
+    rng = np.random.default_rng(7)
+    fc = COMM.bcast(rng.standard_normal(len(interface)))
+    r, z, e, da = (layout.vec.duplicate() for _ in range(4))
+    r.array[:] = rng.standard_normal(hi - lo)
+    factorisations.solve(fact, r, z)
+    product = z.array.copy()
+    fact.subtract_X(fc, product)
+    e.array[:] = r.array
+    mine = (interface >= lo) & (interface < hi)
+    e.array[interface[mine] - lo] -= fc[mine]
+    factorisations.solve(fact, e, da)
+    scale = COMM.allreduce(np.abs(product).max(), op=MPI.MAX)
+    assert COMM.allreduce(np.abs(product - da.array).max(), op=MPI.MAX) < 1e-12 * scale
+    for v in (r, z, e, da):
+        v.destroy()
     factorisations.destroy()
     bulk.destroy()
 
@@ -224,6 +252,36 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     assert scale > 0
     np.testing.assert_allclose(states["fast"], states["reference"], rtol=0,
                                atol=1e-10 * scale)
+
+
+def test_second_back_solve_equals_product_with_X(folder: pathlib.Path) -> None:
+    # Δa = z − X f_c (X kept by body) and Δa = A⁻¹(r₀ − E f_c) (X not kept, a second
+    # back-solve: Factorisations.keep_X on fine meshes) give the same frictional steps:
+    # to round-off in the first, then to the Newton tolerance (the two round-offs make
+    # Newton stop at iterates a tolerance apart). Measured over 8 steps (u, v, a, each
+    # relative to its scale): 1.7e-9, 5.6e-9, 7.7e-9 serially (the same run twice: 0);
+    # on 2 ranks 6e-10, 5e-9, 1.2e-8, and the same run twice differs as much (1e-9,
+    # 2e-8, 1e-8) with a Newton count one apart (tests/test_mpi.py). Bounds: RTOL on u,
+    # 1e-7 on v and a, counts within one. From rest, gravity sets the block on the base.
+    path = two_rectangles(folder / "keep.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    states = {}
+    for keep in (True, False):
+        model = _two_blocks(path, 0.5, damping=Damping(alpha=2.0, beta=1e-4))
+        s = GN22(model, 1e-3)
+        assert s.fast is not None
+        s.fast.factorisations._keep_X = keep
+        s.initialise()
+        its = [s.step() for _ in range(8)]
+        assert (s.fast.factorisations.factorisation(1e-3).X_blocks is not None) == keep
+        states[keep] = (its, [np.concatenate([f.x.array for f in x]) for x in (s.u, s.v, s.a)])
+        s.destroy()
+    its_kept, its_solved = np.array(states[True][0]), np.array(states[False][0])
+    assert np.all(np.abs(its_kept - its_solved) <= 1) and its_kept.sum() > 8
+    for kept, solved, rtol in zip(states[True][1], states[False][1], (RTOL, 1e-7, 1e-7),
+                                  strict=True):
+        scale = COMM.allreduce(np.abs(kept).max(), op=MPI.MAX)
+        assert scale > 0
+        np.testing.assert_allclose(solved, kept, rtol=0, atol=rtol * scale)
 
 
 def test_unknown_solver_is_refused() -> None:

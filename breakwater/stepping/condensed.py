@@ -332,9 +332,19 @@ class CondensedNewton(StepSolver):
             self._check_penetration(its)
             # The last residual evaluation was at the solution: f_c(y) is at hand.
             fc = self.newton.fc
+        out = V["da"]
+        if fact.X_blocks is None:  # Δa = z − X f_c = A⁻¹(r₀ − E f_c): a back-solve
+            with T("bulk_products"):
+                rhs = V["w"]
+                rhs.array[:] = V["r0"].array
+                rhs.array[self.interface.owned_rows] -= fc[self.interface.owned]
+            self.factorisations.solve(fact, rhs, out)
+        else:
+            with T("bulk_products"):
+                da = out.array
+                da[:] = V["z"].array
+                fact.subtract_X(fc, da)  # Δa = z − X f_c, by body block
         with T("bulk_products"):
-            out = V["da"]
-            out.array[:] = V["z"].array - fact.X @ fc
             # At the interface, Newton's converged iterate itself (z_I − X_II f_c equals it
             # only to the residual): the friction law, whose stick tangent is μp/χ, was
             # evaluated and converged there.

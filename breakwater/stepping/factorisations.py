@@ -20,7 +20,21 @@ from petsc4py import PETSc
 from breakwater.common.timings import Timings
 from breakwater.stepping.bulk import BulkOperators
 
-__all__ = ["Factorisation", "Factorisations"]
+__all__ = ["Factorisation", "Factorisations", "XBlock"]
+
+
+@dataclass
+class XBlock:
+    """The nonzero block of X = A⁻¹ E of one body on this rank.
+
+    A couples no two bodies (the stacked M and K are block diagonal), so the column of X
+    of a body's interface unknown is zero, exactly, on the other bodies' rows: X is
+    stored as its (owned rows of a body) × (that body's interface unknowns) blocks.
+    """
+
+    rows: slice  # owned rows of the stacked vector
+    cols: np.ndarray  # interface positions
+    X: np.ndarray  # X[rows, cols], shape (rows, len(cols)), C-contiguous
 
 
 @dataclass
@@ -29,9 +43,20 @@ class Factorisation:
 
     ksp: PETSc.KSP
     A: PETSc.Mat
-    X: np.ndarray  # owned rows of A⁻¹ E, shape (n_owned, n_I)
+    # The owned rows of X = A⁻¹ E by body (zero elsewhere); None: X is not kept, a
+    # second back-solve is cheaper than the product with it (Factorisations.keep_X).
+    X_blocks: list[XBlock] | None
     X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
     S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
+
+    def subtract_X(self, fc: np.ndarray, out: np.ndarray) -> None:
+        """``out −= X f_c`` on the owned rows (``out``: the owned part of a stacked vector).
+
+        Block by block: the rows of each body only meet its own interface unknowns.
+        """
+        assert self.X_blocks is not None, "X is not kept: solve A Δ = E f_c instead"
+        for b in self.X_blocks:
+            out[b.rows] -= b.X @ fc[b.cols]
 
 
 class Factorisations:
@@ -47,15 +72,26 @@ class Factorisations:
         timings: Where the factorisations (``factorisation``, X included) and the
             back-solves (``back_solves``) are timed.
         interface_solves: Compute X and S (False: A only, for the benchmark's floor).
+        keep_X: Keep X for the step's ``Δa = z − X f_c`` (True), or not (False: the
+            step takes a second back-solve ``A⁻¹(r₀ − E f_c)`` instead); None: by the
+            estimated cost (:meth:`keep_X`).
     """
+
+    #: Time per entry of A's factors in a back-solve over the time per entry of X's
+    #: body blocks in the product ``X f_c``; both are memory-bound. Measured on the
+    #: Goda case (1 rank, one BLAS thread, the same factorisation, 2026-11-25): 2.9 at
+    #: refinement 3 (3.0 ms for 3.0e6 factor entries against 0.73 ms for 2.1e6), 2.6 at
+    #: refinement 9 (57 ms for 3.5e7 against 32.5 ms for 5.1e7); the smaller, rounded.
+    SOLVE_PER_PRODUCT = 2.5
 
     def __init__(self, bulk: BulkOperators, interface: np.ndarray, beta1: float,
                  beta2: float, cache: int = 4, timings: Timings | None = None,
-                 interface_solves: bool = True) -> None:
+                 interface_solves: bool = True, keep_X: bool | None = None) -> None:
         self.bulk = bulk
         self.model, self.layout = bulk.model, bulk.layout
         self.timings = timings or Timings()
         self._interface_solves_on = interface_solves
+        self._keep_X = keep_X
         self.interface = interface
         self.beta1, self.beta2 = beta1, beta2
         self._cache: OrderedDict[float, Factorisation] = OrderedDict()
@@ -91,14 +127,17 @@ class Factorisations:
         pc.setFactorSolverType("mumps")
         ksp.setFromOptions()
         ksp.setUp()
+        blocks: list[XBlock] | None
         if self._interface_solves_on and len(self.interface):
-            X = self._interface_solves(ksp, A)
-            X_II = self._gather_rows(X)
+            blocks = self._interface_solves(ksp)
+            X_II = self._gather_rows(blocks)
             S = np.linalg.inv(X_II)
+            if not self.keep_X(ksp, blocks):
+                blocks = None
         else:
-            X = np.zeros((self.layout.offsets[-1], len(self.interface)))
+            blocks = []
             X_II = S = np.zeros((len(self.interface), len(self.interface)))
-        fact = Factorisation(ksp, A, X, X_II, S)
+        fact = Factorisation(ksp, A, blocks, X_II, S)
         self._cache[dt] = fact
         if len(self._cache) > self._cache_size:
             _, old = self._cache.popitem(last=False)
@@ -106,20 +145,69 @@ class Factorisations:
             old.A.destroy()
         return fact
 
-    def _interface_solves(self, ksp: PETSc.KSP, A: PETSc.Mat) -> np.ndarray:
-        """X = A⁻¹ E: one solve per contact-surface DOF (one MUMPS multi-RHS solve)."""
+    def keep_X(self, ksp: PETSc.KSP, blocks: list[XBlock]) -> bool:
+        """Whether the product with X's blocks is cheaper than a second back-solve.
+
+        Both read their operands once per step: the product ``X f_c`` the entries of
+        X's blocks, the back-solve ``A⁻¹(r₀ − E f_c)`` those of A's LU factors (MUMPS
+        INFOG(29)), each :attr:`SOLVE_PER_PRODUCT` times slower. In 2D the blocks grow
+        as N^1.5 (n_I ~ √N), the factors as N log N: the back-solve wins on fine
+        enough meshes. Global counts: the same decision on every rank.
+        """
+        if self._keep_X is not None:
+            return self._keep_X
         comm = self.model.comm
-        n_i = len(self.interface)
+        info = comm.allreduce(ksp.getPC().getFactorMatrix().getMumpsInfog(29), op=MPI.MAX)
+        factors = float(info) if info >= 0 else -1e6 * info  # < 0: millions
+        entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.SUM)
+        return bool(entries <= self.SOLVE_PER_PRODUCT * factors)
+
+    def _interface_bodies(self) -> np.ndarray:
+        """The body of each interface unknown (the same array on every rank)."""
+        start, n_local = self.layout.start, self.layout.offsets[-1]
+        mine = (self.interface >= start) & (self.interface < start + n_local)
+        body = np.zeros(len(self.interface), np.int64)
+        body[mine] = np.searchsorted(self.layout.offsets, self.interface[mine] - start,
+                                     side="right") - 1
+        self.model.comm.Allreduce(MPI.IN_PLACE, body, op=MPI.SUM)
+        return body
+
+    def _interface_solves(self, ksp: PETSc.KSP) -> list[XBlock]:
+        """X = A⁻¹ E by body: one MUMPS multi-right-hand-side solve per body.
+
+        The columns of a body's interface unknowns are kept on that body's rows only,
+        where they can be nonzero; that the other rows are zero is checked (else, on
+        every rank, the whole columns are kept: the product is the same, only slower).
+        """
+        comm = self.model.comm
+        offsets = self.layout.offsets
+        body = self._interface_bodies()
+        solved = []
+        for b in range(len(offsets) - 1):
+            cols = np.flatnonzero(body == b)
+            if len(cols):
+                solved.append((b, cols, self._solve_columns(ksp, cols)))
+        outside = any(np.any(X[: offsets[b]]) or np.any(X[offsets[b + 1]:])
+                      for b, _, X in solved)
+        if comm.allreduce(outside, op=MPI.LOR):
+            return [XBlock(slice(0, int(offsets[-1])), cols, X) for _, cols, X in solved]
+        return [XBlock(slice(int(offsets[b]), int(offsets[b + 1])), cols,
+                       np.ascontiguousarray(X[offsets[b]: offsets[b + 1]]))
+                for b, cols, X in solved]
+
+    def _solve_columns(self, ksp: PETSc.KSP, cols: np.ndarray) -> np.ndarray:
+        """The owned rows of A⁻¹ E[:, cols] (one MUMPS multi-right-hand-side solve)."""
+        comm = self.model.comm
         n_local = self.layout.offsets[-1]
         start = self.layout.start
-        E = PETSc.Mat().createDense(((n_local, None), (None, n_i)),
+        index = self.interface[cols]
+        E = PETSc.Mat().createDense(((n_local, None), (None, len(cols))),
                                     comm=comm)  # type: ignore[arg-type]
         E.setUp()
         E.zeroEntries()
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        cols = np.flatnonzero(mine)
-        for row, col in zip(self.interface[mine], cols, strict=True):
-            E.setValue(int(row), int(col), 1.0)
+        mine = np.flatnonzero((index >= start) & (index < start + n_local))
+        for k in mine:
+            E.setValue(int(index[k]), int(k), 1.0)
         E.assemble()
         X = E.duplicate()
         ksp.getPC().getFactorMatrix().matSolve(E, X)
@@ -128,12 +216,14 @@ class Factorisations:
         X.destroy()
         return out
 
-    def _gather_rows(self, X: np.ndarray) -> np.ndarray:
+    def _gather_rows(self, blocks: list[XBlock]) -> np.ndarray:
         """The interface rows of X (owned rows), gathered on every rank."""
-        start, n_local = self.layout.start, self.layout.offsets[-1]
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        out = np.zeros((len(self.interface), X.shape[1]))
-        out[mine] = X[self.interface[mine] - start]
+        rows = self.interface - self.layout.start
+        out = np.zeros((len(self.interface), len(self.interface)))
+        for b in blocks:
+            lo, hi = b.rows.start, b.rows.stop
+            at = np.flatnonzero((rows >= lo) & (rows < hi))
+            out[np.ix_(at, b.cols)] = b.X[rows[at] - lo]
         self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
