@@ -196,24 +196,33 @@ class Factorisations:
                 for b, cols, X in solved]
 
     def _solve_columns(self, ksp: PETSc.KSP, cols: np.ndarray) -> np.ndarray:
-        """The owned rows of A⁻¹ E[:, cols] (one MUMPS multi-right-hand-side solve)."""
+        """The owned rows of A⁻¹ E[:, cols] (one MUMPS multi-right-hand-side solve).
+
+        E's columns are given to MUMPS as a sparse right-hand side (one 1 each; its
+        forward elimination visits only the fronts above that row): 2.8× faster than
+        as a dense matrix serially, 1.4× (CPU) on 2 ranks (Goda case, refinement 3). PETSc
+        passes it as the transpose of an AIJ matrix, centralised on rank 0 as MUMPS asks.
+        """
         comm = self.model.comm
-        n_local = self.layout.offsets[-1]
-        start = self.layout.start
+        n_local, n = self.layout.offsets[-1], self.layout.vec.getSize()
         index = self.interface[cols]
-        E = PETSc.Mat().createDense(((n_local, None), (None, len(cols))),
+        host = comm.rank == 0
+        Et = PETSc.Mat().createAIJ(((len(cols) if host else 0, len(cols)),
+                                    (n if host else 0, n)), nnz=(1, 1),
+                                   comm=comm)  # type: ignore[arg-type]
+        Et.setUp()
+        if host:
+            for k, row in enumerate(index):
+                Et.setValue(k, int(row), 1.0)
+        Et.assemble()
+        E = PETSc.Mat().createTranspose(Et)
+        X = PETSc.Mat().createDense(((n_local, None), (None, len(cols))),
                                     comm=comm)  # type: ignore[arg-type]
-        E.setUp()
-        E.zeroEntries()
-        mine = np.flatnonzero((index >= start) & (index < start + n_local))
-        for k in mine:
-            E.setValue(int(index[k]), int(k), 1.0)
-        E.assemble()
-        X = E.duplicate()
+        X.setUp()
         ksp.getPC().getFactorMatrix().matSolve(E, X)
         out = np.array(X.getDenseArray(), copy=True)
-        E.destroy()
-        X.destroy()
+        for mat in (Et, E, X):
+            mat.destroy()
         return out
 
     def _gather_rows(self, blocks: list[XBlock]) -> np.ndarray:
