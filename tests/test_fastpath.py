@@ -203,17 +203,11 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
         A[np.ix_(B, B)], A[np.ix_(B, interface)])
     # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
     np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
-    # X = A⁻¹ E is kept by body: each block against the dense one's (owned rows), and
-    # zero, exactly, on the other body's rows (A couples no two bodies).
-    X = np.zeros((n, len(interface)))
-    X[:, :] = np.linalg.solve(A, np.eye(n)[:, interface])
-    assert fact.X_blocks is not None and len(fact.X_blocks) == 2  # the rule keeps X here
-    seen = np.zeros((hi - lo, len(interface)), bool)
-    for b in fact.X_blocks:
-        np.testing.assert_allclose(b.X, X[lo + b.rows.start: lo + b.rows.stop][:, b.cols],
-                                   rtol=0, atol=1e-8 * np.abs(X).max())
-        seen[b.rows, b.cols[:, None]] = True
-    assert not np.any(X[lo:hi][~seen]), "X is nonzero outside its body blocks"
+    # X = A⁻¹ E is kept by block (by body, or one block): each against the dense X's
+    # (owned rows), which is zero outside them.
+    X = np.linalg.solve(A, np.eye(n)[:, interface])
+    assert fact.X_blocks is not None  # the cost rule keeps X here
+    _check_blocks(fact.X_blocks, X[lo:hi])
     # The step's Δa = z − X f_c from the blocks equals A⁻¹(r − E f_c), a second back-solve
     # (the other way of factorisations.keep_X), to round-off.
     rng = np.random.default_rng(7)
@@ -252,6 +246,45 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     assert scale > 0
     np.testing.assert_allclose(states["fast"], states["reference"], rtol=0,
                                atol=1e-10 * scale)
+
+
+def _check_blocks(blocks: list, X: np.ndarray) -> None:
+    """X's blocks against X (owned rows, dense): equal, X zero outside them."""
+    seen = np.zeros(X.shape, bool)
+    for b in blocks:
+        np.testing.assert_allclose(b.X, X[b.rows, b.cols], rtol=0,
+                                   atol=1e-8 * np.abs(X).max())
+        seen[b.rows, b.cols[0]: b.cols[-1] + 1] = True
+    assert not np.any(X[~seen]), "X is nonzero outside its blocks"
+
+
+def test_X_blocks_give_the_dense_product_bit_for_bit() -> None:
+    # On the Goda case (serially: one block per body, each half of X's columns) the
+    # blocks' product Δa = z − X f_c is the dense X's, bit for bit (the Newton counts
+    # depend on its last bit); and on the blocks' rows X is zero outside them.
+    case = load_case(None, ["mesh.refinement=1", "time.solver=fast"])
+    model, spec, _, _ = case.build(COMM)
+    layout = MonolithicLayout(model)
+    bulk = BulkOperators(model, layout)
+    interface = interface_dofs(model, layout)
+    factorisations = Factorisations(bulk, interface, spec.beta1, spec.beta2)
+    fact = factorisations.factorisation(spec.dt)
+    assert fact.X_blocks is not None
+    X = np.zeros((layout.offsets[-1], len(interface)), order="F")  # as MUMPS gives it
+    for b in fact.X_blocks:
+        X[b.rows, b.cols] = b.X
+    if COMM.size == 1:
+        assert len(fact.X_blocks) == 2
+        assert all(len(b.cols) < 0.6 * len(interface) for b in fact.X_blocks)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        fc = COMM.bcast(rng.standard_normal(len(interface)))
+        z = rng.standard_normal(layout.offsets[-1])
+        da = z.copy()
+        fact.subtract_X(fc, da)
+        assert np.array_equal(da, z - X @ fc)
+    factorisations.destroy()
+    bulk.destroy()
 
 
 def test_second_back_solve_equals_product_with_X(folder: pathlib.Path) -> None:
