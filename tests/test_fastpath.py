@@ -37,7 +37,7 @@ from breakwater.model.model import (
 )
 from breakwater.run import simulation
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
-from breakwater.stepping.factorisations import Factorisations
+from breakwater.stepping.factorisations import Factorisation, Factorisations, x_blocks
 from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
@@ -249,13 +249,12 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
 
 
 def _check_blocks(blocks: list, X: np.ndarray) -> None:
-    """X's blocks against X (owned rows, dense): equal, X zero outside them."""
-    seen = np.zeros(X.shape, bool)
+    """X's blocks against X (owned rows, dense): they sum to it (overlapping at zeros)."""
+    total = np.zeros(X.shape)
     for b in blocks:
-        np.testing.assert_allclose(b.X, X[b.rows, b.cols], rtol=0,
-                                   atol=1e-8 * np.abs(X).max())
-        seen[b.rows, b.cols[0]: b.cols[-1] + 1] = True
-    assert not np.any(X[~seen]), "X is nonzero outside its blocks"
+        total[b.rows, b.cols[0]: b.cols[-1] + 1] += b.X
+    np.testing.assert_allclose(total, X, rtol=0, atol=1e-8 * np.abs(X).max())
+    assert not np.any(X[total == 0]), "X is nonzero outside its blocks"
 
 
 def test_X_blocks_give_the_dense_product_bit_for_bit() -> None:
@@ -272,7 +271,7 @@ def test_X_blocks_give_the_dense_product_bit_for_bit() -> None:
     assert fact.X_blocks is not None
     X = np.zeros((layout.offsets[-1], len(interface)), order="F")  # as MUMPS gives it
     for b in fact.X_blocks:
-        X[b.rows, b.cols] = b.X
+        X[b.rows, b.cols] += b.X
     if COMM.size == 1:
         assert len(fact.X_blocks) == 2
         assert all(len(b.cols) < 0.6 * len(interface) for b in fact.X_blocks)
@@ -285,6 +284,28 @@ def test_X_blocks_give_the_dense_product_bit_for_bit() -> None:
         assert np.array_equal(da, z - X @ fc)
     factorisations.destroy()
     bulk.destroy()
+
+
+def test_x_blocks_by_body_or_whole() -> None:
+    # Two bodies' blocks (rows 0–49 meet columns 0–9, rows 50–119 columns 10–19): kept
+    # by body, each product bit for bit the whole X's; a nonzero outside the blocks (A
+    # coupling the bodies) keeps X whole.
+    rng = np.random.default_rng(5)
+    X = np.zeros((120, 20), order="F")
+    X[:50, :10] = rng.standard_normal((50, 10))
+    X[50:, 10:] = rng.standard_normal((70, 10))
+    offsets, body = np.array([0, 50, 120]), np.repeat([0, 1], 10)
+    blocks = x_blocks(X, offsets, body)
+    assert len(blocks) == 2 and all(len(b.cols) < 20 for b in blocks)
+    _check_blocks(blocks, X)
+    fc, z = rng.standard_normal(20), rng.standard_normal(120)
+    fact = Factorisation(None, None, blocks, np.zeros((20, 20)), np.zeros((20, 20)))  # type: ignore[arg-type]
+    da = z.copy()
+    fact.subtract_X(fc, da)
+    assert np.array_equal(da, z - X @ fc)
+    X[60, 3] = 1.0
+    (whole,) = x_blocks(X, offsets, body)
+    assert whole.rows == slice(0, 120) and len(whole.cols) == 20 and whole.X is X
 
 
 def test_second_back_solve_equals_product_with_X(folder: pathlib.Path) -> None:

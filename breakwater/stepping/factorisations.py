@@ -20,7 +20,7 @@ from petsc4py import PETSc
 from breakwater.common.timings import Timings
 from breakwater.stepping.bulk import BulkOperators
 
-__all__ = ["Factorisation", "Factorisations", "XBlock"]
+__all__ = ["ALIGNMENTS", "Factorisation", "Factorisations", "XBlock", "x_blocks"]
 
 
 @dataclass
@@ -150,17 +150,19 @@ class Factorisations:
         """Whether the product with X's blocks is cheaper than a second back-solve.
 
         Both read their operands once per step: the product ``X f_c`` the entries of
-        X's blocks, the back-solve ``A⁻¹(r₀ − E f_c)`` those of A's LU factors (MUMPS
-        INFOG(29)), each :attr:`SOLVE_PER_PRODUCT` times slower. In 2D the blocks grow
-        as N^1.5 (n_I ~ √N), the factors as N log N: the back-solve wins on fine
-        enough meshes. Global counts: the same decision on every rank.
+        X's blocks (each rank its own rows: the largest count), the back-solve
+        ``A⁻¹(r₀ − E f_c)`` those of A's LU factors (MUMPS INFOG(29), all of them: on
+        2 ranks a back-solve was measured to take as much CPU per rank as serially,
+        3.0–3.8 against 2.9 ms at refinement 3), each :attr:`SOLVE_PER_PRODUCT` times
+        slower. In 2D the blocks grow as N^1.5 (n_I ~ √N), the factors as N log N: the
+        back-solve wins on fine enough meshes. The same decision on every rank.
         """
         if self._keep_X is not None:
             return self._keep_X
         comm = self.model.comm
         info = comm.allreduce(ksp.getPC().getFactorMatrix().getMumpsInfog(29), op=MPI.MAX)
         factors = float(info) if info >= 0 else -1e6 * info  # < 0: millions
-        entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.SUM)
+        entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.MAX)
         return bool(entries <= self.SOLVE_PER_PRODUCT * factors)
 
     def _interface_bodies(self) -> np.ndarray:
@@ -176,13 +178,13 @@ class Factorisations:
     def _interface_solves(self, ksp: PETSc.KSP) -> list[XBlock]:
         """X = A⁻¹ E (one MUMPS multi-right-hand-side solve), kept by body block.
 
-        The block of a body: its owned rows and the smallest range of columns, aligned to
-        :attr:`ALIGN`, holding its interface unknowns; the product with the blocks then
-        skips only exact zeros. Kept only if (checked on this rank) X is zero outside
-        the blocks and the blocks' products give the whole X's, ``X @ f_c``, bit for bit
-        (the BLAS's sums grouped as before: the χ = 1e-10 stick tangent magnifies the
-        last bit into the Newton counts, 5198 → 5206 on the Goda case with the blocks'
-        own sums); else X is one block.
+        The block of a body: its owned rows and a range of columns (aligned to one of
+        :data:`ALIGNMENTS`) holding its interface unknowns; the product with the blocks
+        then skips only exact zeros. Kept only if (checked on this rank) X is zero
+        outside the blocks and the blocks' products give the whole X's, ``X @ f_c``, bit
+        for bit (the BLAS's sums grouped as before: the χ = 1e-10 stick tangent
+        magnifies the last bit into the Newton counts, 5198 → 5206 on the Goda case with
+        the blocks' own sums); else X is one block.
         """
         comm = self.model.comm
         n_i = len(self.interface)
@@ -202,36 +204,7 @@ class Factorisations:
         out = np.array(X.getDenseArray(), copy=True)
         E.destroy()
         X.destroy()
-        return self._blocks(out)
-
-    #: Column ranges of the blocks start and end at multiples of this (the BLAS kernel's
-    #: width: OpenBLAS's column-major dgemv adds 4 columns at a time).
-    ALIGN = 4
-
-    def _blocks(self, X: np.ndarray) -> list[XBlock]:
-        """X's owned rows by body block, where that changes no bit of ``X @ f_c``."""
-        offsets, n_i = self.layout.offsets, X.shape[1]
-        body = self._interface_bodies()
-        rng = np.random.default_rng(22)
-        trials = [rng.uniform(0.5, 1.5, n_i) * rng.choice((-1.0, 1.0), n_i) for _ in range(2)]
-        whole = [X @ fc for fc in trials]
-        blocks = []
-        for b in range(len(offsets) - 1):
-            rows = slice(int(offsets[b]), int(offsets[b + 1]))
-            at = np.flatnonzero(body == b)
-            if rows.stop == rows.start or not len(at):
-                if np.any(X[rows]):
-                    return [XBlock(slice(0, int(offsets[-1])), np.arange(n_i), X)]
-                continue
-            lo = at[0] // self.ALIGN * self.ALIGN
-            hi = min(n_i, -(-(at[-1] + 1) // self.ALIGN) * self.ALIGN)
-            block = XBlock(rows, np.arange(lo, hi), np.asfortranarray(X[rows, lo:hi]))
-            if np.any(X[rows, :lo]) or np.any(X[rows, hi:]) or not all(
-                    np.array_equal(block.X @ fc[lo:hi], w[rows])
-                    for fc, w in zip(trials, whole, strict=True)):
-                return [XBlock(slice(0, int(offsets[-1])), np.arange(n_i), X)]
-            blocks.append(block)
-        return blocks
+        return x_blocks(out, self.layout.offsets, self._interface_bodies())
 
     def _gather_rows(self, blocks: list[XBlock]) -> np.ndarray:
         """The interface rows of X (owned rows), gathered on every rank."""
@@ -240,7 +213,7 @@ class Factorisations:
         for b in blocks:
             lo, hi = b.rows.start, b.rows.stop
             at = np.flatnonzero((rows >= lo) & (rows < hi))
-            out[np.ix_(at, b.cols)] = b.X[rows[at] - lo]
+            out[np.ix_(at, b.cols)] += b.X[rows[at] - lo]  # blocks overlap at zeros
         self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
@@ -255,3 +228,61 @@ class Factorisations:
             f.ksp.destroy()
             f.A.destroy()
         self._cache.clear()
+
+
+#: The ranges tried for a body's block: its rows and its interface unknowns' columns,
+#: widened to multiples of each (the BLAS's column-major dgemv takes rows and columns 4
+#: or 8 at a time, the rows left over one by one, in another order), the first whose
+#: product keeps every bit; then all rows and columns.
+ALIGNMENTS = (4, 8, 16, 32, 64, 128, 256, 512)
+
+
+def _aligned(lo: int, hi: int, align: int, size: int) -> slice:
+    return slice(lo // align * align, min(size, -(-hi // align) * align))
+
+
+def x_blocks(X: np.ndarray, offsets: np.ndarray, body: np.ndarray) -> list[XBlock]:
+    """X's owned rows by body block, where that changes no bit of ``X @ f_c``.
+
+    Args:
+        X: The owned rows of X = A⁻¹ E, column-major (as MUMPS gives it).
+        offsets: The bodies' offsets in the owned part of a stacked vector.
+        body: The body of each interface unknown (column).
+
+    Returns:
+        One block per body with owned rows and interface unknowns: its rows and its
+        columns widened to ranges aligned to one of :data:`ALIGNMENTS` (a neighbour's
+        rows in them hold zeros), outside which X is zero, if for every body the blocks'
+        ``out[rows] −= block.X @ f_c`` give ``out − X @ f_c`` bit for bit (two random
+        f_c); else X as one block.
+    """
+    m, n_i = X.shape
+    whole = [XBlock(slice(0, m), np.arange(n_i), X)]
+    rng = np.random.default_rng(22)
+    trials = [rng.uniform(0.5, 1.5, n_i) * rng.choice((-1.0, 1.0), n_i) for _ in range(2)]
+    products = [X @ fc for fc in trials]
+    blocks = []
+    for b in range(len(offsets) - 1):
+        own = slice(int(offsets[b]), int(offsets[b + 1]))
+        at = np.flatnonzero(body == b)
+        if own.stop == own.start or not len(at):
+            if np.any(X[own]):
+                return whole
+            continue
+        if np.any(X[own, : at[0]]) or np.any(X[own, at[-1] + 1:]):
+            return whole
+        for align in (*ALIGNMENTS, max(m, n_i)):  # the last: all rows and columns
+            rows = _aligned(own.start, own.stop, align, m)
+            cols = _aligned(int(at[0]), int(at[-1]) + 1, align, n_i)
+            block = XBlock(rows, np.arange(cols.start, cols.stop),
+                           np.asfortranarray(X[rows, cols]))
+            block.X[: own.start - rows.start] = 0.0  # a neighbour's rows
+            block.X[own.stop - rows.start:] = 0.0
+            mine = slice(own.start - rows.start, own.stop - rows.start)
+            if all(np.array_equal((block.X @ fc[cols])[mine], w[own])
+                   for fc, w in zip(trials, products, strict=True)):
+                break
+        else:
+            return whole
+        blocks.append(block)
+    return blocks
