@@ -19,11 +19,14 @@ for y = Δa_I; F is the whole residual with the bulk rows in equilibrium, a forc
 convergence test keeps its meaning. Once y converges the whole increment is
 ``Δa = z − X f_c(y)``. Per distinct Δt: one assembly and factorisation of A (MUMPS) and
 one multi-right-hand-side solve for X (cached: cut-backs come back to the same Δt). Per
-step: a few sparse matrix-vector products for r₀, one back-solve for z and one dense
-product with X. Per Newton iteration: the contact forces and their Jacobian on the
-interface unknowns and a dense solve of size n_I. The Newton is a PETSc SNES on the
-interface unknowns (every rank solves the same small system, so every rank takes the same
-decisions), with the convergence test and the slip-reversal pre-check of the reference path.
+step: a few sparse matrix-vector products for r₀, one back-solve for z and one product
+with X, block by body (X is zero, exactly, where a body's rows meet another body's
+unknowns), or a second back-solve ``A⁻¹(r₀ − E f_c)`` where that is cheaper
+(:meth:`~breakwater.stepping.factorisations.Factorisations.keep_X`). Per Newton
+iteration: the contact forces and their Jacobian on the interface unknowns and a dense
+solve of size n_I. The Newton is a PETSc SNES on the interface unknowns (every rank
+solves the same small system, so every rank takes the same decisions), with the
+convergence test and the slip-reversal pre-check of the reference path.
 
 The parts: :class:`~breakwater.stepping.bulk.BulkOperators` (M, K, the loads and r₀),
 :class:`~breakwater.stepping.factorisations.Factorisations` (A, X and S per Δt),

@@ -80,9 +80,10 @@ class Factorisations:
 
     #: Time per entry of A's factors in a back-solve over the time per entry of X's
     #: body blocks in the product ``X f_c``; both are memory-bound. Measured on the
-    #: Goda case (1 rank, one BLAS thread, the same factorisation, 2026-11-25): 2.9 at
-    #: refinement 3 (3.0 ms for 3.0e6 factor entries against 0.73 ms for 2.1e6), 2.6 at
-    #: refinement 9 (57 ms for 3.5e7 against 32.5 ms for 5.1e7); the smaller, rounded.
+    #: Goda case (1 rank, one BLAS thread, the same factorisation, CPU time, 2026-11-25):
+    #: 3.1 at refinement 3 (3.0 ms for 3.0e6 factor entries against 0.69 ms for
+    #: 2.15e6), 2.95 at refinement 9 (57 ms for 3.48e7 against 28.5 ms for 5.13e7;
+    #: benchmarks/records/2026-11-25-xblocks.md); the smaller, rounded down.
     SOLVE_PER_PRODUCT = 2.5
 
     def __init__(self, bulk: BulkOperators, interface: np.ndarray, beta1: float,
