@@ -37,7 +37,7 @@ from breakwater.model.model import (
 )
 from breakwater.run import simulation
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
-from breakwater.stepping.factorisations import Factorisations
+from breakwater.stepping.factorisations import Factorisation, Factorisations, x_blocks
 from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
@@ -203,6 +203,28 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
         A[np.ix_(B, B)], A[np.ix_(B, interface)])
     # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
     np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
+    # X = A⁻¹ E is kept by block (by body, or one block): each against the dense X's
+    # (owned rows), which is zero outside them.
+    X = np.linalg.solve(A, np.eye(n)[:, interface])
+    assert fact.X_blocks is not None  # the cost rule keeps X here
+    _check_blocks(fact.X_blocks, X[lo:hi])
+    # The step's Δa = z − X f_c from the blocks equals A⁻¹(r − E f_c), a second back-solve
+    # (the other way of factorisations.keep_X), to round-off.
+    rng = np.random.default_rng(7)
+    fc = COMM.bcast(rng.standard_normal(len(interface)))
+    r, z, e, da = (layout.vec.duplicate() for _ in range(4))
+    r.array[:] = rng.standard_normal(hi - lo)
+    factorisations.solve(fact, r, z)
+    product = z.array.copy()
+    fact.subtract_X(fc, product)
+    e.array[:] = r.array
+    mine = (interface >= lo) & (interface < hi)
+    e.array[interface[mine] - lo] -= fc[mine]
+    factorisations.solve(fact, e, da)
+    scale = COMM.allreduce(np.abs(product).max(), op=MPI.MAX)
+    assert COMM.allreduce(np.abs(product - da.array).max(), op=MPI.MAX) < 1e-12 * scale
+    for v in (r, z, e, da):
+        v.destroy()
     factorisations.destroy()
     bulk.destroy()
 
@@ -224,6 +246,96 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     assert scale > 0
     np.testing.assert_allclose(states["fast"], states["reference"], rtol=0,
                                atol=1e-10 * scale)
+
+
+def _check_blocks(blocks: list, X: np.ndarray) -> None:
+    """X's blocks against X (owned rows, dense): they sum to it (overlapping at zeros)."""
+    total = np.zeros(X.shape)
+    for b in blocks:
+        total[b.rows, b.cols[0]: b.cols[-1] + 1] += b.X
+    np.testing.assert_allclose(total, X, rtol=0, atol=1e-8 * np.abs(X).max())
+    assert not np.any(X[total == 0]), "X is nonzero outside its blocks"
+
+
+def test_X_blocks_give_the_dense_product_bit_for_bit() -> None:
+    # On the Goda case (serially: one block per body, each half of X's columns) the
+    # blocks' product Δa = z − X f_c is the dense X's, bit for bit (the Newton counts
+    # depend on its last bit); and on the blocks' rows X is zero outside them.
+    case = load_case(None, ["mesh.refinement=1", "time.solver=fast"])
+    model, spec, _, _ = case.build(COMM)
+    layout = MonolithicLayout(model)
+    bulk = BulkOperators(model, layout)
+    interface = interface_dofs(model, layout)
+    factorisations = Factorisations(bulk, interface, spec.beta1, spec.beta2)
+    fact = factorisations.factorisation(spec.dt)
+    assert fact.X_blocks is not None
+    X = np.zeros((layout.offsets[-1], len(interface)), order="F")  # as MUMPS gives it
+    for b in fact.X_blocks:
+        X[b.rows, b.cols] += b.X
+    if COMM.size == 1:
+        assert len(fact.X_blocks) == 2
+        assert all(len(b.cols) < 0.6 * len(interface) for b in fact.X_blocks)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        fc = COMM.bcast(rng.standard_normal(len(interface)))
+        z = rng.standard_normal(layout.offsets[-1])
+        da = z.copy()
+        fact.subtract_X(fc, da)
+        assert np.array_equal(da, z - X @ fc)
+    factorisations.destroy()
+    bulk.destroy()
+
+
+def test_x_blocks_by_body_or_whole() -> None:
+    # Two bodies' blocks (rows 0–49 meet columns 0–9, rows 50–119 columns 10–19): kept
+    # by body, each product bit for bit the whole X's; a nonzero outside the blocks (A
+    # coupling the bodies) keeps X whole.
+    rng = np.random.default_rng(5)
+    X = np.zeros((120, 20), order="F")
+    X[:50, :10] = rng.standard_normal((50, 10))
+    X[50:, 10:] = rng.standard_normal((70, 10))
+    offsets, body = np.array([0, 50, 120]), np.repeat([0, 1], 10)
+    blocks = x_blocks(X, offsets, body)
+    assert len(blocks) == 2 and all(len(b.cols) < 20 for b in blocks)
+    _check_blocks(blocks, X)
+    fc, z = rng.standard_normal(20), rng.standard_normal(120)
+    fact = Factorisation(None, None, blocks, np.zeros((20, 20)), np.zeros((20, 20)))  # type: ignore[arg-type]
+    da = z.copy()
+    fact.subtract_X(fc, da)
+    assert np.array_equal(da, z - X @ fc)
+    X[60, 3] = 1.0
+    (whole,) = x_blocks(X, offsets, body)
+    assert whole.rows == slice(0, 120) and len(whole.cols) == 20 and whole.X is X
+
+
+def test_second_back_solve_equals_product_with_X(folder: pathlib.Path) -> None:
+    # Δa = z − X f_c (X kept by body) and Δa = A⁻¹(r₀ − E f_c) (X not kept, a second
+    # back-solve: Factorisations.keep_X on fine meshes) give the same frictional steps:
+    # to round-off in the first, then to the Newton tolerance (the two round-offs make
+    # Newton stop at iterates a tolerance apart). Measured over 8 steps (u, v, a, each
+    # relative to its scale): 1.7e-9, 5.6e-9, 7.7e-9 serially (the same run twice: 0);
+    # on 2 ranks 6e-10, 5e-9, 1.2e-8, and the same run twice differs as much (1e-9,
+    # 2e-8, 1e-8) with a Newton count one apart (tests/test_mpi.py). Bounds: RTOL on u,
+    # 1e-7 on v and a, counts within one. From rest, gravity sets the block on the base.
+    path = two_rectangles(folder / "keep.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    states = {}
+    for keep in (True, False):
+        model = _two_blocks(path, 0.5, damping=Damping(alpha=2.0, beta=1e-4))
+        s = GN22(model, 1e-3)
+        assert s.fast is not None
+        s.fast.factorisations._keep_X = keep
+        s.initialise()
+        its = [s.step() for _ in range(8)]
+        assert (s.fast.factorisations.factorisation(1e-3).X_blocks is not None) == keep
+        states[keep] = (its, [np.concatenate([f.x.array for f in x]) for x in (s.u, s.v, s.a)])
+        s.destroy()
+    its_kept, its_solved = np.array(states[True][0]), np.array(states[False][0])
+    assert np.all(np.abs(its_kept - its_solved) <= 1) and its_kept.sum() > 8
+    for kept, solved, rtol in zip(states[True][1], states[False][1], (RTOL, 1e-7, 1e-7),
+                                  strict=True):
+        scale = COMM.allreduce(np.abs(kept).max(), op=MPI.MAX)
+        assert scale > 0
+        np.testing.assert_allclose(solved, kept, rtol=0, atol=rtol * scale)
 
 
 def test_unknown_solver_is_refused() -> None:

@@ -19,11 +19,14 @@ for y = Δa_I; F is the whole residual with the bulk rows in equilibrium, a forc
 convergence test keeps its meaning. Once y converges the whole increment is
 ``Δa = z − X f_c(y)``. Per distinct Δt: one assembly and factorisation of A (MUMPS) and
 one multi-right-hand-side solve for X (cached: cut-backs come back to the same Δt). Per
-step: a few sparse matrix-vector products for r₀, one back-solve for z and one dense
-product with X. Per Newton iteration: the contact forces and their Jacobian on the
-interface unknowns and a dense solve of size n_I. The Newton is a PETSc SNES on the
-interface unknowns (every rank solves the same small system, so every rank takes the same
-decisions), with the convergence test and the slip-reversal pre-check of the reference path.
+step: a few sparse matrix-vector products for r₀, one back-solve for z and one product
+with X, block by body (X is zero, exactly, where a body's rows meet another body's
+unknowns), or a second back-solve ``A⁻¹(r₀ − E f_c)`` where that is cheaper
+(:meth:`~breakwater.stepping.factorisations.Factorisations.keep_X`). Per Newton
+iteration: the contact forces and their Jacobian on the interface unknowns and a dense
+solve of size n_I. The Newton is a PETSc SNES on the interface unknowns (every rank
+solves the same small system, so every rank takes the same decisions), with the
+convergence test and the slip-reversal pre-check of the reference path.
 
 The parts: :class:`~breakwater.stepping.bulk.BulkOperators` (M, K, the loads and r₀),
 :class:`~breakwater.stepping.factorisations.Factorisations` (A, X and S per Δt),
@@ -334,9 +337,19 @@ class CondensedNewton(StepSolver):
             self._check_penetration(its)
             # The last residual evaluation was at the solution: f_c(y) is at hand.
             fc = self.newton.fc
+        out = V["da"]
+        if fact.X_blocks is None:  # Δa = z − X f_c = A⁻¹(r₀ − E f_c): a back-solve
+            with T("bulk_products"):
+                rhs = V["w"]
+                rhs.array[:] = V["r0"].array
+                rhs.array[self.interface.owned_rows] -= fc[self.interface.owned]
+            self.factorisations.solve(fact, rhs, out)
+        else:
+            with T("bulk_products"):
+                da = out.array
+                da[:] = V["z"].array
+                fact.subtract_X(fc, da)  # Δa = z − X f_c, by body block
         with T("bulk_products"):
-            out = V["da"]
-            out.array[:] = V["z"].array - fact.X @ fc
             # At the interface, Newton's converged iterate itself (z_I − X_II f_c equals it
             # only to the residual): the friction law, whose stick tangent is μp/χ, was
             # evaluated and converged there.
