@@ -28,6 +28,7 @@ from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
 from breakwater.stepping.condensed import InterfaceAssembler
 from breakwater.stepping.gn22 import GN22
+from breakwater.stepping.interface import BodyGuard
 
 COMM = MPI.COMM_WORLD
 
@@ -130,14 +131,14 @@ def test_compiled_guard_equals_slip_guard() -> None:
         solver = stepper.fast
         assert solver is not None and solver.guard is not None
         rng = np.random.default_rng(11)  # the same on every rank: interface arrays
-        n, dv_dx = solver.n, solver.beta1 * float(solver.dt.value)  # as _body_guard
+        n, dv_dx = solver.n, solver.beta1 * float(solver.dt.value)
+        body_guard = BodyGuard(solver.guard, solver.interface, solver.layout, stepper.da)
         for trial in range(3):
             x = 1e-2 * rng.standard_normal(n)
             v_pred = 1e-6 * rng.standard_normal(n)
             step = 3e-2 * rng.standard_normal(n)
             expected = step.copy()
-            solver._v_pred_I = v_pred
-            cut_ref = solver._body_guard(x, expected)
+            cut_ref = body_guard(x, expected, v_pred, dv_dx)
             got = step.copy()
             cut = sum(p.precheck(x, got, v_pred, dv_dx) for p in solver.providers)
             assert cut == cut_ref > 0, trial

@@ -65,6 +65,7 @@ from breakwater.model.model import ContactModel
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
 from breakwater.stepping.factorisations import Factorisations
 from breakwater.stepping.interface import (
+    BodyGuard,
     ContactFactory,
     ContactForces,
     ContactSum,
@@ -170,6 +171,12 @@ class InterfaceAssembler:
         return out.reshape(self.n, self.n)
 
 
+def _surface_guard(pair: SurfaceContact) -> Callable[[np.ndarray, np.ndarray, np.ndarray,
+                                                     float], int]:
+    """A general pair's slip guard (``precheck(x, step)``) as a StateForces guard."""
+    return lambda x, step, v_pred, dv_dx: pair.precheck(x, step)
+
+
 class CondensedNewton(StepSolver):
     """The fast path's :class:`~breakwater.stepping.stepsolver.StepSolver` (see the module doc).
 
@@ -233,22 +240,21 @@ class CondensedNewton(StepSolver):
                 StateForces(InterfaceAssembler(
                     model, layout, ufl.extract_blocks(interface_residual), self.da,
                     self.interface.positions, self.I), self.interface, self.da,
-                    self._body_guard if guard is not None else None)]
+                    BodyGuard(guard, self.interface, layout, self.da)
+                    if guard is not None else None)]
         # General pairs (breakwater.contact.general): one provider each, with its guard.
         self.surfaces = [SurfaceContact(model, p, layout, self.I,
                                         (self.u, self.v, self.a, self.da), dt, beta1, beta2)
                          for p in model.surface_pairs]
         surface_guard = surface_guard and any(p.friction for p in model.surface_pairs)
         self.providers += [StateForces(sp, self.interface, self.da,
-                                       sp.precheck if surface_guard else None)
+                                       _surface_guard(sp) if surface_guard else None)
                            for sp in self.surfaces]
         for sp in self.surfaces:
             sp.timings = self.timings  # its search time: timings["contact_search"]
         self.contact = ContactSum(self.n, self.providers, self.timings)
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
-        self._guard_arrays = [[np.zeros_like(f.x.array) for f in self.da] for _ in range(2)]
-        self._v_pred_I = np.zeros(self.n)
         self.newton = InterfaceNewton(self.n, self.contact, "gn22", options or NewtonOptions(),
                                       force_scale, self.timings)
 
@@ -279,29 +285,6 @@ class CondensedNewton(StepSolver):
             fc += p.vector(accepted=True)
         vec.array[self.interface.owned_rows] += scale * fc[self.interface.owned]
 
-    def _body_guard(self, x: np.ndarray, step: np.ndarray) -> int:
-        """The conforming pairs' slip guard on body arrays, for the assembled providers.
-
-        The guard (:class:`~breakwater.contact.slipguard.SlipGuard`) works on local body
-        arrays: the iterate's velocities v₁ = ṽ + β₁Δt x and the step are written at the
-        interface entries, the only ones the guard reads, and the step is read back
-        where the guard cut it.
-        """
-        assert self.guard is not None
-        dv_dx = self.beta1 * float(self.dt.value)
-        velocity = self._v_pred_I + dv_dx * x
-        v_arrays, step_arrays = self._guard_arrays
-        for va, sa, (local, pos) in zip(v_arrays, step_arrays, self.interface.positions,
-                                        strict=True):
-            va[local] = velocity[pos]
-            sa[local] = step[pos]
-        corrected = self.guard(v_arrays, step_arrays, dv_dx)
-        if corrected:
-            owned = np.concatenate([sa[:n] for sa, n in zip(step_arrays, self.layout.sizes,
-                                                            strict=True)])
-            step[:] = self.interface.gather(owned)[0]
-        return corrected
-
     # --- one step ---------------------------------------------------------------------
 
     def solve(self) -> int:
@@ -331,7 +314,6 @@ class CondensedNewton(StepSolver):
                 w_norm2 = w.norm() ** 2
             z, v_pred, y0, w_I = self.interface.gather(
                 V["z"].array, V["v"].array + dt * V["a"].array, V["da"].array, w.array)
-            self._v_pred_I = v_pred
             self.contact.begin()
             its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
             self._check_penetration(its)

@@ -20,8 +20,8 @@ from mpi4py import MPI
 from breakwater.common.timings import Timings
 from breakwater.model.layout import MonolithicLayout
 
-__all__ = ["ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns", "StateForces",
-           "StateProvider"]
+__all__ = ["BodyGuard", "ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns",
+           "StateForces", "StateProvider"]
 
 
 class ContactForces(Protocol):
@@ -93,12 +93,14 @@ class StateForces:
         provider: The provider.
         interface: The interface unknowns.
         da: The step's unknown Δa, one Function per body.
-        guard: The provider's slip guard ``(x, step) -> corrected``, or None.
+        guard: The provider's slip guard ``(x, step, v_pred, dv_dx) -> corrected``
+            (:meth:`ContactForces.precheck`), or None.
     """
 
     def __init__(self, provider: StateProvider, interface: InterfaceUnknowns,
                  da: Sequence[fem.Function],
-                 guard: Callable[[np.ndarray, np.ndarray], int] | None = None) -> None:
+                 guard: Callable[[np.ndarray, np.ndarray, np.ndarray, float], int] | None
+                 = None) -> None:
         self.provider, self.interface, self.da = provider, interface, da
         self.guard = guard
 
@@ -127,7 +129,46 @@ class StateForces:
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The provider's guard, if any."""
-        return self.guard(x, step) if self.guard is not None else 0
+        return self.guard(x, step, v_pred, dv_dx) if self.guard is not None else 0
+
+
+class BodyGuard:
+    """A slip guard on local body arrays as a guard on the interface unknowns.
+
+    The conforming pairs' :class:`~breakwater.contact.slipguard.SlipGuard` works on local
+    body arrays: the iterate's velocities ``v_pred + dv_dx x`` and the step are written
+    at the interface entries, the only ones the guard reads, and the step is read back
+    where the guard cut it (for the assembled provider; the nodal providers guard on the
+    interface unknowns themselves).
+
+    Args:
+        guard: ``guard(v, step, dv_dx) -> corrected`` on local body arrays.
+        interface: The interface unknowns.
+        layout: The stacked-vector layout.
+        da: The step's unknown Δa, one Function per body (the arrays' shapes).
+    """
+
+    def __init__(self, guard: Callable[[Sequence[np.ndarray], Sequence[np.ndarray], float],
+                                       int], interface: InterfaceUnknowns,
+                 layout: MonolithicLayout, da: Sequence[fem.Function]) -> None:
+        self.guard, self.interface, self.layout = guard, interface, layout
+        self._arrays = [[np.zeros_like(f.x.array) for f in da] for _ in range(2)]
+
+    def __call__(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        """Cut ``step`` in place; the nodes corrected."""
+        velocity = v_pred + dv_dx * x
+        v_arrays, step_arrays = self._arrays
+        for va, sa, (local, pos) in zip(v_arrays, step_arrays, self.interface.positions,
+                                        strict=True):
+            va[local] = velocity[pos]
+            sa[local] = step[pos]
+        corrected = self.guard(v_arrays, step_arrays, dv_dx)
+        if corrected:
+            owned = np.concatenate([sa[:n] for sa, n in zip(step_arrays, self.layout.sizes,
+                                                            strict=True)])
+            step[:] = self.interface.gather(owned)[0]
+        return corrected
 
 
 #: Builds the contact-force providers of a model from its stacked layout and the
