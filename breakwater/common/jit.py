@@ -6,7 +6,9 @@ of them is a handful of calls whose overhead is larger than their arithmetic. Th
 written as plain loops and compiled with numba's ``njit``, as the dolfinx demos compile
 their custom kernels. :func:`kernel` is the one decorator: compiled once per machine
 (``cache=True``: numba keeps the machine code beside the module, or in its user cache
-directory where the package is read-only), without fast-math (the kernels must give the
+directory where the package is read-only; where neither can be written, e.g. a read-only
+install on a cluster node without a writable home, each process compiles them anew),
+without fast-math (the kernels must give the
 numbers of the NumPy and UFL references they are tested against, to round-off).
 """
 
@@ -21,5 +23,12 @@ __all__ = ["kernel"]
 
 
 def kernel[F: Callable[..., Any]](function: F) -> F:
-    """``numba.njit(cache=True)``: ``function`` compiled on its first call."""
-    return cast(F, numba.njit(cache=True)(function))
+    """``numba.njit(cache=True)``: ``function`` compiled on its first call.
+
+    Without a cache where numba finds no writable directory for it (it refuses
+    ``cache=True`` then).
+    """
+    try:
+        return cast(F, numba.njit(cache=True)(function))
+    except RuntimeError:  # "cannot cache function ...: no locator available"
+        return cast(F, numba.njit(function))
