@@ -627,3 +627,30 @@ def test_energy_ledger_with_a_general_pair(shared_dir: pathlib.Path) -> None:
     assert penalty > 0 and row.friction_dissipation > 0.1
     assert abs(row.balance_error) < 1e-2 * row.friction_dissipation
     stepper.destroy()
+
+
+def test_step_state_kept_only_within_the_newton(shared_dir: pathlib.Path) -> None:
+    # Within a step's Newton the pair reads u, v, a gathered once (begin_step) and the
+    # iterate as given; outside it, every evaluation gathers the state Functions: after
+    # the step nothing is kept, and the pair's forces at the accepted state are those of
+    # a fresh gather (the cache would give the start of the step's state).
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=0.5)
+    model = _model(shared_dir / "keep.msh", COMM,
+                   [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 5, 2),
+                    Rectangle("block", -0.1, 0.0, 0.2, 0.1, 3, 2)], pair,
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G))
+    stepper = GN22(model, 1e-3)
+    try:
+        stepper.initialise()
+        provider = _provider(stepper)
+        before = provider.interface_values(stepper.u)
+        for _ in range(3):
+            stepper.step()
+        assert provider._step is None and provider._iterate is None
+        u0, _, _ = provider._state()  # a kept state would be the last step's start
+        after = provider.interface_values(stepper.u)
+        assert not np.array_equal(after, before)  # the block moved
+        assert np.array_equal(u0, after)
+        assert not provider.at(np.zeros(provider.n))  # outside a step: nothing kept
+    finally:
+        stepper.destroy()

@@ -197,6 +197,9 @@ class NodalContactForces:
         self._law = (float(law.normal.ε_n), float(law.normal.g0), float(law.friction.μ),
                      float(law.friction.χ) ** 2)
 
+    def end(self) -> None:
+        """Nothing to release (the gathered state is overwritten by the next :meth:`begin`)."""
+
     def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
         """Add f_c(y) on the interface unknowns to ``out``."""
         nodal_residual(y, self._pos, self._base, *self._coefficients, self._node,

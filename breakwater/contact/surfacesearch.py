@@ -78,6 +78,37 @@ class InterfaceValues:
             self._owned.append((local[hit], pos[hit]))
         # The state Functions' arrays (a view per access otherwise: 8 per evaluation).
         self._arrays = {id(f): f.x.array for fs in state for f in fs}
+        # u, v, a of the step the Newton is solving (begin_step to end_step), and its
+        # iterate: then no reduction per evaluation.
+        self._step: np.ndarray | None = None
+        self._iterate: np.ndarray | None = None
+
+    def begin_step(self) -> None:
+        """Gather u, v, a of the staged step once, for the Newton's evaluations (collective).
+
+        Until :meth:`end_step`, an evaluation at an iterate given by :meth:`at` reads
+        them instead of gathering the state Functions (they do not change within a
+        step; Δa is the iterate itself): the same numbers, without a reduction.
+        """
+        self._step = self._values(self.u, self.v, self.a)
+        self._step.flags.writeable = False
+        self._iterate = None
+
+    def at(self, y: np.ndarray) -> bool:
+        """Evaluate at the iterate y until the next call, within a step.
+
+        Returns:
+            False outside :meth:`begin_step`/:meth:`end_step` (nothing kept: the
+            evaluations read the Δa Functions).
+        """
+        if self._step is None:
+            return False
+        self._iterate = y
+        return True
+
+    def end_step(self) -> None:
+        """The Newton is done: evaluations gather the state Functions again."""
+        self._step = self._iterate = None
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -96,7 +127,13 @@ class InterfaceValues:
             y: Δa at the interface unknowns; None: read from the Δa Functions.
             accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
-        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
+        if y is None and self._step is not None:
+            y = self._iterate
+        if self._step is not None and y is not None and not accepted:
+            u, v, a = self._step
+            da = np.append(y, 0.0)
+        else:
+            u, v, a, da = self._values(self.u, self.v, self.a, self.da)
         if accepted:
             return u, u, v
         if y is not None:

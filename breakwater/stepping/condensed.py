@@ -160,6 +160,16 @@ class InterfaceAssembler:
         """None: the product is formed from :meth:`matrix` (no structure to use)."""
         return None
 
+    def begin_step(self) -> None:
+        """Nothing to keep: the forms are assembled at the state Functions."""
+
+    def at(self, y: np.ndarray) -> bool:
+        """False: Δa must hold the iterate (the forms read it)."""
+        return False
+
+    def end_step(self) -> None:
+        """Nothing kept."""
+
     def matrix(self) -> np.ndarray:
         """The Jacobian at the interface unknowns, dense."""
         out = np.zeros(self.n * self.n)
@@ -315,8 +325,11 @@ class CondensedNewton(StepSolver):
             z, v_pred, y0, w_I = self.interface.gather(
                 V["z"].array, V["v"].array + dt * V["a"].array, V["da"].array, w.array)
             self.contact.begin()
-            its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
-            self._check_penetration(its)
+            try:
+                its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
+                self._check_penetration(its)
+            finally:
+                self.contact.end()
             # The last residual evaluation was at the solution: f_c(y) is at hand.
             fc = self.newton.fc
         out = V["da"]

@@ -37,6 +37,10 @@ class ContactForces(Protocol):
         """Take the staged step's state (u, v, a at t, Δt, the staged Δa)."""
         ...
 
+    def end(self) -> None:
+        """The step's Newton is done (converged or not)."""
+        ...
+
     def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
         """Add f_c(y) on the interface unknowns, shape ``(n_I,)``, to ``out``."""
         ...
@@ -68,6 +72,18 @@ class ContactForces(Protocol):
 
 class StateProvider(Protocol):
     """Contact forces evaluated at the state Functions (Δa holding the iterate)."""
+
+    def begin_step(self) -> None:
+        """The Newton of a step starts (u, v, a fixed until :meth:`end_step`)."""
+        ...
+
+    def at(self, y: np.ndarray) -> bool:
+        """The iterate of the next evaluations; True: taken as it is (Δa need not hold it)."""
+        ...
+
+    def end_step(self) -> None:
+        """The Newton of the step is done."""
+        ...
 
     def vector(self) -> np.ndarray:
         """f_c on the interface unknowns."""
@@ -105,16 +121,26 @@ class StateForces:
         self.guard = guard
 
     def begin(self) -> None:
-        """Nothing to take: the provider reads the Functions."""
+        """The provider's :meth:`StateProvider.begin_step` (collective)."""
+        self.provider.begin_step()
+
+    def end(self) -> None:
+        """The provider's :meth:`StateProvider.end_step`."""
+        self.provider.end_step()
+
+    def _set(self, y: np.ndarray) -> None:
+        """The iterate y for the provider: given, or written into Δa."""
+        if not self.provider.at(y):
+            self.interface.write(self.da, y)
 
     def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
         """Add the provider's ``vector()`` at Δa = y."""
-        self.interface.write(self.da, y)
+        self._set(y)
         out += self.provider.vector()
 
     def add_left_product(self, y: np.ndarray, X: np.ndarray, out: np.ndarray) -> bool:
         """Add the provider's ``left_product(X)`` at Δa = y, if it has one."""
-        self.interface.write(self.da, y)
+        self._set(y)
         product = self.provider.left_product(X)
         if product is None:
             return False
@@ -123,7 +149,7 @@ class StateForces:
 
     def matrix(self, y: np.ndarray) -> np.ndarray:
         """The provider's ``matrix()`` at Δa = y."""
-        self.interface.write(self.da, y)
+        self._set(y)
         return self.provider.matrix()
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
@@ -243,6 +269,11 @@ class ContactSum:
         with self.timings("interface_assembly"):
             for c in self.providers:
                 c.begin()
+
+    def end(self) -> None:
+        """Every provider: the step's Newton is done."""
+        for c in self.providers:
+            c.end()
 
     def vector(self, y: np.ndarray) -> np.ndarray:
         """f_c(y) on the interface unknowns (the same on every rank)."""
