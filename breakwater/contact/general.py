@@ -221,8 +221,7 @@ class SurfaceForces(SurfaceSearch):
         :class:`breakwater.contact.penetration.StepCheck` (None: it does not); the same on every
         rank.
         """
-        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
-        da[:-1] = y
+        u, v, a, da = self._start(y)
         dt = float(self.dt.value)
         # u₁ as GN22.update computes it (gn22_kinematics): the next step's u₀ bit for bit.
         u1 = u + (dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da)

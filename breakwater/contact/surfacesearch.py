@@ -127,20 +127,31 @@ class InterfaceValues:
             y: Δa at the interface unknowns; None: read from the Δa Functions.
             accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
-        if y is None and self._step is not None:
-            y = self._iterate
-        if self._step is not None and y is not None and not accepted:
-            u, v, a = self._step
-            da = np.append(y, 0.0)
-        else:
-            u, v, a, da = self._values(self.u, self.v, self.a, self.da)
         if accepted:
+            u, v = self._values(self.u, self.v)
             return u, u, v
-        if y is not None:
-            da[:-1] = y
+        u, v, a, da = self._start(y)
         dt = float(self.dt.value)
         return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
                 v + dt * a + self.beta1 * dt * da)
+
+    def _start(self, y: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """u, v, a at the start of the step and Δa = y (every rank; a trailing 0).
+
+        Within :meth:`begin_step`/:meth:`end_step` the kept u, v, a and the iterate
+        (y, or the one given to :meth:`at`); otherwise the state Functions, Δa
+        replaced by y where it is given.
+        """
+        if self._step is not None:
+            y = self._iterate if y is None else y
+            if y is not None:
+                u, v, a = self._step
+                return u, v, a, np.append(y, 0.0)
+        u, v, a, da = self._values(self.u, self.v, self.a, self.da)
+        if y is not None:
+            da[:-1] = y
+        return u, v, a, da
 
     def interface_values(self, functions: Sequence[fem.Function]) -> np.ndarray:
         """Values of one Function per body at the pair's interface unknowns (collective).

@@ -322,8 +322,9 @@ class CondensedNewton(StepSolver):
                 fact.A.mult(V["da"], w)
                 w.axpy(-1.0, V["r0"])
                 w_norm2 = w.norm() ** 2
-            z, v_pred, y0, w_I = self.interface.gather(
-                V["z"].array, V["v"].array + dt * V["a"].array, V["da"].array, w.array)
+            z, v_I, a_I, y0, w_I = self.interface.gather(
+                V["z"].array, V["v"].array, V["a"].array, V["da"].array, w.array)
+            v_pred = v_I + dt * a_I  # ṽ = v₀ + Δt a₀ at the interface unknowns
             self.contact.begin()
             try:
                 its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
