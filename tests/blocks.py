@@ -12,6 +12,7 @@ model of three of them that several tests share.
 
 from __future__ import annotations
 
+import math
 import pathlib
 from collections.abc import Callable
 from typing import Any
@@ -177,13 +178,15 @@ THREE_DENSITIES = (1800.0, 2300.0, 2500.0)
 
 
 def three_blocks(path: str | pathlib.Path, comm: MPI.Comm, young_modulus: float,
-                 penalty: float) -> ContactModel:
+                 penalty: float, gap: float = 0.0, tilt: float = 0.0) -> ContactModel:
     """Three stacked blocks on a :func:`stacked_blocks` mesh of ``THREE_*`` sizes.
 
     Gravity, Rayleigh damping (α = 5 1/s, β = 1e-6 s), the base fixed, μ = 0.3 on
     ``joint0`` and 0.6 on ``joint1``, and a triangular pulse on the top block's left side
     (``left2``) over 4 ms whose peak force is 1.5 × 0.6 × the top block's weight: it
-    slides on ``joint1``.
+    slides on ``joint1``. ``gap``: joint1's initial gap g₀ (m); ``tilt``: the mesh turned
+    by this angle (rad) about the origin, so that the interfaces' normals and tangents have
+    two nonzero components (gravity and the pulse stay as given).
     """
     g = 9.81
     w2 = THREE_DENSITIES[2] * g * THREE_WIDTH * THREE_HEIGHTS[2]
@@ -195,9 +198,15 @@ def three_blocks(path: str | pathlib.Path, comm: MPI.Comm, young_modulus: float,
 
     bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=young_modulus))
               for k, ρ in enumerate(THREE_DENSITIES)]
-    return ContactModel(read_mesh(path, comm), bodies,
+    data = read_mesh(path, comm)
+    if tilt:
+        x = data.mesh.geometry.x
+        c, s = math.cos(tilt), math.sin(tilt)
+        x[:, 0], x[:, 1] = c * x[:, 0] - s * x[:, 1], s * x[:, 0] + c * x[:, 1]
+    return ContactModel(data, bodies,
                         [ContactPair("joint0", "block1", "block0", penalty, friction=0.3),
-                         ContactPair("joint1", "block2", "block1", penalty, friction=0.6)],
+                         ContactPair("joint1", "block2", "block1", penalty, friction=0.6,
+                                     gap=gap)],
                         [Fixed("base")], [SurfaceLoad("left2", (1.0, 0.0), pulse)],
                         gravity=(0.0, -g), damping=Damping(alpha=5.0, beta=1e-6))
 

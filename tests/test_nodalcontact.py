@@ -20,14 +20,12 @@ import pathlib
 import numpy as np
 import pytest
 import ufl
-from blocks import stacked_blocks
+from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks
 from mpi4py import MPI
 
 import breakwater.stepping.gn22 as gn22_module
 from breakwater.casefile.case import load_case
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
-from breakwater.model.mesh import read_mesh
-from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
 from breakwater.stepping.condensed import InterfaceAssembler
 from breakwater.stepping.gn22 import GN22
 from breakwater.stepping.interface import BodyGuard
@@ -88,14 +86,8 @@ def test_goda_nodal_equals_forms() -> None:
 
 
 def test_blocks_nodal_equals_forms(folder: pathlib.Path) -> None:
-    widths, heights = 0.4, (0.2, 0.15, 0.1)
-    path = stacked_blocks(folder / "three.msh", COMM, widths, heights, h=0.05)
-    bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=1e11))
-              for k, ρ in enumerate((1800.0, 2300.0, 2500.0))]
-    model = ContactModel(read_mesh(path, COMM), bodies,
-                         [ContactPair("joint0", "block1", "block0", 1e13, friction=0.3),
-                          ContactPair("joint1", "block2", "block1", 1e13, friction=0.6)],
-                         [Fixed("base")], gravity=(0.0, -9.81))
+    path = stacked_blocks(folder / "three.msh", COMM, THREE_WIDTH, THREE_HEIGHTS, h=0.05)
+    model = three_blocks(path, COMM, young_modulus=1e11, penalty=1e13)
     stepper = GN22(model, 1e-4)
     try:
         _compare(stepper)

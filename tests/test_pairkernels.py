@@ -18,13 +18,11 @@ from __future__ import annotations
 import pathlib
 
 import numpy as np
-from blocks import stacked_blocks
+from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks
 from mpi4py import MPI
 
 from breakwater.casefile.case import load_case
 from breakwater.contact.pairstate import ConformingPair
-from breakwater.model.mesh import read_mesh
-from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
 from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
@@ -76,20 +74,9 @@ def test_goda_nodal_sums_equal_forms() -> None:
 
 
 def test_blocks_nodal_sums_equal_forms(folder: pathlib.Path) -> None:
-    widths, heights = 0.4, (0.2, 0.15, 0.1)
-    path = stacked_blocks(folder / "three.msh", COMM, widths, heights, h=0.05)
-    bodies = [Body(f"block{k}", Material(ρ, 0.2, young_modulus=1e11))
-              for k, ρ in enumerate((1800.0, 2300.0, 2500.0))]
-    data = read_mesh(path, COMM)
+    path = stacked_blocks(folder / "three.msh", COMM, THREE_WIDTH, THREE_HEIGHTS, h=0.05)
     # Tilted by 0.3 rad: the normals and tangents have two nonzero components each.
-    x = data.mesh.geometry.x
-    c, s = np.cos(0.3), np.sin(0.3)
-    x[:, 0], x[:, 1] = c * x[:, 0] - s * x[:, 1], s * x[:, 0] + c * x[:, 1]
-    model = ContactModel(data, bodies,
-                         [ContactPair("joint0", "block1", "block0", 1e13, friction=0.3),
-                          ContactPair("joint1", "block2", "block1", 1e13, friction=0.6,
-                                      gap=2e-7)],
-                         [Fixed("base")], gravity=(0.0, -9.81))
+    model = three_blocks(path, COMM, young_modulus=1e11, penalty=1e13, gap=2e-7, tilt=0.3)
     stepper = GN22(model, 1e-4)
     try:
         _compare(stepper)
