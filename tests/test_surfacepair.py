@@ -654,3 +654,58 @@ def test_step_state_kept_only_within_the_newton(shared_dir: pathlib.Path) -> Non
         assert not provider.at(np.zeros(provider.n))  # outside a step: nothing kept
     finally:
         stepper.destroy()
+
+
+def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -> None:
+    """Newton's start of a step keeps each slave node's converged slip velocity.
+
+    A block resting on a non-matching base and shaken sideways below μN (it sticks and
+    rocks: the normal rate and the master's rotation move the projection and tangent
+    from step to step). After each accepted step, the start of the next that
+    :meth:`SurfaceForces.predict` makes has, at every node in contact, the slip velocity
+    the last step converged to (measured against the new step's projection and
+    tangent), to 1e-6 of it or of χ (round-off of the landing); the predictor moves
+    only the slave unknowns of those nodes, tangentially. Some nodes stick (|v_T| < 10 χ).
+    """
+    μ, w, h = 0.6, 0.1, 0.05
+    m = STEEL_LIKE.density * w * h
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=μ)
+    model = _model(shared_dir / "shake.msh", COMM,
+                   [Rectangle("base", -0.1, -0.05, 0.3, 0.05, 9, 2),
+                    Rectangle("block", -0.05, 0.0, w, h, 4, 2)], pair,
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                   loads=[SurfaceLoad("block_left", (0.5 * μ * m * G / h, 0.0),
+                                      lambda t: float(np.sin(2 * np.pi * 50 * t)))])
+    stepper = GN22(model, 5e-4)
+    stepper.initialise()
+    provider = _provider(stepper)
+    χ = pair.regularisation
+    moved = sticking = 0
+    for _ in range(12):
+        stepper.step()
+        assert provider.slip is not None
+        stuck = np.abs(provider.slip) < 10 * χ  # NaN (out of contact): False
+        sticking += int(stuck.sum())
+        # The next step's start, as CondensedNewton.solve makes it.
+        stepper.stage()
+        provider.begin_step()
+        try:
+            y0 = provider._start()[3][:-1].copy()  # Δa = −a/β₁ at the unknowns
+            y = y0.copy()
+            moved += provider.predict(y)
+            u0, _, v1 = provider._state(y)
+            frozen = provider._frozen(u0)
+            along = provider._slip_along(v1, *frozen)
+            keep = np.isfinite(provider.slip) & np.isfinite(along)
+            scale = np.maximum(np.abs(provider.slip[keep]), χ)
+            assert np.all(np.abs(along[keep] - provider.slip[keep]) < 1e-6 * scale)
+            change = (y - y0)[provider.node_pos[keep]]
+            assert np.allclose(np.einsum("jd,jd->j", change, frozen[2][keep][:, ::-1]
+                                         * np.array([1.0, -1.0])), 0.0, atol=1e-12)
+            others = np.ones(provider.n, bool)
+            others[provider.node_pos[keep].ravel()] = False
+            assert np.array_equal(y[others], y0[others])
+        finally:
+            provider.end_step()
+    assert moved > 0 and sticking > 0
+    stepper.destroy()

@@ -48,8 +48,12 @@ __all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_fingerprint", "check
            "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
-FORMAT = 3
+FORMAT = 4
 """Version of the checkpoint layout; a checkpoint of another version is refused.
+
+4: the stepper's state holds ``memory``, the general pairs' last slip velocities at
+their slave nodes (Newton's start of the next step:
+:meth:`breakwater.contact.general.SurfaceForces.predict`).
 
 3: the ledger's state holds ``friction_power``, every pair's friction power at the
 last record (2 held ``surface_power``, the general pairs' only).

@@ -92,7 +92,7 @@ class Stepped:
         return dataclasses.replace(
             state, history_rows=history.rows, wall_before=wall_time,
             stepper={"dt": float(s.dt.value), "flips": s.flips,
-                     "floor_accepts": s.solver.floor_accepts},
+                     "floor_accepts": s.solver.floor_accepts, "memory": s.solver.memory()},
             ledger=self.ledger.state(), snapshot={"time": self.peak.time,
                                                   "value": self.peak.value})
 
@@ -101,6 +101,7 @@ class Stepped:
         s = self.stepper
         s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
         s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
+        s.solver.restore(state.stepper["memory"])
         self.ledger.restore(state.ledger)
         self.peak.time, self.peak.value = state.snapshot["time"], state.snapshot["value"]
 

@@ -316,7 +316,8 @@ class CondensedNewton(StepSolver):
             fc = np.zeros(0)
             its = 1
         else:
-            # The bulk rows' residual at Newton's start, for the relative test.
+            # The bulk rows' residual at Newton's start, for the relative test (the
+            # constant-velocity start: before the general pairs' slip predictor).
             w = V["w"]
             with T("bulk_products"):
                 fact.A.mult(V["da"], w)
@@ -327,8 +328,14 @@ class CondensedNewton(StepSolver):
             v_pred = v_I + dt * a_I  # ṽ = v₀ + Δt a₀ at the interface unknowns
             self.contact.begin()
             try:
+                with T("interface_assembly"):
+                    for sp in self.surfaces:  # each node's last slip velocity kept
+                        sp.predict(y0)
                 its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
                 self._check_penetration(its)
+                with T("interface_assembly"):
+                    for sp in self.surfaces:
+                        sp.converged(self.newton.y)
             finally:
                 self.contact.end()
             # The last residual evaluation was at the solution: f_c(y) is at hand.
@@ -353,6 +360,27 @@ class CondensedNewton(StepSolver):
             out.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             fem_petsc.assign(out, self.da)
         return its
+
+    def accept(self) -> None:
+        """The solved step is accepted: the general pairs keep its slip velocities."""
+        for sp in self.surfaces:
+            sp.accept()
+
+    def memory(self) -> list[list[float | None] | None]:
+        """What the next step's start depends on beyond (u, v, a), for a checkpoint.
+
+        Per general pair, its slave nodes' last slip velocities
+        (:attr:`~breakwater.contact.general.SurfaceForces.slip`; None for NaN).
+        """
+        return [None if sp.slip is None else
+                [float(x) if np.isfinite(x) else None for x in sp.slip]
+                for sp in self.surfaces]
+
+    def restore(self, memory: list[list[float | None] | None]) -> None:
+        """Set what :meth:`memory` returned (a resumed run)."""
+        for sp, slip in zip(self.surfaces, memory, strict=True):
+            sp.slip = None if slip is None else np.array(
+                [np.nan if x is None else x for x in slip], dtype=float)
 
     def _check_penetration(self, its: int) -> None:
         """Reject a converged step that leaves a general pair's slave node unseen.

@@ -377,6 +377,7 @@ class GN22:
             gn22_update(u.x.array, v.x.array, a.x.array, d.x.array, Δt, self.params.beta1,
                         self.params.beta2)
         self.t.value += Δt
+        self.solver.accept()
 
     def destroy(self) -> None:
         """Free the PETSc objects of the Newton solver (collective).

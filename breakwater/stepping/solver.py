@@ -205,6 +205,16 @@ class NewtonSolver(StepSolver):
         self.floor_accepts += stalled
         return reason
 
+    def accept(self) -> None:
+        """Nothing to keep: the step's state is all in the Functions."""
+
+    def memory(self) -> list[list[float | None] | None]:
+        """Nothing beyond the state Functions (no general pairs on this path)."""
+        return []
+
+    def restore(self, memory: list[list[float | None] | None]) -> None:
+        """Nothing to set."""
+
     def destroy(self) -> None:
         """Free the solver's PETSc objects now (collective: on every rank at once).
 

@@ -5,7 +5,8 @@ reference path, PETSc SNES on the whole residual of the step) and
 :class:`~breakwater.stepping.condensed.CondensedNewton` (the fast path, the bulk
 eliminated and Newton on the contact-surface unknowns).
 :class:`~breakwater.stepping.gn22.GN22` stages a step (Δa holds Newton's start),
-calls :meth:`StepSolver.solve` and, on success, updates the state from Δa; its initial
+calls :meth:`StepSolver.solve` and, on success, updates the state from Δa (and calls
+:meth:`StepSolver.accept`); its initial
 acceleration adds :meth:`StepSolver.add_surface_forces`; the run counts
 :attr:`StepSolver.floor_accepts` (saved in checkpoints) and folds
 :attr:`StepSolver.timings` into the time loop's split.
@@ -43,6 +44,18 @@ class StepSolver(Protocol):
             ConvergenceError: The step did not converge (PenetrationError: it was
                 rejected); the state at t is untouched.
         """
+        ...
+
+    def accept(self) -> None:
+        """The step just solved is accepted (GN22 updates the state from its Δa)."""
+        ...
+
+    def memory(self) -> list[list[float | None] | None]:
+        """What the next step depends on beyond the state Functions (a checkpoint's)."""
+        ...
+
+    def restore(self, memory: list[list[float | None] | None]) -> None:
+        """Set what :meth:`memory` returned, on resuming a run."""
         ...
 
     def add_surface_forces(self, vec: PETSc.Vec, scale: float = 1.0) -> None:
