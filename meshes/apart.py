@@ -25,7 +25,9 @@ class Rectangle:
     """A rectangular body ``[x0, x0 + width] × [y0, y0 + height]``.
 
     Its physical groups: ``name`` (cells) and ``name_bottom``, ``name_right``,
-    ``name_top``, ``name_left`` (facets).
+    ``name_top``, ``name_left`` (facets); with :func:`rectangles`' ``corners``, its
+    corners ``name_bottom_left``, ``name_bottom_right``, ``name_top_right``,
+    ``name_top_left`` (points).
 
     Attributes:
         name: Body name.
@@ -47,7 +49,7 @@ class Rectangle:
 
 
 def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectangle],
-               order: int = 1) -> pathlib.Path:
+               order: int = 1, corners: bool = False) -> pathlib.Path:
     """Write a mesh of separate rectangles (rank 0 writes; collective).
 
     Args:
@@ -55,6 +57,8 @@ def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectan
         comm: Communicator.
         bodies: The rectangles.
         order: Geometric order of the elements.
+        corners: Also name each rectangle's corners (point groups; the mesh is the
+            same).
 
     Returns:
         The path.
@@ -70,15 +74,19 @@ def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectan
                 p = [geo.addPoint(x, y, 0) for x, y in corners]
                 lines = [geo.addLine(p[k], p[(k + 1) % 4]) for k in range(4)]
                 surface = geo.addPlaneSurface([geo.addCurveLoop(lines)])
-                groups.append((b, lines, surface))
+                groups.append((b, p, lines, surface))
             geo.synchronize()
-            for b, lines, surface in groups:
+            for b, p, lines, surface in groups:
                 for line, n in zip(lines, (b.nx, b.ny, b.nx, b.ny), strict=True):
                     gmsh.model.mesh.setTransfiniteCurve(line, n + 1)
                 gmsh.model.mesh.setTransfiniteSurface(surface)
                 gmsh.model.addPhysicalGroup(2, [surface], name=b.name)
                 for line, side in zip(lines, ("bottom", "right", "top", "left"), strict=True):
                     gmsh.model.addPhysicalGroup(1, [line], name=f"{b.name}_{side}")
+                if corners:
+                    for point, corner in zip(p, ("bottom_left", "bottom_right", "top_right",
+                                                 "top_left"), strict=True):
+                        gmsh.model.addPhysicalGroup(0, [point], name=f"{b.name}_{corner}")
             gmsh.model.mesh.generate(2)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))

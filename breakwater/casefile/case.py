@@ -210,11 +210,13 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
     """Every group the case names exists in the mesh with the right dimension."""
     where = "the goda mesh" if case.mesh.generated else case.mesh.source
 
-    def need(name: str, dim: int, field_path: str) -> None:
-        if groups.get(name) == dim:
+    def need(name: str, dim: int | tuple[int, ...], field_path: str) -> None:
+        dims = (dim,) if isinstance(dim, int) else dim
+        if groups.get(name) in dims:
             return
-        have = sorted(n for n, d in groups.items() if d == dim)
-        raise InvalidField(field_path, f"no {_DIM_NAMES[dim]} ({dim}D) physical group "
+        have = sorted(n for n, d in groups.items() if d in dims)
+        kinds = " or ".join(f"{_DIM_NAMES[d]} ({d}D)" for d in dims)
+        raise InvalidField(field_path, f"no {kinds} physical group "
                            f"'{name}' in {where}{suggest(name, have)} (it has: "
                            f"{', '.join(have) or 'none'})")
 
@@ -231,7 +233,7 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
         else:
             need(c.name, 1, f"contact.{c.name}")
     for f in case.fixed:
-        need(f.name, 1, f"fixed.{f.name}")
+        need(f.name, (1, 0), f"fixed.{f.name}")  # a facet group, or points
     for ld in case.loads:
         need(ld.group, 1, f"loads.{ld.name}.group")
         for k, extra in enumerate(ld.groups):

@@ -187,9 +187,9 @@ class ContactCase:
 
 @dataclass(frozen=True)
 class FixedCase:
-    """``[fixed.<group>]``: zero displacement on a facet group."""
+    """``[fixed.<group>]``: zero displacement on a facet group or at a point group's nodes."""
 
-    name: str = setting(key=True, doc="facet (1D) physical group")
+    name: str = setting(key=True, doc="facet (1D) or point (0D) physical group")
     components: tuple[int, ...] = setting((0, 1), doc="fixed displacement components "
                                           "(0: x, 1: y)")
 

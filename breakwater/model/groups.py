@@ -1,4 +1,4 @@
-"""Where a contact model's groups lie: bodies by name, facet groups, fixed boundaries, loads.
+"""Where a contact model's groups lie: bodies by name, facet groups, fixed groups, loads.
 
 :class:`ModelGroups` finds the named groups of the mesh on the bodies and builds the
 Dirichlet conditions and the load measures (on the data
@@ -15,7 +15,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater.common.errors import MeshError
-from breakwater.model.mesh import group_tag
+from breakwater.model.mesh import group_tag, group_vertices
 from breakwater.model.parts import BodyData, Fixed, LoadData, SurfaceLoad
 from breakwater.model.residual import ModelForms
 
@@ -61,21 +61,59 @@ class ModelGroups(ModelForms):
         return b, b.facet_tags.find(tag)
 
     def _build_fixed(self, fixed: Fixed) -> list[fem.DirichletBC]:
-        body, facets = self._locate(fixed.group)
+        """Zero displacement components on a facet group or at a point group's vertices.
+
+        A point group (dimension 0, gmsh ``Physical Point``) holds the components of the
+        nodes at its points, as a facet group holds those of the nodes on its facets.
+        """
         fdim = self.mesh.topology.dim - 1
+        dim = self.mesh_data.physical_groups.get(fixed.group, (fdim, 0))[0]
+        if dim == 0:
+            body, entities = self._locate_points(fixed.group)
+        elif dim == fdim:
+            body, entities = self._locate(fixed.group)
+        else:
+            raise MeshError(f"fixed '{fixed.group}': physical group of dimension {dim}, "
+                            f"expected a facet ({fdim}D) or point (0D) group")
         comps = range(self.gdim) if fixed.components is None else fixed.components
         bcs = []
         for c in comps:
             if not 0 <= c < self.gdim:
                 raise ValueError(f"fixed '{fixed.group}': component {c} out of range")
             Vc = body.V.sub(c)
-            dofs = fem.locate_dofs_topological(Vc, fdim, facets)
+            dofs = fem.locate_dofs_topological(Vc, dim, entities)
             bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
         self._fixed.append((fixed.group, body.index, tuple(comps)))
         return bcs
 
+    def _locate_points(self, group: str) -> tuple[BodyData, np.ndarray]:
+        """The body holding a point group, and the group's vertices in its submesh.
+
+        Raises:
+            MeshError: The group's points are on no body's vertices, or on several
+                bodies (a point shared by two bodies of a conforming interface).
+        """
+        parent = group_vertices(self.mesh_data, group)
+        found = []
+        for b in self.bodies:
+            assert b.vertex_map is not None
+            sub = b.vertex_map.sub_topology_to_topology(parent, inverse=True)
+            found.append(np.asarray(sub[sub >= 0], dtype=np.int32))
+        counts = [self.comm.allreduce(len(f)) for f in found]
+        owners = [i for i, c in enumerate(counts) if c > 0]
+        if not owners:
+            raise MeshError(f"fixed '{group}': point group '{group}' has no vertex of any "
+                            "body")
+        if len(owners) > 1:
+            names = ", ".join(self.bodies[i].spec.name for i in owners)
+            raise MeshError(f"fixed '{group}': point group '{group}' lies on several "
+                            f"bodies ({names}); a fixed point group must lie on exactly one")
+        body = self.bodies[owners[0]]
+        body.submesh.topology.create_connectivity(0, body.submesh.topology.dim)
+        return body, found[owners[0]]
+
     def fixed_on(self, body: str) -> list[tuple[str, tuple[int, ...]]]:
-        """The fixed boundaries on a body: (facet group, displacement components held)."""
+        """The fixed boundaries on a body: (facet or point group, components held)."""
         index = self.body(body).index
         return [(group, comps) for group, i, comps in self._fixed if i == index]
 

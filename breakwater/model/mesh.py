@@ -224,6 +224,22 @@ def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:
     return int(tag)
 
 
+def group_vertices(data: gmshio.MeshData, name: str) -> np.ndarray:
+    """The vertices of the parent mesh (this rank's, ghosts included) in a point group.
+
+    Raises:
+        MeshError: No such group, not a point (dimension-0) group, or a mesh whose
+            point groups dolfinx did not read.
+
+    """
+    tag = group_tag(data, name, 0)
+    tdim = data.mesh.topology.dim
+    tags = {tdim - 2: data.ridge_tags, tdim - 3: data.peak_tags}.get(0)
+    if tags is None:
+        raise MeshError(f"point group '{name}' cannot be read from this mesh")
+    return tags.find(tag)
+
+
 def group_points(data: gmshio.MeshData, name: str) -> np.ndarray:
     """Coordinates of the vertices in a named point (dimension-0) group, on every rank.
 
@@ -232,12 +248,7 @@ def group_points(data: gmshio.MeshData, name: str) -> np.ndarray:
 
     """
     msh = data.mesh
-    tag = group_tag(data, name, 0)
-    tdim = msh.topology.dim
-    tags = {tdim - 2: data.ridge_tags, tdim - 3: data.peak_tags}.get(0)
-    if tags is None:
-        raise MeshError(f"point group '{name}' cannot be read from this mesh")
-    vertices = tags.find(tag)
+    vertices = group_vertices(data, name)
     nloc = msh.topology.index_map(0).size_local
     vertices = vertices[vertices < nloc]
     x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, 0, vertices).ravel()]

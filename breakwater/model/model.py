@@ -55,7 +55,7 @@ class ContactModel(ModelGroups):
             with shared-facet ghosting.
         bodies: The bodies (named cell groups).
         pairs: The contact pairs (named facet groups).
-        fixed: Dirichlet boundaries (named facet groups).
+        fixed: Dirichlet boundaries (named facet or point groups).
         loads: Time-dependent surface tractions.
         gravity: Body force per unit mass (m/s²), e.g. ``(0, -9.81)``.
         damping: Rayleigh damping.
@@ -111,7 +111,8 @@ class ContactModel(ModelGroups):
             λ, μ = body.material.lame
             const = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
             self.bodies.append(BodyData(body, i, sub, cmap, ftags, V, dx(tag),
-                                         const(body.material.density), const(λ), const(μ)))
+                                         const(body.material.density), const(λ), const(μ),
+                                         vertex_map=vmap))
         self.entity_maps = [b.cell_map for b in self.bodies]
         self._by_name = {b.spec.name: b for b in self.bodies}
 

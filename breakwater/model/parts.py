@@ -93,10 +93,10 @@ class Body:
 
 @dataclass(frozen=True)
 class Fixed:
-    """Zero displacement on a named facet group.
+    """Zero displacement on a named facet group, or at the vertices of a point group.
 
     Attributes:
-        group: Facet group name.
+        group: Facet (dimension tdim − 1) or point (dimension 0) group name.
         components: Displacement components fixed (0 = x, 1 = y, 2 = z); None for all.
 
     """
@@ -160,6 +160,7 @@ class BodyData:
     ρ: fem.Constant
     λ: fem.Constant
     μ: fem.Constant
+    vertex_map: dolfinx.mesh.EntityMap | None = None  # submesh vertex -> parent vertex
 
 
 @dataclass

@@ -5,7 +5,8 @@ data of the static state, and steps or solves nothing (but :func:`quality_inputs
 which asks the pairs):
 
 - :func:`static_summary`: the first contact pair's static state (the paper's Fig. 17:
-  contact resultant against the weight it carries, mean, edge and centre pressure);
+  contact resultant against the weight it carries, mean, edge and centre pressure; a
+  general pair's when the model has no conforming one);
 - :func:`quality_inputs` and :func:`contact_quality`: the contact quality report of
   each pair (:mod:`breakwater.outputs.quality`);
 - :class:`PeakSnapshot`: the state at the largest |u_x| of the first probe (the
@@ -30,6 +31,7 @@ from mpi4py import MPI
 
 from breakwater import __version__  # type: ignore[attr-defined]
 from breakwater.config.runspec import TimeSpec
+from breakwater.contact.general import SurfaceContact
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair, pair_names
@@ -46,10 +48,14 @@ __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_qualit
 def resting_on(model: ContactModel, body: int) -> set[int]:
     """A body and every body resting on it: the slaves of pairs whose master is one of them.
 
-    Under gravity their weight is what the body's contacts below it carry.
+    Pairs of both kinds (conforming and general). Under gravity their weight is what
+    the body's contacts below it carry.
     """
+    links = [(p.slave, p.master) for p in model.pairs]
+    links += [(model.body(p.slave).index, model.body(p.master).index)
+              for p in model.surface_pairs]
     found = {body}
-    while new := {p.slave for p in model.pairs if p.master in found} - found:
+    while new := {s for s, m in links if m in found} - found:
         found |= new
     return found
 
@@ -65,34 +71,68 @@ def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
     return first, last, centre
 
 
+def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[Pair]
+                ) -> tuple[str, int, float] | None:
+    """The first contact pair's name, slave body and static normal resultant ∫ p dS.
+
+    The first conforming pair (its ``<name>_normal_force``), else the first general pair:
+    Σ w p over its integration points (w their reference lengths, p = ε_n⟨−g_n⟩₊:
+    :meth:`breakwater.contact.general.SurfaceContact.state`), the same integral.
+    None: no pair (or the general pair is not among ``pairs``).
+    """
+    if model.pairs:
+        name = pair_names([p.spec for p in model.pairs])[0]
+        return name, model.pairs[0].slave, row[f"{name}_normal_force"]
+    if not model.surface_pairs:
+        return None
+    spec = model.surface_pairs[0]
+    contact = next((p for p in pairs if isinstance(p, SurfaceContact) and p.name == spec.name),
+                   None)
+    if contact is None:
+        return None
+    state = contact.state()
+    return spec.name, model.body(spec.slave).index, \
+        float(np.sum(state["weight"] * state["pressure"]))
+
+
 def static_summary(model: ContactModel, row: Mapping[str, float],
-                   interface: Mapping[str, np.ndarray], iterations: int) -> dict[str, Any]:
+                   interface: Mapping[str, np.ndarray], iterations: int,
+                   pairs: Sequence[Pair] = ()) -> dict[str, Any]:
     """The ``static`` entry of the summary: the first contact pair's static state.
+
+    The first conforming pair's, or, in a model without one, the first general pair's
+    (the same keys, the same meaning): the normal resultant ∫ p dS on the slave, the
+    weight of the slave and of every body resting on it (:func:`resting_on`), the mean
+    pressure over the contact length (the history's ``<name>_contact_length``), the
+    pressures at the ends of the interface (a general pair's slave surface) and at its
+    node nearest the centre (:func:`edge_centre`, on the snapshot's nodes).
 
     Args:
         model: The contact model.
         row: The history row of the static state.
         interface: Its nodal interface data (:func:`~breakwater.outputs.monitor.interface_state`).
         iterations: Newton iterations of the static solve.
+        pairs: The stepper's pairs (:attr:`~breakwater.stepping.gn22.GN22.contacts`;
+            a general pair's resultant is measured on its object).
     """
     static: dict[str, Any] = {"newton_iterations": iterations}
-    if not model.pairs:
+    first = _first_pair(model, row, pairs)
+    if first is None:
         return static
-    slave = model.pairs[0].slave
+    name, slave, resultant = first
     weights = model.weight()
     weight = sum(weights[i] for i in resting_on(model, slave))
-    name = pair_names([p.spec for p in model.pairs])[0]
-    length, resultant = row[f"{name}_contact_length"], row[f"{name}_normal_force"]
+    length = row[f"{name}_contact_length"]
     pressure = interface[f"contact_{name}_pressure"]
-    first, last, centre = edge_centre(interface[f"contact_{name}_x"])
+    first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
     static.update({
         "slave": model.bodies[slave].spec.name,
         "weight": weight,
         "contact_resultant": resultant,
         "contact_length": length,
         "mean_contact_pressure": resultant / length if length > 0 else None,
-        "edge_pressure": 0.5 * (pressure[first] + pressure[last]),
-        "edge_pressures": [pressure[first], pressure[last]],
+        "edge_pressure": 0.5 * (pressure[first_node] + pressure[last]),
+        "edge_pressures": [pressure[first_node], pressure[last]],
         "center_pressure": pressure[centre],
         "max_pressure": float(pressure.max()),
         "resultant_over_weight": resultant / weight if weight > 0 else None,

@@ -168,6 +168,9 @@ class HistoryWriter:
 
 # --- fields of the bodies ---------------------------------------------------------
 
+COMPONENTS = {"stress_xx": (0, 0), "stress_xy": (0, 1), "stress_zz": (2, 2)}
+"""The stress components of the snapshots beside ``stress_yy`` (indices in the 3 × 3 tensor)."""
+
 class BodyFields:
     """Displacement, velocity and stresses of one body as discontinuous P_k fields.
 
@@ -212,7 +215,7 @@ class BodyFields:
         self._syy = fem.Expression(σ3[1, 1], X)
         self.functions = [self.displacement, self.velocity, self.stress, self.von_mises,
                           self.stress_yy]
-        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace] | None = None
+        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace, fem.FunctionSpace] | None = None
         # The fast path of update: the P_k nodes of a cell are the discontinuous
         # space's (the same element, the same points), so displacement and velocity are
         # copies of the nodal values, and von Mises and σ_yy follow from the stress at
@@ -271,20 +274,29 @@ class BodyFields:
 
         Returns:
             On rank 0: ``x`` (n, 2) vertex coordinates, ``triangles`` (m, 3),
-            ``ux``, ``uy``, ``von_mises``, ``stress_yy`` (n,).
+            ``ux``, ``uy``, ``von_mises``, ``stress_yy`` and the stress tensor's
+            components ``stress_xx``, ``stress_xy``, ``stress_zz`` (n,; σ_zz = λ tr ε
+            in plane strain; σ_xz = σ_yz = 0 there, not written).
         """
         sub = self.u.function_space.mesh
         if self._p1 is None:
             self._p1 = (fem.functionspace(sub, ("Lagrange", 1, (self.gdim,))),
-                        fem.functionspace(sub, ("Lagrange", 1)))
-        V1, S1 = self._p1
+                        fem.functionspace(sub, ("Lagrange", 1)),
+                        fem.functionspace(sub, ("Lagrange", 1, (3, 3))))
+        V1, S1, T1 = self._p1
         u1 = fem.Function(V1)
         u1.interpolate(self.u)
         scalars = {}
         for name, f in (("von_mises", self.von_mises), ("stress_yy", self.stress_yy)):
             s1 = fem.Function(S1)
             s1.interpolate(f)
-            scalars[name] = s1
+            scalars[name] = s1.x.array
+        # The tensor at the same vertices, from the same cells (T1 has S1's dof layout).
+        t1 = fem.Function(T1)
+        t1.interpolate(self.stress)
+        σ = t1.x.array.reshape(-1, 3, 3)
+        for name, (i, j) in COMPONENTS.items():
+            scalars[name] = σ[:, i, j]
         imap = S1.dofmap.index_map
         nloc = imap.size_local
         tdim = sub.topology.dim
@@ -298,7 +310,7 @@ class BodyFields:
             "cells": cells,
             "ux": u1.x.array.reshape(-1, self.gdim)[:nloc, 0],
             "uy": u1.x.array.reshape(-1, self.gdim)[:nloc, 1],
-            **{k: f.x.array[:nloc] for k, f in scalars.items()},
+            **{k: a[:nloc] for k, a in scalars.items()},
         }
         parts = sub.comm.gather(local, root=0)
         if parts is None:

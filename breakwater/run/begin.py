@@ -52,7 +52,7 @@ def start(r: Session) -> None:
     out.open_fields()
     row = r.record(0.0, st.static_iterations)
     interface = interface_state(s.contacts, s.u)
-    st.static = sm.static_summary(m, row, interface, st.static_iterations)
+    st.static = sm.static_summary(m, row, interface, st.static_iterations, s.contacts)
     st.static.update(init.summary())
     st.contact = sm.quality_inputs(s.contacts, s.u)
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)

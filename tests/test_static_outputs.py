@@ -1,0 +1,245 @@
+"""Point groups in ``[fixed]``, the static summary of general pairs, the static stress tensor
+(issue 23, item 5).
+
+- A frictionless block (W × H, ρ) on a base meshed apart (:mod:`meshes.apart`; a general
+  pair): nothing holds it horizontally but the point group ``block_bottom_left`` fixed in
+  x (``[fixed.block_bottom_left] components = [0]``). Its static state and a short run
+  work, the pinned node's u_x is exactly 0 (a Dirichlet DOF), and the summary's static
+  entry has the conforming pairs' keys: the normal resultant ∫ p dS equals the block's
+  weight ρ g W H (vertical equilibrium of the block, exact for the FE solution: the
+  virtual displacement (0, 1) is in the P2 space, and the pin carries no vertical
+  force; tests/test_relaxation.py), the mean pressure is it over the contact length,
+  and edge and centre pressures are the snapshot's at the ends and the middle of the
+  slave surface.
+- A block on rollers (``block_bottom`` fixed in y, its corner ``block_bottom_left`` in x)
+  under a uniform pressure p on its top, no gravity: the uniform plane-strain state
+  σ_yy = −p, σ_xx = σ_xy = 0, σ_zz = ν(σ_xx + σ_yy) (Timoshenko & Goodier, *Theory of
+  Elasticity*, §16: plane strain), which P2 elements hold exactly (a linear
+  displacement): every node of ``static.npz`` to 1e-9 of p (the round-off of a
+  direct solve on E/p = 1e6), with the fast and the reference solver.
+- A point group lying on two bodies (the corner of a block on a conforming interface)
+  is refused in one line.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from blocks import two_rectangles
+from breakwater.meshes.apart import Rectangle, rectangles
+
+from breakwater import cli
+from breakwater.casefile.case import load_case
+from breakwater.common.errors import MeshError
+from breakwater.common.files import read_history
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Fixed, Material
+from breakwater.statics.initial import initial_state
+from breakwater.stepping.gn22 import GN22
+
+COMM = MPI.COMM_WORLD
+W, H = 0.2, 0.05            # the block (m)
+ρ, ν, E, G = 2000.0, 0.25, 1e9, 9.81
+WEIGHT = ρ * G * W * H      # N/m
+P = 1e3                     # Pa: the uniform pressure
+
+
+def _run(case: pathlib.Path, out: pathlib.Path) -> dict:
+    assert cli.main(["run", str(case), "--out", str(out), "--quiet", "--no-progress"]) == 0
+    with open(out / "summary.json", encoding="utf-8") as f:
+        return json.load(f)
+
+
+@pytest.fixture(scope="module")
+def pinned(folder: pathlib.Path) -> pathlib.Path:
+    """The frictionless block on the base, pinned in x at its lower-left corner: a run of
+    five steps of 1e-4 s from its static state."""
+    mesh = rectangles(folder / "pinned.msh", COMM,
+                      [Rectangle("base", -0.2, -0.05, 0.4, 0.05, 8, 2),
+                       Rectangle("block", -W / 2, 0.0, W, H, 7, 2)], corners=True)
+    case = folder / "pinned.toml"
+    if COMM.rank == 0:
+        case.write_text(f'''name = "pinned"
+mesh.source = "{mesh}"
+[bodies.base]
+density = {ρ}
+poisson = {ν}
+young_modulus = {E}
+[bodies.block]
+density = {ρ}
+poisson = {ν}
+young_modulus = {E}
+[contact.c]
+slave = "block"
+master = "base"
+slave_surface = "block_bottom"
+master_surface = "base_top"
+penalty = 1e12
+[fixed.base_bottom]
+[fixed.block_bottom_left]
+components = [0]
+[time]
+dt = 1e-4
+end_time = 5e-4
+[output]
+figures = false
+[output.probes.corner]
+body = "block"
+group = "block_bottom_left"
+''', encoding="utf-8")
+    COMM.barrier()
+    out = folder / "pinned"
+    summary = _run(case, out)
+    assert summary["finished"] is True
+    return out
+
+
+def test_pinned_point_holds_a_frictionless_block(pinned: pathlib.Path) -> None:
+    """The run of the case file: the point probe at the pin reads u_x = 0 to the
+    round-off of the other shape functions, as do the snapshots' P1 values there (1e-12
+    of u_y; measured 1e-17); the block settles (u_y < 0) and spreads (Poisson) away
+    from the pin (u_x > 0 at its right corner)."""
+    h = read_history(pinned / "history.csv")
+    assert len(h["t"]) == 6
+    assert np.all(h["corner_uy"] < 0)
+    assert np.all(np.abs(h["corner_ux"]) < 1e-12 * np.abs(h["corner_uy"]))
+    for name in ("static.npz", "snapshot_max_ux.npz"):
+        with np.load(pinned / name) as data:
+            x, ux, uy = data["block_x"], data["block_ux"], data["block_uy"]
+        pin = np.flatnonzero(np.hypot(x[:, 0] + W / 2, x[:, 1]) < 1e-12)
+        right = np.flatnonzero(np.hypot(x[:, 0] - W / 2, x[:, 1]) < 1e-12)
+        assert len(pin) == 1 and len(right) == 1
+        assert abs(ux[pin[0]]) < 1e-12 * abs(uy[pin[0]]), name
+        assert ux[right[0]] > 0.0, name
+
+
+def test_pinned_dof_is_exactly_zero(pinned: pathlib.Path) -> None:
+    """The model of the same case file: the block's x DOF at the pin (on every rank that
+    holds it, owned or ghost) is exactly 0 in the static state and after five steps,
+    while its y DOF moves."""
+    built = load_case(pinned.with_suffix(".toml")).build(COMM)
+    model = built.model
+    model.set_time(0.0)
+    state = initial_state(model)
+    assert state.kind == "frictionless"
+    block = model.body("block").index
+    x = state.u[block].function_space.tabulate_dof_coordinates()[:, :2]
+    pin = np.flatnonzero(np.hypot(x[:, 0] + W / 2, x[:, 1]) < 1e-12)
+    assert COMM.allreduce(len(pin)) >= 1
+    stepper = GN22(model, 1e-4)
+    stepper.initialise(state.u, state.v)
+    for k in range(6):
+        u = stepper.u[block].x.array.reshape(-1, 2)
+        assert np.all(u[pin, 0] == 0.0), k
+        assert np.all(u[pin, 1] < 0.0), k
+        stepper.step()
+    stepper.destroy()
+
+
+def test_static_summary_of_a_general_pair(pinned: pathlib.Path) -> None:
+    """Resultant = weight ρgWH (1e-6: the relaxation's residual, 1e-8 of the load norm,
+    as tests/test_relaxation.py); the weight itself to round-off; mean = resultant over
+    the contact length W (every integration point closed); edge and centre pressures
+    the snapshot's end and middle nodes; the printed report has no n/a."""
+    with open(pinned / "summary.json", encoding="utf-8") as f:
+        s = json.load(f)["static"]
+    assert s["slave"] == "block"
+    assert s["weight"] == pytest.approx(WEIGHT, rel=1e-12)
+    assert s["contact_resultant"] == pytest.approx(WEIGHT, rel=1e-6)
+    assert s["resultant_over_weight"] == pytest.approx(1.0, rel=1e-6)
+    assert s["contact_length"] == pytest.approx(W, rel=1e-12)
+    assert s["mean_contact_pressure"] == pytest.approx(s["contact_resultant"] / W, rel=1e-12)
+    assert s["mean_contact_pressure"] == pytest.approx(ρ * G * H, rel=1e-6)
+    with np.load(pinned / "static.npz") as data:
+        x, p = data["contact_c_x"], data["contact_c_pressure"]
+    assert len(x) == 15 and np.all(np.diff(x[:, 0]) > 0)  # 7 P2 facets, sorted
+    middle = int(np.argmin(np.abs(x[:, 0])))
+    assert x[middle, 0] == pytest.approx(0.0, abs=1e-12)
+    assert s["edge_pressures"] == [p[0], p[-1]]
+    assert s["edge_pressure"] == 0.5 * (p[0] + p[-1])
+    assert s["center_pressure"] == p[middle]
+    assert s["max_pressure"] == p.max()
+    # The pressure is near its mean in the middle (a flat block on a stiff base).
+    assert s["center_pressure"] == pytest.approx(ρ * G * H, rel=0.2)
+    report = _report(pinned)
+    line = next(li for li in report.splitlines() if "static: contact resultant" in li)
+    assert "n/a" not in line, line
+
+
+def _report(out: pathlib.Path) -> str:
+    """The report printed at the end of a run, from its summary."""
+    from breakwater.outputs.summary import format_report
+
+    with open(out / "summary.json", encoding="utf-8") as f:
+        return format_report(json.load(f), out)
+
+
+@pytest.mark.parametrize("solver", ["fast", "reference"])
+def test_static_stress_tensor_of_a_uniformly_loaded_block(folder: pathlib.Path,
+                                                          solver: str) -> None:
+    """σ_yy = −p, σ_xx = σ_xy = 0, σ_zz = ν(σ_xx + σ_yy) at every node of static.npz
+    (to 1e-9 p); ``stress_yy`` is the tensor's σ_yy; von Mises is that of the tensor."""
+    mesh = rectangles(folder / "press.msh", COMM, [Rectangle("block", 0.0, 0.0, W, H, 4, 2)],
+                      corners=True)
+    case = folder / f"press_{solver}.toml"
+    if COMM.rank == 0:
+        case.write_text(f'''name = "press"
+gravity = [0.0, 0.0]
+mesh.source = "{mesh}"
+[bodies.block]
+density = {ρ}
+poisson = {ν}
+young_modulus = {E}
+[fixed.block_bottom]
+components = [1]
+[fixed.block_bottom_left]
+components = [0]
+[loads.press]
+group = "block_top"
+pressure = {P}
+[time]
+dt = 1e-4
+end_time = 2e-4
+solver = "{solver}"
+[output]
+figures = false
+''', encoding="utf-8")
+    COMM.barrier()
+    out = folder / f"press_{solver}"
+    _run(case, out)
+    with np.load(out / "static.npz") as data:
+        σ = {k: data[f"block_stress_{k}"] for k in ("xx", "yy", "xy", "zz")}
+        vm = data["block_von_mises"]
+        ux = data["block_ux"]
+        x = data["block_x"]
+    tol = 1e-9 * P
+    np.testing.assert_allclose(σ["yy"], -P, atol=tol)
+    np.testing.assert_allclose(σ["xx"], 0.0, atol=tol)
+    np.testing.assert_allclose(σ["xy"], 0.0, atol=tol)
+    np.testing.assert_allclose(σ["zz"], ν * (σ["xx"] + σ["yy"]), atol=tol)
+    np.testing.assert_allclose(σ["zz"], -ν * P, atol=tol)
+    # Von Mises of (0, −p, −νp): p sqrt(1 − ν + ν²).
+    np.testing.assert_allclose(vm, P * np.sqrt(1 - ν + ν**2), atol=tol)
+    # The pin holds the corner: u_x = (1 + ν) ν p x / E (plane strain: ε_xx = ((1 − ν²)
+    # σ_xx − ν(1 + ν) σ_yy)/E), 0 at x = 0 (to the P1 values' round-off, 1e-20 m).
+    assert (np.hypot(x[:, 0], x[:, 1]) < 1e-12).sum() == 1
+    np.testing.assert_allclose(ux, (1 + ν) * ν * P * x[:, 0] / E, rtol=1e-8, atol=1e-20)
+
+
+def test_point_group_on_two_bodies_is_refused(shared_dir: pathlib.Path) -> None:
+    """``a_corner`` (tests/blocks.py) lies on the conforming interface: a vertex of both
+    blocks."""
+    mesh = two_rectangles(shared_dir / "two.msh", COMM, (0.5, 0.5), (1.0, 0.5), 0.25)
+    mat = Material(ρ, ν, young_modulus=E)
+    with pytest.raises(MeshError, match=r"^fixed 'a_corner': point group 'a_corner' lies "
+                       r"on several bodies \(a, b\)"):
+        ContactModel(read_mesh(mesh, COMM), [Body("a", mat), Body("b", mat)],
+                     fixed=[Fixed("a_corner", (0,))])
