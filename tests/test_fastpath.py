@@ -37,6 +37,7 @@ from breakwater.model.model import (
 )
 from breakwater.run import simulation
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
+from breakwater.stepping import factorisations
 from breakwater.stepping.factorisations import Factorisation, Factorisations, x_blocks
 from breakwater.stepping.gn22 import GN22, solve_static
 
@@ -306,6 +307,30 @@ def test_x_blocks_by_body_or_whole() -> None:
     X[60, 3] = 1.0
     (whole,) = x_blocks(X, offsets, body)
     assert whole.rows == slice(0, 120) and len(whole.cols) == 20 and whole.X is X
+
+
+def test_x_blocks_all_rows_window_leaves_X(monkeypatch: pytest.MonkeyPatch) -> None:
+    # When no aligned window keeps the product's bits, a body's block is the window of
+    # all rows and columns, with the neighbour's rows zeroed: in the block's own copy.
+    # (It once zeroed X itself, through np.asfortranarray's view: X_II became zero and
+    # singular, "LinAlgError: Singular matrix", on a Goda mesh written by hand whose
+    # blocks needed the wide window.)
+    monkeypatch.setattr(factorisations, "ALIGNMENTS", ())
+    rng = np.random.default_rng(6)
+    X = np.zeros((120, 20), order="F")
+    X[:50, :10] = rng.standard_normal((50, 10))
+    X[50:, 10:] = rng.standard_normal((70, 10))
+    before = X.copy()
+    offsets, body = np.array([0, 50, 120]), np.repeat([0, 1], 10)
+    blocks = x_blocks(X, offsets, body)
+    assert np.array_equal(X, before)
+    assert len(blocks) == 2 and all(b.rows == slice(0, 120) for b in blocks)
+    _check_blocks(blocks, X)
+    fc, z = rng.standard_normal(20), rng.standard_normal(120)
+    fact = Factorisation(None, None, blocks, np.zeros((20, 20)), np.zeros((20, 20)))  # type: ignore[arg-type]
+    da = z.copy()
+    fact.subtract_X(fc, da)
+    assert np.allclose(da, z - X @ fc, rtol=0, atol=1e-13)
 
 
 def test_second_back_solve_equals_product_with_X(folder: pathlib.Path) -> None:

@@ -275,8 +275,11 @@ def x_blocks(X: np.ndarray, offsets: np.ndarray, body: np.ndarray) -> list[XBloc
         for align in (*ALIGNMENTS, max(m, n_i)):  # the last: all rows and columns
             rows = _aligned(own.start, own.stop, align, m)
             cols = _aligned(int(at[0]), int(at[-1]) + 1, align, n_i)
+            # A copy: the window of all rows and columns is X itself, whose neighbour
+            # rows the next lines zero (np.asfortranarray returned X's own memory there,
+            # and X became zero: a singular X_II on a mesh whose blocks needed it).
             block = XBlock(rows, np.arange(cols.start, cols.stop),
-                           np.asfortranarray(X[rows, cols]))
+                           np.array(X[rows, cols], order="F", copy=True))
             block.X[: own.start - rows.start] = 0.0  # a neighbour's rows
             block.X[own.stop - rows.start:] = 0.0
             mine = slice(own.start - rows.start, own.stop - rows.start)
