@@ -338,6 +338,16 @@ class SurfaceSearch(InterfaceValues):
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
 
+    def normal_forces(self, u1: np.ndarray) -> np.ndarray:
+        """The slave nodes' normal forces λ_k = ∫ p N_k at the state u1 (node order).
+
+        At the residual's own integration points (:meth:`_normal`).
+
+        Args:
+            u1: Displacements at the interface unknowns (a trailing 0).
+        """
+        return np.asarray(self._normal(u1)["lam"])
+
     def _normal(self, u1: np.ndarray) -> dict[str, Any]:
         """The normal part of the state u1 (cached: the search once per state).
 
