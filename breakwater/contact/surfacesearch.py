@@ -25,7 +25,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.contact import forcekernels, searchkernels
 from breakwater.contact.penetration import search_radius
 from breakwater.contact.projection import FacetGrid, project, shape
-from breakwater.contact.surfaces import SurfacePair, gather_surface
+from breakwater.contact.surfaces import SurfacePair, gather_surface, warn_first_order
 
 if TYPE_CHECKING:
     from breakwater.common.timings import Timings
@@ -203,6 +203,7 @@ class SurfaceSearch(InterfaceValues):
         self.law = forms.ContactLaw.of(spec)
         slave = gather_surface(model, layout, spec.slave, (spec.slave_surface,))
         master = gather_surface(model, layout, spec.master, spec.master_groups)
+        warn_first_order(model, spec, (slave, master))
         # Orient each master facet so that (t_y, −t_x) points out of its cell.
         mid = master.X.mean(axis=1)
         chord = master.X[:, 1] - master.X[:, 0]

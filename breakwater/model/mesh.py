@@ -20,17 +20,20 @@ log = logging.getLogger("breakwater.model.mesh")
 
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-              gdim: int = 2) -> gmshio.MeshData:
+              gdim: int = 2, order: int = 2) -> gmshio.MeshData:
     """Read a gmsh ``.msh`` (or mesh a ``.geo``) with its physical groups.
 
     Cells are ghosted across shared facets, which interior-facet (interface)
-    integrals need in parallel.
+    integrals need in parallel. A ``.msh`` of second order (six-node triangles) is
+    read as such: the cells are curved, their mid-edge nodes where gmsh put them.
 
     Args:
         path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
             temporary folder: nothing is written beside the script).
         comm: Communicator to distribute the mesh over.
         gdim: Geometric dimension of the model (2 for plane strain).
+        order: The displacement's degree: a ``.geo`` whose curves are curved is
+            meshed to this geometric order (:func:`mesh_geo`).
 
     Returns:
         dolfinx's ``MeshData`` (mesh, cell/facet/ridge tags, physical groups by name).
@@ -44,8 +47,8 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
         raise MeshError(f"mesh file not found: {path}")
     if path.suffix == ".geo":
         with shared_tempdir(comm, "breakwater-geo-") as folder:
-            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim),
-                             comm, gdim)
+            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim,
+                                      order), comm, gdim)
     if path.suffix != ".msh":
         raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
@@ -174,9 +177,43 @@ def check_cells(path: pathlib.Path) -> None:
                         "shared edge (a folded mesh or an inverted cell; remesh)")
 
 
-def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2
-             ) -> pathlib.Path:
+CURVED = 1e-9
+"""A mid-edge node of a second-order mesh farther than this fraction of its edge's
+length from the edge's midpoint makes the edge curved."""
+
+
+def curved_edges() -> int:
+    """The number of curved edges of the current gmsh model's 1-D elements (rank 0).
+
+    Mid-edge nodes of the three-node lines (gmsh type 8) more than :data:`CURVED` of
+    the edge's length off the chord's midpoint: gmsh places them on the geometry's
+    curves (circle arcs, splines), at the midpoint of straight ones.
+    """
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    if not len(tags):
+        return 0
+    xyz = np.zeros((int(tags.max()) + 1, 3))
+    xyz[tags.astype(np.int64)] = coords.reshape(-1, 3)
+    count = 0
+    for etype, _, enodes in zip(*gmsh.model.mesh.getElements(1), strict=True):
+        if etype != 8:
+            continue
+        a, b, m = (xyz[enodes.astype(np.int64).reshape(-1, 3)[:, k]] for k in range(3))
+        off = np.linalg.norm(m - 0.5 * (a + b), axis=1)
+        count += int(np.count_nonzero(off > CURVED * np.linalg.norm(b - a, axis=1)))
+    return count
+
+
+def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2,
+             order: int = 1) -> pathlib.Path:
     """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
+
+    With ``order = 2`` (the P2 displacement) the mesh is made second order
+    (``setOrder(2)``: the mid-edge nodes on the geometry's curves) where the script
+    has a curved curve (:func:`curved_edges`); a geometry of straight lines keeps
+    first-order (affine) cells, on which the conforming pairs' compiled path runs
+    (:mod:`breakwater.contact.nodal`) and whose P2 nodes are the same points. A
+    script that asks for an order itself (``Mesh.ElementOrder``) keeps it.
 
     Args:
         path: The script.
@@ -184,6 +221,7 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
             every rank.
         comm: Communicator (rank 0 meshes, every rank returns once the file exists).
         dim: Dimension of the mesh.
+        order: The displacement's degree (1 or 2).
 
     Returns:
         ``target``.
@@ -197,6 +235,10 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
         with gmsh_session():
             gmsh.merge(str(path))  # into the session's model
             gmsh.model.mesh.generate(dim)
+            if order == 2 and gmsh.option.getNumber("Mesh.ElementOrder") == 1:
+                gmsh.model.mesh.setOrder(2)
+                if not curved_edges():
+                    gmsh.model.mesh.setOrder(1)
             gmsh.write(str(target))
 
     try:
