@@ -113,11 +113,11 @@ def nodal_pressure(forces: np.ndarray, weights: np.ndarray) -> np.ndarray:
     N_k: second-order accurate where p is smooth. Where the integration is
     ``nodes`` (the law at the nodes, Gauss–Lobatto weights), p_k is the law at the
     node. The consistent L² projection (M p = λ, M the slave surface's mass matrix)
-    was measured against it on the Hertz problem (docs/general-contact.md): it keeps
-    the first-order geometry's node-to-node oscillation and overshoots by 2-3 % of
-    p₀ past the contact's edge, the dual projection neither. A P2 vertex function
-    is negative over part of its facets, so a vertex just past the contact's edge may
-    read a small negative value (measured −0.8 % of p₀).
+    was measured against it on the Hertz problem (docs/general-contact.md): less
+    accurate inside the contact (3.0 % of p₀ against 2.2 %) and keeping most of a
+    first-order geometry's node-to-node oscillation (8.5 % against 4.2 %). A P2
+    vertex function is negative over part of its facets, so a vertex just past the
+    contact's edge may read a small negative value (measured −0.8 % of p₀).
 
     Args:
         forces: λ_k, ``(n_nodes,)``.
