@@ -152,3 +152,46 @@ def test_outputs_on_curved_cells(shared_dir: pathlib.Path) -> None:
             assert nodal is not None and np.all(np.isfinite(nodal["ux"]))
     assert all(p.exists() for p in writer.paths)
     stepper.destroy()
+
+
+def _two_triangles(path: pathlib.Path, mid: tuple[float, float]) -> pathlib.Path:
+    """Two six-node triangles of the unit square, the first's mid-node of its edge
+    (0,0)-(1,0) at ``mid`` (rank 0 writes)."""
+    import gmsh
+
+    from breakwater.common.gmshtools import gmsh_session
+    from breakwater.common.parallel import on_rank_zero
+
+    def write() -> str:
+        with gmsh_session(model="curved"):
+            surface = gmsh.model.addDiscreteEntity(2)
+            xy = [(0, 0), (1, 0), (1, 1), (0, 1), mid, (1, 0.5), (0.5, 0.5), (0.5, 1),
+                  (0, 0.5)]
+            gmsh.model.mesh.addNodes(2, surface, list(range(1, 10)),
+                                     [c for x, y in xy for c in (x, y, 0.0)])
+            # (0,0) (1,0) (1,1) | mids 5 6 7; (0,0) (1,1) (0,1) | mids 7 8 9.
+            gmsh.model.mesh.addElementsByType(surface, 9, [1, 2],
+                                              [1, 2, 3, 5, 6, 7, 1, 3, 4, 7, 8, 9])
+            gmsh.model.addPhysicalGroup(2, [surface], name="square")
+            gmsh.write(str(path))
+        return str(path)
+
+    return pathlib.Path(on_rank_zero(COMM, write))
+
+
+def test_folded_curved_cell_is_refused(shared_dir: pathlib.Path) -> None:
+    """A six-node triangle whose mid-edge node is pushed across the cell (its
+    Jacobian changes sign) is refused in one line naming the cell; moved a quarter
+    of the way in, it is a valid curved cell (its Jacobian at the nodes half the
+    straight cell's or more: measured 0.5)."""
+    from breakwater.common.errors import MeshError
+    from breakwater.model.mesh import curved_jacobian
+
+    ok = read_mesh(_two_triangles(shared_dir / "ok.msh", (0.5, 0.125)), COMM)
+    assert ok.mesh.geometry.cmaps[0].degree == 2
+    x = np.array([[(0, 0), (1, 0), (1, 1), (0.5, 0.125), (1, 0.5), (0.5, 0.5)]], float)
+    assert curved_jacobian(x)[0] == pytest.approx(0.5)
+    x[0, 3] = (0.5, 0.0)
+    assert curved_jacobian(x)[0] == pytest.approx(1.0)
+    with pytest.raises(MeshError, match=r"folded.msh: curved cell 1 at .* folds"):
+        read_mesh(_two_triangles(shared_dir / "folded.msh", (0.5, 0.45)), COMM)

@@ -120,14 +120,53 @@ def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return area, quality
 
 
+# The six-node triangle (gmsh type 9: the corners, then the mid-edge nodes of the
+# edges 0-1, 1-2, 2-0): its shape functions' derivatives at its nodes, (node, ∂ξ/∂η, N).
+_P2_NODES = np.array([[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]])
+
+
+def _p2_derivatives(ξ: np.ndarray, η: np.ndarray) -> np.ndarray:
+    """∂N/∂ξ and ∂N/∂η of the six-node triangle at points, ``(points, 2, 6)``."""
+    λ = 1 - ξ - η
+    z = np.zeros_like(ξ)
+    dξ = [1 - 4 * λ, 4 * ξ - 1, z, 4 * (λ - ξ), 4 * η, -4 * η]
+    dη = [1 - 4 * λ, z, 4 * η - 1, -4 * ξ, 4 * ξ, 4 * (λ - η)]
+    return np.stack([np.stack(dξ, axis=-1), np.stack(dη, axis=-1)], axis=1)
+
+
+_P2_DN = _p2_derivatives(_P2_NODES[:, 0].astype(float), _P2_NODES[:, 1].astype(float))
+
+
+def curved_jacobian(x: np.ndarray) -> np.ndarray:
+    """The smallest Jacobian of six-node triangles at their nodes over the corners' one.
+
+    Args:
+        x: The nodes' coordinates, ``(cells, 6, 2)`` in gmsh's order.
+
+    Returns:
+        ``min det J(node) / det J(straight cell)`` per cell: 1 for a straight-sided
+        cell, ≤ 0 where a mid-edge node moved far enough to fold the cell.
+    """
+    J = np.einsum("qan,cnd->cqad", _P2_DN, x)  # (cells, node, ∂, coordinate)
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    c = x[:, :3]
+    straight = ((c[:, 1, 0] - c[:, 0, 0]) * (c[:, 2, 1] - c[:, 0, 1])
+                - (c[:, 2, 0] - c[:, 0, 0]) * (c[:, 1, 1] - c[:, 0, 1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(straight != 0, det.min(axis=1) / straight, 0.0)
+
+
 def check_cells(path: pathlib.Path) -> None:
     """Refuse degenerate or overlapping 2D cells of the current gmsh model (rank 0).
 
-    Checked on the corners of each cell (the straight-sided cell; the mid-side nodes of
-    a curved P2 cell are not checked): a height below :data:`DEGENERATE` of the longest
-    edge is refused, below :data:`THIN` warned about once (the thinnest cell); two
-    cells on the same side of their shared edge overlap (a folded mesh, an inverted
-    cell among its neighbours), whatever the orientation of each surface.
+    Checked on the corners of each cell (the straight-sided cell): a height below
+    :data:`DEGENERATE` of the longest edge is refused, below :data:`THIN` warned about
+    once (the thinnest cell); two cells on the same side of their shared edge overlap
+    (a folded mesh, an inverted cell among its neighbours), whatever the orientation
+    of each surface. A curved six-node triangle (a second-order mesh) is refused where
+    its Jacobian at one of its nodes falls to :data:`DEGENERATE` of the straight
+    cell's or changes sign (:func:`curved_jacobian`: a mid-edge node moved across
+    the cell).
 
     Raises:
         MeshError: One line naming the file, the cell (gmsh element tag) and its
@@ -139,9 +178,19 @@ def check_cells(path: pathlib.Path) -> None:
     cells, elements, sides = [], [], []
     for etype, etags, enodes in zip(*gmsh.model.mesh.getElements(2), strict=True):
         corners = gmsh.model.mesh.getElementProperties(etype)[5]
-        nodes = enodes.astype(np.int64).reshape(len(etags), -1)[:, :corners]
+        all_nodes = enodes.astype(np.int64).reshape(len(etags), -1)
+        nodes = all_nodes[:, :corners]
         cells.append(nodes)
         elements.append(etags.astype(np.int64))
+        if etype == 9:  # six-node triangles
+            ratio = curved_jacobian(xy[all_nodes])
+            worst = int(np.argmin(ratio))
+            if ratio[worst] < DEGENERATE:
+                centre = xy[nodes[worst]].mean(axis=0)
+                raise MeshError(f"{path}: curved cell {etags[worst]} at ({centre[0]:.6g}, "
+                                f"{centre[1]:.6g}) folds: its Jacobian at a node is "
+                                f"{ratio[worst]:.1e} of its corners' (a mid-edge node "
+                                "too far off its edge; refine there or remesh)")
     for nodes, etags in zip(cells, elements, strict=True):
         area, quality = cell_quality(xy[nodes])
         worst = int(np.argmin(quality))
