@@ -195,3 +195,30 @@ def test_folded_curved_cell_is_refused(shared_dir: pathlib.Path) -> None:
     assert curved_jacobian(x)[0] == pytest.approx(1.0)
     with pytest.raises(MeshError, match=r"folded.msh: curved cell 1 at .* folds"):
         read_mesh(_two_triangles(shared_dir / "folded.msh", (0.5, 0.45)), COMM)
+
+
+def test_case_geo_is_meshed_to_the_displacement_degree(shared_dir: pathlib.Path) -> None:
+    """A case's ``mesh.source`` ``.geo`` with a circle arc: second-order cells with
+    ``mesh.degree = 2`` (the default), first-order with ``mesh.degree = 1``."""
+    import tomli_w
+
+    from breakwater.casefile.case import load_case
+
+    geo = shared_dir / "hertz.geo"
+    for degree in (2, 1):
+        toml = shared_dir / f"hertz{degree}.toml"
+        if COMM.rank == 0:
+            geo.write_text(HERTZ_GEO)
+            toml.write_text(tomli_w.dumps({
+                "mesh": {"source": "hertz.geo", "degree": degree},
+                "bodies": {b: {"density": 2000.0, "poisson": 0.3, "shear_modulus": 4e8}
+                           for b in ("cylinder", "block")},
+                "contact": {"hertz": {"slave": "cylinder", "master": "block",
+                                      "slave_surface": "cylinder_arc",
+                                      "master_surface": "block_top", "penalty": 1e12}},
+                "fixed": {"block_bottom": {}},
+                "time": {"dt": 1e-4, "end_time": 1e-3},
+                "output": {"directory": str(shared_dir / f"out{degree}")}}))
+        COMM.barrier()
+        data = load_case(toml).read_mesh(COMM)
+        assert data.mesh.geometry.cmaps[0].degree == degree
