@@ -114,10 +114,11 @@ def nodal_pressure(forces: np.ndarray, weights: np.ndarray) -> np.ndarray:
     ``nodes`` (the law at the nodes, Gauss–Lobatto weights), p_k is the law at the
     node. The consistent L² projection (M p = λ, M the slave surface's mass matrix)
     was measured against it on the Hertz problem (docs/general-contact.md): less
-    accurate inside the contact (3.0 % of p₀ against 2.2 %) and keeping most of a
-    first-order geometry's node-to-node oscillation (8.5 % against 4.2 %). A P2
+    accurate inside the contact (0.67 % of p₀ against 0.29 %) and keeping most of a
+    first-order geometry's node-to-node oscillation (10 % against 4.6 %). A P2
     vertex function is negative over part of its facets, so a vertex just past the
-    contact's edge may read a small negative value (measured −0.8 % of p₀).
+    contact's edge may read a negative value (measured −1.0 % of p₀, −5 % with a
+    penalty overlap of 3e-5 of the contact half-width).
 
     Args:
         forces: λ_k, ``(n_nodes,)``.
