@@ -73,7 +73,8 @@ def mesh_file(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
     The Goda mesh is generated into ``<directory>/mesh/goda.msh`` and a ``.geo`` script
     is meshed into ``<directory>/mesh/<stem>.msh`` (default directory: the output
     folder; nothing is written beside the user's script); a ``.msh`` source is the
-    case's file.
+    case's file. A ``.geo`` with curved curves is meshed to the displacement's degree
+    (:func:`breakwater.model.mesh.mesh_geo`: curved P2 cells).
 
     Raises:
         MeshError: gmsh cannot mesh the ``.geo`` script.
@@ -84,7 +85,8 @@ def mesh_file(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
         return source
     folder = pathlib.Path(directory) if directory is not None else case.output_directory
     if not case.mesh.generated:
-        return mesh_geo(source, folder / "mesh" / f"{source.stem}.msh", comm)
+        return mesh_geo(source, folder / "mesh" / f"{source.stem}.msh", comm,
+                        order=case.mesh.degree)
     from breakwater import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
 
     return meshes.generate(folder / "mesh" / "goda.msh", case.mesh.goda,

@@ -45,7 +45,8 @@ class MeshCase:
     refinement: float = setting(1.0, doc="goda only: element sizes are divided by this "
                                 "(cell counts grow as refinement²)")
     degree: int = setting(2, doc="polynomial degree of the displacement (2: six-node "
-                          "triangles, as the paper)")
+                          "triangles, as the paper; a .geo with a curved curve is then "
+                          "meshed second order, curved cells)")
     goda: GodaGeometry = setting(_GODA_GEOMETRY, unit="m",  # noqa: RUF009 (a field() with docs)
                                  doc="goda only: dimensions of the model (see below)")
     max_elements: int = setting(1_000_000, doc="goda only: refuse a mesh of more triangles "

@@ -10,6 +10,7 @@ model's (:mod:`breakwater.model.pairs`, re-exported here); its forces are
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -23,8 +24,16 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["INTEGRATIONS", "Surface", "SurfacePair", "check_pair_settings", "gather_surface",
-           "surface_dofs"]
+__all__ = ["INTEGRATIONS", "TURN", "Surface", "SurfacePair", "check_pair_settings",
+           "chord_sag", "gather_surface", "surface_dofs", "warn_first_order"]
+
+log = logging.getLogger("breakwater.contact.surfaces")
+
+TURN = 1e-4
+"""A surface turning by more than this angle (rad) at consecutive vertices is
+curved (a chord h of a circle turning by θ at its ends sags hθ/8: above 1e-5 h)."""
+
+_warned: set[tuple[str, str]] = set()  # (pair, surface) warned about: once per process
 
 
 @dataclass
@@ -94,3 +103,83 @@ def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:
             out.append(layout.global_index[b.index][(blocks[:, None] * bs
                                                      + np.arange(bs)).ravel()])
     return np.concatenate(out) if out else np.zeros(0, np.int64)
+
+
+def chord_sag(surface: Surface) -> tuple[int, float, float]:
+    """Where a first-order surface is a polygon of chords of a curve.
+
+    The turn θ between the chords of consecutive facets at each shared vertex; a
+    vertex is on a curve where it and a neighbouring vertex both turn by more than
+    :data:`TURN`, and the surface is curved where it has three such vertices or
+    more (an isolated corner, or two a facet apart, are the geometry's own). A chord
+    h of the circle through such a vertex and its neighbours (facets h₁, h₂) sags
+    h²/(8R) = h²θ/(4(h₁ + h₂)) below it.
+
+    Returns:
+        The number of such vertices, their largest turn (rad) and the largest sag
+        (m) of their facets.
+    """
+    if surface.X.shape[0] < 3:
+        return 0, 0.0, 0.0
+    ends = surface.dofs[:, :2, 0]  # the vertices' ids (the x DOF)
+    chord = surface.X[:, 1] - surface.X[:, 0]
+    length = np.linalg.norm(chord, axis=1)
+    vertex, end = np.unique(ends, return_inverse=True)  # each facet end's vertex
+    end = end.reshape(ends.shape)
+    # The two facets at each vertex (−1: an end of the surface).
+    at = np.full((len(vertex), 2), -1)
+    count = np.zeros(len(vertex), np.int64)
+    for f, k in np.ndindex(*end.shape):
+        v = end[f, k]
+        if count[v] < 2:
+            at[v, count[v]] = f
+        count[v] += 1
+    shared = count == 2
+    t = chord / np.maximum(length, 1e-300)[:, None]
+    a, b = at[shared, 0], at[shared, 1]
+    turn = np.zeros(len(vertex))
+    turn[shared] = np.arccos(np.clip(np.abs(np.sum(t[a] * t[b], axis=1)), 0.0, 1.0))
+    bent = turn > TURN
+    # A vertex whose two facets' other ends both turn too.
+    v = np.flatnonzero(shared)
+    ends_a, ends_b = end[a], end[b]
+    other_a = np.where(ends_a[:, 0] == v, ends_a[:, 1], ends_a[:, 0])
+    other_b = np.where(ends_b[:, 0] == v, ends_b[:, 1], ends_b[:, 0])
+    curved = np.zeros(len(vertex), bool)
+    curved[v] = bent[v] & (bent[other_a] | bent[other_b])
+    if curved.sum() < 3:
+        return 0, 0.0, 0.0
+    # The circle through a vertex and its neighbours: radius (h₁ + h₂)/(2θ); a chord
+    # h of it sags h²/(8R) = h²θ/(4(h₁ + h₂)).
+    sag = np.zeros(len(vertex))
+    sag[v] = np.maximum(length[a], length[b])**2 * turn[v] / (4 * (length[a] + length[b]))
+    return int(curved.sum()), float(turn[curved].max()), float(sag[curved].max())
+
+
+def warn_first_order(model: ContactModel, spec: SurfacePair, surfaces: Sequence[Surface]
+                     ) -> None:
+    """Warn where a first-order mesh's P2 contact surface is curved (once per surface).
+
+    :func:`chord_sag`: its P2 nodes lie on the chords, which the elements flatten
+    against the other surface, and the pressure alternates between vertices and
+    mid-edge nodes where the sag exceeds the penalty overlap p/ε_n. The decision is the
+    same on every rank (the surfaces are gathered); rank 0 logs.
+    """
+    if model.mesh.geometry.cmaps[0].degree != 1:
+        return
+    names = (spec.slave_surface, "+".join(spec.master_groups))
+    for name, surface in zip(names, surfaces, strict=True):
+        if surface.X.shape[1] != 3 or (spec.name, name) in _warned:
+            continue
+        n, turn, sag = chord_sag(surface)
+        if n and model.comm.rank == 0:
+            log.warning(
+                "contact '%s': surface '%s' is curved (its facets turn by up to %.2g° at %d "
+                "nodes) but the mesh is first order: its P2 mid-edge nodes lie on the "
+                "straight chords, up to %.1e m inside the curve, and the contact pressure "
+                "alternates between vertices and mid-edge nodes where that exceeds the "
+                "penalty overlap p/ε_n; mesh it second order (a .geo as mesh.source is; "
+                "gmsh: Mesh.ElementOrder = 2, or -order 2)", spec.name, name,
+                np.degrees(turn), n, sag)
+        if n:
+            _warned.add((spec.name, name))

@@ -25,7 +25,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.contact import forcekernels, searchkernels
 from breakwater.contact.penetration import search_radius
 from breakwater.contact.projection import FacetGrid, project, shape
-from breakwater.contact.surfaces import SurfacePair, gather_surface
+from breakwater.contact.surfaces import SurfacePair, gather_surface, warn_first_order
 
 if TYPE_CHECKING:
     from breakwater.common.timings import Timings
@@ -203,6 +203,7 @@ class SurfaceSearch(InterfaceValues):
         self.law = forms.ContactLaw.of(spec)
         slave = gather_surface(model, layout, spec.slave, (spec.slave_surface,))
         master = gather_surface(model, layout, spec.master, spec.master_groups)
+        warn_first_order(model, spec, (slave, master))
         # Orient each master facet so that (t_y, −t_x) points out of its cell.
         mid = master.X.mean(axis=1)
         chord = master.X[:, 1] - master.X[:, 0]
@@ -337,6 +338,16 @@ class SurfaceSearch(InterfaceValues):
         self._frozen_key = u0.copy()
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
+
+    def normal_forces(self, u1: np.ndarray) -> np.ndarray:
+        """The slave nodes' normal forces λ_k = ∫ p N_k at the state u1 (node order).
+
+        At the residual's own integration points (:meth:`_normal`).
+
+        Args:
+            u1: Displacements at the interface unknowns (a trailing 0).
+        """
+        return np.asarray(self._normal(u1)["lam"])
 
     def _normal(self, u1: np.ndarray) -> dict[str, Any]:
         """The normal part of the state u1 (cached: the search once per state).

@@ -20,17 +20,20 @@ log = logging.getLogger("breakwater.model.mesh")
 
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-              gdim: int = 2) -> gmshio.MeshData:
+              gdim: int = 2, order: int = 2) -> gmshio.MeshData:
     """Read a gmsh ``.msh`` (or mesh a ``.geo``) with its physical groups.
 
     Cells are ghosted across shared facets, which interior-facet (interface)
-    integrals need in parallel.
+    integrals need in parallel. A ``.msh`` of second order (six-node triangles) is
+    read as such: the cells are curved, their mid-edge nodes where gmsh put them.
 
     Args:
         path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
             temporary folder: nothing is written beside the script).
         comm: Communicator to distribute the mesh over.
         gdim: Geometric dimension of the model (2 for plane strain).
+        order: The displacement's degree: a ``.geo`` whose curves are curved is
+            meshed to this geometric order (:func:`mesh_geo`).
 
     Returns:
         dolfinx's ``MeshData`` (mesh, cell/facet/ridge tags, physical groups by name).
@@ -44,8 +47,8 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
         raise MeshError(f"mesh file not found: {path}")
     if path.suffix == ".geo":
         with shared_tempdir(comm, "breakwater-geo-") as folder:
-            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim),
-                             comm, gdim)
+            return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim,
+                                      order), comm, gdim)
     if path.suffix != ".msh":
         raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
@@ -117,14 +120,53 @@ def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return area, quality
 
 
+# The six-node triangle (gmsh type 9: the corners, then the mid-edge nodes of the
+# edges 0-1, 1-2, 2-0): its shape functions' derivatives at its nodes, (node, ∂ξ/∂η, N).
+_P2_NODES = np.array([[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]])
+
+
+def _p2_derivatives(ξ: np.ndarray, η: np.ndarray) -> np.ndarray:
+    """∂N/∂ξ and ∂N/∂η of the six-node triangle at points, ``(points, 2, 6)``."""
+    λ = 1 - ξ - η
+    z = np.zeros_like(ξ)
+    dξ = [1 - 4 * λ, 4 * ξ - 1, z, 4 * (λ - ξ), 4 * η, -4 * η]
+    dη = [1 - 4 * λ, z, 4 * η - 1, -4 * ξ, 4 * ξ, 4 * (λ - η)]
+    return np.stack([np.stack(dξ, axis=-1), np.stack(dη, axis=-1)], axis=1)
+
+
+_P2_DN = _p2_derivatives(_P2_NODES[:, 0].astype(float), _P2_NODES[:, 1].astype(float))
+
+
+def curved_jacobian(x: np.ndarray) -> np.ndarray:
+    """The smallest Jacobian of six-node triangles at their nodes over the corners' one.
+
+    Args:
+        x: The nodes' coordinates, ``(cells, 6, 2)`` in gmsh's order.
+
+    Returns:
+        ``min det J(node) / det J(straight cell)`` per cell: 1 for a straight-sided
+        cell, ≤ 0 where a mid-edge node moved far enough to fold the cell.
+    """
+    J = np.einsum("qan,cnd->cqad", _P2_DN, x)  # (cells, node, ∂, coordinate)
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    c = x[:, :3]
+    straight = ((c[:, 1, 0] - c[:, 0, 0]) * (c[:, 2, 1] - c[:, 0, 1])
+                - (c[:, 2, 0] - c[:, 0, 0]) * (c[:, 1, 1] - c[:, 0, 1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(straight != 0, det.min(axis=1) / straight, 0.0)
+
+
 def check_cells(path: pathlib.Path) -> None:
     """Refuse degenerate or overlapping 2D cells of the current gmsh model (rank 0).
 
-    Checked on the corners of each cell (the straight-sided cell; the mid-side nodes of
-    a curved P2 cell are not checked): a height below :data:`DEGENERATE` of the longest
-    edge is refused, below :data:`THIN` warned about once (the thinnest cell); two
-    cells on the same side of their shared edge overlap (a folded mesh, an inverted
-    cell among its neighbours), whatever the orientation of each surface.
+    Checked on the corners of each cell (the straight-sided cell): a height below
+    :data:`DEGENERATE` of the longest edge is refused, below :data:`THIN` warned about
+    once (the thinnest cell); two cells on the same side of their shared edge overlap
+    (a folded mesh, an inverted cell among its neighbours), whatever the orientation
+    of each surface. A curved six-node triangle (a second-order mesh) is refused where
+    its Jacobian at one of its nodes falls to :data:`DEGENERATE` of the straight
+    cell's or changes sign (:func:`curved_jacobian`: a mid-edge node moved across
+    the cell).
 
     Raises:
         MeshError: One line naming the file, the cell (gmsh element tag) and its
@@ -136,9 +178,19 @@ def check_cells(path: pathlib.Path) -> None:
     cells, elements, sides = [], [], []
     for etype, etags, enodes in zip(*gmsh.model.mesh.getElements(2), strict=True):
         corners = gmsh.model.mesh.getElementProperties(etype)[5]
-        nodes = enodes.astype(np.int64).reshape(len(etags), -1)[:, :corners]
+        all_nodes = enodes.astype(np.int64).reshape(len(etags), -1)
+        nodes = all_nodes[:, :corners]
         cells.append(nodes)
         elements.append(etags.astype(np.int64))
+        if etype == 9:  # six-node triangles
+            ratio = curved_jacobian(xy[all_nodes])
+            worst = int(np.argmin(ratio))
+            if ratio[worst] < DEGENERATE:
+                centre = xy[nodes[worst]].mean(axis=0)
+                raise MeshError(f"{path}: curved cell {etags[worst]} at ({centre[0]:.6g}, "
+                                f"{centre[1]:.6g}) folds: its Jacobian at a node is "
+                                f"{ratio[worst]:.1e} of its corners' (a mid-edge node "
+                                "too far off its edge; refine there or remesh)")
     for nodes, etags in zip(cells, elements, strict=True):
         area, quality = cell_quality(xy[nodes])
         worst = int(np.argmin(quality))
@@ -174,9 +226,43 @@ def check_cells(path: pathlib.Path) -> None:
                         "shared edge (a folded mesh or an inverted cell; remesh)")
 
 
-def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2
-             ) -> pathlib.Path:
+CURVED = 1e-9
+"""A mid-edge node of a second-order mesh farther than this fraction of its edge's
+length from the edge's midpoint makes the edge curved."""
+
+
+def curved_edges() -> int:
+    """The number of curved edges of the current gmsh model's 1-D elements (rank 0).
+
+    Mid-edge nodes of the three-node lines (gmsh type 8) more than :data:`CURVED` of
+    the edge's length off the chord's midpoint: gmsh places them on the geometry's
+    curves (circle arcs, splines), at the midpoint of straight ones.
+    """
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    if not len(tags):
+        return 0
+    xyz = np.zeros((int(tags.max()) + 1, 3))
+    xyz[tags.astype(np.int64)] = coords.reshape(-1, 3)
+    count = 0
+    for etype, _, enodes in zip(*gmsh.model.mesh.getElements(1), strict=True):
+        if etype != 8:
+            continue
+        a, b, m = (xyz[enodes.astype(np.int64).reshape(-1, 3)[:, k]] for k in range(3))
+        off = np.linalg.norm(m - 0.5 * (a + b), axis=1)
+        count += int(np.count_nonzero(off > CURVED * np.linalg.norm(b - a, axis=1)))
+    return count
+
+
+def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2,
+             order: int = 1) -> pathlib.Path:
     """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
+
+    With ``order = 2`` (the P2 displacement) the mesh is made second order
+    (``setOrder(2)``: the mid-edge nodes on the geometry's curves) where the script
+    has a curved curve (:func:`curved_edges`); a geometry of straight lines keeps
+    first-order (affine) cells, on which the conforming pairs' compiled path runs
+    (:mod:`breakwater.contact.nodal`) and whose P2 nodes are the same points. A
+    script that asks for an order itself (``Mesh.ElementOrder``) keeps it.
 
     Args:
         path: The script.
@@ -184,6 +270,7 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
             every rank.
         comm: Communicator (rank 0 meshes, every rank returns once the file exists).
         dim: Dimension of the mesh.
+        order: The displacement's degree (1 or 2).
 
     Returns:
         ``target``.
@@ -197,6 +284,10 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
         with gmsh_session():
             gmsh.merge(str(path))  # into the session's model
             gmsh.model.mesh.generate(dim)
+            if order == 2 and gmsh.option.getNumber("Mesh.ElementOrder") == 1:
+                gmsh.model.mesh.setOrder(2)
+                if not curved_edges():
+                    gmsh.model.mesh.setOrder(1)
             gmsh.write(str(target))
 
     try:

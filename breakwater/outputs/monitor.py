@@ -87,8 +87,9 @@ def interface_state(pairs: Sequence[Pair], u: Sequence[fem.Function]
         ``contacts``: the pairs' names, in order; per pair ``contact_<name>_<field>``
         for the fields of :meth:`~breakwater.model.pairs.Pair.snapshot`: ``x`` (node
         coordinates, sorted), ``normal``, ``gap`` (normal gap g_n), ``slip`` (2D: along
-        the tangent) and ``pressure`` (ε_n ⟨−g_n⟩₊), at a conforming pair's interface
-        nodes and at a general pair's slave nodes.
+        the tangent) and ``pressure`` (ε_n ⟨−g_n⟩₊ at a conforming pair's interface
+        nodes; at a general pair's slave nodes the projection of the pressure its
+        residual integrates, :func:`breakwater.contact.slavepoints.nodal_pressure`).
     """
     data: dict[str, np.ndarray] = {"contacts": np.array([p.name for p in pairs], dtype=str)}
     for p in pairs:

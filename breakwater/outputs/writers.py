@@ -373,8 +373,9 @@ class PairFields:
     ``slip_velocity`` and ``friction_traction`` (vectors). At a conforming pair's
     nodes the law acts (the Gauss–Lobatto points of the interface measure), so nodal
     values are exact; a general pair's residual integrates the law at its own points,
-    so the integral of ``pressure`` equals the normal resultant to the interpolation
-    error.
+    and its ``pressure`` is their dual-basis projection onto the slave nodes
+    (:func:`breakwater.contact.slavepoints.nodal_pressure`), whose integral is the
+    residual's ∫p.
 
     Args:
         model: The contact model.
