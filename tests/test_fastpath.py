@@ -36,8 +36,8 @@ from breakwater.model.model import (
     Material,
 )
 from breakwater.run import simulation
-from breakwater.stepping.bulk import BulkOperators, interface_dofs
 from breakwater.stepping import factorisations
+from breakwater.stepping.bulk import BulkOperators, interface_dofs
 from breakwater.stepping.factorisations import Factorisation, Factorisations, x_blocks
 from breakwater.stepping.gn22 import GN22, solve_static
 

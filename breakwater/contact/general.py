@@ -222,6 +222,40 @@ class SurfaceForces(SurfaceSearch):
         return int(forcekernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
                                            self.beta1 * float(self.dt.value), self._law[3]))
 
+    def resolution(self, y: np.ndarray) -> float:
+        """The round-off of f_c at the iterate y: below it ‖F‖ carries no information.
+
+        A sticking slave node's friction −μλφ(v_T) has the tangent μλφ'(v_T), up to
+        μλ/χ, and v_T is a difference of velocities of order |v| + Δt|a| + β₁Δt|Δa|
+        computed to their round-off ε (the unit round-off) each: its force carries
+        ``μλ_k φ'(v_T) ε Σ|v|``, 1e-6 N/m on the Goda caisson rocking on its corner
+        (μλ/χ = 6.5e11 N s/m², |v| 1e-2 m/s) where the Newton tolerance is 7e-8.
+        Returns the root sum of squares over the nodes (0 without friction: the
+        normal part's round-off, ε_n w ε |x| per point, stays below the tolerances
+        the Newton meets).
+        """
+        if not self.spec.friction:
+            return 0.0
+        ε = float(np.finfo(float).eps)
+        _, v, a, da = self._start(y)
+        dt = float(self.dt.value)
+        u0, u1, v1 = self._state(y)
+        p = self._normal(u1)
+        _, _, mu, chi = self._law
+        total = 0.0
+        if len(p["index"]):
+            facet, N0, t0 = self._frozen(u0)
+            k, v_T, _, _ = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
+                                                 self._pm, v1, mu, chi)
+            if len(k):
+                mag = np.abs(v) + dt * np.abs(a) + self.beta1 * dt * np.abs(da)
+                node = mag[self._node_pos[k]].sum(axis=1) + np.einsum(
+                    "jb,jbd->j", np.abs(N0[k]), mag[self._pm[facet[k]]])
+                speed2 = np.einsum("jd,jd->j", v_T, v_T)
+                slope = chi**2 / (speed2 + chi**2) ** 1.5
+                total += float(np.sum((mu * p["lam"][k] * slope * ε * node) ** 2))
+        return float(np.sqrt(total))
+
     # --- the slip predictor ---------------------------------------------------------
 
     def _slip_along(self, v1: np.ndarray, facet: np.ndarray, N0: np.ndarray,

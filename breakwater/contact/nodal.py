@@ -223,6 +223,10 @@ class NodalContactForces:
         self.add_left_product(y, np.eye(self.n), out)
         return out
 
+    def resolution(self, y: np.ndarray) -> float:
+        """0: no estimate (the conforming pairs' Newton meets its tolerance)."""
+        return 0.0
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The pair's slip guard on the interface unknowns; the nodes corrected.

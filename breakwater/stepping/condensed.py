@@ -160,6 +160,10 @@ class InterfaceAssembler:
         """None: the product is formed from :meth:`matrix` (no structure to use)."""
         return None
 
+    def resolution(self, y: np.ndarray) -> float:
+        """0: no estimate (the forms' round-off is left to the Newton's stall test)."""
+        return 0.0
+
     def begin_step(self) -> None:
         """Nothing to keep: the forms are assembled at the state Functions."""
 

@@ -10,6 +10,7 @@ f_c(y) and their Jacobian, summed over the providers (:class:`ContactForces`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
@@ -58,6 +59,10 @@ class ContactForces(Protocol):
         """∂f_c/∂y on the interface unknowns, dense, shape ``(n_I, n_I)``."""
         ...
 
+    def resolution(self, y: np.ndarray) -> float:
+        """The round-off of f_c(y): a residual below it is converged (0: none known)."""
+        ...
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The provider's slip guard on Newton's step (next iterate ``x − step``).
@@ -95,6 +100,10 @@ class StateProvider(Protocol):
 
     def matrix(self) -> np.ndarray:
         """∂f_c/∂y on the interface unknowns, dense."""
+        ...
+
+    def resolution(self, y: np.ndarray) -> float:
+        """The round-off of ``vector()`` at Δa = y (0: none known)."""
         ...
 
 
@@ -151,6 +160,11 @@ class StateForces:
         """The provider's ``matrix()`` at Δa = y."""
         self._set(y)
         return self.provider.matrix()
+
+    def resolution(self, y: np.ndarray) -> float:
+        """The provider's ``resolution(y)``."""
+        self._set(y)
+        return self.provider.resolution(y)
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
@@ -299,6 +313,11 @@ class ContactSum:
         if dense is not None:
             out += X @ dense
         return out
+
+    def resolution(self, y: np.ndarray) -> float:
+        """The round-off of f_c(y), over the providers (root sum of squares)."""
+        with self.timings("interface_assembly"):
+            return math.sqrt(sum(c.resolution(y) ** 2 for c in self.providers))
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
