@@ -52,7 +52,7 @@ from __future__ import annotations
 import contextlib
 import logging
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -196,24 +196,43 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
         ConvergenceError: No static state could be found (not even with the bodies
             held).
     """
+    spec = model.initial
+    if spec.undeformed:
+        log.info("initial state: undeformed, at rest ([initial] undeformed = true)")
+        return InitialState(model.functions("u"), initial_velocities(model), 0, "undeformed")
+    o = options or NewtonOptions()
+    options = replace(o, atol=min(o.atol, spec.tolerance),
+                      floor_atol=min(o.floor_atol, spec.tolerance))
     with _initial_loads(model):
         if model.surface_pairs:
             v = initial_velocities(model)
-            r = relax(model, v, STICK_BAND, options)
+            r = relax(model, v, STICK_BAND, options, spec.tolerance, spec.loading)
             return InitialState(r.u, v, r.iterations, r.kind, r.held,
                                 {"pseudo_steps": r.steps, "seconds": r.seconds})
+        frictional = spec.loading == "frictional" and any(
+            float(p.law.friction.μ.value) > 0 for p in model.pairs)
         try:
-            u, its = solve_static(model, options=options)
-            state = InitialState(u, initial_velocities(model), its)
-        except ConvergenceError as e:
-            if not model.pairs:
-                raise
-            log.debug("no frictionless static state (%s): solving with friction", e)
-            try:
-                state = _frictional(model, options, e.iterations)
-            except (ConvergenceError, PETSc.Error) as f:
-                raise ConvergenceError(f"{e}; with friction: {f}", e.reason,
-                                       e.iterations + getattr(f, "iterations", 0)) from f
+            if frictional:
+                state = _frictional(model, options, 0)
+            else:
+                try:
+                    u, its = solve_static(model, options=options)
+                    state = InitialState(u, initial_velocities(model), its)
+                except ConvergenceError as e:
+                    if not model.pairs:
+                        raise
+                    log.debug("no frictionless static state (%s): solving with friction", e)
+                    try:
+                        state = _frictional(model, options, e.iterations)
+                    except (ConvergenceError, PETSc.Error) as f:
+                        raise ConvergenceError(f"{e}; with friction: {f}", e.reason,
+                                               e.iterations + getattr(f, "iterations", 0)
+                                               ) from f
+        except (ConvergenceError, PETSc.Error) as e:
+            raise ConvergenceError(
+                f"initial state: no static equilibrium ({e}); set [initial] undeformed = "
+                "true to start from the undeformed state at rest", getattr(e, "reason", -1),
+                getattr(e, "iterations", 0)) from e
     return state
 
 

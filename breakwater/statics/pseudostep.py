@@ -86,6 +86,7 @@ class PseudoStepper:
         self.scale = force_scale(m)
         self.steps = 0
         self.c = self.c_max  # c of the last converged step
+        self.tolerance = 1e-9  # the static residual, as a fraction of self.scale
 
     def destroy(self) -> None:
         """Free the stepper's PETSc objects."""
