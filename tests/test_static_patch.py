@@ -179,3 +179,21 @@ def test_no_static_state_is_an_error(folder: pathlib.Path) -> None:
     state = initial_state(model)
     assert state.kind == "undeformed" and state.iterations == 0
     assert all(not np.any(u.x.array) for u in state.u)
+
+
+def test_failed_static_state_exits_1(folder: pathlib.Path,
+                                     capsys: pytest.CaptureFixture[str]) -> None:
+    """Through the command line: the sliding-block example with gravity reversed (the block
+    pulled off its base) exits with status 1 and one line naming ``[initial] undeformed``;
+    with ``initial.undeformed = true`` it runs (status 0)."""
+    from breakwater import cli
+
+    example = pathlib.Path(__file__).parent.parent / "examples/sliding_block/sliding_block.toml"
+    args = ["run", str(example), "--no-progress", "--quiet", "--set", "gravity=[0.0, 9.81]",
+            "--set", "time.end_time=0.002"]
+    assert cli.main([*args, "--out", str(folder / "pulled")]) == 1
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    if COMM.rank == 0:
+        assert len(errors) == 1 and "[initial] undeformed = true" in errors[0], errors
+    assert cli.main([*args, "--out", str(folder / "pulled_undeformed"), "--set",
+                     "initial.undeformed=true"]) == 0

@@ -39,8 +39,17 @@ initial velocity. :func:`initial_state` finds it in up to three stages:
    (1 − β₁)Δt as a velocity error, +1.4 % of the slide at Δt = 1e-3) and the bonded
    shear's elastic release reversed slip velocities for a few steps.
 
-Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
-only for the pairs that need it (or for every pair if the frictional Newton fails).
+Where some pair has friction, ``[initial] loading = "frictional"`` (the default,
+:class:`~breakwater.config.runspec.InitialSpec`) starts at stage 2: gravity and the
+initial loads are applied with friction active, so that nothing slides on the way to a
+frictionless equilibrium (the Goda caisson's base corners slip ±0.021 mm in the
+frictionless state, ±0.0007 mm in the frictional one). ``"frictionless"`` tries stage 1
+first; stage 2 then runs only when stage 1 fails and some contact pair has friction.
+Stage 3 runs only for the pairs that need it (or for every pair if the frictional
+Newton fails). The Newton tolerance is ``[initial] tolerance`` (of the load norm, 1e-9
+by default). No static state at all is an error (:class:`~breakwater.common.errors.
+ConvergenceError`) naming ``[initial] undeformed``: with it set, the run starts from
+the undeformed state at rest instead (``kind = "undeformed"``), without a static solve.
 
 A model with general contact pairs (:mod:`breakwater.contact.general`) gets its state in
 the same three stages from :func:`breakwater.statics.relaxation.relax` (pseudo-transient
@@ -99,8 +108,8 @@ class InitialState:
         v: Initial velocities (one Function per body; zero at rest).
         iterations: Newton iterations of every static solve.
         kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
-            place up to t = 0); with general pairs also ``"undeformed"`` (no static
-            state relaxed: :mod:`breakwater.statics.relaxation`).
+            place up to t = 0); ``"undeformed"`` where the case asks for no static
+            state (``[initial] undeformed``).
         held: Names of the bodies held in place up to t = 0 (released at t = 0).
         relaxation: With general pairs (:mod:`breakwater.statics.relaxation`): its
             ``pseudo_steps`` and wall time ``seconds``; else None.
