@@ -30,7 +30,7 @@ from blocks import two_rectangles
 from mpi4py import MPI
 
 from breakwater.common.errors import ConvergenceError
-from breakwater.config.runspec import OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
 from breakwater.outputs.checkpoint import CHECKPOINT, CheckpointError, match_nodes
@@ -63,11 +63,15 @@ def _pulse(t: float) -> float:
 
 def _model(path: pathlib.Path, penalty: float = 1e10, comm: MPI.Comm = COMM) -> ContactModel:
     material = Material(RHO, 0.2, young_modulus=1e8)
-    return ContactModel(read_mesh(path, comm), [Body("a", material), Body("b", material)],
-                        [ContactPair("interface", "a", "b", penalty=penalty, friction=0.6,
-                                     regularisation=1e-10)],
-                        [Fixed("b_bottom")], [SurfaceLoad("a_left", (1.0, 0.0), _pulse)],
-                        gravity=(0.0, -G))
+    model = ContactModel(read_mesh(path, comm), [Body("a", material), Body("b", material)],
+                         [ContactPair("interface", "a", "b", penalty=penalty, friction=0.6,
+                                      regularisation=1e-10)],
+                         [Fixed("b_bottom")], [SurfaceLoad("a_left", (1.0, 0.0), _pulse)],
+                         gravity=(0.0, -G))
+    # The frictionless static state: the histories the tests were written for (the largest
+    # u_x before the SIGTERM checkpoint; from the frictional state it comes after it).
+    model.initial = InitialSpec(loading="frictionless")
+    return model
 
 
 def _output(directory: pathlib.Path, interval: int = INTERVAL) -> OutputSpec:

@@ -170,7 +170,8 @@ def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, ca
 def test_loads_of_the_initial_state(mesh_path):
     # A sustained side push of half μN, present at t = 0: in the initial state by default
     # (a frictional state: no frictionless one exists), left out with InitialSpec(loads=())
-    # (the frictionless state under gravity; the push then acts from t = 0 on).
+    # (the state under gravity; the push then acts from t = 0 on): frictional by default
+    # (the weight applied with friction active), frictionless with loading="frictionless".
     from breakwater.config.runspec import InitialSpec
     from breakwater.model.model import SurfaceLoad
 
@@ -184,6 +185,9 @@ def test_loads_of_the_initial_state(mesh_path):
     model.set_time(0.0)
     assert initial_state(model).kind == "frictional"
     model.initial = InitialSpec(loads=())
+    state = initial_state(model)
+    assert state.kind == "frictional" and state.held == []
+    model.initial = InitialSpec(loads=(), loading="frictionless")
     state = initial_state(model)
     assert state.kind == "frictionless" and state.held == []
     assert float(model.loads[0].amplitude.value) == push  # restored after the static solve

@@ -71,21 +71,24 @@ def test_truncated_mesh_exit_2(mesh_path, folder, section, capsys):
 
 
 def test_failed_static_state_report_and_summary(mesh_path, shared_dir, capsys):
-    # No static state: gravity pulls the block off its base, so neither a frictionless
-    # nor a frictional (nor a held) equilibrium exists. Nothing of the run is written but
-    # the summary, which says so and names no file that was not written; the report has
-    # no "None" or "n/a" solver line (it had "(mean n/a, max None)").
+    # No static state: gravity pulls the block off its base, so no frictional (nor a held)
+    # equilibrium exists: an error naming [initial] undeformed, the key that starts the
+    # run undeformed. Nothing of the run is written but the summary, which says so and
+    # names no file that was not written; the report has no "None" or "n/a" solver line
+    # (it had "(mean n/a, max None)").
     material = Material(2000.0, 0.25, young_modulus=1e9)
     model = ContactModel(read_mesh(mesh_path, COMM), [Body("a", material), Body("b", material)],
                          [ContactPair("interface", "a", "b", penalty=1e12, friction=0.3)],
                          [Fixed("b_bottom")], gravity=(1.0, 9.81))
     out = shared_dir / "failed"
-    with pytest.raises(simulation.SimulationFailed, match="static: Newton did not converge"):
+    with pytest.raises(simulation.SimulationFailed,
+                       match=r"no static equilibrium .*Newton did not converge.*\[initial\] "
+                             "undeformed = true"):
         simulation.run(model, TimeSpec(dt=1e-4, end_time=1e-3),
                        OutputSpec(out, figures=False, progress=False))
     report = capsys.readouterr().out
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "failed" and "with friction" in summary["error"]
+    assert summary["status"] == "failed" and "[initial] undeformed" in summary["error"]
     assert summary["outputs"]["static"] is None and summary["outputs"]["history"] is None
     assert not (out / "static.npz").exists() and not (out / "history.csv").exists()
     if COMM.rank == 0:

@@ -520,8 +520,9 @@ EXAMPLE = pathlib.Path(__file__).parents[1] / "examples" / "sliding_block" / "sl
 
 def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     """The example case (a general pair) runs from its file through the CLI; the block
-    starts at rest on the base (the frictionless static state: the push is not in the
-    initial state) and slides with the rigid block's acceleration (F − μN)/m: the second
+    starts at rest on the base (the static state under its weight, applied with friction
+    active: ``[initial] loading = "frictional"``; the push is not in the initial state)
+    and slides with the rigid block's acceleration (F − μN)/m: the second
     difference of the corner probe's u_x over 10-20 ms within 2 % of it (measured 2e-4).
 
     u_x itself runs ahead of (F − μN) t²/(2m), by 8 % at 20 ms: the regularised law
@@ -542,7 +543,7 @@ def test_example_case_runs(shared_dir: pathlib.Path) -> None:
     assert ux[-1] > ux[10] > 0
     assert abs(second / a - 1) < 0.02
     static = json.loads((out / "summary.json").read_text())["static"]
-    assert static["initial_state"] == "frictionless" and static["held_bodies"] == []
+    assert static["initial_state"] == "frictional" and static["held_bodies"] == []
     assert static["relaxation_steps"] > 0
     # The pair's history columns: while the block slides, the friction resultant is
     # μ times the normal one (every contact node slides the same way).

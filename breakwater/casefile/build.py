@@ -150,7 +150,9 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
             velocities=tuple((b.name, b.initial_velocity) for b in case.bodies
                              if any(b.initial_velocity)),
             loads=None if names is None else tuple(k for k, name in enumerate(owner)
-                                                   if name in names))
+                                                   if name in names),
+            loading=case.initial.loading, tolerance=case.initial.tolerance,
+            undeformed=case.initial.undeformed)
         for b in case.bodies:
             why = velocity_conflict(model, b.name, b.initial_velocity) \
                 if any(b.initial_velocity) else None

@@ -205,7 +205,7 @@ class FixedCase:
 
 @dataclass(frozen=True)
 class InitialCase:
-    """``[initial]``: the loads of the initial state.
+    """``[initial]``: the static initial state: its loads, how they are applied, its tolerance.
 
     The load names are checked by :class:`~breakwater.casefile.settings.CaseSettings`; a
     body's initial velocity is ``bodies.<name>.initial_velocity``. The run layer
@@ -215,6 +215,21 @@ class InitialCase:
     loads: tuple[str, ...] | None = setting(None, doc="names of the loads in the static "
                                             "initial state, at their values at t = 0 (default: "
                                             "every load; [] none: gravity only)")
+    loading: Literal["frictional", "frictionless"] = setting(
+        "frictional", doc="how gravity and the initial loads are applied where a pair has "
+        "friction: frictional (friction active on the way, as if the loads were applied "
+        "slowly: no frictionless slide) or frictionless (the frictionless equilibrium "
+        "where one exists, friction only where none does)")
+    tolerance: float = setting(1e-9, doc="the static state's residual ‖f − K u − f_c(u)‖ "
+                               "as a fraction of the load norm ‖f‖ (a time step's Newton: "
+                               "1e-9)")
+    undeformed: bool = setting(False, doc="start from the undeformed state at rest (no "
+                               "static state: the bodies start unloaded under the loads); "
+                               "otherwise a static state that cannot be found is an error")
+
+    def __post_init__(self) -> None:
+        if not 0 < self.tolerance < 1:
+            raise InvalidField("tolerance", f"must be in (0, 1) (got {self.tolerance:g})")
 
 
 @dataclass(frozen=True)

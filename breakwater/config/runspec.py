@@ -193,10 +193,18 @@ class InitialSpec:
         loads: Indices (in ``model.loads``) of the loads in the static initial state,
             at their values at t = 0; None: every load. A load left out acts from
             t = 0 on a body that is in equilibrium without it.
+        loading: ``"frictional"``: where a pair has friction, the loads are applied
+            with friction active (no frictionless slide on the way);
+            ``"frictionless"``: the frictionless equilibrium where one exists.
+        tolerance: The static residual ‖f − K u − f_c(u)‖ as a fraction of ‖f‖.
+        undeformed: Start from the undeformed state at rest (no static state).
     """
 
     velocities: tuple[tuple[str, tuple[float, ...]], ...] = ()
     loads: tuple[int, ...] | None = None
+    loading: str = "frictional"
+    tolerance: float = 1e-9
+    undeformed: bool = False
 
     def velocity(self, body: str) -> tuple[float, ...] | None:
         """The initial velocity of a body (None: at rest)."""

@@ -39,8 +39,17 @@ initial velocity. :func:`initial_state` finds it in up to three stages:
    (1 − β₁)Δt as a velocity error, +1.4 % of the slide at Δt = 1e-3) and the bonded
    shear's elastic release reversed slip velocities for a few steps.
 
-Stage 2 runs only when stage 1 fails and some contact pair has friction, and stage 3
-only for the pairs that need it (or for every pair if the frictional Newton fails).
+Where some pair has friction, ``[initial] loading = "frictional"`` (the default,
+:class:`~breakwater.config.runspec.InitialSpec`) starts at stage 2: gravity and the
+initial loads are applied with friction active, so that nothing slides on the way to a
+frictionless equilibrium (the Goda caisson's base corners slip ±0.021 mm in the
+frictionless state, ±0.0007 mm in the frictional one). ``"frictionless"`` tries stage 1
+first; stage 2 then runs only when stage 1 fails and some contact pair has friction.
+Stage 3 runs only for the pairs that need it (or for every pair if the frictional
+Newton fails). The Newton tolerance is ``[initial] tolerance`` (of the load norm, 1e-9
+by default). No static state at all is an error (:class:`~breakwater.common.errors.
+ConvergenceError`) naming ``[initial] undeformed``: with it set, the run starts from
+the undeformed state at rest instead (``kind = "undeformed"``), without a static solve.
 
 A model with general contact pairs (:mod:`breakwater.contact.general`) gets its state in
 the same three stages from :func:`breakwater.statics.relaxation.relax` (pseudo-transient
@@ -52,7 +61,7 @@ from __future__ import annotations
 import contextlib
 import logging
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -99,8 +108,8 @@ class InitialState:
         v: Initial velocities (one Function per body; zero at rest).
         iterations: Newton iterations of every static solve.
         kind: ``"frictionless"``, ``"frictional"`` or ``"held"`` (some body held in
-            place up to t = 0); with general pairs also ``"undeformed"`` (no static
-            state relaxed: :mod:`breakwater.statics.relaxation`).
+            place up to t = 0); ``"undeformed"`` where the case asks for no static
+            state (``[initial] undeformed``).
         held: Names of the bodies held in place up to t = 0 (released at t = 0).
         relaxation: With general pairs (:mod:`breakwater.statics.relaxation`): its
             ``pseudo_steps`` and wall time ``seconds``; else None.
@@ -196,24 +205,43 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
         ConvergenceError: No static state could be found (not even with the bodies
             held).
     """
+    spec = model.initial
+    if spec.undeformed:
+        log.info("initial state: undeformed, at rest ([initial] undeformed = true)")
+        return InitialState(model.functions("u"), initial_velocities(model), 0, "undeformed")
+    o = options or NewtonOptions()
+    options = replace(o, atol=min(o.atol, spec.tolerance),
+                      floor_atol=min(o.floor_atol, spec.tolerance))
     with _initial_loads(model):
         if model.surface_pairs:
             v = initial_velocities(model)
-            r = relax(model, v, STICK_BAND, options)
+            r = relax(model, v, STICK_BAND, options, spec.tolerance, spec.loading)
             return InitialState(r.u, v, r.iterations, r.kind, r.held,
                                 {"pseudo_steps": r.steps, "seconds": r.seconds})
+        frictional = spec.loading == "frictional" and any(
+            float(p.law.friction.μ.value) > 0 for p in model.pairs)
         try:
-            u, its = solve_static(model, options=options)
-            state = InitialState(u, initial_velocities(model), its)
-        except ConvergenceError as e:
-            if not model.pairs:
-                raise
-            log.debug("no frictionless static state (%s): solving with friction", e)
-            try:
-                state = _frictional(model, options, e.iterations)
-            except (ConvergenceError, PETSc.Error) as f:
-                raise ConvergenceError(f"{e}; with friction: {f}", e.reason,
-                                       e.iterations + getattr(f, "iterations", 0)) from f
+            if frictional:
+                state = _frictional(model, options, 0)
+            else:
+                try:
+                    u, its = solve_static(model, options=options)
+                    state = InitialState(u, initial_velocities(model), its)
+                except ConvergenceError as e:
+                    if not model.pairs:
+                        raise
+                    log.debug("no frictionless static state (%s): solving with friction", e)
+                    try:
+                        state = _frictional(model, options, e.iterations)
+                    except (ConvergenceError, PETSc.Error) as f:
+                        raise ConvergenceError(f"{e}; with friction: {f}", e.reason,
+                                               e.iterations + getattr(f, "iterations", 0)
+                                               ) from f
+        except (ConvergenceError, PETSc.Error) as e:
+            raise ConvergenceError(
+                f"initial state: no static equilibrium ({e}); set [initial] undeformed = "
+                "true to start from the undeformed state at rest", getattr(e, "reason", -1),
+                getattr(e, "iterations", 0)) from e
     return state
 
 

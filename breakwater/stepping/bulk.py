@@ -62,6 +62,9 @@ class BulkOperators:
         # Dirichlet rows of the stacked vector (owned positions).
         self.bc_rows = self._bc_rows()
         self._work = [self.M.createVecLeft() for _ in range(3)]
+        self.offset: PETSc.Vec | None = None
+        """A constant force added to F (None: none): the relaxation's contact forces at
+        the start of a pseudo step (:mod:`breakwater.statics.pseudostep`)."""
 
     def _load_vectors(self) -> list[tuple[fem.Constant | None, PETSc.Vec]]:
         """Gravity and each surface load at unit amplitude: f(t) = Σ amplitude_k(t) f_k."""
@@ -113,6 +116,8 @@ class BulkOperators:
         out.zeroEntries()
         for amplitude, vec in self._loads:
             out.axpy(1.0 if amplitude is None else float(amplitude.value), vec)
+        if self.offset is not None:
+            out.axpy(1.0, self.offset)
 
     def predictor_residual(self, u: PETSc.Vec, v: PETSc.Vec, a: PETSc.Vec, dt: float,
                            out: PETSc.Vec) -> None:
