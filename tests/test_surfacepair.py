@@ -663,7 +663,7 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
     A block resting on a non-matching base and shaken sideways below μN (it sticks and
     rocks: the normal rate and the master's rotation move the projection and tangent
     from step to step). After each accepted step, the start of the next that
-    :meth:`SurfaceForces.predict` makes has, at every node in contact, the slip velocity
+    :meth:`SlipMemory.predict` makes has, at every node in contact, the slip velocity
     the last step converged to (measured against the new step's projection and
     tangent), to 1e-6 of it or of χ (round-off of the landing); the predictor moves
     only the slave unknowns of those nodes, tangentially. Some nodes stick (|v_T| < 10 χ).
@@ -684,8 +684,8 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
     moved = sticking = 0
     for _ in range(12):
         stepper.step()
-        assert provider.slip is not None
-        stuck = np.abs(provider.slip) < 10 * χ  # NaN (out of contact): False
+        assert provider.memory.slip is not None
+        stuck = np.abs(provider.memory.slip) < 10 * χ  # NaN (out of contact): False
         sticking += int(stuck.sum())
         # The next step's start, as CondensedNewton.solve makes it.
         stepper.stage()
@@ -693,13 +693,13 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
         try:
             y0 = provider._start()[3][:-1].copy()  # Δa = −a/β₁ at the unknowns
             y = y0.copy()
-            moved += provider.predict(y)
+            moved += provider.memory.predict(y)
             u0, _, v1 = provider._state(y)
             frozen = provider._frozen(u0)
-            along = provider._slip_along(v1, *frozen)
-            keep = np.isfinite(provider.slip) & np.isfinite(along)
-            scale = np.maximum(np.abs(provider.slip[keep]), χ)
-            assert np.all(np.abs(along[keep] - provider.slip[keep]) < 1e-6 * scale)
+            along = provider.memory.along(v1, *frozen)
+            keep = np.isfinite(provider.memory.slip) & np.isfinite(along)
+            scale = np.maximum(np.abs(provider.memory.slip[keep]), χ)
+            assert np.all(np.abs(along[keep] - provider.memory.slip[keep]) < 1e-6 * scale)
             change = (y - y0)[provider.node_pos[keep]]
             assert np.allclose(np.einsum("jd,jd->j", change, frozen[2][keep][:, ::-1]
                                          * np.array([1.0, -1.0])), 0.0, atol=1e-12)
@@ -713,7 +713,7 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
 
 
 def test_resolution_bounds_the_round_off_of_the_forces(shared_dir: pathlib.Path) -> None:
-    """:meth:`SurfaceForces.resolution` bounds what round-off of the velocities does to f_c.
+    """``newtonaids.resolution`` bounds what round-off of the velocities does to f_c.
 
     The block of the slip-predictor test, shaken below μN: at each step's start, v, a
     and the iterate Δa perturbed by a relative ε (random signs, 20 draws: the round-off
@@ -743,7 +743,7 @@ def test_resolution_bounds_the_round_off_of_the_forces(shared_dir: pathlib.Path)
         provider.begin_step()
         try:
             y = provider._start()[3][:-1].copy()
-            provider.predict(y)
+            provider.memory.predict(y)
             bound = provider.resolution(y)
             provider.at(y)
             f0 = provider.vector()

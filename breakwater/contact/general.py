@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact import forcekernels, slavepoints
+from breakwater.contact import forcekernels, newtonaids, slavepoints
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
@@ -85,9 +85,8 @@ class SurfaceForces(SurfaceSearch):
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
 
     Attributes:
-        slip: Per slave node, the slip velocity along the tangent at the end of the last
-            accepted step (NaN: not in contact; None: no step yet): Newton's start of
-            the next (:meth:`predict`); a checkpoint saves it.
+        memory: The slave nodes' slip velocities of the last accepted step, Newton's
+            start of the next (:class:`~breakwater.contact.newtonaids.SlipMemory`).
     """
 
     def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
@@ -96,8 +95,7 @@ class SurfaceForces(SurfaceSearch):
                               Sequence[fem.Function], Sequence[fem.Function]],
                  dt: fem.Constant, beta1: float, beta2: float) -> None:
         super().__init__(model, spec, layout, interface, state, dt, beta1, beta2)
-        self.slip: np.ndarray | None = None
-        self._pending: np.ndarray | None = None
+        self.memory = newtonaids.SlipMemory(self)
         self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
                                     self.node_X, self.node_pos, self.master.X, self.pos_m)
 
@@ -162,6 +160,10 @@ class SurfaceForces(SurfaceSearch):
         act, A = self._jacobian()
         return forcekernels.left_product(np.ascontiguousarray(X, dtype=float), act, A)
 
+    def active_jacobian(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`matrix` as ``(act, A)``: the unknowns it couples and its block there."""
+        return self._jacobian()
+
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense.
 
@@ -223,101 +225,8 @@ class SurfaceForces(SurfaceSearch):
                                            self.beta1 * float(self.dt.value), self._law[3]))
 
     def resolution(self, y: np.ndarray) -> float:
-        """The round-off of f_c at the iterate y: below it ‖F‖ carries no information.
-
-        A sticking slave node's friction −μλφ(v_T) has the tangent μλφ'(v_T), up to
-        μλ/χ, and v_T is a difference of velocities of order |v| + Δt|a| + β₁Δt|Δa|
-        computed to their round-off ε (the unit round-off) each: its force carries
-        ``μλ_k φ'(v_T) ε Σ|v|``, 1e-6 N/m on the Goda caisson rocking on its corner
-        (μλ/χ = 6.5e11 N s/m², |v| 1e-2 m/s) where the Newton tolerance is 7e-8.
-        Returns the root sum of squares over the nodes (0 without friction: the
-        normal part's round-off, ε_n w ε |x| per point, stays below the tolerances
-        the Newton meets).
-        """
-        if not self.spec.friction:
-            return 0.0
-        ε = float(np.finfo(float).eps)
-        _, v, a, da = self._start(y)
-        dt = float(self.dt.value)
-        u0, u1, v1 = self._state(y)
-        p = self._normal(u1)
-        _, _, mu, chi = self._law
-        total = 0.0
-        if len(p["index"]):
-            facet, N0, t0 = self._frozen(u0)
-            k, v_T, _, _ = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
-                                                 self._pm, v1, mu, chi)
-            if len(k):
-                mag = np.abs(v) + dt * np.abs(a) + self.beta1 * dt * np.abs(da)
-                node = mag[self._node_pos[k]].sum(axis=1) + np.einsum(
-                    "jb,jbd->j", np.abs(N0[k]), mag[self._pm[facet[k]]])
-                speed2 = np.einsum("jd,jd->j", v_T, v_T)
-                slope = chi**2 / (speed2 + chi**2) ** 1.5
-                total += float(np.sum((mu * p["lam"][k] * slope * ε * node) ** 2))
-        return float(np.sqrt(total))
-
-    # --- the slip predictor ---------------------------------------------------------
-
-    def _slip_along(self, v1: np.ndarray, facet: np.ndarray, N0: np.ndarray,
-                    t0: np.ndarray) -> np.ndarray:
-        """Per slave node, ``(v_k − v̄_m(ξ̄₀))·t₀`` at the velocities v1 (NaN: no facet)."""
-        vm = np.einsum("jb,jbd->jd", N0, v1[self._pm[np.maximum(facet, 0)]])
-        along = np.einsum("jd,jd->j", v1[self._node_pos] - vm, t0)
-        along[facet < 0] = np.nan
-        return along
-
-    def predict(self, y: np.ndarray) -> int:
-        """Newton's start with each slave node's slip velocity of the last step kept.
-
-        GN22's start Δa = −a/β₁ keeps every velocity (``v₁ = v₀``), but a general
-        pair measures the slip velocity against the master point under the node's
-        projection *at the start of the step*, along the tangent there, and both move
-        from step to step: the relative velocity, which carries the normal
-        (penetration) rate, then shows a tangential part ``v_n Δθ`` (1e-7 m/s on the
-        separately meshed Goda caisson during the impact, 1000 χ). A node that stuck
-        (|v_T| ≤ χ) would start Newton far outside the stick band, where the law's
-        tangent μλχ²/|v_T|³ is nil: Newton's first step reversed the slip of most
-        sticking nodes (the guard landed them at zero) and the iteration took 7–9
-        iterations per step instead of 3–4. Here the slave node's tangential start is
-        moved so that its slip velocity, measured against this step's projection
-        and tangent, is the one the last accepted step converged to
-        (:meth:`converged`, :meth:`accept`): y_k += −t₀ (v_T(y) − v_T,last)/(β₁Δt).
-        Only the start moves; the solution is the law's.
-
-        Args:
-            y: Newton's start on the interface unknowns, changed in place.
-
-        Returns:
-            The nodes moved (the same on every rank).
-        """
-        if self.slip is None or not self.spec.friction:
-            return 0
-        u0, _, v1 = self._state(y)
-        facet, N0, t0 = self._frozen(u0)
-        along = self._slip_along(v1, facet, N0, t0)
-        pos = self._node_pos
-        keep = np.isfinite(self.slip) & np.isfinite(along) & np.all(pos >= 0, axis=1)
-        shift = (along[keep] - self.slip[keep]) / (self.beta1 * float(self.dt.value))
-        np.subtract.at(y, pos[keep], t0[keep] * shift[:, None])
-        return int(keep.sum())
-
-    def converged(self, y: np.ndarray) -> None:
-        """Keep the converged step's slip velocities at the slave nodes in contact.
-
-        They become :attr:`slip`, the predictor's (:meth:`predict`), when the step is
-        accepted (:meth:`accept`); NaN where a node has no contact (λ_k = 0).
-        """
-        if not self.spec.friction:
-            return
-        u0, u1, v1 = self._state(y)
-        along = self._slip_along(v1, *self._frozen(u0))
-        along[~(self._normal(u1)["lam"] > 0)] = np.nan
-        self._pending = along
-
-    def accept(self) -> None:
-        """The step whose slip :meth:`converged` kept is accepted."""
-        if self._pending is not None:
-            self.slip, self._pending = self._pending, None
+        """The round-off of f_c at y (:func:`breakwater.contact.newtonaids.resolution`)."""
+        return newtonaids.resolution(self, y)
 
     def penetration(self, y: np.ndarray) -> str | None:
         """Why the step's solution Δa = y leaves a slave node beyond what the search sees.

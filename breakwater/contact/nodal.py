@@ -227,6 +227,10 @@ class NodalContactForces:
         """0: no estimate (the conforming pairs' Newton meets its tolerance)."""
         return 0.0
 
+    def active_jacobian(self, y: np.ndarray) -> None:
+        """None: the left product from the nodal structure is used instead."""
+        return None
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The pair's slip guard on the interface unknowns; the nodes corrected.

@@ -229,6 +229,14 @@ class _Offset:
         """A constant: zero."""
         return np.zeros((len(self.f0), len(self.f0)))
 
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A constant: no unknowns coupled."""
+        return np.zeros(0, np.int64), np.zeros((0, 0))
+
+    def resolution(self, y: np.ndarray) -> float:
+        """Exact: 0."""
+        return 0.0
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """No guard."""

@@ -76,7 +76,8 @@ from breakwater.stepping.interfacenewton import InterfaceNewton
 from breakwater.stepping.solver import NewtonOptions
 from breakwater.stepping.stepsolver import StepSolver
 
-__all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "InterfaceAssembler"]
+__all__ = ["CondensedNewton", "ContactFactory", "ContactForces", "GeneralPairs",
+           "InterfaceAssembler"]
 
 
 class InterfaceAssembler:
@@ -163,6 +164,10 @@ class InterfaceAssembler:
     def resolution(self, y: np.ndarray) -> float:
         """0: no estimate (the forms' round-off is left to the Newton's stall test)."""
         return 0.0
+
+    def active_jacobian(self) -> None:
+        """None: the assembled matrix has no such form here."""
+        return None
 
     def begin_step(self) -> None:
         """Nothing to keep: the forms are assembled at the state Functions."""
@@ -267,6 +272,7 @@ class CondensedNewton(StepSolver):
         for sp in self.surfaces:
             sp.timings = self.timings  # its search time: timings["contact_search"]
         self.contact = ContactSum(self.n, self.providers, self.timings)
+        self.general = GeneralPairs(self.surfaces, self.timings)
         self._vecs = {k: layout.vec.duplicate() for k in ("u", "v", "a", "r0", "z", "da", "w")}
         self.guard = guard
         self.newton = InterfaceNewton(self.n, self.contact, "gn22", options or NewtonOptions(),
@@ -345,14 +351,9 @@ class CondensedNewton(StepSolver):
             v_pred = v_I + dt * a_I  # ṽ = v₀ + Δt a₀ at the interface unknowns
             self.contact.begin()
             try:
-                with T("interface_assembly"):
-                    for sp in self.surfaces:  # each node's last slip velocity kept
-                        sp.predict(y0)
+                self.general.start(y0)
                 its = self.newton.solve(fact, z, y0, w_I, w_norm2, v_pred, self.beta1 * dt)
-                self._check_penetration(its)
-                with T("interface_assembly"):
-                    for sp in self.surfaces:
-                        sp.converged(self.newton.y)
+                self.general.finish(self.newton.y, its)
             finally:
                 self.contact.end()
             # The last residual evaluation was at the solution: f_c(y) is at hand.
@@ -384,36 +385,61 @@ class CondensedNewton(StepSolver):
         return its
 
     def accept(self) -> None:
-        """The solved step is accepted: the general pairs keep its slip velocities."""
-        for sp in self.surfaces:
-            sp.accept()
+        """The solved step is accepted (:meth:`GeneralPairs.accept`)."""
+        self.general.accept()
 
     def memory(self) -> list[list[float | None] | None]:
-        """What the next step's start depends on beyond (u, v, a), for a checkpoint.
-
-        Per general pair, its slave nodes' last slip velocities
-        (:attr:`~breakwater.contact.general.SurfaceForces.slip`; None for NaN).
-        """
-        return [None if sp.slip is None else
-                [float(x) if np.isfinite(x) else None for x in sp.slip]
-                for sp in self.surfaces]
+        """:meth:`GeneralPairs.memory`."""
+        return self.general.memory()
 
     def restore(self, memory: list[list[float | None] | None]) -> None:
-        """Set what :meth:`memory` returned (a resumed run)."""
-        for sp, slip in zip(self.surfaces, memory, strict=True):
-            sp.slip = None if slip is None else np.array(
-                [np.nan if x is None else x for x in slip], dtype=float)
+        """:meth:`GeneralPairs.restore`."""
+        self.general.restore(memory)
 
-    def _check_penetration(self, its: int) -> None:
-        """Reject a converged step that leaves a general pair's slave node unseen.
+
+class GeneralPairs:
+    """The general pairs' part of a fast step around its Newton.
+
+    Args:
+        surfaces: The pairs.
+        timings: Where their work is timed (``interface_assembly``).
+    """
+
+    def __init__(self, surfaces: Sequence[SurfaceContact], timings: Timings) -> None:
+        self.surfaces, self.timings = surfaces, timings
+
+    def start(self, y0: np.ndarray) -> None:
+        """Newton's start: each slave node's last slip velocity kept (in place)."""
+        with self.timings("interface_assembly"):
+            for sp in self.surfaces:
+                sp.memory.predict(y0)
+
+    def finish(self, y: np.ndarray, its: int) -> None:
+        """Check the converged y and keep its slip velocities.
 
         Raises:
-            PenetrationError: :meth:`SurfaceContact.penetration` of some pair (the same
-                decision on every rank: every rank holds the same interface values).
+            PenetrationError: y leaves a slave node beyond what a pair's search sees
+                (:meth:`SurfaceContact.penetration`; the same decision on every rank:
+                every rank holds the same interface values).
         """
         with self.timings("interface_assembly"):
-            y = self.newton.y
             for p in self.surfaces:
                 why = p.penetration(y)
                 if why is not None:
                     raise PenetrationError(why, 0, its)
+            for p in self.surfaces:
+                p.memory.converged(y)
+
+    def accept(self) -> None:
+        """The solved step is accepted: the pairs keep its slip velocities."""
+        for sp in self.surfaces:
+            sp.memory.accept()
+
+    def memory(self) -> list[list[float | None] | None]:
+        """Per pair, its slave nodes' last slip velocities (a checkpoint's)."""
+        return [sp.memory.saved() for sp in self.surfaces]
+
+    def restore(self, memory: list[list[float | None] | None]) -> None:
+        """Set what :meth:`memory` returned (a resumed run)."""
+        for sp, saved in zip(self.surfaces, memory, strict=True):
+            sp.memory.load(saved)

@@ -63,6 +63,14 @@ class ContactForces(Protocol):
         """The round-off of f_c(y): a residual below it is converged (0: none known)."""
         ...
 
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """∂f_c/∂y as ``(act, A)``: nonzero only in rows and columns ``act``, there A.
+
+        None where the provider has no such form (then :meth:`add_left_product` or
+        :meth:`matrix`).
+        """
+        ...
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The provider's slip guard on Newton's step (next iterate ``x − step``).
@@ -104,6 +112,10 @@ class StateProvider(Protocol):
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of ``vector()`` at Δa = y (0: none known)."""
+        ...
+
+    def active_jacobian(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``matrix()`` as ``(act, A)`` on the unknowns it couples, or None."""
         ...
 
 
@@ -165,6 +177,11 @@ class StateForces:
         """The provider's ``resolution(y)``."""
         self._set(y)
         return self.provider.resolution(y)
+
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The provider's ``active_jacobian()`` at Δa = y."""
+        self._set(y)
+        return self.provider.active_jacobian()
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
@@ -313,6 +330,28 @@ class ContactSum:
         if dense is not None:
             out += X @ dense
         return out
+
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """∂f_c/∂y as ``(act, A)`` (rows and columns ``act``), if every provider has it.
+
+        The providers' active unknowns joined, their blocks summed; None if one has
+        no such form (the Newton then forms the whole ``X ∂f_c/∂y``).
+        """
+        parts = []
+        with self.timings("interface_assembly"):
+            for c in self.providers:
+                part = c.active_jacobian(y)
+                if part is None:
+                    return None
+                parts.append(part)
+            if len(parts) == 1:
+                return parts[0]
+            act = np.unique(np.concatenate([p[0] for p in parts]))
+            A = np.zeros((len(act), len(act)))
+            for a, block in parts:
+                at = np.searchsorted(act, a)
+                A[np.ix_(at, at)] += block
+            return act, A
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c(y), over the providers (root sum of squares)."""

@@ -99,10 +99,8 @@ class InterfaceNewton:
         norms = [math.sqrt(max(float(whole), fnorm**2))]
         reason, stalled = self._test(norms, 0.0, 0.0, x)
         while reason == _R.CONVERGED_ITERATING:
-            J = self.contact.left_jacobian(x, X_II)
-            J.flat[:: len(J) + 1] += 1.0
             try:
-                δ = np.linalg.solve(J, G)
+                δ = self._step(x, X_II, G)
             except np.linalg.LinAlgError:
                 reason = int(_R.DIVERGED_LINEAR_SOLVE)
                 break
@@ -123,6 +121,30 @@ class InterfaceNewton:
                 f"iterations, residual {norms[-1]:.3e})", reason, its)
         self.y, self.fc = x, fc
         return its
+
+    def _step(self, x: np.ndarray, X_II: np.ndarray, G: np.ndarray) -> np.ndarray:
+        """Newton's step δ: ``(1 + X_II ∂f_c/∂y) δ = G``.
+
+        Where ∂f_c/∂y is nonzero only in the rows and columns ``act`` (a general pair:
+        the points in contact and their master facets, a fraction of a master surface
+        that may be long), the system is solved on them alone: with B = ∂f_c/∂y there,
+        ``(1 + X_act,act B) δ_act = G_act`` and ``δ = G − X_II[:, act] B δ_act``,
+        a dense solve of size |act| instead of n_I. Else the whole matrix.
+
+        Raises:
+            np.linalg.LinAlgError: A singular system.
+        """
+        active = self.contact.active_jacobian(x)
+        if active is None:
+            J = self.contact.left_jacobian(x, X_II)
+            J.flat[:: len(J) + 1] += 1.0
+            return np.linalg.solve(J, G)
+        act, B = active
+        if not len(act):
+            return G.copy()
+        J = X_II[np.ix_(act, act)] @ B
+        J.flat[:: len(J) + 1] += 1.0
+        return G - X_II[:, act] @ (B @ np.linalg.solve(J, G[act]))
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, float]:

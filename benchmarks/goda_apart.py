@@ -1,0 +1,111 @@
+r"""The Goda case meshed apart by hand against the conforming case (issue 23).
+
+Run on purpose, never in CI (three full runs, a few minutes)::
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/goda_apart.py [--out DIR]
+
+Issue 23's acceptance: a separately meshed Goda case (``examples/goda_apart/``: a
+``.geo`` written by hand, gmsh's Delaunay algorithm, caisson elements 12 mm, mound
+22 mm, 14 mm on the crest; not ``meshes/goda.py``) with the general pair's default
+settings finishes with mean Newton iterations per step within 1.5× of the conforming
+run's, headline results within 2 % (peaks) and 10 % (residuals) of the conforming
+run's, and a time loop within 1.5× of the conforming one's. Three runs through the
+CLI, in one process, back to back:
+
+- ``conforming``: the built-in case (the paper's mesh, caisson 29 mm, mound 26.5 mm);
+- ``conforming-fine``: the built-in case meshed at the apart mesh's sizes (caisson and
+  crest 12 mm, mound 22 mm), so that the time loops compare like with like;
+- ``apart``: ``examples/goda_apart/goda_apart.toml``.
+
+Every run takes the mound's shear modulus of the conforming calibration at refinement
+1 (2.27789e6 Pa: calibration with a general pair is refused), and point probes of both
+bodies at the caisson's base corners (slip = caisson − mound u_x; the pair probes of
+the conforming runs check them). Printed: the headline table with relative
+differences to ``conforming``, and the solvers' figures with the time loops' ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import sys
+import tempfile
+from typing import Any
+
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
+from breakwater import cli
+from breakwater.common.files import read_history
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from general_vs_conforming import COMMON, _headline  # noqa: E402
+
+APART = pathlib.Path(__file__).parents[1] / "examples" / "goda_apart" / "goda_apart.toml"
+FINE = ["mesh.goda.caisson_element_size=0.012", "mesh.goda.mound_element_size=0.022"]
+APART_PROBES = [f'output.probes.{c}_{b}={{body="{b}", group="{c}"}}'
+                for c in ("corner_front", "corner_rear") for b in ("caisson",)] + [
+    'output.probes.corner_front_mound={body="mound", point=[-0.1025, 0.19]}',
+    'output.probes.corner_rear_mound={body="mound", point=[0.1025, 0.19]}']
+
+
+def _run(name: str, out: pathlib.Path, case: list[str], extra: list[str]) -> dict[str, Any]:
+    argv = ["run", *case, "--out", str(out / name), "--no-progress", "--quiet"]
+    for s in extra:
+        argv += ["--set", s]
+    code = cli.main(argv)
+    if code != 0:
+        raise SystemExit(f"the {name} run failed (exit {code})")
+    summary = json.loads((out / name / "summary.json").read_text())
+    return {"summary": summary, "history": read_history(out / name / "history.csv")}
+
+
+def main() -> None:
+    """Run the three cases and print the tables (rank 0)."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--out", type=pathlib.Path, default=None)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    args = parser.parse_args()
+    comm = MPI.COMM_WORLD
+    tmp = tempfile.mkdtemp(prefix="goda_apart_") if comm.rank == 0 else None
+    out = args.out or pathlib.Path(comm.bcast(tmp, root=0))
+    common = [s for s in COMMON if not s.startswith("output.probes.")]
+    runs = {
+        "conforming": _run("conforming", out, [], [*COMMON, *args.set]),
+        "conforming-fine": _run("conforming-fine", out, [], [*COMMON, *FINE, *args.set]),
+        "apart": _run("apart", out, [str(APART)], [*common, *APART_PROBES, *args.set]),
+    }
+    if comm.rank > 0:
+        return
+    rows = {k: _headline(r) for k, r in runs.items()}
+    ref = rows["conforming"]
+    print(f"Goda case: conforming, conforming at 12/22 mm, apart ({APART.name}); "
+          f"outputs in {out}\n")
+    print("| result | " + " | ".join(runs) + " |")
+    print("|---|" + "---|" * len(runs))
+    for key, x in ref.items():
+        cells = [f"{rows[k][key]:.6g}" + (f" ({(rows[k][key] - x) / abs(x):+.2%})"
+                                          if k != "conforming" and x else "")
+                 for k in runs]
+        print(f"| {key} | " + " | ".join(cells) + " |")
+    print("\n| solver | " + " | ".join(runs) + " |")
+    print("|---|" + "---|" * len(runs))
+    for key in ("steps", "newton_iterations", "mean_newton_iterations",
+                "max_newton_iterations", "cutbacks", "round_off_accepts"):
+        cells = [r["summary"]["solver"].get(key) for r in runs.values()]
+        print(f"| {key} | " + " | ".join(f"{c:.4g}" if isinstance(c, float) else str(c)
+                                         for c in cells) + " |")
+    for key in ("wall", "cpu"):
+        cells = [r["summary"]["solver"]["time_loop"][key] for r in runs.values()]
+        print(f"| time loop {key} (s) | " + " | ".join(f"{c:.3g}" for c in cells) + " |")
+    loop = {k: r["summary"]["solver"]["time_loop"]["cpu"] for k, r in runs.items()}
+    its = {k: r["summary"]["solver"]["mean_newton_iterations"] for k, r in runs.items()}
+    print(f"\napart / conforming: mean Newton iterations {its['apart'] / its['conforming']:.2f}"
+          f"x, time loop (CPU) {loop['apart'] / loop['conforming']:.2f}x; apart / "
+          f"conforming-fine: {its['apart'] / its['conforming-fine']:.2f}x, "
+          f"{loop['apart'] / loop['conforming-fine']:.2f}x")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,150 @@
+"""What the interface Newton asks of a general pair beyond f_c and its Jacobian.
+
+- :class:`SlipMemory`: Newton's start of a step with each slave node's slip velocity of
+  the last accepted step kept (the frame it is measured in moves between steps).
+- :func:`resolution`: the round-off of f_c at an iterate, below which the residual
+  carries no information (the Newton's test converges there).
+
+Both read the pair's state at the interface unknowns
+(:class:`~breakwater.contact.surfacesearch.SurfaceSearch`; every rank holds the same values,
+so every rank takes the same decisions).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from breakwater.contact import forcekernels
+
+if TYPE_CHECKING:
+    from breakwater.contact.surfacesearch import SurfaceSearch
+
+__all__ = ["SlipMemory", "resolution"]
+
+
+class SlipMemory:
+    """Newton's start with each slave node's slip velocity of the last step kept.
+
+    GN22's start Δa = −a/β₁ keeps every velocity (``v₁ = v₀``), but a general pair
+    measures the slip velocity against the master point under the node's projection
+    *at the start of the step*, along the tangent there, and both move from step to
+    step: the relative velocity, which carries the normal (penetration) rate, then
+    shows a tangential part ``v_n Δθ`` (1e-7 m/s on the separately meshed Goda caisson
+    during the impact, 1000 χ). A node that stuck (|v_T| ≤ χ) would start Newton far
+    outside the stick band, where the law's tangent μλχ²/|v_T|³ is nil: Newton's first
+    step reversed the slip of most sticking nodes (the guard landed them at zero) and
+    the iteration took 7–9 iterations per step instead of 3–4. :meth:`predict` moves the
+    slave node's tangential start so that its slip velocity, measured against this
+    step's projection and tangent, is the one the last accepted step converged to
+    (:meth:`converged`, :meth:`accept`): ``y_k += −t₀ (v_T(y) − v_T,last)/(β₁Δt)``.
+    Only the start moves; the solution is the law's.
+
+    Args:
+        pair: The general pair.
+
+    Attributes:
+        slip: Per slave node, the slip velocity along the tangent at the end of the last
+            accepted step (NaN: not in contact; None: no step yet); a checkpoint saves
+            it (:meth:`saved`, :meth:`load`).
+    """
+
+    def __init__(self, pair: SurfaceSearch) -> None:
+        self.pair = pair
+        self.slip: np.ndarray | None = None
+        self._pending: np.ndarray | None = None
+
+    def along(self, v1: np.ndarray, facet: np.ndarray, N0: np.ndarray, t0: np.ndarray
+              ) -> np.ndarray:
+        """Per slave node, ``(v_k − v̄_m(ξ̄₀))·t₀`` at the velocities v1 (NaN: no facet)."""
+        p = self.pair
+        vm = np.einsum("jb,jbd->jd", N0, v1[p._pm[np.maximum(facet, 0)]])
+        out = np.einsum("jd,jd->j", v1[p._node_pos] - vm, t0)
+        out[facet < 0] = np.nan
+        return out
+
+    def predict(self, y: np.ndarray) -> int:
+        """Move Newton's start y (in place) to the last step's slip velocities.
+
+        Returns:
+            The nodes moved (the same on every rank).
+        """
+        p = self.pair
+        if self.slip is None or not p.spec.friction:
+            return 0
+        u0, _, v1 = p._state(y)
+        facet, N0, t0 = p._frozen(u0)
+        along = self.along(v1, facet, N0, t0)
+        pos = p._node_pos
+        keep = np.isfinite(self.slip) & np.isfinite(along) & np.all(pos >= 0, axis=1)
+        shift = (along[keep] - self.slip[keep]) / (p.beta1 * float(p.dt.value))
+        y[pos[keep]] -= t0[keep] * shift[:, None]  # distinct positions per node
+        return int(keep.sum())
+
+    def converged(self, y: np.ndarray) -> None:
+        """Keep the converged step's slip velocities at the slave nodes in contact.
+
+        They become :attr:`slip` when the step is accepted (:meth:`accept`); NaN where
+        a node has no contact (λ_k = 0).
+        """
+        p = self.pair
+        if not p.spec.friction:
+            return
+        u0, u1, v1 = p._state(y)
+        along = self.along(v1, *p._frozen(u0))
+        along[~(p._normal(u1)["lam"] > 0)] = np.nan
+        self._pending = along
+
+    def accept(self) -> None:
+        """The step whose slip :meth:`converged` kept is accepted."""
+        if self._pending is not None:
+            self.slip, self._pending = self._pending, None
+
+    def saved(self) -> list[float | None] | None:
+        """:attr:`slip` for a checkpoint (JSON: None for NaN)."""
+        if self.slip is None:
+            return None
+        return [float(x) if np.isfinite(x) else None for x in self.slip]
+
+    def load(self, saved: list[float | None] | None) -> None:
+        """Set :attr:`slip` from :meth:`saved` (a resumed run)."""
+        self.slip = None if saved is None else np.array(
+            [np.nan if x is None else x for x in saved], dtype=float)
+
+
+def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
+    """The round-off of a general pair's f_c at the iterate y.
+
+    A sticking slave node's friction −μλφ(v_T) has the tangent μλφ'(v_T), up to μλ/χ,
+    and v_T is a difference of velocities of order |v| + Δt|a| + β₁Δt|Δa| computed to
+    their round-off ε (the unit round-off) each: its force carries
+    ``μλ_k φ'(v_T) ε Σ|v|``, 1e-6 N/m on the Goda caisson rocking on its corner
+    (μλ/χ = 6.5e11 N s/m², |v| 1e-2 m/s) where the Newton tolerance is 7e-8.
+
+    Returns:
+        The root sum of squares over the slave nodes in contact (0 without friction:
+        the normal part's round-off, ε_n w ε |x| per point, stays below the
+        tolerances the Newton meets).
+    """
+    if not pair.spec.friction:
+        return 0.0
+    ε = float(np.finfo(float).eps)
+    _, v, a, da = pair._start(y)
+    dt = float(pair.dt.value)
+    u0, u1, v1 = pair._state(y)
+    p = pair._normal(u1)
+    _, _, mu, chi = pair._law
+    if not len(p["index"]):
+        return 0.0
+    facet, N0, t0 = pair._frozen(u0)
+    k, v_T, _, _ = forcekernels.friction(p["lam"], facet, N0, t0, pair._node_pos, pair._pm,
+                                         v1, mu, chi)
+    if not len(k):
+        return 0.0
+    mag = np.abs(v) + dt * np.abs(a) + pair.beta1 * dt * np.abs(da)
+    node = mag[pair._node_pos[k]].sum(axis=1) + np.einsum(
+        "jb,jbd->j", np.abs(N0[k]), mag[pair._pm[facet[k]]])
+    speed2 = np.einsum("jd,jd->j", v_T, v_T)
+    slope = chi**2 / (speed2 + chi**2) ** 1.5
+    return float(np.sqrt(np.sum((mu * p["lam"][k] * slope * ε * node) ** 2)))
