@@ -67,6 +67,7 @@ class InterfaceNewton:
         self.flips = 0
         self.y = np.zeros(n)
         self.fc = np.zeros(n)
+        self._columns_of: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def solve(self, fact: Factorisation, z_I: np.ndarray, y0: np.ndarray, w_I: np.ndarray,
               w_norm2: float, v_pred: np.ndarray, dv_dx: float) -> int:
@@ -142,9 +143,14 @@ class InterfaceNewton:
         act, B = active
         if not len(act):
             return G.copy()
-        J = X_II[np.ix_(act, act)] @ B
+        key = self._columns_of
+        if key is None or key[0] is not X_II or not np.array_equal(key[1], act):
+            # X_II's columns act, kept while act stays (the iterations of a step).
+            self._columns_of = key = (X_II, act, np.ascontiguousarray(X_II[:, act]))
+        X_act = key[2]
+        J = X_act[act] @ B
         J.flat[:: len(J) + 1] += 1.0
-        return G - X_II[:, act] @ (B @ np.linalg.solve(J, G[act]))
+        return G - X_act @ (B @ np.linalg.solve(J, G[act]))
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, float]:
