@@ -130,7 +130,9 @@ class InterfaceNewton:
         the points in contact and their master facets, a fraction of a master surface
         that may be long), the system is solved on them alone: with B = ∂f_c/∂y there,
         ``(1 + X_act,act B) δ_act = G_act`` and ``δ = G − X_II[:, act] B δ_act``,
-        a dense solve of size |act| instead of n_I. Else the whole matrix.
+        a dense solve of size |act| instead of n_I, written for the forces
+        ``w = B δ_act``: ``(1 + B X_act,act) w = B G_act``, ``δ = G − X_II[:, act] w``.
+        Else the whole matrix.
 
         Raises:
             np.linalg.LinAlgError: A singular system.
@@ -148,9 +150,12 @@ class InterfaceNewton:
             # X_II's columns act, kept while act stays (the iterations of a step).
             self._columns_of = key = (X_II, act, np.ascontiguousarray(X_II[:, act]))
         X_act = key[2]
-        J = X_act[act] @ B
+        # For the forces w = B δ_act: (1 + B X_act,act) w = B G_act (solving for δ_act
+        # and forming B δ_act instead multiplies its round-off by B's stick and penalty
+        # tangents, 1e12: an impact's Newton diverged).
+        J = B @ X_act[act]
         J.flat[:: len(J) + 1] += 1.0
-        return G - X_act @ (B @ np.linalg.solve(J, G[act]))
+        return G - X_act @ np.linalg.solve(J, B @ G[act])
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, float]:
