@@ -657,6 +657,21 @@ def test_step_state_kept_only_within_the_newton(shared_dir: pathlib.Path) -> Non
         stepper.destroy()
 
 
+def _shaken(path: pathlib.Path) -> tuple[GN22, SurfaceContact]:
+    """A block on a non-matching base shaken sideways below μN (50 Hz, 0.5 μmg), started."""
+    μ, w, h = 0.6, 0.1, 0.05
+    m = STEEL_LIKE.density * w * h
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=μ)
+    model = _model(path, COMM, [Rectangle("base", -0.1, -0.05, 0.3, 0.05, 9, 2),
+                                Rectangle("block", -0.05, 0.0, w, h, 4, 2)], pair,
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                   loads=[SurfaceLoad("block_left", (0.5 * μ * m * G / h, 0.0),
+                                      lambda t: float(np.sin(2 * np.pi * 50 * t)))])
+    stepper = GN22(model, 5e-4)
+    stepper.initialise()
+    return stepper, _provider(stepper)
+
+
 def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -> None:
     """Newton's start of a step keeps each slave node's converged slip velocity.
 
@@ -668,19 +683,8 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
     tangent), to 1e-6 of it or of χ (round-off of the landing); the predictor moves
     only the slave unknowns of those nodes, tangentially. Some nodes stick (|v_T| < 10 χ).
     """
-    μ, w, h = 0.6, 0.1, 0.05
-    m = STEEL_LIKE.density * w * h
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=μ)
-    model = _model(shared_dir / "shake.msh", COMM,
-                   [Rectangle("base", -0.1, -0.05, 0.3, 0.05, 9, 2),
-                    Rectangle("block", -0.05, 0.0, w, h, 4, 2)], pair,
-                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
-                   loads=[SurfaceLoad("block_left", (0.5 * μ * m * G / h, 0.0),
-                                      lambda t: float(np.sin(2 * np.pi * 50 * t)))])
-    stepper = GN22(model, 5e-4)
-    stepper.initialise()
-    provider = _provider(stepper)
-    χ = pair.regularisation
+    stepper, provider = _shaken(shared_dir / "shake.msh")
+    χ = provider.spec.regularisation
     moved = sticking = 0
     for _ in range(12):
         stepper.step()
@@ -722,18 +726,7 @@ def test_resolution_bounds_the_round_off_of_the_forces(shared_dir: pathlib.Path)
     separately meshed Goda case) and, where nodes stick, by more than
     1e-3 of it (the estimate is the stick tangent's, not a loose constant).
     """
-    μ, w, h = 0.6, 0.1, 0.05
-    m = STEEL_LIKE.density * w * h
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=μ)
-    model = _model(shared_dir / "shake2.msh", COMM,
-                   [Rectangle("base", -0.1, -0.05, 0.3, 0.05, 9, 2),
-                    Rectangle("block", -0.05, 0.0, w, h, 4, 2)], pair,
-                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
-                   loads=[SurfaceLoad("block_left", (0.5 * μ * m * G / h, 0.0),
-                                      lambda t: float(np.sin(2 * np.pi * 50 * t)))])
-    stepper = GN22(model, 5e-4)
-    stepper.initialise()
-    provider = _provider(stepper)
+    stepper, provider = _shaken(shared_dir / "shake2.msh")
     rng = np.random.default_rng(23)
     ε = np.finfo(float).eps
     ratios = []
