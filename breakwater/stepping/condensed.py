@@ -288,7 +288,7 @@ class CondensedNewton(StepSolver):
         patch test, σ off by 6e-6 p: :mod:`breakwater.statics.pseudostep` turns it on),
         and at Δt = 1e-3 s a drift of the same patch's exact static state by 1.2e-8 p
         in 20 steps (4e-11 p on). On, the bulk balances the interface forces f_c − S G
-        instead (two products of size n_I² per step). On for models with general pairs;
+        instead (the Newton's last residual force). On for models with general pairs;
         off for the conforming pairs alone (their histories bit for bit as before)."""
 
     @property
@@ -360,9 +360,9 @@ class CondensedNewton(StepSolver):
             fc = self.newton.fc
             if self.consistent:
                 # The bulk that balances y, the interface forces f_c − S G (G = y − z_I
-                # + X_II f_c, the Newton's residual): the step's residual is then the
-                # interface force S G the Newton converged, not A_BI G.
-                fc = fc - fact.S @ (self.newton.y - z + fact.X_II @ fc)
+                # + X_II f_c, the Newton's residual, S G its force F at the solution):
+                # the step's residual is then the force the Newton converged, not A_BI G.
+                fc = fc - self.newton.F
         out = V["da"]
         if fact.X_blocks is None:  # Δa = z − X f_c = A⁻¹(r₀ − E f_c): a back-solve
             with T("bulk_products"):

@@ -54,6 +54,7 @@ class InterfaceNewton:
         flips: Nodes whose slip reversal the guards cut, over the solves.
         y: The converged iterate after :meth:`solve`.
         fc: f_c at the last residual evaluation (at the solution after :meth:`solve`).
+        F: The residual force ``S G`` there (its norm is the one the test read).
     """
 
     def __init__(self, n: int, contact: ContactSum, name: str, options: NewtonOptions,
@@ -67,6 +68,7 @@ class InterfaceNewton:
         self.flips = 0
         self.y = np.zeros(n)
         self.fc = np.zeros(n)
+        self.F = np.zeros(n)
         self._columns_of: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def solve(self, fact: Factorisation, z_I: np.ndarray, y0: np.ndarray, w_I: np.ndarray,
@@ -92,7 +94,8 @@ class InterfaceNewton:
         t0 = time.perf_counter()
         X_II, S = fact.X_II, fact.S
         x = np.array(y0, dtype=float)
-        fc, G, fnorm = self._residual(x, X_II, S, z_I)
+        fc, G, F = self._residual(x, X_II, S, z_I)
+        fnorm = float(np.linalg.norm(F))
         # ‖F₀‖ of the relative test is the whole residual at Newton's start, bulk rows
         # included, as for the reference Newton: ‖R(Δa₀)‖² = ‖w‖² − ‖w_I‖² +
         # ‖w_I + f_c(y₀)‖² with w = A Δa₀ − r₀ (the bulk rows' residual).
@@ -108,8 +111,8 @@ class InterfaceNewton:
             if self.guarded:
                 self.flips += self.contact.precheck(x, δ, v_pred, dv_dx)
             x = x - δ
-            fc, G, fnorm = self._residual(x, X_II, S, z_I)
-            norms.append(fnorm)
+            fc, G, F = self._residual(x, X_II, S, z_I)
+            norms.append(float(np.linalg.norm(F)))
             reason, stalled = self._test(norms, float(np.linalg.norm(x)),
                                          float(np.linalg.norm(δ)), x)
         its = len(norms) - 1
@@ -120,7 +123,7 @@ class InterfaceNewton:
             raise ConvergenceError(
                 f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
                 f"iterations, residual {norms[-1]:.3e})", reason, its)
-        self.y, self.fc = x, fc
+        self.y, self.fc, self.F = x, fc, F
         return its
 
     def _step(self, x: np.ndarray, X_II: np.ndarray, G: np.ndarray) -> np.ndarray:
@@ -128,11 +131,10 @@ class InterfaceNewton:
 
         Where ∂f_c/∂y is nonzero only in the rows and columns ``act`` (a general pair:
         the points in contact and their master facets, a fraction of a master surface
-        that may be long), the system is solved on them alone: with B = ∂f_c/∂y there,
-        ``(1 + X_act,act B) δ_act = G_act`` and ``δ = G − X_II[:, act] B δ_act``,
-        a dense solve of size |act| instead of n_I, written for the forces
-        ``w = B δ_act``: ``(1 + B X_act,act) w = B G_act``, ``δ = G − X_II[:, act] w``.
-        Else the whole matrix.
+        that may be long), the system is solved on them alone, a dense solve of size
+        |act| instead of n_I, for their forces w = B δ_act (B = ∂f_c/∂y there):
+        ``(1 + B X_act,act) w = B G_act`` and ``δ = G − X_II[:, act] w``. Else the
+        whole matrix.
 
         Raises:
             np.linalg.LinAlgError: A singular system.
@@ -158,8 +160,8 @@ class InterfaceNewton:
         return G - X_act @ np.linalg.solve(J, B @ G[act])
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, float]:
-        """f_c(y), G(y) = y − z_I + X_II f_c(y) and the force ‖F‖ = ‖S G‖.
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """f_c(y), G(y) = y − z_I + X_II f_c(y) and the force F = S G.
 
         G has the root of F = S (y − z_I) + f_c without S's large entries of both
         signs, whose products carry n_I · |S| |y| of round-off into F and stalled
@@ -168,7 +170,7 @@ class InterfaceNewton:
         """
         fc = self.contact.vector(y)
         G = y - z_I + X_II @ fc
-        return fc, G, float(np.linalg.norm(S @ G))
+        return fc, G, S @ G
 
     def _test(self, norms: list[float], xnorm: float, ynorm: float, x: np.ndarray
               ) -> tuple[int, bool]:
