@@ -77,10 +77,11 @@ VARIANTS = {
 }
 
 
-def _run(name: str, out: pathlib.Path, extra: list[str]) -> dict[str, Any]:
-    """One CLI run; its summary and history (every rank)."""
-    argv = ["run", "--out", str(out / name), "--no-progress", "--quiet"]
-    for s in [*COMMON, *extra]:
+def _run(name: str, out: pathlib.Path, extra: list[str], case: tuple[str, ...] = (),
+         common: tuple[str, ...] | list[str] = tuple(COMMON)) -> dict[str, Any]:
+    """One CLI run of ``case`` (the built-in one if empty); its summary and history."""
+    argv = ["run", *case, "--out", str(out / name), "--no-progress", "--quiet"]
+    for s in [*common, *extra]:
         argv += ["--set", s]
     code = cli.main(argv)
     if code != 0:

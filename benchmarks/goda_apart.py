@@ -27,38 +27,23 @@ differences to ``conforming``, and the solvers' figures with the time loops' rat
 from __future__ import annotations
 
 import argparse
-import json
 import pathlib
 import sys
 import tempfile
-from typing import Any
 
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
-from breakwater import cli
-from breakwater.common.files import read_history
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from general_vs_conforming import COMMON, _headline  # noqa: E402
+from general_vs_conforming import COMMON, _headline, _run
 
 APART = pathlib.Path(__file__).parents[1] / "examples" / "goda_apart" / "goda_apart.toml"
 FINE = ["mesh.goda.caisson_element_size=0.012", "mesh.goda.mound_element_size=0.022"]
-APART_PROBES = [f'output.probes.{c}_{b}={{body="{b}", group="{c}"}}'
-                for c in ("corner_front", "corner_rear") for b in ("caisson",)] + [
+APART_PROBES = [f'output.probes.{c}_caisson={{body="caisson", group="{c}"}}'
+                for c in ("corner_front", "corner_rear")] + [
     'output.probes.corner_front_mound={body="mound", point=[-0.1025, 0.19]}',
     'output.probes.corner_rear_mound={body="mound", point=[0.1025, 0.19]}']
-
-
-def _run(name: str, out: pathlib.Path, case: list[str], extra: list[str]) -> dict[str, Any]:
-    argv = ["run", *case, "--out", str(out / name), "--no-progress", "--quiet"]
-    for s in extra:
-        argv += ["--set", s]
-    code = cli.main(argv)
-    if code != 0:
-        raise SystemExit(f"the {name} run failed (exit {code})")
-    summary = json.loads((out / name / "summary.json").read_text())
-    return {"summary": summary, "history": read_history(out / name / "history.csv")}
 
 
 def main() -> None:
@@ -72,9 +57,9 @@ def main() -> None:
     out = args.out or pathlib.Path(comm.bcast(tmp, root=0))
     common = [s for s in COMMON if not s.startswith("output.probes.")]
     runs = {
-        "conforming": _run("conforming", out, [], [*COMMON, *args.set]),
-        "conforming-fine": _run("conforming-fine", out, [], [*COMMON, *FINE, *args.set]),
-        "apart": _run("apart", out, [str(APART)], [*common, *APART_PROBES, *args.set]),
+        "conforming": _run("conforming", out, args.set),
+        "conforming-fine": _run("conforming-fine", out, [*FINE, *args.set]),
+        "apart": _run("apart", out, [*APART_PROBES, *args.set], (str(APART),), common),
     }
     if comm.rank > 0:
         return
