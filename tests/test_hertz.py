@@ -131,6 +131,22 @@ def test_hertz_coarse(shared_dir: pathlib.Path) -> None:
     _nodal_pressure(r)
 
 
+def _against_johnson(x: np.ndarray, p: np.ndarray, label: str) -> None:
+    """Nodal pressures p at abscissae x against Johnson's p(x) = p₀ sqrt(1 − x²/b²)
+    (§4.2): within 3 % of p₀ over |x| < 0.9 b (at least 15 nodes there), the node on
+    the axis within 2 % of p₀."""
+    exact = P_MAX * np.sqrt(np.clip(1 - (x / B) ** 2, 0.0, None))
+    inside = np.abs(x) < 0.9 * B
+    axis = int(np.argmin(np.abs(x)))
+    error = np.abs(p - exact)[inside].max() / P_MAX
+    if COMM.rank == 0:
+        print(f"{label}: max |p − p(x)|/p₀ {error:.2e} over |x| < 0.9b "
+              f"({inside.sum()} nodes), p(0)/p₀ − 1 {p[axis] / P_MAX - 1:+.2e}")
+    assert inside.sum() >= 15
+    assert error < 0.03
+    assert abs(p[axis] / P_MAX - 1) < 0.02
+
+
 def _nodal_pressure(r: dict[str, Any]) -> None:
     """The slave nodes' pressure field (static.npz, contact_<name>.bp) against Johnson's
     p(x) = p₀ sqrt(1 − x²/b²) (§4.2; x the nodes' reference abscissa, as the linear
@@ -139,17 +155,7 @@ def _nodal_pressure(r: dict[str, Any]) -> None:
     round-off. In the current abscissa the slave surface's tangential displacement
     (1.25 % of b inward at the edge) shortens the contact by as much: that is the
     −1.6 % of the b measured on the integration points' current positions."""
-    x, p = r["nodes_x"], r["nodes_p"]
-    exact = P_MAX * np.sqrt(np.clip(1 - (x / B) ** 2, 0.0, None))
-    inside = np.abs(x) < 0.9 * B
-    axis = int(np.argmin(np.abs(x)))
-    error = np.abs(p - exact)[inside].max() / P_MAX
-    if COMM.rank == 0:
-        print(f"nodal pressure: max |p − p(x)|/p₀ {error:.2e} over |x| < 0.9b "
-              f"({inside.sum()} nodes), p(0)/p₀ − 1 {p[axis] / P_MAX - 1:+.2e}")
-    assert inside.sum() >= 15
-    assert error < 0.03
-    assert abs(p[axis] / P_MAX - 1) < 0.02
+    _against_johnson(r["nodes_x"], r["nodes_p"], "nodal pressure")
     assert r["field_integral"] == pytest.approx(r["integral"], rel=1e-12)
 
 
@@ -235,12 +241,4 @@ def test_hertz_static_field(shared_dir: pathlib.Path) -> None:
     assert (out / "figures" / "static_pressure.png").exists()
     with np.load(out / "static.npz") as data:
         x, p = data["contact_hertz_x"][:, 0], data["contact_hertz_pressure"]
-    exact = P_MAX * np.sqrt(np.clip(1 - (x / B) ** 2, 0.0, None))
-    inside = np.abs(x) < 0.9 * B
-    error = np.abs(p - exact)[inside].max() / P_MAX
-    if COMM.rank == 0:
-        print(f"static field: max |p − p(x)|/p₀ {error:.2e}, p(0)/p₀ − 1 "
-              f"{p[0] / P_MAX - 1:+.2e}")
-    assert inside.sum() >= 15
-    assert error < 0.03
-    assert abs(p[0] / P_MAX - 1) < 0.02
+    _against_johnson(x, p, "static field")
