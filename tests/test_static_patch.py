@@ -181,6 +181,18 @@ def test_no_static_state_is_an_error(folder: pathlib.Path) -> None:
     assert all(not np.any(u.x.array) for u in state.u)
 
 
+def test_unreachable_tolerance_is_named(folder: pathlib.Path) -> None:
+    """A static tolerance below what round-off reaches (1e-20 of the load): the error
+    names ``[initial] tolerance`` and gives each stage's failure (the frictionless one's
+    first: the case's own law), not only the held stage's and ``undeformed`` (the
+    equilibrium exists: 1e-9 finds it, above)."""
+    model = _model(folder, 6, 4)
+    model.initial = InitialSpec(tolerance=1e-20)
+    with pytest.raises(ConvergenceError, match=r"\(frictionless: .*; held: .*\) at "
+                       r"\[initial\] tolerance = 1e-20 of the load"):
+        initial_state(model)
+
+
 def test_failed_static_state_exits_1(folder: pathlib.Path,
                                      capsys: pytest.CaptureFixture[str]) -> None:
     """Through the command line: the sliding-block example with gravity reversed (the block

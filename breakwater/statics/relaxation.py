@@ -202,8 +202,11 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
             break
         if inc < 0.1 * ps.reach:
             c = min(c * GROWTH, ps.c_max)
+    left = residual / ps.scale
+    why = (f"; its residual stalled at {left:.1e} of the load, above [initial] tolerance = "
+           f"{ps.tolerance:g}: raise it if that is round-off" if left < 1e-6 else "")
     raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
-                           f"{k} steps)", -1, its)
+                           f"{k} steps{why})", -1, its)
 
 
 def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
@@ -416,14 +419,16 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
             its, kind = 0, "frictionless"
             held: list[str] = []
             res = None
+            failed: list[str] = []  # why each stage before the held one failed
             if loading == "frictionless" or not r.has_friction:
-                res, its = _frictionless(r, its)
+                res, its = _frictionless(r, its, failed)
             if res is None and r.has_friction:
                 try:
                     res = _stage(r, True)
                     kind = "frictional"
                 except ConvergenceError as e:
                     its += e.iterations
+                    failed.append(f"frictional: {e}")
                     log.debug("no frictional static state (%s): every pair held", e)
             if res is None:
                 try:
@@ -435,8 +440,10 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                     # relaxation.
                     raise ConvergenceError(
                         f"initial state: no static equilibrium, not even with the bodies "
-                        f"held ({e}); set [initial] undeformed = true to start from the "
-                        f"undeformed state at rest", e.reason, its + e.iterations) from e
+                        f"held ({'; '.join([*failed, f'held: {e}'])}) at [initial] "
+                        f"tolerance = {tolerance:g} of the load; set [initial] undeformed = "
+                        f"true to start from the undeformed state at rest",
+                        e.reason, its + e.iterations) from e
             u = model.functions("u")
             for f, x in zip(u, res.u, strict=True):
                 f.x.array[:] = x
@@ -465,13 +472,15 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
     return out
 
 
-def _frictionless(r: PseudoStepper, its: int) -> tuple[_Result | None, int]:
-    """Stages 1 and 1b (module doc); None where neither relaxes."""
+def _frictionless(r: PseudoStepper, its: int, failed: list[str]
+                  ) -> tuple[_Result | None, int]:
+    """Stages 1 and 1b (module doc); None where neither relaxes (why: in ``failed``)."""
     try:
         with r.friction(0.0):
             return _stage(r, False), its
     except ConvergenceError as e:
         its += e.iterations
+        failed.append(f"frictionless: {e}")
         log.debug("no frictionless static state (%s)", e)
     if not r.has_friction:
         return None, its
@@ -486,5 +495,6 @@ def _frictionless(r: PseudoStepper, its: int) -> tuple[_Result | None, int]:
         with r.friction(RESIDUAL_FRICTION):
             return _stage(r, False), its
     except ConvergenceError as e:
+        failed.append(f"nearly frictionless: {e}")
         log.debug("no nearly frictionless static state (%s)", e)
         return None, its + e.iterations
