@@ -45,8 +45,8 @@ PACKAGE = pathlib.Path(breakwater.__file__).parent
 FORMS = pathlib.Path(importlib.import_module("breakwater.forms").__file__).parent
 MESHES = pathlib.Path(importlib.import_module("breakwater.meshes").__file__).parent
 
-LAYERS = {"forms": 0, "common": 1, "meshes": 2, "config": 2, "loads": 3, "model": 4,
-          "contact": 5, "stepping": 6, "energy": 7, "statics": 8, "outputs": 9,
+LAYERS = {"forms": 0, "common": 1, "meshes": 2, "config": 2, "loads": 3, "storms": 3,
+          "model": 4, "contact": 5, "stepping": 6, "energy": 7, "statics": 8, "outputs": 9,
           "casefile": 10, "run": 11, "studies": 12, "": 13}
 MAX_MODULE_LINES = 600  # the brief: a module over ≈600 lines holds two jobs
 MAX_CLASS_LINES = 200  # and a class over ≈200

@@ -1,0 +1,15 @@
+"""Storms: wave trains, each wave's pressure history, and the rigid-block sliding model.
+
+Performance-based design of a caisson breakwater (Shimosako & Takahashi 1994, 1999;
+Goda & Takagi 2000) drives the caisson wave by wave through a storm. This subpackage holds
+what does not need a finite-element model (plain Python and NumPy):
+
+- :mod:`breakwater.storms.waves`: the data passed between the parts: a :class:`Wave`
+  (height, period, start), a :class:`WaveTrain`, the :class:`Site` (Goda's geometry of
+  the breakwater and the water), and a :class:`WaveLoad` (one wave's front-pressure shape
+  and the time histories of p₁ and of the uplift p_u).
+"""
+
+from breakwater.storms.waves import Site, Wave, WaveLoad, WaveTrain
+
+__all__ = ["Site", "Wave", "WaveLoad", "WaveTrain"]
