@@ -65,6 +65,10 @@ class BulkTerms(Protocol):
         """
         ...
 
+    def sync(self) -> None:
+        """Take the staged loads' current stage as the start of the next step (resume)."""
+        ...
+
     def destroy(self) -> None:
         """Free the PETSc objects it holds (collective)."""
         ...
@@ -112,9 +116,13 @@ class FormTerms:
             out = self.model.assemble_local([*self._stored, *self._step])
         else:
             out = np.concatenate([self.model.assemble_local(self._stored), np.zeros(3)])
+        self.sync()
+        return out
+
+    def sync(self) -> None:
+        """The start parameters of the staged loads set to their current ones."""
         for c0, c in self._parameters:
             c0.value[:] = c.value
-        return out
 
     def destroy(self) -> None:
         """Nothing to free (the forms hold no PETSc object)."""
@@ -295,9 +303,8 @@ class MatrixTerms:
     def local(self, step: bool) -> np.ndarray:
         """The :data:`TERMS` (see :meth:`BulkTerms.local`).
 
-        A staged load whose field changed in the step did work ½(A₀ f₀ + A₁ f₁)·Δu,
-        f₀ its vector at the start: the sums take ½(A₀ + A₁) f₁·Δu, and
-        ½A₀ (f₀ − f₁)·Δu is added here.
+        A staged load whose field changed in the step did work ½(A₀ f₀ + A₁ f₁)·Δu (f₀
+        its start vector): the sums take ½(A₀ + A₁) f₁·Δu; ½A₀ (f₀ − f₁)·Δu is added.
         """
         old = self._refresh()
         out = self._local_sums(step) if self._csr else self.local_products(step)
@@ -308,6 +315,10 @@ class MatrixTerms:
                 a0 = float(self.amp0[k].value)
                 out[3] += 0.5 * a0 * _dot(f0 - self._loads[:n, k + 1], du)
         return out
+
+    def sync(self) -> None:
+        """The staged loads' columns taken at their current stage, without correction."""
+        self._refresh()
 
     def _refresh(self) -> dict[int, np.ndarray]:
         """Take the staged loads' vectors at their current stage; the columns replaced."""

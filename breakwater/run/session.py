@@ -30,6 +30,7 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
 from breakwater.outputs.monitor import Monitor, interface_state
+from breakwater.outputs.stormrecord import storm_record, write_waves
 from breakwater.outputs.writers import RunFiles
 from breakwater.run import runstate
 from breakwater.run.runstate import RunState
@@ -102,6 +103,7 @@ class Stepped:
         s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
         s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
         s.solver.restore(state.stepper["memory"])
+        s.model.set_time(state.step.t)  # a staged field's stage, for the ledger
         self.ledger.restore(state.ledger)
         self.peak.time, self.peak.value = state.snapshot["time"], state.snapshot["value"]
 
@@ -198,7 +200,24 @@ class Session:
         if finished:
             for line in applied_warnings(summary.get("loads", {})):
                 log.warning("%s", line)
+        self._storm_record(summary)
         return summary
+
+    def _storm_record(self, summary: dict[str, Any]) -> None:
+        """A storm's ``waves.csv`` (rank 0) and the summary's ``storm`` block.
+
+        Every rank computes the same record from the same rows
+        (:mod:`breakwater.outputs.stormrecord`).
+        """
+        for name, info in summary.get("loads", {}).items():
+            if "storm" not in info:
+                continue
+            p1 = next((ld.spec.amplitude for ld in self.model.loads
+                       if ld.spec.name == name and ld.parameters is not None), None)
+            waves, block = storm_record(self.rows, info["storm"], p1)
+            on_rank_zero(self.comm, lambda waves=waves: bool(  # type: ignore[misc]
+                write_waves(self.directory / files.WAVES, waves)))
+            summary["storm"] = {"load": name, **block}
 
     def close(self) -> None:
         """Free the stepper's and the ledger's PETSc objects (collective; after the summary)."""

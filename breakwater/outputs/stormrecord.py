@@ -1,0 +1,182 @@
+"""A storm's per-wave record: ``waves.csv`` and the summary's ``storm`` block.
+
+Written at the end of a run (finished, failed or interrupted: the waves finished by
+then) from the history rows. A storm load of the case (``[loads.<name>.storm]``)
+adds two pair probes on the contact pair under the caisson's base, at the base's two
+ends (``<load>_base_lo`` at the smaller x, ``<load>_base_hi``), and its summary entry
+(``loads.<name>.storm``) holds the waves and how to read the probes
+(:func:`breakwater.casefile.stormbuild.storm_outputs`). Per wave k, over its interval
+``start < t <= start + T`` (the state at its start: the last row at or before it):
+
+- ``sliding``: the change over the wave of the caisson's horizontal displacement
+  relative to the mound at its base, the mean of the two ends' (caisson minus mound,
+  ``slave_ux − master_ux`` of the pair probes), positive landward (away from the loaded
+  face): the residual slip the wave left (the elastic part returns when the force is
+  off; what is still moving at the wave's end is counted in the next wave);
+- ``cumulative_sliding``: the sum of ``sliding`` up to this wave;
+- ``rocking``: the largest |θ − θ₀| in the wave, θ the slope of the caisson's vertical
+  displacement between the base's ends ((u_y,hi − u_y,lo)/(x_hi − x_lo), rad,
+  counter-clockwise positive), θ₀ that of the static state;
+- ``max_contact_pressure``: ε_n × the pair's largest penetration in the wave (Pa;
+  the penalty law's pressure at the most loaded node or integration point);
+- ``peak_force_per_length``: the largest horizontal force of the front pressure at the
+  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+__all__ = ["COLUMNS", "storm_record", "write_waves"]
+
+COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", "sliding",
+           "cumulative_sliding", "rocking", "max_contact_pressure")
+"""The columns of ``waves.csv``."""
+
+
+def _sliding(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+    """The caisson's mean horizontal displacement relative to the mound, landward."""
+    rel = sum(row[f"{p}_slave_ux"] - row[f"{p}_master_ux"] for p in (r["lo"], r["hi"]))
+    return 0.5 * rel * r["sign"] * r["landward"]
+
+
+def _rotation(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+    """The slope of the caisson's u_y between the base's ends (rad)."""
+    side = "slave" if r["sign"] > 0 else "master"
+    return (row[f"{r['hi']}_{side}_uy"] - row[f"{r['lo']}_{side}_uy"]) / r["length"]
+
+
+def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
+                 p1: Callable[[float], float] | None = None
+                 ) -> tuple[list[dict[str, float]], dict[str, Any]]:
+    """The per-wave rows of the waves finished, and the summary's ``storm`` block.
+
+    Args:
+        rows: The history rows (the static state's first).
+        storm: The load's ``storm`` summary entry (waves and ``record``: the probes'
+            names, the landward sign, the caisson's side of the pair, the base length,
+            the pair's penetration column and penalty).
+        p1: t ↦ p₁ of the storm (the model's amplitude of the front); None: no peak
+            force.
+    """
+    r = storm["record"]
+    waves = storm["waves"]
+    out: list[dict[str, float]] = []
+    if not rows:
+        return out, _block(out, waves, r)
+    times = [row["t"] for row in rows]
+    θ0 = _rotation(rows[0], r)
+    total = 0.0
+    for k, w in enumerate(waves):
+        start, end = w["start"], w["start"] + w["period"]
+        if times[-1] < end * (1 - 1e-12):
+            break  # not finished
+        i0 = max(i for i, t in enumerate(times) if t <= start)
+        inside = [i for i, t in enumerate(times) if start < t <= end * (1 + 1e-12)]
+        if not inside:
+            inside = [i0]
+        i1 = inside[-1]
+        sliding = _sliding(rows[i1], r) - _sliding(rows[i0], r)
+        total += sliding
+        rocking = max(abs(_rotation(rows[i], r) - θ0) for i in inside)
+        pressure = r["penalty"] * max(rows[i][r["penetration"]] for i in inside)
+        force = math.nan if p1 is None else max(
+            p1(times[i]) * w["front_force_per_p1"] for i in inside)
+        out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
+                    "start": start, "end": end, "peak_force_per_length": force,
+                    "sliding": sliding, "cumulative_sliding": total, "rocking": rocking,
+                    "max_contact_pressure": pressure})
+    return out, _block(out, waves, r)
+
+
+def _block(out: list[dict[str, float]], waves: Sequence[Mapping[str, Any]],
+           r: Mapping[str, Any]) -> dict[str, Any]:
+    """The summary's ``storm`` block."""
+    block: dict[str, Any] = {"waves": len(waves), "waves_finished": len(out),
+                             "record": "waves.csv",
+                             "total_sliding": out[-1]["cumulative_sliding"] if out else 0.0,
+                             "sliding_measure": "mean of the base ends' horizontal "
+                             "displacement of the caisson relative to the mound, landward "
+                             f"(pair probes {r['lo']}, {r['hi']})"}
+    if out:
+        big = max(out, key=lambda w: w["height"])
+        block["largest_wave"] = {"wave": int(big["wave"]), "height": big["height"],
+                                 "period": big["period"], "sliding": big["sliding"]}
+        most = max(out, key=lambda w: w["sliding"])
+        block["most_sliding"] = {"wave": int(most["wave"]), "height": most["height"],
+                                 "sliding": most["sliding"]}
+    return block
+
+
+def write_waves(path: Any, waves: Sequence[Mapping[str, float]]) -> Any:
+    """Write ``waves.csv`` (atomically): a header, one row per finished wave."""
+    from breakwater.common import files
+
+    lines = [",".join(COLUMNS)]
+    for w in waves:
+        lines.append(",".join(str(int(w[c])) if c == "wave" else repr(float(w[c]))
+                              for c in COLUMNS))
+    return files.atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def read_waves(path: Any) -> dict[str, Any]:
+    """``waves.csv`` as one NumPy array per column (none when it holds no wave)."""
+    import numpy as np
+
+    lines = [line for line in open(path, encoding="utf-8").read().splitlines() if line]
+    names = lines[0].split(",")
+    values = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    return {n: values[:, k] if len(values) else np.zeros(0) for k, n in enumerate(names)}
+
+
+def storm_figures(directory: Any, folder: Any) -> list[Any]:
+    """The storm's figures from ``waves.csv`` (none without it or a finished wave).
+
+    ``storm_sliding.png``: the cumulative sliding against the waves' end times (and
+    numbers); ``storm_sliding_per_wave.png``: each wave's sliding against H.
+    """
+    import pathlib
+
+    from matplotlib.figure import Figure
+
+    from breakwater.common.files import WAVES
+
+    path = pathlib.Path(directory) / WAVES
+    if not path.is_file():
+        return []
+    w = read_waves(path)
+    if not len(w.get("wave", ())):
+        return []
+    out = []
+    fig = Figure(figsize=(7, 4))
+    ax = fig.add_subplot()
+    ax.step([0.0, *w["end"]], [0.0, *(1e3 * w["cumulative_sliding"])], where="post")
+    ax.plot(w["end"], 1e3 * w["cumulative_sliding"], "o")
+    ax.set_xlabel("t (s): the end of each wave")
+    ax.set_ylabel("cumulative sliding (mm)")
+    top = ax.secondary_xaxis("top")
+    top.set_xticks(w["end"], [str(int(k)) for k in w["wave"]])
+    top.set_xlabel("wave")
+    ax.grid(alpha=0.3)
+    out.append(_save(fig, pathlib.Path(folder) / "storm_sliding.png"))
+    fig = Figure(figsize=(6, 4))
+    ax = fig.add_subplot()
+    ax.plot(w["height"], 1e3 * w["sliding"], "o")
+    ax.set_xlabel("H (m)")
+    ax.set_ylabel("sliding of the wave (mm)")
+    ax.grid(alpha=0.3)
+    out.append(_save(fig, pathlib.Path(folder) / "storm_sliding_per_wave.png"))
+    return out
+
+
+def _save(fig: Any, path: Any) -> Any:
+    """Save a figure atomically (:func:`breakwater.outputs.figures` does the same)."""
+    from breakwater.common.files import temporary_path, writing
+
+    tmp = temporary_path(path)
+    with writing(path):
+        fig.savefig(tmp, dpi=150, bbox_inches="tight")
+        tmp.replace(path)
+    return path
