@@ -187,7 +187,8 @@ def hand_waves(monkeypatch):
 
 
 def _run(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str, end_time: float,
-         friction: float = 0.0) -> tuple[dict, dict]:
+         friction: float = 0.0, overrides: tuple[str, ...] = (), resume: bool = False
+         ) -> tuple[dict, dict]:
     from blocks import two_block_case
 
     from breakwater.casefile.case import load_case
@@ -201,10 +202,10 @@ def _run(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str, end_ti
         text = text.replace("penalty = 1e12", f"penalty = 1e12\nfriction = {friction}")
         path.write_text(text)
     COMM.barrier()
-    built = load_case(path, [f"time.end_time={end_time!r}", f"time.dt={CASE_DT!r}"]
-                      ).build(COMM)
+    built = load_case(path, [f"time.end_time={end_time!r}", f"time.dt={CASE_DT!r}",
+                             *overrides]).build(COMM)
     summary = simulation.run(built.model, built.time, built.output,
-                             extra_summary=built.extra, report=False)
+                             extra_summary=built.extra, report=False, resume=resume)
     return summary, read_history(folder / name / "history.csv")
 
 
@@ -358,3 +359,95 @@ def test_record_of_synthetic_rows_and_an_unfinished_wave():
     storm["record"].update({"sign": -1, "landward": -1.0})
     waves, _ = storm_record(flipped, storm)
     assert waves[0]["sliding"] == pytest.approx(1e-3, rel=1e-15)
+
+
+@pytest.mark.timeout(120)
+def test_failed_run_records_the_waves_it_finished(stacked, folder, hand_waves, monkeypatch):
+    # The run fails in the second wave (every solve from t = 0.35 s on raises, no
+    # cut-back): waves.csv and the summary's storm block hold the first wave only, the
+    # same record as the whole run's first row (the rows up to 0.3 s are the same).
+    from breakwater.common.errors import ConvergenceError
+    from breakwater.outputs.stormrecord import read_waves
+    from breakwater.run.simulation import SimulationFailed
+
+    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
+             "waves = [[0.02, 0.3], [0.03, 0.4]]\n")
+    solve = GN22.solve
+
+    def failing(self: GN22) -> int:
+        if float(self.t.value) >= 0.35:
+            raise ConvergenceError("stopped here", -1, 0)
+        return solve(self)
+
+    monkeypatch.setattr(GN22, "solve", failing)
+    with pytest.raises(SimulationFailed) as info:
+        _run(folder, stacked, storm, "failed_storm", 0.7, overrides=("time.max_cutbacks=0",))
+    monkeypatch.undo()
+    record = info.value.summary["storm"]
+    assert record["waves"] == 2 and record["waves_finished"] == 1
+    cut = read_waves(folder / "failed_storm" / "waves.csv")
+    whole = read_waves(folder / "two_storm" / "waves.csv") \
+        if (folder / "two_storm" / "waves.csv").is_file() else None
+    assert list(cut["wave"]) == [1]
+    if whole is not None:  # test_two_waves_record_and_ledger ran before: the same wave 1
+        for c in ("sliding", "rocking", "max_contact_pressure", "peak_force_per_length"):
+            assert cut[c][0] == pytest.approx(whole[c][0], rel=1e-12, abs=1e-300), c
+
+
+# A wave whose force lasts over the checkpoint at 0.31 s, 10 ms into the second wave.
+LONG = 0.05
+
+
+def _long_wave_loads(storm, base_width):
+    from breakwater.storms.waves import WaveLoad
+
+    out = []
+    for w in storm.waves_train.waves:
+        g = _goda(storm, w)
+        peak = (0.0, 0.5 * LONG, LONG)
+        out.append(WaveLoad(w, tuple((z, p / g.p1) for z, p in g.front_points()),
+                            Table(peak, (0.0, g.p1, 0.0)), Table(peak, (0.0, g.uplift, 0.0)),
+                            LONG))
+    return tuple(out)
+
+
+@pytest.mark.timeout(180)
+def test_resume_in_a_wave_equals_the_whole_run(stacked, folder, monkeypatch):
+    # Killed after the checkpoint at t = 0.31 s, inside the second wave's force (the
+    # front's second shape, p₁ ≠ 0), and resumed: the same history as the whole run
+    # (serially to round-off, 1e-12 of each column's largest value or of the energy
+    # scale for the ledger's; on 2 ranks 1e-7, as the other resume tests), and the same
+    # record. The resumed ledger starts from the second shape (the stage at the
+    # checkpoint's time), not the first.
+    from blocks import run_killed_at
+
+    from breakwater.casefile.stormcase import StormCase
+    from breakwater.common.files import read_history
+    from breakwater.energy.ledger import FIELDS
+    from breakwater.outputs.stormrecord import read_waves
+
+    monkeypatch.setattr(StormCase, "wave_loads", _long_wave_loads)
+    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
+             "waves = [[0.02, 0.3], [0.03, 0.4]]\n")
+    more = ("output.checkpoint_interval=10",)
+    _run(folder, stacked, storm, "whole_storm", 0.7, overrides=more)
+
+    def run(directory: pathlib.Path, **kwargs) -> dict:
+        return _run(folder, stacked, storm, directory.name, 0.7, overrides=more, **kwargs)[0]
+
+    with monkeypatch.context() as mp:
+        run_killed_at(run, folder / "resumed_storm", 0.315, mp)
+    summary = run(folder / "resumed_storm", resume=True)
+    assert summary["finished"] and summary["resumed_from"][0]["t"] == pytest.approx(0.31)
+    a = read_history(folder / "whole_storm" / "history.csv")
+    b = read_history(folder / "resumed_storm" / "history.csv")
+    np.testing.assert_array_equal(a["t"], b["t"])
+    energy = max(np.abs(a[c]).max() for c in ("kinetic", "strain", "penalty", "external_work"))
+    rtol = 1e-12 if COMM.size == 1 else 1e-7
+    for c in a:
+        scale = energy if c in FIELDS else max(np.abs(a[c]).max(), 1e-300)
+        assert np.abs(a[c] - b[c]).max() <= rtol * scale, c
+    wa = read_waves(folder / "whole_storm" / "waves.csv")
+    wb = read_waves(folder / "resumed_storm" / "waves.csv")
+    for c in wa:
+        np.testing.assert_allclose(wb[c], wa[c], rtol=rtol, atol=rtol * np.abs(wa[c]).max())
