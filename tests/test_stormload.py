@@ -454,3 +454,23 @@ def test_resume_in_a_wave_equals_the_whole_run(stacked, folder, monkeypatch):
     wb = read_waves(folder / "resumed_storm" / "waves.csv")
     for c in wa:
         np.testing.assert_allclose(wb[c], wa[c], rtol=rtol, atol=rtol * np.abs(wa[c]).max())
+
+
+def test_storm_example_reads():
+    # examples/goda_storm.toml: the waves and the numbers its comments quote (Goda and
+    # Goda–Takahashi's P of the highest wave, μ(W − U)), from the case.
+    from breakwater.casefile.case import load_case
+    from breakwater.loads.wavepressure import goda_pressure
+
+    example = pathlib.Path(__file__).resolve().parents[1] / "examples" / "goda_storm.toml"
+    case = load_case(example)
+    wave = next(ld for ld in case.loads if ld.name == "wave")
+    train = wave.storm.waves_train
+    assert [w.height for w in train.waves] == [0.12, 0.16, 0.18, 0.14, 0.17]
+    assert train.duration == pytest.approx(7.0) and case.time.end_time == 7.0
+    s = wave.storm
+    args = (0.18, 1.4, s.depth, s.toe_depth, s.berm_depth, s.crest_height)
+    g, gt = goda_pressure(*args), goda_pressure(*args, impulsive=True, berm_width=0.1)
+    μ = case.contact[0].friction
+    resistance = μ * (940.0 - g.uplift_force(case.mesh.goda.caisson_width))
+    assert (round(g.force), round(gt.force), round(resistance)) == (388, 469, 406)

@@ -36,7 +36,12 @@ __all__ = ["SeaCase", "StormCase"]
 
 @dataclass(frozen=True)
 class SeaCase:
-    """``[loads.<name>.storm.sea]``: a sea state, the waves' heights Rayleigh-distributed."""
+    """``[loads.<name>.storm.sea]``: a sea state, the waves' heights Rayleigh-distributed.
+
+    Its waves (:func:`breakwater.storms.seastate.wave_train`): N heights drawn from the
+    Rayleigh distribution of H_1/3 with the seed, capped at the breaking limit, each of
+    period T_1/3, one after the other from t = 0.
+    """
 
     significant_height: float = setting(unit="m", doc="H_1/3, the significant wave height")
     period: float = setting(unit="s", doc="the waves' period (T_1/3)")
@@ -145,8 +150,9 @@ class StormCase:
 
             s = self.sea
             try:
-                state = SeaState(significant_height=s.significant_height, period=s.period,
-                                 waves=s.waves, duration=s.duration, seed=s.seed)
+                state = SeaState(significant_height=s.significant_height,
+                                 significant_period=s.period, waves=s.waves,
+                                 duration=s.duration, seed=s.seed)
                 return wave_train(state, self.site(base_width))
             except ValueError as e:
                 raise InvalidField("sea", str(e)) from None
