@@ -270,7 +270,10 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
                         "is one): waves.csv records one")
     for ld in case.loads:  # a storm's record: probes at the ends of the caisson's base
         if ld.enabled and ld.storm is not None:
-            more, extra["loads"][ld.name]["storm"] = storm_outputs(case, data, ld, model)
+            more, info = storm_outputs(case, data, ld, model)
+            extra["loads"][ld.name]["storm"] = info
+            if info["warnings"]:  # logged when the run starts
+                extra["loads"][ld.name].setdefault("warnings", []).extend(info["warnings"])
             taken = {q.name for q in pair_probes} & {q.name for q in more}
             if taken:
                 raise CaseError(f"output.pair_probes.{sorted(taken)[0]}: the name is the "

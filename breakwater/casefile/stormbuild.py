@@ -23,7 +23,13 @@ if TYPE_CHECKING:
     from breakwater.casefile.settings import CaseSettings
     from breakwater.model.model import ContactModel
 
-__all__ = ["applied_front", "face_integral", "profile_integral", "storm_outputs"]
+FRACTION_WARNING = 0.01
+"""A wave whose applied front force differs from its profile's by more than this
+fraction is warned about (the face misses part of the profile, or the facets do not
+resolve its kinks)."""
+
+__all__ = ["FRACTION_WARNING", "applied_front", "face_integral", "profile_integral",
+           "storm_outputs"]
 
 
 def profile_integral(points: Any, a: float, b: float) -> float:
@@ -97,9 +103,12 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     """The pair probes of a storm's record and its ``storm`` summary entry (collective).
 
     Each wave's entry holds ``front_force_per_p1``, the horizontal force per unit p₁
-    the run applies (:func:`applied_front`), and ``face_fraction``, that over the exact
-    integral of the wave's shape over the loaded face (below 1 where the facets do not
-    resolve the profile's kinks, or the face misses part of it).
+    the run applies (:func:`applied_front`), ``face_fraction``, that over the exact
+    integral of the wave's shape over the loaded face (off 1 where the facets do not
+    resolve the profile's kinks), and ``profile_fraction``, the exact integral over the
+    face over the whole shape's (below 1 where the face misses part of the profile);
+    ``warnings`` the one-line warnings of the waves off by more than
+    :data:`FRACTION_WARNING`.
 
     Args:
         case: The case (its contact pairs).
@@ -150,11 +159,13 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     probes = (PairProbeSpec(names[0], index, (float(lo[0]), y)),
               PairProbeSpec(names[1], index, (float(hi[0]), y)))
     triangle, _ = base_triangle(storm.uplift_group, data, groups)
-    waves = []
+    waves: list[dict[str, Any]] = []
+    warnings: list[str] = []
     wave_loads = storm_wave_loads(load, data)
     applied = applied_front(model, load.name, len(wave_loads))
     for k, w in enumerate(wave_loads):
         force = face_integral(w.front, storm.still_water_level, data, groups)
+        whole = profile_integral(w.front, w.front[0][0], w.front[-1][0])
         if not force > 0:
             raise CaseError(f"{key}.still_water_level: the front pressure of wave {k + 1} "
                             f"(H = {w.wave.height:g} m) misses the loaded face "
@@ -162,10 +173,20 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
         waves.append({"height": w.wave.height, "period": w.wave.period,
                       "start": w.wave.start, "duration": w.duration,
                       "front": [list(p) for p in w.front],
-                      "front_force_per_p1": applied[k], "face_fraction": applied[k] / force})
+                      "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
+                      "profile_fraction": force / whole})
+    for name, what in (("profile_fraction", "of the front profile lies on the loaded face "
+                        "(the rest is not applied)"),
+                       ("face_fraction", "of the exact integral over the face is applied "
+                        "(profile kinks inside facets: refine the face)")):
+        worst = max(range(len(waves)), key=lambda k: abs(waves[k][name] - 1.0))
+        if abs(waves[worst][name] - 1.0) > FRACTION_WARNING:
+            warnings.append(f"{key}: wave {worst + 1} (H = {waves[worst]['height']:g} m): "
+                            f"{100 * waves[worst][name]:.3g}% {what}; summary.json "
+                            f"loads.{load.name}.storm.waves[].{name}")
     record = {"lo": names[0], "hi": names[1], "sign": sign,
               "landward": float(triangle.axis[0]), "length": width,
               "pair": pair.name, "penetration": f"{pair.name}_penetration",
               "penalty": pair.penalty}
     return probes, {"waves": waves, "base_width": width, "duration": storm.waves_train.duration,
-                    "record": record}
+                    "record": record, "warnings": warnings}
