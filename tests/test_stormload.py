@@ -396,9 +396,12 @@ def test_failed_run_records_the_waves_it_finished(stacked, folder, hand_waves, m
     whole = read_waves(folder / "two_storm" / "waves.csv") \
         if (folder / "two_storm" / "waves.csv").is_file() else None
     assert list(cut["wave"]) == [1]
+    # (serially the same steps bit for bit; on 2 ranks to the solves' tolerance, as the
+    # resume tests: measured 3e-11)
+    rtol = 1e-12 if COMM.size == 1 else 1e-7
     if whole is not None:  # test_two_waves_record_and_ledger ran before: the same wave 1
         for c in ("sliding", "rocking", "max_contact_pressure", "peak_force_per_length"):
-            assert cut[c][0] == pytest.approx(whole[c][0], rel=1e-12, abs=1e-300), c
+            assert cut[c][0] == pytest.approx(whole[c][0], rel=rtol, abs=1e-300), c
 
 
 # A wave whose force lasts over the checkpoint at 0.31 s, 10 ms into the second wave.
