@@ -10,6 +10,7 @@ exactly on the end time. Plain numbers: exact comparisons.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 import math
 
@@ -19,7 +20,14 @@ from breakwater.common.errors import CaseError
 from breakwater.config.runspec import TimeSpec
 from breakwater.outputs.quality import PairInputs
 from breakwater.run.runstate import RunState
-from breakwater.stepping.stepsize import GROW_AFTER, StepSize
+from breakwater.stepping.stepsize import (
+    CALM_STEPS,
+    GROW_AFTER,
+    LOAD_STEPS,
+    StepSize,
+    error_constant,
+    resolved_step,
+)
 
 
 def _steps(step: StepSize) -> list[float]:
@@ -153,3 +161,67 @@ def test_invalid_settings() -> None:
     for dt, end, cutbacks in [(0.0, 1.0, 1), (-1.0, 1.0, 1), (0.1, -1.0, 1), (0.1, 1.0, -1)]:
         with pytest.raises(ValueError, match="invalid time settings"):
             StepSize(dt=dt, end_time=end, max_cutbacks=cutbacks)
+
+
+# --- adaptive steps -----------------------------------------------------------------------
+
+
+def test_adaptive_error_rejects_and_grows_back() -> None:
+    # r = e / (tolerance ‖Δu‖ + floor_u): above 1 the step is retried with half of it;
+    # after CALM_STEPS steps in a row with r < GROW_BELOW it doubles, never above dt.
+    step = StepSize(dt=1.0, end_time=100.0, max_cutbacks=0, levels=3, tolerance=1e-2)
+    assert step.propose() == 1.0
+    assert step.judge(error=2e-2, increment=1.0) is False  # r = 2: retry with 1/2
+    assert (step.h, step.halvings, step.rejected) == (0.5, 1, 1)
+    assert step.judge(error=0.9e-2, increment=1.0) is True  # r = 0.9: accepted
+    assert step.accept() is False and step.t == 0.5
+    for _ in range(CALM_STEPS - 1):
+        assert step.judge(error=1e-4, increment=1.0) and step.accept() is False
+    assert step.judge(error=1e-4, increment=1.0) and step.accept() is True
+    assert (step.h, step.halvings) == (1.0, 0)
+    # Calm steps at dt: no growth beyond it.
+    for _ in range(2 * CALM_STEPS):
+        assert step.judge(error=0.0, increment=1.0) and step.accept() is False
+    assert step.h == 1.0
+    # At the smallest step (levels halvings) a large error is accepted.
+    for _ in range(3):
+        assert step.judge(error=1.0, increment=1.0) is False
+    assert step.halvings == 3 and step.judge(error=1.0, increment=1.0) is True
+    # A step that does not converge halves too, down to the same smallest step.
+    assert step.reject() is False
+
+
+def test_adaptive_steps_resolve_the_loads() -> None:
+    # A pulse of 0.1 s starting at t = 2 inside steps of 1: the step shrinks to at most
+    # 1/LOAD_STEPS of each segment it meets before the step that would cross the pulse
+    # is taken (the error alone would not see a pulse inside one step).
+    step = StepSize(dt=1.0, end_time=6.0, max_cutbacks=0, levels=8, tolerance=1e-2,
+                    breakpoints=[2.0, 2.05, 2.1])
+    taken = []
+    while not step.finished:
+        taken.append(step.propose())
+        step.judge(error=0.0, increment=1.0)
+        step.accept()
+    assert step.t == 6.0
+    inside = [h for h, t in zip(taken, itertools.accumulate(taken), strict=True)
+              if 2.0 < t <= 2.1 + 1e-12]
+    assert max(inside) * LOAD_STEPS <= 0.05  # the segments are 0.05 s long
+    assert len(inside) >= 2 * LOAD_STEPS
+    assert taken[0] == 1.0 and 1.0 in taken[-2:]  # large steps away from the pulse
+    # The same rule, alone: the step of a triangular pulse of 0.02 s from dt = 1e-2.
+    assert resolved_step(1e-2, 10, (0.0, 0.01, 0.02)) == 1e-2 / 8  # 1.25e-3 <= 0.01/5
+    assert resolved_step(1e-2, 2, (0.0, 0.01, 0.02)) == 1e-2 / 4  # no more than levels
+
+
+def test_adaptive_settings_are_checked() -> None:
+    assert TimeSpec(dt=1e-3, end_time=1.0).levels == 0
+    spec = TimeSpec(dt=1e-3, end_time=1.0, adaptive=True)
+    assert spec.levels == 6 and spec.smallest_dt == 1e-3 / 64
+    assert TimeSpec(dt=1e-3, end_time=1.0, adaptive=True, min_dt=1e-4).levels == 3
+    with pytest.raises(CaseError, match="tolerance: must be > 0"):
+        TimeSpec(dt=1e-3, end_time=1.0, adaptive=True, tolerance=0.0)
+    with pytest.raises(CaseError, match="min_dt: adaptive steps: at most 20 halvings"):
+        TimeSpec(dt=1e-3, end_time=1.0, adaptive=True, min_dt=1e-12)
+    # GN22's error constant: |β₂/2 − 1/6| + |β₁ − ½| (trapezoidal rule: 1/12).
+    assert error_constant(0.5, 0.5) == pytest.approx(1 / 12, rel=1e-15)
+    assert error_constant(0.6, 0.605) == pytest.approx(0.3025 - 1 / 6 + 0.1, rel=1e-15)

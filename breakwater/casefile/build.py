@@ -31,6 +31,7 @@ from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
 from breakwater.statics.initial import velocity_conflict
+from breakwater.stepping.stepsize import resolved_step
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -232,7 +233,10 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         if error is not None:
             raise CaseError(error)
         t = case.time
-        pulse, sampled = pulse_warning(ld, t.dt, t.end_time, t.beta1)
+        dt = t.dt  # the step inside a pulse: adaptive steps resolve its segments
+        if t.adaptive and ld.kind == "pulse":
+            dt = resolved_step(t.dt, t.levels, ld.pulse(1.0, 1.0).breakpoints)
+        pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1)
         if sampled:
             extra["loads"][ld.name]["sampled"] = sampled
         # Logged when the run starts (not again when it resumes), kept in the summary.

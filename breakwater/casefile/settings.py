@@ -145,7 +145,7 @@ class CaseSettings:
                 raise InvalidField("out_of_plane_length", f"the impulse of loads.{ld.name} "
                                    f"per metre, {ld.total_impulse:g} N s / "
                                    f"{self.out_of_plane_length:g} m, overflows")
-            ld.check_time(self.time.end_time, self.time.dt)
+            ld.check_time(self.time.end_time, self.time.smallest_dt)
         loads = [ld.name for ld in self.loads]
         for name in self.initial.loads or ():
             if name not in loads:

@@ -20,6 +20,12 @@ __all__ = ["MAX_CUTBACKS", "InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeS
 MAX_CUTBACKS = 20
 """Largest ``time.max_cutbacks``: Δt·2⁻²⁰ ≈ 1e-6 Δt (each cut-back retries a failing
 step with a full Newton solve; 2000 of them ran for hours on one step)."""
+DEFAULT_LEVELS = 6
+"""Adaptive steps: the halvings of dt without min_dt (dt / 64 the smallest step). The
+error estimate also follows elastic modes that fixed steps leave to GN22's damping (a
+stiff block sliding: its smallest steps throughout); the floor bounds what that costs."""
+MAX_LEVELS = 20
+"""Adaptive steps: the halvings of dt allowed at most (a factorisation each)."""
 
 
 @dataclass(frozen=True)
@@ -96,6 +102,12 @@ class TimeSpec:
     newton_atol: float = setting(1e-9, doc="Newton absolute tolerance, as a fraction of "
                                  "the load-vector norm")
     newton_max_it: int = setting(40, doc="Newton iterations per step (1 to 10000)")
+    adaptive: bool = setting(False, doc="adaptive steps: dt / 2^k chosen by GN22's local "
+                             "error estimate and the loads' breakpoints, dt the largest "
+                             "and min_dt (default dt / 64) the smallest")
+    tolerance: float = setting(1e-3, doc="adaptive steps: the local error allowed per step, "
+                               "relative to the step's displacement increment (1e-3: the "
+                               "Goda case within 0.2 % of dt = 1e-4 s)")
     solver: Solver = setting("fast", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
                              'on the contact surfaces only; "reference": Newton on the whole '
                              "residual, refactorised every iteration (the same results to "
@@ -128,6 +140,11 @@ class TimeSpec:
             if self.min_dt > self.dt:
                 raise InvalidField("min_dt", f"must be <= dt ({self.min_dt:g} > "
                                    f"{self.dt:g})")
+        positive(self.tolerance, "tolerance")
+        if self.min_dt is not None and self.adaptive and self.min_dt < self.dt / 2**MAX_LEVELS:
+            raise InvalidField("min_dt", f"adaptive steps: at most {MAX_LEVELS} halvings "
+                               f"of dt (min_dt >= dt / {2**MAX_LEVELS:g} = "
+                               f"{self.dt / 2**MAX_LEVELS:.3g} s; got {self.min_dt:g})")
         positive(self.max_steps, "max_steps")
         if self.planned_steps > self.max_steps:
             raise InvalidField("end_time", f"end_time / dt = {self.end_time:g} / "
@@ -146,6 +163,19 @@ class TimeSpec:
     def planned_steps(self) -> int:
         """The steps from 0 to ``end_time`` without cut-backs (the last one may be short)."""
         return math.ceil(self.end_time / self.dt * (1.0 - 1e-9))
+
+    @property
+    def levels(self) -> int:
+        """Adaptive steps: the halvings of dt down to the smallest step (0: fixed steps)."""
+        if not self.adaptive:
+            return 0
+        smallest = self.min_dt if self.min_dt is not None else self.dt / 2**DEFAULT_LEVELS
+        return max(1, math.floor(math.log2(self.dt / smallest) + 1e-9))
+
+    @property
+    def smallest_dt(self) -> float:
+        """The smallest step without a cut-back: dt, or dt / 2^levels (adaptive)."""
+        return self.dt / 2**self.levels
 
     @property
     def dt_floor(self) -> float:

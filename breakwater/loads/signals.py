@@ -122,6 +122,13 @@ class Pulse:
         return self.start + self.duration
 
     @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Times where the amplitude jumps or its slope changes (s): start, peak, end."""
+        if self.shape == "triangular":
+            return (self.start, self.start + self.peak * self.duration, self.end)
+        return (self.start, self.end)
+
+    @property
     def maximum(self) -> float:
         """Largest amplitude of the pulse."""
         return {"triangular": 2.0, "rectangular": 1.0,
@@ -157,6 +164,11 @@ class Constant:
     value: float = 1.0
     start: float = 0.0
 
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Where the factor jumps (s): ``start`` when it is after t = 0."""
+        return (self.start,) if self.start > 0 else ()
+
     def __call__(self, t: float) -> float:
         """Factor at time ``t``."""
         return self.value if t >= self.start else 0.0
@@ -173,6 +185,11 @@ class Ramp:
     def __post_init__(self) -> None:
         if not (self.rise > 0 and math.isfinite(self.rise)):
             raise ValueError(f"ramp rise time must be > 0 (got {self.rise})")
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Where the slope changes (s): the start and the end of the rise."""
+        return (self.start, self.start + self.rise)
 
     def __call__(self, t: float) -> float:
         """Factor at time ``t``."""
@@ -218,6 +235,11 @@ class Table:
     def end(self) -> float:
         """The time of the last point (s), on the run's clock."""
         return self.start + self.times[-1]
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """The table's points on the run's clock (s): where the slope changes."""
+        return tuple(self.start + t for t in self.times)
 
     def __call__(self, t: float) -> float:
         """Factor at time ``t``."""

@@ -10,8 +10,15 @@ the checkpoint instead, once it is known to fit the case and the history kept.
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
 
 from breakwater.common import files
+from breakwater.common.errors import CaseError
+from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
 from breakwater.outputs.checkpoint import CheckpointError
@@ -19,6 +26,7 @@ from breakwater.outputs.monitor import interface_state
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
+from breakwater.stepping.stepsize import StepSize
 
 __all__ = ["restore", "start"]
 
@@ -48,6 +56,8 @@ def start(r: Session) -> None:
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
     s.initialise(init.u, init.v)
+    if st.step.adaptive:
+        adaptive_start(st.step, m, s.u)
     out.open_history(x.monitor.columns)
     out.open_fields()
     row = r.record(0.0, st.static_iterations)
@@ -58,6 +68,29 @@ def start(r: Session) -> None:
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)
     r.log_quality()
     out.write_fields(0.0, s.u, s.v)
+
+
+def adaptive_start(step: StepSize, model: ContactModel, u: Sequence[fem.Function]) -> None:
+    """The loads' breakpoints and the first displacement scale of adaptive steps (collective).
+
+    Raises:
+        CaseError: A load's history does not name its breakpoints (a plain Python
+            function): adaptive steps could jump over it.
+    """
+    times: set[float] = set()
+    for ld in model.loads:
+        bp = getattr(ld.spec.amplitude, "breakpoints", None)
+        if bp is None:
+            raise CaseError(f"time.adaptive: the history of load '{ld.spec.name or ld.spec.group}' "
+                            "does not give its breakpoints (a plain function): adaptive "
+                            "steps could step over it (use fixed steps, or a Pulse, Ramp, "
+                            "Constant or Table history)")
+        times.update(float(t) for t in bp)
+    step.breakpoints = sorted(times)
+    largest = max((float(np.max(np.abs(f.x.array))) if f.x.array.size else 0.0 for f in u),
+                  default=0.0)
+    largest = model.comm.allreduce(largest, op=MPI.MAX)
+    step.scale = largest
 
 
 def restore(r: Session) -> None:

@@ -85,7 +85,9 @@ class RunState:
     @classmethod
     def start(cls, time: TimeSpec) -> RunState:
         """The state of a new run with the time settings ``time``."""
-        return cls(StepSize(time.dt, time.end_time, time.max_cutbacks, time.dt_floor))
+        return cls(StepSize(time.dt, time.end_time, time.max_cutbacks, time.dt_floor,
+                            levels=time.levels,
+                            tolerance=time.tolerance if time.adaptive else 0.0))
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data (JSON): nested dataclasses as dictionaries."""
@@ -95,7 +97,9 @@ class RunState:
     def from_dict(cls, data: dict[str, Any], time: TimeSpec) -> RunState:
         """The state of :meth:`as_dict`; the time settings are the run's ``time``."""
         step = {**data["step"], "dt": time.dt, "end_time": time.end_time,
-                "max_cutbacks": time.max_cutbacks, "floor": time.dt_floor}
+                "max_cutbacks": time.max_cutbacks, "floor": time.dt_floor,
+                "levels": time.levels,
+                "tolerance": time.tolerance if time.adaptive else 0.0}
         return cls(**{**data, "step": StepSize(**step),
                       "contact": [PairInputs(**c) for c in data["contact"]]})
 

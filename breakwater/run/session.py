@@ -41,6 +41,9 @@ __all__ = ["Session", "Stepped"]
 
 log = logging.getLogger("breakwater.run.simulation")  # the run's logger: rank 0 only in run()
 
+ADAPTIVE_CACHE = 8
+"""Adaptive steps: factorisations kept at most (distinct step sizes, the latest used)."""
+
 
 class Stepped:
     """The GN22 stepper and the objects bound to its state.
@@ -67,6 +70,9 @@ class Stepped:
                                max_it=time.newton_max_it)
         params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
         self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=time.solver)
+        if s.fast is not None and time.levels:  # adaptive steps: a factorisation per level
+            s.fast.factorisations.cache_size = max(s.fast.factorisations.cache_size,
+                                                   min(time.levels + 1, ADAPTIVE_CACHE))
         self.ledger = EnergyLedger(s)
         self.monitor = Monitor(model, s, output)
         self.peak = sm.PeakSnapshot(model, self.monitor.probes.names)
@@ -262,6 +268,12 @@ class Session:
             st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
             s.solver.floor_accepts if s is not None else 0, self.wall_time(),
             kind=self.time.solver, time_loop=st.time_loop)
+        if st.step.adaptive:
+            taken = st.step.accepted[1:]
+            solver["adaptive"] = {
+                "tolerance": st.step.tolerance, "smallest_allowed_dt": st.step.dt
+                / 2**st.step.levels, "rejected_steps": st.step.rejected,
+                "smallest_dt": min(taken, default=None), "largest_dt": max(taken, default=None)}
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))

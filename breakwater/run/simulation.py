@@ -84,6 +84,7 @@ from breakwater.outputs.monitor import Monitor, interface_state, pair_names
 from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
 from breakwater.run.session import Session
+from breakwater.stepping.gn22 import local_error
 from breakwater.stepping.stepsize import GROW_AFTER
 from breakwater.stepping.stepsolver import StepSolver
 
@@ -201,7 +202,12 @@ def _loop(r: Session, stop: StopSignal) -> None:
     show = output.progress if output.progress is not None else sys.stderr.isatty()
     log.info("work estimate: %d steps × %d unknowns = %.3g", r.work["steps_planned"],
              r.work["dofs"], r.work["estimate"])
-    log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
+    if step.adaptive:
+        log.info("time stepping to t = %g s with adaptive steps from dt = %g s down to "
+                 "%.3g s (tolerance %g)", time.end_time, time.dt, time.dt / 2**step.levels,
+                 time.tolerance)
+    else:
+        log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
     clock = _LoopClock(st.time_loop, s.solver)
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
                   step.t) as progress, clock:
@@ -218,6 +224,11 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 its = s.solve()
                 if not _finite(r.comm, *s.da):
                     raise ConvergenceError("non-finite acceleration increment", 0, its)
+                if step.adaptive and not step.judge(*local_error(s)):
+                    log.debug("t = %.6g s, dt = %.3g s: local error %.3g times the "
+                              "tolerance; retrying with dt = %.3g s", t, trial, step.ratio,
+                              step.h)
+                    continue
             except (ConvergenceError, PETSc.Error) as e:
                 # The state (u, v, a) is untouched until update(): retry from it.
                 st.failed_steps += 1
@@ -248,7 +259,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
             if output.field_interval > 0 and st.steps % output.field_interval == 0:
                 x.files.write_fields(row["t"], s.u, s.v)
                 st.fields_time = row["t"]
-            if grew:
+            if grew and not step.adaptive:
                 log.info("t = %.6g s: step size back to dt = %.3g s", row["t"], step.h)
             if interval > 0 and st.steps % interval == 0:
                 clock.fold()

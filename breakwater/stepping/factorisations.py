@@ -97,7 +97,7 @@ class Factorisations:
         self.interface = interface
         self.beta1, self.beta2 = beta1, beta2
         self._cache: OrderedDict[float, Factorisation] = OrderedDict()
-        self._cache_size = cache
+        self.cache_size = cache
 
     def factorisation(self, dt: float) -> Factorisation:
         """A = M + β₁Δt C + ½β₂Δt² K factorised, X and S (cached by Δt)."""
@@ -141,7 +141,7 @@ class Factorisations:
             X_II = S = np.zeros((len(self.interface), len(self.interface)))
         fact = Factorisation(ksp, A, blocks, X_II, S)
         self._cache[dt] = fact
-        if len(self._cache) > self._cache_size:
+        if len(self._cache) > self.cache_size:
             _, old = self._cache.popitem(last=False)
             old.ksp.destroy()
             old.A.destroy()

@@ -24,6 +24,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
@@ -37,6 +38,7 @@ from breakwater.model.model import ContactModel, PairData
 from breakwater.model.pairs import Pair
 from breakwater.stepping.condensed import CondensedNewton
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
+from breakwater.stepping.stepsize import error_constant
 from breakwater.stepping.stepsolver import StepSolver
 
 
@@ -414,3 +416,33 @@ class GN22:
         if corrected:
             self.flips += corrected
             fem_petsc.assign(self._y, y)
+
+
+def local_error(stepper: GN22) -> tuple[float, float, float]:
+    """The step solved by ``stepper``: its local error estimate, increment and size (collective).
+
+    ``e = c Δt² Δa`` with c = :func:`~breakwater.stepping.stepsize.error_constant`
+    (Zienkiewicz & Xie 1991) and ``Δu = Δt v + ½Δt² a + ½β₂Δt² Δa``, before
+    :meth:`GN22.update`.
+
+    Returns:
+        ‖e‖∞, ‖Δu‖∞ and ‖u + Δu‖∞ over the owned DOFs of every body (the same on
+        every rank).
+    """
+    Δt, p = float(stepper.dt.value), stepper.params
+    c = error_constant(p.beta1, p.beta2) * Δt**2
+    e = du = size = 0.0
+    for u, v, a, d in zip(stepper.u, stepper.v, stepper.a, stepper.da, strict=True):
+        n = u.function_space.dofmap.index_map.size_local * u.function_space.dofmap.index_map_bs
+        if n == 0:
+            continue
+        dd = d.x.array[:n]
+        e = max(e, c * float(np.max(np.abs(dd))))
+        inc = Δt * v.x.array[:n] + 0.5 * Δt**2 * a.x.array[:n] + 0.5 * p.beta2 * Δt**2 * dd
+        du = max(du, float(np.max(np.abs(inc))))
+        size = max(size, float(np.max(np.abs(u.x.array[:n] + inc))))
+    if stepper.model.comm.size > 1:
+        norms = np.array([e, du, size])
+        stepper.model.comm.Allreduce(MPI.IN_PLACE, norms, op=MPI.MAX)
+        e, du, size = (float(x) for x in norms)
+    return e, du, size
