@@ -74,6 +74,31 @@ class WaveHistory:
                 hi = mid
         return lo - 1 if lo > 0 else None
 
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Where the history jumps or its slope changes, on the run's clock (s).
+
+        Each wave's start and end of force, and its history's own breakpoints (τ from
+        the wave's start: :class:`breakwater.storms.waveforce.PulseHistory`'s, a
+        :class:`~breakwater.loads.signals.Table`'s points). Adaptive steps keep a few
+        steps between them.
+
+        Raises:
+            AttributeError: A wave's history does not give its breakpoints (a plain
+                function): then there are none to give (adaptive steps refuse it).
+        """
+        times: set[float] = set()
+        for w in self.loads:
+            history = w.p1 if self.part == "p1" else w.uplift
+            own = getattr(history, "breakpoints", None)
+            if own is None:
+                raise AttributeError(f"the {self.part} history of the wave at t = "
+                                     f"{w.wave.start:g} s gives no breakpoints")
+            t0 = w.wave.start
+            times.update(t0 + float(τ) for τ in own if 0.0 <= τ <= w.duration)
+            times.update((t0, t0 + w.duration))
+        return tuple(sorted(times))
+
     def __call__(self, t: float) -> float:
         """p₁ or p_u (Pa) at time ``t``."""
         k = self.wave(t)
