@@ -315,6 +315,9 @@ def test_two_waves_record_and_ledger(stacked, folder, hand_waves):
     assert applied == pytest.approx(expected, rel=1e-9)
     record = summary["storm"]
     assert record["waves"] == record["waves_finished"] == 2
+    from breakwater.outputs.summary import format_report
+
+    assert "storm: 2 of 2 waves, total sliding" in format_report(summary, folder)
     from breakwater.outputs.stormrecord import read_waves
 
     table = read_waves(folder / "two_storm" / "waves.csv")
