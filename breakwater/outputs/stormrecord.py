@@ -81,7 +81,7 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
         sliding = _sliding(rows[i1], r) - _sliding(rows[i0], r)
         total += sliding
         rocking = max(abs(_rotation(rows[i], r) - θ0) for i in inside)
-        pressure = r["penalty"] * max(rows[i][r["penetration"]] for i in inside)
+        pressure = r["penalty"] * max(rows[i].get(r["penetration"], math.nan) for i in inside)
         force = math.nan if p1 is None else max(
             p1(times[i]) * w["front_force_per_p1"] for i in inside)
         out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
