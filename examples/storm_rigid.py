@@ -9,7 +9,7 @@ and sand fill), μ = 0.6, under a storm of H_1/3 = 8 m, T_1/3 = 14 s and 1000 wa
 1.24 (the usual design criterion is 1.2).
 
 Usage: ``python examples/storm_rigid.py [STORMS] [OUTDIR]`` (default 200 storms, the
-CSV and the figure in ``results/storm_rigid/``); about 4 s per 100 storms on one core.
+CSV and the figure in ``results/storm_rigid/``); about 2 s of CPU per 100 storms.
 """
 
 from __future__ import annotations

@@ -13,8 +13,9 @@ M_a the added mass of the water on the caisson's faces::
 
     M_a = 1.0855 ρ h'²
 
-the value of the sources above, which is Westergaard's added mass of a rigid wall of
-draft h' accelerated in still water, on its two faces: one face carries
+the value the sources above use as we know it from the literature restating them (we
+could not read the originals here), and which we verified to be Westergaard's added mass
+of a rigid wall of draft h' accelerated in still water, on its two faces: one face carries
 Σ_n 2ρh'²/λ_n³ = 14 ζ(3)/π³ ρh'² = 0.5427 ρh'² (λ_n = (2n − 1)π/2), two faces
 28 ζ(3)/π³ = 1.0855 (tests/test_storms_rigid.py checks the number). The finite-element
 model has no water: ``Caisson(added_mass=False)`` drops M_a for the FE-vs-rigid comparison.
