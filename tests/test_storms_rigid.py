@@ -23,7 +23,7 @@ from breakwater.storms.rigid import (
 )
 from breakwater.storms.seastate import SeaState, wave_train
 from breakwater.storms.waveforce import PulseHistory, wave_load
-from breakwater.storms.waves import Site, Wave, WaveLoad
+from breakwater.storms.waves import Site, Wave, WaveLoad, WaveTrain
 
 UNIT = ((-1.0, 1.0), (0.0, 1.0))  # front shape with ∫ s dz = 1 m: P = p₁
 
@@ -160,6 +160,11 @@ def test_added_mass_coefficient():
 def test_caisson_refused():
     with pytest.raises(ValueError, match=r"^friction"):
         _block(μ=0.0)
+    c = _block()
+    lift = 2.0 * c.submerged_weight  # U = ½ p_u B = W'
+    for uplift in (Rect(lift, 0.3), lambda τ: lift if 0 <= τ < 0.3 else 0.0):
+        with pytest.raises(ValueError, match=r"^the uplift U = .* lifts off"):
+            slide(_load(Rect(0.9 * c.submerged_weight, 0.3), 0.3, uplift), c)
     with pytest.raises(ValueError, match=r"^mass: .* floats"):
         Caisson(mass=1000.0, base_width=1.0, toe_depth=2.0, friction=0.6, density=1000.0)
 
@@ -176,3 +181,14 @@ def test_storm_sliding_is_the_sum_of_the_waves():
     with pytest.raises(ValueError, match=r"^base_width"):
         storm_sliding(train, site, Caisson(mass=2100.0 * 21.0 * 19.5, base_width=21.0,
                                            toe_depth=14.5, friction=0.6))
+
+
+def test_sliding_into_the_next_wave_is_refused():
+    """μ = 0.1: a 12 m wave sets the caisson sliding for 16 s, past the next wave (12 s)."""
+    site = Site(depth=20.0, toe_depth=14.5, berm_depth=11.0, crest_height=5.0,
+                base_width=20.0)
+    c = Caisson(mass=2100.0 * 20.0 * 19.5, base_width=20.0, toe_depth=14.5, friction=0.1)
+    first = Wave(12.0, 12.0)
+    assert slide_motion(wave_load(first, site), c).stop > 12.0
+    with pytest.raises(ValueError, match=r"^wave 1 \(H = 12 m\): the caisson still slides"):
+        storm_sliding(WaveTrain((first, Wave(5.0, 12.0, 12.0))), site, c)

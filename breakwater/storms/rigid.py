@@ -265,7 +265,12 @@ def slide_motion(load: WaveLoad, caisson: Caisson) -> Slide:
                   caisson.moving_mass)
 
     def R(τ: float) -> float:
-        return wave_force * load.p1(τ) - μ * (W - 0.5 * B * load.uplift(τ))
+        U = 0.5 * B * load.uplift(τ)
+        if U >= W:  # a history without a peak: checked where it is evaluated
+            raise ValueError(f"the uplift U = {U:.4g} N/m at τ = {τ:.4g} s reaches the "
+                             f"submerged weight W' = {W:.4g} N/m: the caisson lifts off "
+                             "(outside the sliding model)")
+        return wave_force * load.p1(τ) - μ * (W - U)
 
     peaks = [getattr(h, "peak", None) for h in (load.p1, load.uplift)]
     if peaks[1] is not None and 0.5 * B * peaks[1] >= W:
