@@ -192,3 +192,19 @@ def test_sliding_into_the_next_wave_is_refused():
     assert slide_motion(wave_load(first, site), c).stop > 12.0
     with pytest.raises(ValueError, match=r"^wave 1 \(H = 12 m\): the caisson still slides"):
         storm_sliding(WaveTrain((first, Wave(5.0, 12.0, 12.0))), site, c)
+
+
+def test_weight_given():
+    """W' given (an FE model's static normal force) replaces M g − ρ g B h'; the same
+    closed form of the rectangular pulse follows with N = W'."""
+    c = _block(toe_depth=0.5, added_mass=False)
+    given = Caisson(c.mass, c.base_width, c.toe_depth, c.friction, added_mass=False,
+                    weight=0.5 * c.submerged_weight)
+    N, m = given.submerged_weight, given.moving_mass
+    assert N == 0.5 * c.submerged_weight and m == c.mass
+    F0, τ = 2.0 * 0.6 * N, 0.3
+    a = (F0 - 0.6 * N) / m
+    expected = 0.5 * a * τ**2 + (a * τ) ** 2 / (2.0 * 0.6 * N / m)
+    assert slide(_load(Rect(F0, τ), τ), given) == pytest.approx(expected, rel=1e-6)
+    with pytest.raises(ValueError, match="weight: W' must be > 0"):
+        Caisson(c.mass, c.base_width, c.toe_depth, c.friction, weight=0.0)

@@ -82,6 +82,9 @@ class Caisson:
         added_mass: Include M_a = 1.0855 ρ h'² (False: the FE model's dry block).
         density: Water density ρ (kg/m³).
         gravity: g (m/s²).
+        weight: W' given (N/m), e.g. a finite-element model's static normal force on
+            the mound (its weight less the buoyancy loads it applies); None:
+            M g − ρ g B h'.
 
     Raises:
         ValueError: A field out of range, or W' <= 0 (the caisson floats), naming it.
@@ -95,6 +98,7 @@ class Caisson:
     added_mass: bool = True
     density: float = 1025.0
     gravity: float = 9.81
+    weight: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("mass", "base_width", "friction", "density", "gravity"):
@@ -103,6 +107,8 @@ class Caisson:
                 raise ValueError(f"{name}: must be > 0 (got {value!r})")
         if not (self.toe_depth >= 0 and math.isfinite(self.toe_depth)):
             raise ValueError(f"toe_depth: must be >= 0 (got {self.toe_depth!r})")
+        if self.weight is not None and not (self.weight > 0 and math.isfinite(self.weight)):
+            raise ValueError(f"weight: W' must be > 0 (got {self.weight!r})")
         if not self.submerged_weight > 0:
             raise ValueError(f"mass: M g = {self.mass * self.gravity:.4g} N/m does not "
                              f"exceed the buoyancy ρ g B h' = {self.buoyancy:.4g} N/m: the "
@@ -115,7 +121,9 @@ class Caisson:
 
     @property
     def submerged_weight(self) -> float:
-        """W' = M g − ρ g B h' (N/m)."""
+        """W' = M g − ρ g B h' (N/m), or ``weight`` when given."""
+        if self.weight is not None:
+            return self.weight
         return self.mass * self.gravity - self.buoyancy
 
     @property
