@@ -319,15 +319,47 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
             the line).
 
     """
+    rows = read_rows(path, (2,), "two numbers t, value")
+    times: list[float] = []
+    values: list[float] = []
+    for k, (number, (t, v)) in enumerate(rows):
+        if times and not t > times[-1]:
+            raise ValueError(f"{path.name} line {number}: t = {t:g} does not increase (line "
+                             f"{rows[k - 1][0]} has t = {times[-1]:g})")
+        times.append(t)
+        values.append(v)
+    if len(times) < 2:
+        raise ValueError(f"{path.name}: a table needs at least two data rows (found "
+                         f"{len(times)})")
+    return tuple(times), tuple(values)
+
+
+def read_rows(path: pathlib.Path, counts: tuple[int, ...], expected: str
+              ) -> list[tuple[int, tuple[float, ...]]]:
+    """The numeric rows of a spreadsheet CSV, read as :func:`read_table` describes.
+
+    Args:
+        path: The file.
+        counts: The numbers of cells a data row may have (e.g. ``(2,)``, ``(2, 3)``).
+        expected: What a row holds, for the messages (``"two numbers t, value"``).
+
+    Returns:
+        (line number, the row's numbers) for each data row, in order.
+
+    Raises:
+        OSError: The file cannot be read (the message names it).
+        ValueError: A row with another number of cells, a cell that is not a number (or
+            beyond the largest float), mixed decimal marks (the message names the file
+            and the line).
+
+    """
     if not path.is_file():
         raise OSError(f"file not found: {path}")
     lines = [line.split("#", 1)[0] for line in _decode(path.read_bytes()).splitlines()]
     # The separator of the data: a header ("time (s)<tab>factor") may use another.
     filled = [line for line in lines if line.strip()]
     separator = _separator(filled[1:] or filled)
-    times: list[float] = []
-    values: list[float] = []
-    rows: list[int] = []
+    rows: list[tuple[int, tuple[float, ...]]] = []
     decimal: tuple[str, str, int] | None = None  # the file's decimal mark, cell, line
     header_allowed = True
     for number, line in enumerate(lines, start=1):
@@ -340,17 +372,16 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
             header_allowed = False
             if not any(numeric):
                 continue  # the header: no number in it
-        if len(cells) != 2 or not all(numeric):
+        if len(cells) not in counts or not all(numeric):
             bad = next((c for c, ok in zip(cells, numeric, strict=True) if not ok), None)
             named = {";": "';'", "\t": "a tab"}.get(separator)
             why = (f"got {len(cells)} cell{'s' * (len(cells) != 1)}"
                    + (f", the file's separator being {named}" if named else "")
-                   if len(cells) != 2 else
+                   if len(cells) not in counts else
                    "no number: only the first row may be a header, comment others out "
                    "with #" if not any(numeric) else
                    "an empty cell" if bad == "" else f"{bad!r} is not a number")
-            raise ValueError(f"{where}: expected two numbers t, value ({why}: "
-                             f"{line.strip()!r})")
+            raise ValueError(f"{where}: expected {expected} ({why}: {line.strip()!r})")
         for cell in cells:
             mark = "," if "," in cell else "." if "." in cell else None
             if mark is None:
@@ -363,18 +394,10 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
                                  f"(line {decimal[2]}) a decimal "
                                  f"{'comma' if decimal[0] == ',' else 'point'}: use one "
                                  "throughout")
-        t, v = (float(c.replace(",", ".")) for c in cells)
-        if not (math.isfinite(t) and math.isfinite(v)):  # 1e400: inf, not an error of float
-            raise ValueError(f"{where}: {cells[math.isfinite(t)]!r} is beyond the largest "
-                             f"number (about 1.8e308)")
-        if times and not t > times[-1]:
-            raise ValueError(f"{where}: t = {t:g} does not increase (line {rows[-1]} has "
-                             f"t = {times[-1]:g})")
-        times.append(t)
-        values.append(v)
-        rows.append(number)
-    if len(times) < 2:
-        raise ValueError(f"{path.name}: a table needs at least two data rows (found "
-                         f"{len(times)})")
-    return tuple(times), tuple(values)
-
+        row = tuple(float(c.replace(",", ".")) for c in cells)
+        for cell, x in zip(cells, row, strict=True):
+            if not math.isfinite(x):  # 1e400: inf, not an error of float
+                raise ValueError(f"{where}: {cell!r} is beyond the largest number (about "
+                                 "1.8e308)")
+        rows.append((number, row))
+    return rows

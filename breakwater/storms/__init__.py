@@ -8,6 +8,12 @@ what does not need a finite-element model (plain Python and NumPy):
   (height, period, start), a :class:`WaveTrain`, the :class:`Site` (Goda's geometry of
   the breakwater and the water), and a :class:`WaveLoad` (one wave's front-pressure shape
   and the time histories of p₁ and of the uplift p_u).
+- :mod:`breakwater.storms.seastate`: a :class:`~breakwater.storms.seastate.SeaState` and
+  its waves (Rayleigh heights capped by breaking), a user's wave-by-wave table.
+- :mod:`breakwater.storms.waveforce`: one wave's Goda(–Takahashi) pressures over time
+  and their resultants.
+- :mod:`breakwater.storms.rigid`: the rigid-block sliding model (Shimosako & Takahashi).
+- :mod:`breakwater.storms.montecarlo`: the expected sliding distance over storms.
 """
 
 from breakwater.storms.waves import Site, Wave, WaveLoad, WaveTrain

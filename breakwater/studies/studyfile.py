@@ -24,6 +24,8 @@ A study file (TOML) names a base case and how to vary it::
     [figures]                       # optional, see breakwater.studies.plots
     x = ["bodies.mound.shear_modulus"]
     reference = {time_of_max_ux = 0.032}
+    limits = [0.1, 0.3]             # a storm study: tolerable slidings (m) for the
+                                    # Monte Carlo (breakwater.studies.stormstats)
 
 Keys are any case key in the ``--set key=value`` dotted syntax; every case is read by
 :func:`breakwater.casefile.case.load_case` with the study's values as overrides, so it is
@@ -75,7 +77,7 @@ __all__ = ["Derived", "Point", "Study", "check_points", "load_study", "toml_lite
 TOP_KEYS = ("name", "description", "base", "set", "grid", "zip", "samples", "derived",
             "figures")
 DERIVED_KEYS = ("from", "key", "table", "interpolate")
-FIGURE_KEYS = ("x", "y", "reference", "reference_label")
+FIGURE_KEYS = ("x", "y", "reference", "reference_label", "limits")
 DISTRIBUTIONS = ("uniform", "log_uniform", "choice")
 MAX_POINTS = 1000
 """Default limit on the points of a study (``sweep --max-points``)."""
@@ -322,6 +324,10 @@ class _Reader:
             if key in out and not (isinstance(out[key], list)
                                    and all(isinstance(c, str) for c in out[key])):
                 raise self.error(f"figures.{key}", "expected a list of column names")
+        limits = out.get("limits", [])
+        if not (isinstance(limits, list) and all(_number(v) and float(v) > 0 for v in limits)):
+            raise self.error("figures.limits", "expected a list of tolerable slidings (m), "
+                             "each > 0")
         ref = out.get("reference", {})
         if not isinstance(ref, Mapping):
             raise self.error("figures.reference", "expected a table of column = value")

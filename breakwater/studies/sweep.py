@@ -103,7 +103,9 @@ def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = N
     ``residual_ux.<p>``; ``time_of_max_ux``, ``residual_slip``, ``max_uplift``;
     ``static_mean_pressure``; ``energy_balance_error`` (the largest over the run) and
     ``external_work`` (at the end), per metre out of plane; ``steps``,
-    ``newton_iterations``, ``cutbacks``; ``loop_time`` (s); per body
+    ``newton_iterations``, ``cutbacks``; ``loop_time`` (s); a storm's
+    ``storm.total_sliding``, ``storm.waves_finished`` and the rigid-block model's
+    ``storm.rigid_total_sliding`` (m); per body
     ``shear_modulus.<body>`` of the case as run (the calibrated G included).
     """
     out: dict[str, float] = {}
@@ -130,6 +132,10 @@ def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = N
     put("newton_iterations", solver.get("newton_iterations"))
     put("cutbacks", solver.get("cutbacks"))
     put("loop_time", solver.get("wall_time"))
+    storm = summary.get("storm") or {}
+    put("storm.total_sliding", storm.get("total_sliding"))
+    put("storm.waves_finished", storm.get("waves_finished"))
+    put("storm.rigid_total_sliding", (storm.get("rigid") or {}).get("total_sliding"))
     for name, body in ((case_toml or {}).get("bodies") or {}).items():
         g = body.get("shear_modulus")
         if g is None and body.get("young_modulus") is not None:
@@ -424,6 +430,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                                len(points) - sum(status.count(s) for s in
                                                  ("finished", "failed", "interrupted")))
         from breakwater.studies import plots as sweepplots
+        from breakwater.studies import stormstats
 
         try:
             drawn = sweepplots.make_figures(folder, study, TABLE)
@@ -431,6 +438,15 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             print(f"breakwater: warning: the figures of the study could not be drawn: "
                   f"{_one_line(e)}", file=sys.stderr, flush=True)
             drawn = []
+        mc = stormstats.monte_carlo(folder, study, *sweepplots.read_table(folder / TABLE))
+        if mc is not None:
+            p = mc["percentiles"]
+            say(f"study '{study.name}': expected sliding per storm {mc['mean']:.4g} m "
+                f"(± {mc['half_width_95']:.2g} m at 95 %, std {mc['std']:.3g} m, "
+                f"{mc['storms']} storms); percentiles 5/50/95 {p['5']:.3g} / {p['50']:.3g} "
+                f"/ {p['95']:.3g} m"
+                + "".join(f"; P(> {k} m) = {v:.3g}" for k, v in mc["exceedance"].items())
+                + f" -> {folder / 'monte_carlo.json'}")
         if signum:
             print(f"breakwater: study '{study.name}' interrupted by "
                   f"{signal.Signals(signum).name}: {outcome.finished}/{outcome.total} "

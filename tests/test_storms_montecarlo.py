@@ -1,0 +1,63 @@
+"""The Monte Carlo of the expected sliding: statistics, reproducibility, outputs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from breakwater.storms.montecarlo import MonteCarlo, expected_sliding, plot, write_csv
+from breakwater.storms.rigid import Caisson
+from breakwater.storms.seastate import SeaState
+from breakwater.storms.waves import Site
+
+
+def _case(width: float) -> tuple[Site, Caisson]:
+    site = Site(depth=20.0, toe_depth=14.5, berm_depth=11.0, crest_height=5.0,
+                base_width=width)
+    return site, Caisson(mass=2100.0 * width * 19.5, base_width=width, toe_depth=14.5,
+                         friction=0.6)
+
+
+def test_far_below_sliding_is_zero():
+    """H_1/3 = 2 m on the 30 m caisson (safety factor 1.24 at H_max = 14.4 m): the largest
+    of 200 waves (about 4–5 m) is far below sliding, every storm gives 0."""
+    site, caisson = _case(30.0)
+    result = expected_sliding(SeaState(2.0, 10.0, waves=200), site, caisson, storms=5)
+    assert result.mean == 0.0 and result.std == 0.0
+    assert result.percentiles == {5.0: 0.0, 50.0: 0.0, 95.0: 0.0}
+    assert result.exceedance == {0.1: 0.0, 0.3: 0.0}
+    assert result.storms_needed() == 1
+
+
+def test_statistics_ordered_and_reproducible(tmp_path):
+    site, caisson = _case(20.0)
+    sea = SeaState(8.0, 14.0, waves=200)
+    a = expected_sliding(sea, site, caisson, storms=(3, 5, 7, 11, 13, 17), limits=(0.1,))
+    b = expected_sliding(sea, site, caisson, storms=(3, 5, 7, 11, 13, 17), limits=(0.1,))
+    assert np.array_equal(a.totals, b.totals) and a.seeds == (3, 5, 7, 11, 13, 17)
+    assert a.mean > 0.0
+    p = a.percentiles
+    assert min(a.totals) <= p[5.0] <= p[50.0] <= p[95.0] <= max(a.totals)
+    assert a.exceedance[0.1] == np.mean(a.totals > 0.1)
+    z = 1.959963984540054  # Φ⁻¹(0.975)
+    assert a.storms_needed(0.1, 0.95) == math.ceil((z * a.std / (0.1 * a.mean)) ** 2)
+    assert a.half_width(0.95) == pytest.approx(z * a.std / math.sqrt(6))
+    csv = write_csv(a, tmp_path / "mc.csv")
+    rows = csv.read_text().splitlines()
+    assert rows[0] == "seed,total_sliding_m" and len(rows) == 7
+    assert float(rows[1].split(",")[1]) == pytest.approx(a.totals[0], rel=1e-8)
+    png = plot(a, tmp_path / "mc.png")
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_refused():
+    site, caisson = _case(30.0)
+    sea = SeaState(2.0, 10.0, waves=10)
+    with pytest.raises(ValueError, match=r"^storms"):
+        expected_sliding(sea, site, caisson, storms=0)
+    with pytest.raises(ValueError, match=r"^limits"):
+        expected_sliding(sea, site, caisson, storms=1, limits=(-0.1,))
+    with pytest.raises(ValueError, match=r"^confidence"):
+        MonteCarlo((0,), np.zeros(1), ()).storms_needed(confidence=1.0)

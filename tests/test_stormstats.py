@@ -1,0 +1,55 @@
+"""A study over storm seeds as a Monte Carlo (breakwater.studies.stormstats).
+
+The statistics of the finished cases' ``storm.total_sliding`` (sweep.csv) against the
+formulas computed here (numpy's mean, sample standard deviation and percentiles; the
+fraction above each limit; the CLT's half-width 1.96 s/√n), the failed cases left out.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+from breakwater.common.errors import CaseError
+from breakwater.studies.stormstats import COLUMN, monte_carlo
+from breakwater.studies.studyfile import load_study
+
+pytestmark = pytest.mark.serial  # files only: once is enough
+
+
+def test_monte_carlo_of_a_storm_study(tmp_path: pathlib.Path) -> None:
+    study_file = tmp_path / "storms.toml"
+    study_file.write_text('base = "goda"\n[grid]\n"loads.storm.storm.sea.seed" = [0, 1, 2, 3, 4]\n'
+                          "[figures]\nlimits = [0.1, 0.3]\n")
+    study = load_study(study_file)
+    totals = [0.0, 0.05, 0.2, 0.4, 9.9]
+    header = ["loads.storm.storm.sea.seed", "status", COLUMN]
+    rows = [{"loads.storm.storm.sea.seed": str(i), "status": "finished", COLUMN: repr(s)}
+            for i, s in enumerate(totals)]
+    rows[4]["status"] = "failed"  # its total is not a storm's: left out
+    out = monte_carlo(tmp_path, study, header, rows)
+    assert out is not None
+    done = np.array(totals[:4])
+    assert out["storms"] == 4 and out["seed_key"] == "loads.storm.storm.sea.seed"
+    assert out["mean"] == pytest.approx(done.mean(), rel=1e-15)
+    assert out["std"] == pytest.approx(done.std(ddof=1), rel=1e-15)
+    assert out["percentiles"]["50"] == pytest.approx(np.percentile(done, 50), rel=1e-15)
+    assert out["exceedance"] == {"0.1": 0.5, "0.3": 0.25}
+    assert out["half_width_95"] == pytest.approx(1.959964 * done.std(ddof=1) / 2, rel=1e-6)
+    assert json.loads((tmp_path / "monte_carlo.json").read_text())["storms"] == 4
+    assert (tmp_path / "figures" / "monte_carlo.png").stat().st_size > 0
+    assert math.isfinite(out["storms_needed_10pct_95"])
+    # No storm column: not a storm study.
+    assert monte_carlo(tmp_path, study, ["status"], [{"status": "finished"}]) is None
+
+
+def test_limits_are_checked(tmp_path: pathlib.Path) -> None:
+    study_file = tmp_path / "bad.toml"
+    study_file.write_text('base = "goda"\n[grid]\n"time.dt" = [1e-4]\n'
+                          "[figures]\nlimits = [0.1, -1]\n")
+    with pytest.raises(CaseError, match=r"figures\.limits"):
+        load_study(study_file)
