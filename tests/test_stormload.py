@@ -518,3 +518,69 @@ def test_adaptive_steps_through_a_storm(stacked, folder, hand_waves):
     assert adaptive["storm"]["total_sliding"] == pytest.approx(
         fixed["storm"]["total_sliding"], rel=0.01)
     assert adaptive["energy"]["max_balance_error_over_energy_scale"] < 1e-6
+
+
+@pytest.mark.timeout(120)
+def test_storm_with_the_literature_force_profile(stacked, folder):
+    # The storm path with breakwater.storms.waveforce's force-time profile (a sine
+    # hump of Goda's p₁ over τ₀ = T/2): the applied impulse along x is GN22's rule over
+    # the step ends of F(t) = p₁(t) × each wave's Goda P/p₁ (the profiles whole on the
+    # face, their kinks on facet ends: exact quadrature), 1e-9; the ledger closes.
+    from breakwater.casefile.stormcase import StormCase
+    from breakwater.storms.waveforce import wave_load
+
+    waves = [(0.02, 0.3), (0.03, 0.4)]
+    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
+             f"waves = {[list(w) for w in waves]}\n")
+    summary, _ = _run(folder, stacked, storm, "profile_storm", 0.7)
+    sc = StormCase(**_site_values(), waves=tuple(waves))
+    site = sc.site(AW)
+    loads = [wave_load(w, site) for w in sc.waves_train.waves]
+    ratio = [_goda(sc, w).force / _goda(sc, w).p1 for w in sc.waves_train.waves]
+
+    def force(t: float) -> float:
+        k = 0 if t < 0.3 else 1
+        return loads[k].p1(t - loads[k].wave.start) * ratio[k]
+
+    β1 = 0.6  # [time] beta1's default
+    times = [k * CASE_DT for k in range(round(0.7 / CASE_DT) + 1)]
+    expected = sum(CASE_DT * ((1 - β1) * force(t0) + β1 * force(t1))
+                   for t0, t1 in itertools.pairwise(times))
+    applied = summary["loads"]["wave"]["applied"]["impulse_per_length"][0]
+    assert applied == pytest.approx(expected, rel=1e-9)
+    assert summary["storm"]["waves_finished"] == 2
+    assert summary["energy"]["max_balance_error_over_energy_scale"] < 1e-6
+
+
+def test_sea_state_and_wave_table_read(stacked, folder):
+    # [sea] draws its waves with breakwater.storms.seastate.wave_train (the same seed,
+    # the same heights); waves = "file.csv" reads them with read_wave_table, relative to
+    # the case file.
+    from breakwater.casefile.case import load_case
+    from breakwater.storms.seastate import SeaState, wave_train
+
+    mesh = stacked
+    table = folder / "storm_waves.csv"
+    if COMM.rank == 0:
+        table.write_text("H, T\n0.01, 0.3\n0.02, 0.4\n")
+    COMM.barrier()
+    for name, source in (("sea", "sea = { significant_height = 0.012, period = 0.4, "
+                                  "waves = 4, seed = 3 }"),
+                         ("table", 'waves = "storm_waves.csv"')):
+        path = folder / f"read_{name}.toml"
+        if COMM.rank == 0:
+            from blocks import two_block_case
+
+            path.write_text(two_block_case(mesh, "mesh.degree = 2",
+                                           f"[loads.wave]\ngroup = \"a_left\"\n"
+                                           f"[loads.wave.storm]\n{SITE}{source}\n")
+                            .replace("end_time = 1e-3", "end_time = 2.0"))
+        COMM.barrier()
+        storm = load_case(path).loads[0].storm
+        train = storm.waves_train
+        if name == "sea":
+            expected = wave_train(SeaState(0.012, 0.4, waves=4, seed=3), storm.site(AW))
+            assert train == expected and len(train) == 4
+        else:
+            assert [(w.height, w.period, w.start) for w in train.waves] == \
+                [(0.01, 0.3, 0.0), (0.02, 0.4, 0.3)]
