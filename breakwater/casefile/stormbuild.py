@@ -187,6 +187,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     record = {"lo": names[0], "hi": names[1], "sign": sign,
               "landward": float(triangle.axis[0]), "length": width,
               "pair": pair.name, "penetration": f"{pair.name}_penetration",
-              "penalty": pair.penalty}
+              "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,
+              "toe_depth": storm.toe_depth, "density": storm.density}
     return probes, {"waves": waves, "base_width": width, "duration": storm.waves_train.duration,
                     "record": record, "warnings": warnings}

@@ -20,7 +20,14 @@ ends (``<load>_base_lo`` at the smaller x, ``<load>_base_hi``), and its summary 
 - ``max_contact_pressure``: ε_n × the pair's largest penetration in the wave (Pa;
   the penalty law's pressure at the most loaded node or integration point);
 - ``peak_force_per_length``: the largest horizontal force of the front pressure at the
-  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m).
+  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m);
+- ``rigid_sliding``: the rigid-block model's sliding under the same wave load
+  (:func:`rigid_record`; NaN where it does not apply).
+
+:func:`rigid_record` is the rigid-block reference (Shimosako & Takahashi;
+:mod:`breakwater.storms.rigid`) of the same storm on the FE model's caisson: its mass
+and W' (the static normal force on the mound), μ of the pair, no added mass (the FE
+model has no water), each wave from rest.
 """
 
 from __future__ import annotations
@@ -29,10 +36,11 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["COLUMNS", "storm_record", "write_waves"]
+__all__ = ["COLUMNS", "read_waves", "rigid_record", "storm_figures", "storm_record",
+           "write_waves"]
 
 COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", "sliding",
-           "cumulative_sliding", "rocking", "max_contact_pressure")
+           "cumulative_sliding", "rocking", "max_contact_pressure", "rigid_sliding")
 """The columns of ``waves.csv``."""
 
 
@@ -49,7 +57,8 @@ def _rotation(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
 
 
 def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
-                 p1: Callable[[float], float] | None = None
+                 p1: Callable[[float], float] | None = None,
+                 rigid: Mapping[str, Any] | None = None
                  ) -> tuple[list[dict[str, float]], dict[str, Any]]:
     """The per-wave rows of the waves finished, and the summary's ``storm`` block.
 
@@ -60,6 +69,8 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
             the pair's penetration column and penalty).
         p1: t ↦ p₁ of the storm (the model's amplitude of the front); None: no peak
             force.
+        rigid: The rigid-block reference (:func:`rigid_record`), put beside each wave
+            and in the block; None: none.
     """
     r = storm["record"]
     waves = storm["waves"]
@@ -87,8 +98,53 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
         out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
                     "start": start, "end": end, "peak_force_per_length": force,
                     "sliding": sliding, "cumulative_sliding": total, "rocking": rocking,
-                    "max_contact_pressure": pressure})
-    return out, _block(out, waves, r)
+                    "max_contact_pressure": pressure,
+                    "rigid_sliding": (rigid or {}).get("sliding", [math.nan] * (k + 1))[k]})
+    block = _block(out, waves, r)
+    if rigid is not None:
+        block["rigid"] = dict(rigid)
+    return out, block
+
+
+def rigid_record(loads: Sequence[Any], *, mass: float, weight: float, base_width: float,
+                 toe_depth: float, friction: float, density: float, gravity: float
+                 ) -> dict[str, Any]:
+    """The rigid-block model's sliding under each wave's load (each from rest).
+
+    Args:
+        loads: The waves' loads (:class:`~breakwater.storms.waves.WaveLoad`), the FE run's.
+        mass: The caisson's mass per metre (kg/m).
+        weight: W' (N/m): the FE model's static normal force on the mound.
+        base_width: B (m).
+        toe_depth: h' (m).
+        friction: μ.
+        density: Water density (kg/m³; no added mass: not used but checked).
+        gravity: g (m/s²).
+
+    Returns:
+        ``sliding`` per wave, ``total_sliding``, the inputs, and ``note`` when a wave's
+        slide lasts into the next wave (the from-rest model does not hold there); or
+        ``error`` when the model cannot apply (μ = 0: no resistance).
+    """
+    from breakwater.storms.rigid import Caisson, slide_motion
+
+    inputs = {"mass": mass, "weight": weight, "friction": friction, "added_mass": False,
+              "model": "breakwater.storms.rigid: (M) x'' = P - mu (W' - U), from rest per wave"}
+    try:
+        caisson = Caisson(mass, base_width, toe_depth, friction, added_mass=False,
+                          density=density, gravity=gravity, weight=weight)
+        motions = [slide_motion(load, caisson) for load in loads]
+    except ValueError as e:
+        return {**inputs, "error": str(e)}
+    sliding = [m.distance for m in motions]
+    out: dict[str, Any] = {**inputs, "sliding": sliding, "total_sliding": sum(sliding)}
+    late = [k + 1 for k, (m, load) in enumerate(zip(motions, loads, strict=True))
+            if m.stop is not None and k + 1 < len(loads)
+            and load.wave.start + m.stop > loads[k + 1].wave.start]
+    if late:
+        out["note"] = (f"waves {late}: the rigid block still slides when the next wave "
+                       "begins (the from-rest model does not hold there)")
+    return out
 
 
 def _block(out: list[dict[str, float]], waves: Sequence[Mapping[str, Any]],
@@ -139,6 +195,7 @@ def storm_figures(directory: Any, folder: Any) -> list[Any]:
     """
     import pathlib
 
+    import numpy as np
     from matplotlib.figure import Figure
 
     from breakwater.common.files import WAVES
@@ -163,7 +220,10 @@ def storm_figures(directory: Any, folder: Any) -> list[Any]:
     out.append(_save(fig, pathlib.Path(folder) / "storm_sliding.png"))
     fig = Figure(figsize=(6, 4))
     ax = fig.add_subplot()
-    ax.plot(w["height"], 1e3 * w["sliding"], "o")
+    ax.plot(w["height"], 1e3 * w["sliding"], "o", label="finite elements")
+    if "rigid_sliding" in w and np.isfinite(w["rigid_sliding"]).any():
+        ax.plot(w["height"], 1e3 * w["rigid_sliding"], "x", label="rigid block")
+        ax.legend()
     ax.set_xlabel("H (m)")
     ax.set_ylabel("sliding of the wave (mm)")
     ax.grid(alpha=0.3)
