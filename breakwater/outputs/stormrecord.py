@@ -37,7 +37,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 __all__ = ["COLUMNS", "read_waves", "rigid_record", "storm_figures", "storm_record",
-           "write_waves"]
+           "write_storm_record", "write_waves"]
 
 COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", "sliding",
            "cumulative_sliding", "rocking", "max_contact_pressure", "rigid_sliding")
@@ -240,3 +240,54 @@ def _save(fig: Any, path: Any) -> Any:
         fig.savefig(tmp, dpi=150, bbox_inches="tight")
         tmp.replace(path)
     return path
+
+
+def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
+                       summary: dict[str, Any], directory: Any) -> None:
+    """A storm's ``waves.csv`` (rank 0) and the summary's ``storm`` block (collective).
+
+    Every rank computes the same record from the same rows; the rigid-block reference
+    (:func:`rigid_record`) takes the storm's wave loads from the model's front load (its
+    amplitude, a :class:`~breakwater.storms.stormload.WaveHistory`), M and W' from the
+    static state when its pair's slave is the caisson (W' the static normal force: the
+    weight and any load at t = 0), else M from the caisson's weight and W' = M g.
+
+    Args:
+        model: The contact model (:class:`~breakwater.model.model.ContactModel`).
+        rows: The history rows.
+        summary: The run's summary (``loads.<name>.storm`` read, ``storm`` set).
+        directory: The output folder.
+    """
+    import pathlib
+
+    import numpy as np
+
+    from breakwater.common.files import WAVES
+    from breakwater.common.parallel import on_rank_zero
+
+    for name, info in summary.get("loads", {}).items():
+        if "storm" not in info:
+            continue
+        p1 = next((ld.spec.amplitude for ld in model.loads
+                   if ld.spec.name == name and ld.parameters is not None), None)
+        loads = getattr(p1, "loads", None)
+        r = info["storm"]["record"]
+        g = float(np.linalg.norm(model.gravity.value))
+        rigid: dict[str, Any] | None = None
+        if loads is not None and not g > 0:
+            rigid = {"error": "the model has no gravity: the rigid block has no weight"}
+        elif loads is not None:
+            weights = model.weight()  # collective: every rank
+            static = summary.get("static") or {}
+            if static.get("slave") == r["caisson"] and static.get("contact_resultant"):
+                mass, weight = static["weight"] / g, static["contact_resultant"]
+            else:
+                mass = weights[model.body(r["caisson"]).index] / g
+                weight = mass * g
+            rigid = rigid_record(loads, mass=mass, weight=weight, base_width=r["length"],
+                                 toe_depth=r["toe_depth"], friction=r["friction"],
+                                 density=r["density"], gravity=g)
+        waves, block = storm_record(rows, info["storm"], p1, rigid)
+        on_rank_zero(model.comm, lambda waves=waves: bool(  # type: ignore[misc]
+            write_waves(pathlib.Path(directory) / WAVES, waves)))
+        summary["storm"] = {"load": name, **block}

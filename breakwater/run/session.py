@@ -20,7 +20,6 @@ import time as _time
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
 from dolfinx import fem
 
 from breakwater.common import files
@@ -31,7 +30,7 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
 from breakwater.outputs.monitor import Monitor, interface_state
-from breakwater.outputs.stormrecord import rigid_record, storm_record, write_waves
+from breakwater.outputs.stormrecord import write_storm_record
 from breakwater.outputs.writers import RunFiles
 from breakwater.run import runstate
 from breakwater.run.runstate import RunState
@@ -207,50 +206,8 @@ class Session:
         if finished:
             for line in applied_warnings(summary.get("loads", {})):
                 log.warning("%s", line)
-        self._storm_record(summary)
+        write_storm_record(self.model, self.rows, summary, self.directory)
         return summary
-
-    def _storm_record(self, summary: dict[str, Any]) -> None:
-        """A storm's ``waves.csv`` (rank 0) and the summary's ``storm`` block.
-
-        Every rank computes the same record from the same rows
-        (:mod:`breakwater.outputs.stormrecord`).
-        """
-        for name, info in summary.get("loads", {}).items():
-            if "storm" not in info:
-                continue
-            p1 = next((ld.spec.amplitude for ld in self.model.loads
-                       if ld.spec.name == name and ld.parameters is not None), None)
-            rigid = self._rigid(info["storm"], getattr(p1, "loads", None), summary)
-            waves, block = storm_record(self.rows, info["storm"], p1, rigid)
-            on_rank_zero(self.comm, lambda waves=waves: bool(  # type: ignore[misc]
-                write_waves(self.directory / files.WAVES, waves)))
-            summary["storm"] = {"load": name, **block}
-
-    def _rigid(self, storm: Mapping[str, Any], loads: Any, summary: Mapping[str, Any]
-               ) -> dict[str, Any] | None:
-        """The rigid-block reference of a storm on this model's caisson (collective).
-
-        M and W' from the static state when its pair's slave is the caisson (W' the
-        static normal force: the weight and any load at t = 0), else M from the
-        caisson's weight and W' = M g.
-        """
-        if loads is None:
-            return None
-        r = storm["record"]
-        g = float(np.linalg.norm(self.model.gravity.value))
-        if not g > 0:
-            return {"error": "the model has no gravity: the rigid block has no weight"}
-        weights = self.model.weight()  # collective: every rank
-        static = summary.get("static") or {}
-        if static.get("slave") == r["caisson"] and static.get("contact_resultant"):
-            mass, weight = static["weight"] / g, static["contact_resultant"]
-        else:
-            mass = weights[self.model.body(r["caisson"]).index] / g
-            weight = mass * g
-        return rigid_record(loads, mass=mass, weight=weight, base_width=r["length"],
-                            toe_depth=r["toe_depth"], friction=r["friction"],
-                            density=r["density"], gravity=g)
 
     def close(self) -> None:
         """Free the stepper's and the ledger's PETSc objects (collective; after the summary)."""
