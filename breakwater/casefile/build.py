@@ -23,6 +23,7 @@ from mpi4py import MPI
 from breakwater.casefile.godaface import check_goda_face
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
+from breakwater.casefile.stormbuild import storm_outputs
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.contact.surfaces import SurfacePair
@@ -267,6 +268,21 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     pair_probes = tuple(PairProbeSpec(q.name, pair_index[q.pair],
                                       where(f"output.pair_probes.{q.name}", q.group, q.point))
                         for q in o.pair_probes)
+    storms = [ld.name for ld in case.loads if ld.enabled and ld.storm is not None]
+    if len(storms) > 1:
+        raise CaseError(f"loads.{storms[1]}.storm: one storm per case (loads.{storms[0]} "
+                        "is one): waves.csv records one")
+    for ld in case.loads:  # a storm's record: probes at the ends of the caisson's base
+        if ld.enabled and ld.storm is not None:
+            more, info = storm_outputs(case, data, ld, model)
+            extra["loads"][ld.name]["storm"] = info
+            if info["warnings"]:  # logged when the run starts
+                extra["loads"][ld.name].setdefault("warnings", []).extend(info["warnings"])
+            taken = {q.name for q in pair_probes} & {q.name for q in more}
+            if taken:
+                raise CaseError(f"output.pair_probes.{sorted(taken)[0]}: the name is the "
+                                f"probe of loads.{ld.name}'s per-wave record (rename it)")
+            pair_probes += more
     output = OutputSpec(directory=case.output_directory, field_interval=o.field_interval,
                         probes=probes, pair_probes=pair_probes, figures=o.figures,
                         case_name=case.name, checkpoint_interval=o.checkpoint_interval)

@@ -165,9 +165,10 @@ def builtin_case(name: str) -> pathlib.Path:
 
 
 _SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA,),
-                                                   "loads.*.table.file": ()})
-"""The TOML form of a case (``mesh.source`` is a path unless it is "goda"; so is a load
-table's ``file``)."""
+                                                   "loads.*.table.file": (),
+                                                   "loads.*.storm.waves": ()})
+"""The TOML form of a case (``mesh.source`` is a path unless it is "goda"; so are a load
+table's ``file`` and a storm's ``waves`` when a string)."""
 
 
 def is_file_value(key: str, value: Any) -> bool:
@@ -299,6 +300,8 @@ def case_inputs(path: str | pathlib.Path | None, case: Case) -> list[pathlib.Pat
         inputs.append(pathlib.Path(case.mesh.source))
     inputs += [pathlib.Path(ld.table.file) for ld in case.loads
                if ld.table is not None and ld.table.file is not None]
+    inputs += [pathlib.Path(ld.storm.waves) for ld in case.loads
+               if ld.storm is not None and isinstance(ld.storm.waves, str)]
     return inputs
 
 

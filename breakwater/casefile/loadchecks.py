@@ -134,7 +134,8 @@ def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | N
         measure = abs(field.ufl_pressure(x)) * abs(n[0] * a[1] - n[1] * a[0])
         covered[field] = covered.get(field, 0.0) + model.assemble(model.form(measure * ld.ds))
         groups.setdefault(field, []).append(ld.spec.group)
-    where = f"loads.{load.name}." + ("profile" if load.profile is not None else "goda")
+    where = f"loads.{load.name}." + ("profile" if load.profile is not None else
+                                     "storm" if load.storm is not None else "goda")
     for field, part in covered.items():
         total = profile_area(field)
         names = ", ".join(f"'{g}'" for g in groups[field])

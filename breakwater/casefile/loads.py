@@ -15,7 +15,10 @@ pulse) times a **spatial traction field** on a facet group (:mod:`breakwater.loa
   ``direction``), ``pressure`` (Pa normal to the surface, positive pushing into the
   body), ``[profile]`` (a pressure p(s) given by points along an axis) or ``[goda]``
   (Goda's design wave pressure on the front face and, with ``uplift_group``, the
-  triangular uplift under the base; :mod:`breakwater.loads.wavepressure`).
+  triangular uplift under the base; :mod:`breakwater.loads.wavepressure`);
+- a storm (``[storm]``, :mod:`breakwater.casefile.stormcase`): waves one after the other,
+  each its Goda front pressure (the shape changing from wave to wave) and uplift with
+  its own force-time history; it is its own time function (no ``time_function``).
 
 These tables are read without the solver stack; on a mesh,
 :func:`~breakwater.casefile.meshloads.surface_loads` turns a load into the model's
@@ -31,6 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
+from breakwater.casefile.stormcase import StormCase
 from breakwater.config.fields import InvalidField, positive, setting
 from breakwater.loads.fields import PressureProfile
 from breakwater.loads.signals import (
@@ -49,7 +53,7 @@ from breakwater.loads.wavepressure import GodaPressure, GodaRangeError, goda_pre
 __all__ = ["RESOLVED_STEPS", "GodaCase", "LoadCase", "PendulumCase", "ProfileCase", "TableCase"]
 
 TimeFunction = Literal["pulse", "constant", "ramp", "table"]
-MAGNITUDES = ("force", "traction", "pressure", "profile", "goda")
+MAGNITUDES = ("force", "traction", "pressure", "profile", "goda", "storm")
 
 RESOLVED_STEPS = 10
 """A pulse shorter than this many nominal steps is warned about as under-resolved
@@ -261,6 +265,8 @@ class LoadCase:
                                      "positive pushing into the body")
     profile: ProfileCase | None = setting(None, doc="pressure varying along the surface")  # noqa: RUF009 (a field() with docs)
     goda: GodaCase | None = setting(None, doc="Goda's design wave pressure")  # noqa: RUF009 (a field() with docs)
+    storm: StormCase | None = setting(None, doc="a storm, wave by wave (its own time "  # noqa: RUF009 (a field() with docs)
+                                      "function)")
     shape: PulseShape = setting("triangular", doc="pulse: force-time shape")  # noqa: RUF009 (a field() with docs)
     duration: float = setting(2e-3, unit="s", doc="pulse: duration")
     start: float = setting(0.0, unit="s", doc="time the load starts (a table: its t = 0)")
@@ -277,8 +283,19 @@ class LoadCase:
         object.__setattr__(self, "direction", tuple(c / norm for c in self.direction))
         impulsive = self.impulse is not None or self.pendulum is not None
         given = [k for k in MAGNITUDES if getattr(self, k) is not None]
-        kind = self.time_function or ("pulse" if impulsive else "constant")
-        if kind == "pulse":
+        kind: str = self.time_function or ("pulse" if impulsive else "constant")
+        if self.storm is not None:
+            if self.time_function is not None:
+                raise InvalidField("time_function", "a [storm] gives each wave's force-time "
+                                   "history: remove time_function")
+            if len(given) != 1 or impulsive:
+                other = next((k for k in given if k != "storm"), "impulse")
+                raise InvalidField(other, "a [storm] is the load's only magnitude")
+            if self.start != 0.0:
+                raise InvalidField("start", "a storm starts at t = 0 (its waves give their "
+                                   "own start times)")
+            kind = "storm"
+        elif kind == "pulse":
             if given:
                 raise InvalidField(given[0], "a pulse is given by its impulse (or "
                                    "[pendulum]), not a force or pressure")
@@ -377,7 +394,14 @@ class LoadCase:
         if not self.enabled:
             return
         where = f"loads.{self.name}"
-        if self.kind == "table":
+        if self.storm is not None:
+            train = self.storm.waves_train
+            if end_time < train.duration * (1 - 1e-12):
+                raise InvalidField("time.end_time", f"{end_time:g} s ends the run before "
+                                   f"the storm of loads.{self.name} ({len(train)} waves, to "
+                                   f"t = {train.duration:g} s): set time.end_time >= "
+                                   f"{train.duration:g}")
+        elif self.kind == "table":
             assert self.table is not None
             first = self.table.history(self.start).times[0] + self.start
             if first >= end_time:

@@ -10,6 +10,7 @@ part of the profile the face receives). All are collective.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from breakwater.casefile.godaface import check_goda_face, goda_applied
@@ -20,8 +21,10 @@ if TYPE_CHECKING:
 
     from breakwater.casefile.loads import GodaCase, LoadCase
     from breakwater.model.model import SurfaceLoad
+    from breakwater.storms.waves import WaveLoad
 
-__all__ = ["group_length", "load_length", "load_summary", "surface_loads", "uplift_profile"]
+__all__ = ["base_triangle", "extent", "group_length", "load_length", "load_summary", "owner",
+           "storm_loads", "storm_wave_loads", "surface_loads", "uplift_profile"]
 
 
 def group_length(data: gmshio.MeshData, group: str) -> float:
@@ -60,7 +63,7 @@ def load_length(load: LoadCase, data: gmshio.MeshData) -> float:
     return sum(group_length(data, g) for g in (load.group, *load.groups))
 
 
-def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
+def extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
     """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
     import dolfinx
     import numpy as np
@@ -78,23 +81,45 @@ def _extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
     return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))
 
 
-def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
-                   ) -> tuple[PressureProfile, float]:
+def base_triangle(uplift_group: str, data: gmshio.MeshData, front: tuple[str, ...],
+                  pressure: float = 1.0) -> tuple[PressureProfile, float]:
     """The triangular uplift on the base and the base width B (m).
 
-    p_u at the base's edge nearest the front face, falling linearly to 0 at the heel.
+    ``pressure`` at the base's edge nearest the front face, falling linearly to 0 at
+    the heel.
     """
-    assert goda.uplift_group is not None
-    lo, hi = _extent(data, goda.uplift_group)
-    ends = [_extent(data, g) for g in front]
+    lo, hi = extent(data, uplift_group)
+    ends = [extent(data, g) for g in front]
     front_x = 0.5 * (min(e[0][0] for e in ends) + max(e[1][0] for e in ends))
     width = float(hi[0] - lo[0])
     if abs(front_x - lo[0]) <= abs(front_x - hi[0]):
         origin, axis = (float(lo[0]), 0.0), (1.0, 0.0)
     else:
         origin, axis = (float(hi[0]), 0.0), (-1.0, 0.0)
-    pu = goda.pressure().uplift
-    return PressureProfile(((0.0, pu), (width, 0.0)), axis, origin), width
+    return PressureProfile(((0.0, pressure), (width, 0.0)), axis, origin), width
+
+
+def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
+                   ) -> tuple[PressureProfile, float]:
+    """Goda's triangular uplift on the base (p_u at the front edge) and the base width B."""
+    assert goda.uplift_group is not None
+    return base_triangle(goda.uplift_group, data, front, goda.pressure().uplift)
+
+
+def storm_wave_loads(load: LoadCase, data: gmshio.MeshData) -> tuple[WaveLoad, ...]:
+    """Each wave's load of a storm, on the base width of the mesh (collective).
+
+    Raises:
+        CaseError: A wave the force-time profile refuses (named).
+    """
+    from breakwater.common.errors import CaseError
+
+    assert load.storm is not None
+    _, width = base_triangle(load.storm.uplift_group, data, (load.group, *load.groups))
+    try:
+        return load.storm.wave_loads(width)
+    except ValueError as e:
+        raise CaseError(f"loads.{load.name}.storm: {e}") from None
 
 
 def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: float
@@ -114,6 +139,8 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
         check_goda_face(load, data, warn=False)  # warned by casefile.build.build
 
     groups = (load.group, *load.groups)
+    if load.storm is not None:
+        return storm_loads(load, data, storm_wave_loads(load, data))
     if load.kind == "pulse":
         pulse = load.pulse(out_of_plane_length, load_length(load, data))
         return [SurfaceLoad(g, load.direction, pulse, body=load.body, name=load.name)
@@ -137,12 +164,39 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
     loads = [SurfaceLoad(g, direction, factor, field, load.body, load.name) for g in groups]
     if load.goda is not None and load.goda.uplift_group is not None:
         profile, _ = uplift_profile(load.goda, data, groups)
-        body = load.body or _owner(data, load.group)
+        body = load.body or owner(data, load.group)
         loads.append(SurfaceLoad(load.goda.uplift_group, (), factor, profile, body, load.name))
     return loads
 
 
-def _owner(data: gmshio.MeshData, group: str) -> str:
+def storm_loads(load: LoadCase, data: gmshio.MeshData, waves: Sequence[WaveLoad]
+                ) -> list[SurfaceLoad]:
+    """A storm's model loads: the front (its shape staged per wave) × p₁, the uplift × p_u.
+
+    Raises:
+        CaseError: Waves that do not follow one another
+            (:func:`~breakwater.storms.stormload.check_wave_loads`).
+    """
+    from breakwater.common.errors import CaseError
+    from breakwater.model.model import SurfaceLoad
+    from breakwater.storms.stormload import WaveHistory, front_field
+
+    storm = load.storm
+    assert storm is not None
+    groups = (load.group, *load.groups)
+    try:
+        field = front_field(waves, storm.still_water_level)
+    except ValueError as e:
+        raise CaseError(f"loads.{load.name}.storm: {e}") from None
+    p1, pu = WaveHistory(tuple(waves), "p1"), WaveHistory(tuple(waves), "uplift")
+    loads = [SurfaceLoad(g, (), p1, field, load.body, load.name) for g in groups]
+    triangle, _ = base_triangle(storm.uplift_group, data, groups)
+    body = load.body or owner(data, load.group)
+    loads.append(SurfaceLoad(storm.uplift_group, (), pu, triangle, body, load.name))
+    return loads
+
+
+def owner(data: gmshio.MeshData, group: str) -> str:
     """The name of the one cell group next to a facet group (the loaded body)."""
     from breakwater.common.errors import CaseError
     from breakwater.model.mesh import group_tag
@@ -188,6 +242,9 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
         if load.pendulum is not None:
             info["impact_velocity"] = load.pendulum.velocity
         return info
+    if load.storm is not None:
+        info.update({"time_function": "storm", "magnitude": "storm", "patch_length": h})
+        return info  # and its "storm" entry: casefile.stormbuild.storm_outputs
     info.update({"time_function": load.kind, "magnitude": load.magnitude,
                  "patch_length": h, "start": load.start})
     if load.rise is not None:
@@ -220,3 +277,4 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
             info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),
                          "uplift_moment_per_length": g.uplift_moment(width)})
     return info
+

@@ -27,11 +27,34 @@ from breakwater.common.parallel import on_rank_zero
 if TYPE_CHECKING:  # light at import (no MPI): the figures and checkpoints import this
     from mpi4py import MPI
 
-__all__ = ["CASE", "CHECKPOINT", "FIGURES", "HISTORY", "NAME_MAX", "SNAPSHOT", "STATIC",
-           "STUDY_PATTERNS", "SUMMARY", "atomic_savez", "atomic_write_bytes", "atomic_write_json",
-           "atomic_write_text", "atomic_write_toml", "check_writable", "make_directory",
-           "name_problem", "outputs_entry", "overwritten_inputs", "path_problem", "read_history",
-           "remove_temporaries", "temporary_path", "to_jsonable", "writing"]
+__all__ = [
+    "CASE",
+    "CHECKPOINT",
+    "FIGURES",
+    "HISTORY",
+    "NAME_MAX",
+    "SNAPSHOT",
+    "STATIC",
+    "STUDY_PATTERNS",
+    "SUMMARY",
+    "WAVES",
+    "atomic_savez",
+    "atomic_write_bytes",
+    "atomic_write_json",
+    "atomic_write_text",
+    "atomic_write_toml",
+    "check_writable",
+    "make_directory",
+    "name_problem",
+    "outputs_entry",
+    "overwritten_inputs",
+    "path_problem",
+    "read_history",
+    "remove_temporaries",
+    "temporary_path",
+    "to_jsonable",
+    "writing",
+]
 
 HISTORY = "history.csv"
 SUMMARY = "summary.json"
@@ -40,7 +63,9 @@ STATIC = "static.npz"
 SNAPSHOT = "snapshot_max_ux.npz"
 FIGURES = "figures"
 CHECKPOINT = "checkpoint.npz"
-OUTPUT_PATTERNS = (HISTORY, SUMMARY, CASE, STATIC, SNAPSHOT, CHECKPOINT, FIGURES,
+WAVES = "waves.csv"
+"""A storm's per-wave record (:mod:`breakwater.outputs.stormrecord`)."""
+OUTPUT_PATTERNS = (HISTORY, SUMMARY, CASE, STATIC, SNAPSHOT, CHECKPOINT, FIGURES, WAVES,
                    "fields_*.bp", "contact_*.bp", "*.part[0-9]*.bp", ".*.tmp[0-9]*")
 """The names a run may write in its output folder (shell patterns)."""
 

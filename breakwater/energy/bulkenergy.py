@@ -65,6 +65,10 @@ class BulkTerms(Protocol):
         """
         ...
 
+    def sync(self) -> None:
+        """Take the staged loads' current stage as the start of the next step (resume)."""
+        ...
+
     def destroy(self) -> None:
         """Free the PETSc objects it holds (collective)."""
         ...
@@ -93,16 +97,32 @@ class FormTerms:
         rayleigh = m.form(sum(forms.rayleigh_power(m.α, m.β, b.ρ, v̄[i], b.λ, b.μ, b.dx)
                               for i, b in bodies))
         work = sum(forms.external_power(b.ρ, m.gravity, Δu[i], b.dx) for i, b in bodies)
+        # A staged field's traction at the start of the step reads the parameters it
+        # had there: copies, set after each record.
+        self._parameters: list[tuple[fem.Constant, fem.Constant]] = []
         for ld, a0 in zip(m.loads, amp0, strict=True):
-            t̄ = 0.5 * (a0 + ld.amplitude) * ld.unit
+            if ld.parameters is not None and ld.unit_with is not None:
+                c0 = fem.Constant(m.mesh, np.array(ld.parameters.value))
+                self._parameters.append((c0, ld.parameters))
+                t̄ = 0.5 * (a0 * ld.unit_with(c0) + ld.amplitude * ld.unit)
+            else:
+                t̄ = 0.5 * (a0 + ld.amplitude) * ld.unit
             work += forms.surface_traction(t̄, Δu[ld.body], ld.ds)
         self._step = [rayleigh, m.form(work), numerical.bulk_form(s)]
 
     def local(self, step: bool) -> np.ndarray:
         """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
         if step:
-            return self.model.assemble_local([*self._stored, *self._step])
-        return np.concatenate([self.model.assemble_local(self._stored), np.zeros(3)])
+            out = self.model.assemble_local([*self._stored, *self._step])
+        else:
+            out = np.concatenate([self.model.assemble_local(self._stored), np.zeros(3)])
+        self.sync()
+        return out
+
+    def sync(self) -> None:
+        """The start parameters of the staged loads set to their current ones."""
+        for c0, c in self._parameters:
+            c0.value[:] = c.value
 
     def destroy(self) -> None:
         """Nothing to free (the forms hold no PETSc object)."""
@@ -220,6 +240,10 @@ class MatrixTerms:
             assert a is not None
             self._amplitudes.append(a)
         self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
+        # The loads whose field changes at given times, and the version of each that
+        # the columns hold (LoadData.version).
+        self._versions = {k: ld.version for k, ld in enumerate(m.loads)
+                          if ld.parameters is not None}
         # One rank: copies of the matrices' CSR arrays (M and K do not change; one
         # sparsity pattern) for matrix_sums, the rows of its vectors, and views of the
         # Functions' owned entries (their storage does not move).
@@ -277,10 +301,38 @@ class MatrixTerms:
                                 for a0, a1 in zip(self.amp0, self._amplitudes, strict=True))])
 
     def local(self, step: bool) -> np.ndarray:
-        """The :data:`TERMS` (see :meth:`BulkTerms.local`)."""
-        if self._csr:
-            return self._local_sums(step)
-        return self.local_products(step)
+        """The :data:`TERMS` (see :meth:`BulkTerms.local`).
+
+        A staged load whose field changed in the step did work ½(A₀ f₀ + A₁ f₁)·Δu (f₀
+        its start vector): the sums take ½(A₀ + A₁) f₁·Δu; ½A₀ (f₀ − f₁)·Δu is added.
+        """
+        old = self._refresh()
+        out = self._local_sums(step) if self._csr else self.local_products(step)
+        if step and old:
+            n = int(self.layout.offsets[-1])
+            du = self._owned(self.stepper.u) - self._owned(self.u0)
+            for k, f0 in old.items():
+                a0 = float(self.amp0[k].value)
+                out[3] += 0.5 * a0 * _dot(f0 - self._loads[:n, k + 1], du)
+        return out
+
+    def sync(self) -> None:
+        """The staged loads' columns taken at their current stage, without correction."""
+        self._refresh()
+
+    def _refresh(self) -> dict[int, np.ndarray]:
+        """Take the staged loads' vectors at their current stage; the columns replaced."""
+        if not self._versions:
+            return {}
+        loads, n = self.bulk.load_vectors, int(self.layout.offsets[-1])
+        old = {}
+        for k, version in self._versions.items():
+            now = self.stepper.model.loads[k].version
+            if now != version:
+                old[k] = self._loads[:, k + 1].copy()
+                self._loads[:, k + 1] = loads[k + 1][1].array[:n]
+                self._versions[k] = now
+        return old
 
     def _local_sums(self, step: bool) -> np.ndarray:
         """:meth:`local` on one rank: :func:`matrix_sums`."""

@@ -107,13 +107,18 @@ class EnergyLedger:
                 "friction_power": self._power0}
 
     def restore(self, state: dict[str, Any]) -> None:
-        """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller)."""
+        """Continue from a :meth:`state` (``u0``, ``v0`` are set by the caller).
+
+        The model's loads must be set at the state's time first (``set_time``): a
+        field that changes at given times is then at the stage the next step starts in.
+        """
         self.reference = state["reference"]
         self.row = Energies(**state["row"])
         self._t0 = state["t0"]
         self._power0 = state["friction_power"]
         for a0, value in zip(self._amp0, state["amp0"], strict=True):
             a0.value = value
+        self.bulk.sync()  # staged loads: the stage the model holds (set at the state's t)
 
     def record(self) -> Energies:
         """Update the ledger with the stepper's current state and return the row."""

@@ -15,6 +15,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater.common.errors import MeshError
+from breakwater.loads.fields import StagedField
 from breakwater.model.mesh import group_tag, group_vertices
 from breakwater.model.parts import BodyData, Fixed, LoadData, SurfaceLoad
 from breakwater.model.residual import ModelForms
@@ -160,5 +161,12 @@ class ModelGroups(ModelForms):
         self._load_data.append((tag, entities.astype(np.int32).ravel()))
         ds = ufl.Measure("ds", domain=msh, subdomain_data=self._load_data)(tag)
         amp = fem.Constant(msh, dolfinx.default_scalar_type(load.amplitude(0.0)))
-        unit = load.unit_traction(ufl.SpatialCoordinate(msh), ufl.FacetNormal(msh))
-        return LoadData(load, index, ds, amp, unit)
+        x, n = ufl.SpatialCoordinate(msh), ufl.FacetNormal(msh)
+        field = load.field
+        if not isinstance(field, StagedField):
+            return LoadData(load, index, ds, amp, load.unit_traction(x, n))
+        # A field that changes at given times: its parameters in a Constant (stage 0).
+        c = fem.Constant(msh, np.array(field.parameters(field.stage(0.0)), dtype=float))
+        return LoadData(load, index, ds, amp, load.unit_traction(x, n, c), parameters=c,
+                        stage=field.stage(0.0),
+                        unit_with=lambda c0: field.traction_with(x, n, c0))

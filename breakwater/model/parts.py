@@ -17,7 +17,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.loads.fields import TractionField
+from breakwater.loads.fields import StagedField, TractionField
 
 __all__ = ["Body", "BodyData", "Damping", "Fixed", "LoadData", "Material", "SurfaceLoad"]
 
@@ -116,8 +116,9 @@ class SurfaceLoad:
             empty when ``field`` gives it.
         amplitude: Time function t ↦ scale factor.
         field: Traction per unit amplitude as a UFL expression of the position and the
-            outward normal of the body (:mod:`breakwater.loads.fields`); None: the
-            constant ``direction``.
+            outward normal of the body (:mod:`breakwater.loads.fields`), or one that
+            changes at given times (a :class:`~breakwater.loads.fields.StagedField`);
+            None: the constant ``direction``.
         body: The body loaded; None: the one body whose boundary holds the group.
         name: The load of the case it comes from (the summary's applied loads).
 
@@ -126,13 +127,22 @@ class SurfaceLoad:
     group: str
     direction: tuple[float, ...]
     amplitude: Callable[[float], float]
-    field: TractionField | None = None
+    field: TractionField | StagedField | None = None
     body: str | None = None
     name: str | None = None
 
-    def unit_traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr
-                      ) -> ufl.core.expr.Expr:
-        """The traction per unit amplitude at ``x`` (outward normal ``n``)."""
+    def unit_traction(self, x: ufl.core.expr.Expr, n: ufl.core.expr.Expr,
+                      c: ufl.core.expr.Expr | None = None) -> ufl.core.expr.Expr:
+        """The traction per unit amplitude at ``x`` (outward normal ``n``).
+
+        Args:
+            x: The position.
+            n: The outward unit normal of the body.
+            c: A staged field's parameters (a ``fem.Constant``; else unused).
+        """
+        if isinstance(self.field, StagedField):
+            assert c is not None
+            return self.field.traction_with(x, n, c)
         if self.field is not None:
             return self.field.traction(x, n)
         return ufl.as_vector(self.direction)
@@ -165,15 +175,39 @@ class BodyData:
 
 @dataclass
 class LoadData:
-    """What the model builds for one load: ``traction = amplitude × unit``."""
+    """What the model builds for one load: ``traction = amplitude × unit``.
+
+    A staged field's ``unit`` reads its parameters from ``parameters`` (a
+    ``fem.Constant``), set for the stage holding the load time by :meth:`set_stage`;
+    ``version`` counts the changes, so that whoever assembled ``unit`` into a vector
+    (the fast solver's load vectors, the ledger, the applied loads) knows when to
+    assemble it again.
+    """
 
     spec: SurfaceLoad
     body: int
     ds: ufl.Measure
     amplitude: fem.Constant
     unit: ufl.core.expr.Expr
+    parameters: fem.Constant | None = None
+    stage: int = 0
+    version: int = 0
+    unit_with: Callable[[ufl.core.expr.Expr], ufl.core.expr.Expr] | None = None
+    """A staged field's traction per unit amplitude for other parameters (the ledger's
+    at the start of a step); None for a fixed field."""
     traction: ufl.core.expr.Expr = field(init=False)
 
     def __post_init__(self) -> None:
         self.traction = self.amplitude * self.unit
+
+    def set_stage(self, t: float) -> None:
+        """Set a staged field's parameters for the stage holding time ``t``."""
+        f = self.spec.field
+        if not isinstance(f, StagedField) or self.parameters is None:
+            return
+        k = f.stage(t)
+        if k != self.stage:
+            self.parameters.value[:] = f.parameters(k)
+            self.stage = k
+            self.version += 1
 

@@ -61,9 +61,10 @@ class ModelForms:
     # --- physics ------------------------------------------------------------------
 
     def set_time(self, t: float) -> None:
-        """Evaluate the time-dependent loads at time ``t``."""
+        """Evaluate the time-dependent loads at time ``t`` (a staged field: its stage)."""
         for ld in self.loads:
             ld.amplitude.value = ld.spec.amplitude(t)
+            ld.set_stage(t)
 
     def mass(self, a: Sequence, w: Sequence | None = None) -> ufl.Form:
         """Σ ∫ ρ a·w over the bodies (M a)."""

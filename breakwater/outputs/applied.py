@@ -49,8 +49,12 @@ class AppliedLoads:
         self.beta1 = beta1
         self.model = model
         gdim = model.gdim
-        unit = [[model.assemble(model.form(ld.unit[i] * ld.ds)) for i in range(gdim)]
-                for ld in model.loads]
+        self._forms = [[model.form(ld.unit[i] * ld.ds) for i in range(gdim)]
+                       for ld in model.loads]
+        unit = [[model.assemble(f) for f in forms] for forms in self._forms]
+        # The loads whose field changes at given times, and the version ``unit`` holds.
+        self._versions = {k: ld.version for k, ld in enumerate(model.loads)
+                          if ld.parameters is not None}
         self.names: list[str] = []
         for k, ld in enumerate(model.loads):
             name = ld.spec.name or f"load {k}"
@@ -69,7 +73,16 @@ class AppliedLoads:
                           "time_of_peak": [None] * len(self.names)})
 
     def forces(self) -> np.ndarray:
-        """The resultant force (N/m) of each case load at the loads' current amplitudes."""
+        """The resultant force (N/m) of each case load at the loads' current amplitudes.
+
+        A staged load's unit resultant is assembled again when its stage changed
+        (collective: every rank sets the stages from the same time).
+        """
+        for k, version in self._versions.items():
+            now = self.model.loads[k].version
+            if now != version:
+                self.unit[k] = [self.model.assemble(f) for f in self._forms[k]]
+                self._versions[k] = now
         amplitudes = np.array([float(ld.amplitude.value) for ld in self.model.loads])
         return self.owner @ (amplitudes[:, None] * self.unit)
 

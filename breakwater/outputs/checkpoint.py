@@ -115,7 +115,7 @@ def case_fingerprint(resolved_case: Mapping[str, Any]) -> str:
 
 
 def _input_files(resolved_case: Mapping[str, Any]) -> list[str]:
-    """The paths of the files a resolved case reads: its mesh file, its load tables."""
+    """The files a resolved case reads: its mesh, its load tables, a storm's waves."""
     paths = []
     source = resolved_case.get("mesh", {}).get("source")
     if source is not None and source != "goda":
@@ -124,6 +124,9 @@ def _input_files(resolved_case: Mapping[str, Any]) -> list[str]:
         table = load.get("table") if isinstance(load, Mapping) else None
         if isinstance(table, Mapping) and table.get("file") is not None:
             paths.append(str(table["file"]))
+        storm = load.get("storm") if isinstance(load, Mapping) else None
+        if isinstance(storm, Mapping) and isinstance(storm.get("waves"), str):
+            paths.append(str(storm["waves"]))  # a storm's table of waves
     return paths
 
 

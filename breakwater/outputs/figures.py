@@ -15,7 +15,9 @@
 - ``static_pressure.png``: static contact pressure along each interface (Fig. 17; a
   general pair's at its slave surface's nodes);
 - ``max_ux_deformed.png``: deformed shape (×20) coloured by σ_yy at the instant of the
-  largest horizontal displacement of the first probe (Figs. 20, 22).
+  largest horizontal displacement of the first probe (Figs. 20, 22);
+- a storm's ``storm_sliding.png`` and ``storm_sliding_per_wave.png`` (from ``waves.csv``:
+  :func:`breakwater.outputs.stormrecord.storm_figures`).
 
 Usage: ``python -m breakwater.outputs.figures <output directory>``.
 """
@@ -44,6 +46,7 @@ from breakwater.common.files import (
     temporary_path,
     writing,
 )
+from breakwater.outputs.stormrecord import storm_figures
 
 __all__ = ["make_figures"]
 
@@ -305,6 +308,7 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
                 f"Deformed shape (×{scale:g}) and vertical stress at t = {t:.4g} s\n"
                 "(largest $u_x$ of the first probe; cf. paper Figs. 20, 22)",
                 folder / "max_ux_deformed.png", scale=scale, outline=True, cmap="viridis_r"))
+    drawn += storm_figures(directory, folder)
     return [p for p in drawn if p is not None]
 
 

@@ -474,5 +474,14 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"{num(e.get('numerical_dissipation'))} J/m "
                      f"({pct(e.get('numerical_dissipation_over_external_work'))})")
         lines.append(line)
+    storm = summary.get("storm")
+    if storm:
+        line = (f"  storm: {storm.get('waves_finished')} of {storm.get('waves')} waves, "
+                f"total sliding {num(storm.get('total_sliding'))} m")
+        big = storm.get("largest_wave")
+        if big:
+            line += (f" (the highest, wave {big['wave']}, H = {num(big['height'])} m: "
+                     f"{num(big['sliding'])} m)")
+        lines.append(line + "; waves.csv")
     lines.append(f"  outputs: {directory}")
     return "\n".join(lines)

@@ -30,6 +30,7 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
 from breakwater.outputs.monitor import Monitor, interface_state
+from breakwater.outputs.stormrecord import write_storm_record
 from breakwater.outputs.writers import RunFiles
 from breakwater.run import runstate
 from breakwater.run.runstate import RunState
@@ -108,6 +109,7 @@ class Stepped:
         s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
         s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
         s.solver.restore(state.stepper["memory"])
+        s.model.set_time(state.step.t)  # a staged field's stage, for the ledger
         self.ledger.restore(state.ledger)
         self.peak.time, self.peak.value = state.snapshot["time"], state.snapshot["value"]
 
@@ -204,6 +206,7 @@ class Session:
         if finished:
             for line in applied_warnings(summary.get("loads", {})):
                 log.warning("%s", line)
+        write_storm_record(self.model, self.rows, summary, self.directory)
         return summary
 
     def close(self) -> None:

@@ -67,31 +67,66 @@ class BulkOperators:
         the start of a pseudo step (:mod:`breakwater.statics.pseudostep`)."""
 
     def _load_vectors(self) -> list[tuple[fem.Constant | None, PETSc.Vec]]:
-        """Gravity and each surface load at unit amplitude: f(t) = Σ amplitude_k(t) f_k."""
+        """Gravity and each surface load at unit amplitude: f(t) = Σ amplitude_k(t) f_k.
+
+        A load whose field changes at given times (``LoadData.version``) keeps its
+        compiled form, assembled again by :meth:`refresh` when its stage changes.
+        """
         m = self.model
         w = m.w
         loads = []
         gravity = sum(_body_force(b, m.gravity, w[i]) for i, b in enumerate(m.bodies))
-        loads.append((None, self._vector(gravity)))
-        for ld in m.loads:
-            unit = ufl.dot(ld.unit, w[ld.body]) * ld.ds
-            loads.append((ld.amplitude, self._vector(unit)))
+        loads.append((None, self._vector(self._compile(gravity))))
+        self._staged: list[tuple[int, list[tuple[fem.Form, int]]]] = []
+        self._versions: list[int] = []
+        for k, ld in enumerate(m.loads):
+            compiled = self._compile(ufl.dot(ld.unit, w[ld.body]) * ld.ds)
+            loads.append((ld.amplitude, self._vector(compiled)))
+            if ld.parameters is not None:
+                self._staged.append((k, compiled))
+                self._versions.append(ld.version)
         return loads
 
-    def _vector(self, form: ufl.Form) -> PETSc.Vec:
-        """A linear form assembled into a stacked vector (bodies it does not touch: 0)."""
-        out = self.layout.vec.duplicate()
-        out.zeroEntries()
+    def _compile(self, form: ufl.Form) -> list[tuple[fem.Form, int]]:
+        """A linear form's blocks compiled, each with the body it belongs to."""
+        out = []
         for block in ufl.extract_blocks(form):
             if block is None:
                 continue
             compiled = self.model.form(block)
-            body = body_index(self.model, compiled.function_spaces[0])
-            vec = fem.assemble_vector(compiled)
+            out.append((compiled, body_index(self.model, compiled.function_spaces[0])))
+        return out
+
+    def _vector(self, compiled: list[tuple[fem.Form, int]],
+                out: PETSc.Vec | None = None) -> PETSc.Vec:
+        """Compiled blocks assembled into a stacked vector (bodies they miss: 0)."""
+        if out is None:
+            out = self.layout.vec.duplicate()
+        out.zeroEntries()
+        for form, body in compiled:
+            vec = fem.assemble_vector(form)
             vec.scatter_reverse(la.InsertMode.add)
             lo, hi = self.layout.offsets[body], self.layout.offsets[body + 1]
             out.array[lo:hi] = vec.array[: hi - lo]
         return out
+
+    def refresh(self) -> bool:
+        """Assemble again the vectors of the loads whose field changed (collective).
+
+        Every rank sets the loads' stages from the same time, so every rank takes the
+        same branch.
+
+        Returns:
+            Whether a vector changed.
+        """
+        changed = False
+        for j, (k, compiled) in enumerate(self._staged):
+            version = self.model.loads[k].version
+            if version != self._versions[j]:
+                self._vector(compiled, self._loads[k + 1][1])
+                self._versions[j] = version
+                changed = True
+        return changed
 
     def _bc_rows(self) -> np.ndarray:
         rows = []
@@ -107,12 +142,15 @@ class BulkOperators:
         """Gravity's load vector (amplitude None: 1), then each load's at unit amplitude.
 
         F(t) = Σ amplitude_k(t) f_k, the loads in the model's order with their
-        amplitude Constants (the energy ledger's external work).
+        amplitude Constants (the energy ledger's external work); a staged load's at its
+        current stage (:meth:`refresh`).
         """
+        self.refresh()
         return self._loads
 
     def load(self, out: PETSc.Vec) -> None:
-        """F at the loads' current amplitudes (the model's ``set_time``)."""
+        """F at the loads' current amplitudes and stages (the model's ``set_time``)."""
+        self.refresh()
         out.zeroEntries()
         for amplitude, vec in self._loads:
             out.axpy(1.0 if amplitude is None else float(amplitude.value), vec)

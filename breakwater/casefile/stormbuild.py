@@ -1,0 +1,193 @@
+"""A storm load on a mesh: its waves for the summary and the probes of its per-wave record.
+
+:func:`storm_outputs` gives, for a ``[loads.<name>.storm]`` of a case on its mesh, the
+two pair probes at the ends of the caisson's base (on the contact pair whose surface
+is ``uplift_group``) and the load's ``storm`` summary entry: the waves (H, T, start,
+the duration of the force, the front shape and its horizontal force per unit p₁ on
+the loaded face) and how :mod:`breakwater.outputs.stormrecord` reads the history.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import TYPE_CHECKING, Any
+
+from breakwater.common.errors import CaseError
+from breakwater.config.runspec import PairProbeSpec
+from breakwater.loads.fields import StagedField
+
+if TYPE_CHECKING:
+    from dolfinx.io import gmsh as gmshio
+
+    from breakwater.casefile.loads import LoadCase
+    from breakwater.casefile.settings import CaseSettings
+    from breakwater.model.model import ContactModel
+
+FRACTION_WARNING = 0.01
+"""A wave whose applied front force differs from its profile's by more than this
+fraction is warned about (the face misses part of the profile, or the facets do not
+resolve its kinks)."""
+
+__all__ = ["FRACTION_WARNING", "applied_front", "face_integral", "profile_integral",
+           "storm_outputs"]
+
+
+def profile_integral(points: Any, a: float, b: float) -> float:
+    """∫ p(s) ds over [a, b] of a piecewise-linear profile, 0 outside its points (exact)."""
+    s = [float(p[0]) for p in points]
+    p = [float(q[1]) for q in points]
+    lo, hi = max(min(a, b), s[0]), min(max(a, b), s[-1])
+    if not hi > lo:
+        return 0.0
+    cuts = sorted({lo, hi, *(x for x in s if lo < x < hi)})
+
+    def value(x: float) -> float:
+        for k in range(len(s) - 1):
+            if s[k] <= x <= s[k + 1]:
+                return p[k] + (p[k + 1] - p[k]) * (x - s[k]) / (s[k + 1] - s[k])
+        return 0.0
+
+    return sum(0.5 * (value(x0) + value(x1)) * (x1 - x0)
+               for x0, x1 in itertools.pairwise(cuts))
+
+
+def face_integral(points: Any, still_water_level: float, data: gmshio.MeshData,
+                  groups: tuple[str, ...]) -> float:
+    """∫ shape(y − SWL) |dy| over the loaded facets (collective; the same on every rank).
+
+    The horizontal force per unit p₁ that a vertical face receives of a front shape.
+    """
+    import dolfinx
+    from mpi4py import MPI
+
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    assert data.facet_tags is not None
+    owned = msh.topology.index_map(fdim).size_local
+    total = 0.0
+    for group in groups:
+        facets = data.facet_tags.find(group_tag(data, group, fdim))
+        facets = facets[facets < owned]
+        if not len(facets):
+            continue
+        y = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets), 1]
+        for y0, y1 in zip(y.min(axis=1).tolist(), y.max(axis=1).tolist(), strict=True):
+            total += profile_integral(points, y0 - still_water_level, y1 - still_water_level)
+    return float(msh.comm.allreduce(total, op=MPI.SUM))
+
+
+def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
+    """The horizontal force per unit p₁ that the model applies in each stage (collective).
+
+    ∫ t_x ds of the case load's staged front loads (the facet quadrature the run uses),
+    each stage's points set in turn, then the stage the model held set back.
+    """
+    loads = [ld for ld in model.loads if ld.spec.name == name and ld.parameters is not None]
+    forms = [model.form(ld.unit[0] * ld.ds) for ld in loads]
+    out = []
+    for k in range(stages):
+        for ld in loads:
+            assert ld.parameters is not None and isinstance(ld.spec.field, StagedField)
+            ld.parameters.value[:] = ld.spec.field.parameters(k)
+        out.append(sum(model.assemble(f) for f in forms))
+    for ld in loads:
+        assert ld.parameters is not None and isinstance(ld.spec.field, StagedField)
+        ld.parameters.value[:] = ld.spec.field.parameters(ld.stage)
+    return out
+
+
+def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
+                  model: ContactModel) -> tuple[tuple[PairProbeSpec, ...], dict[str, Any]]:
+    """The pair probes of a storm's record and its ``storm`` summary entry (collective).
+
+    Each wave's entry holds ``front_force_per_p1``, the horizontal force per unit p₁
+    the run applies (:func:`applied_front`), ``face_fraction``, that over the exact
+    integral of the wave's shape over the loaded face (off 1 where the facets do not
+    resolve the profile's kinks), and ``profile_fraction``, the exact integral over the
+    face over the whole shape's (below 1 where the face misses part of the profile);
+    ``warnings`` the one-line warnings of the waves off by more than
+    :data:`FRACTION_WARNING`.
+
+    Args:
+        case: The case (its contact pairs).
+        data: The mesh.
+        load: A load with a ``[storm]``.
+        model: The model built with the load.
+
+    Returns:
+        The probes (the pair at indices of the case's conforming pairs, or a general
+        pair's name) and the entry.
+
+    Raises:
+        CaseError: No contact pair on ``uplift_group``; a base that is not horizontal;
+            the front shape of every wave off the loaded face.
+    """
+    from breakwater.casefile.meshloads import base_triangle, extent, owner, storm_wave_loads
+
+    storm = load.storm
+    assert storm is not None
+    key = f"loads.{load.name}.storm"
+    groups = (load.group, *load.groups)
+    caisson = load.body or owner(data, load.group)
+    conforming = [c for c in case.contact if not c.general]
+    found: tuple[Any, int, int | str] | None = None
+    for c in case.contact:
+        masters = c.master_surface if isinstance(c.master_surface, tuple) \
+            else (c.master_surface,)
+        if not c.general and c.name == storm.uplift_group:
+            found = (c, 1 if c.slave == caisson else -1, conforming.index(c))
+        elif c.general and c.slave_surface == storm.uplift_group:
+            found = (c, 1, c.name)
+        elif c.general and storm.uplift_group in masters:
+            found = (c, -1, c.name)
+        if found is not None:
+            break
+    if found is None:
+        raise CaseError(f"{key}.uplift_group: no contact pair on '{storm.uplift_group}' "
+                        "(the per-wave sliding is measured on the pair under the "
+                        "caisson's base)")
+    pair, sign, index = found
+    lo, hi = extent(data, storm.uplift_group)
+    width = float(hi[0] - lo[0])
+    if abs(float(hi[1] - lo[1])) > 1e-9 * width:
+        raise CaseError(f"{key}.uplift_group: the base '{storm.uplift_group}' is not "
+                        f"horizontal (y from {lo[1]:.6g} to {hi[1]:.6g} m)")
+    y = float(lo[1])
+    names = (f"{load.name}_base_lo", f"{load.name}_base_hi")
+    probes = (PairProbeSpec(names[0], index, (float(lo[0]), y)),
+              PairProbeSpec(names[1], index, (float(hi[0]), y)))
+    triangle, _ = base_triangle(storm.uplift_group, data, groups)
+    waves: list[dict[str, Any]] = []
+    warnings: list[str] = []
+    wave_loads = storm_wave_loads(load, data)
+    applied = applied_front(model, load.name, len(wave_loads))
+    for k, w in enumerate(wave_loads):
+        force = face_integral(w.front, storm.still_water_level, data, groups)
+        whole = profile_integral(w.front, w.front[0][0], w.front[-1][0])
+        if not force > 0:
+            raise CaseError(f"{key}.still_water_level: the front pressure of wave {k + 1} "
+                            f"(H = {w.wave.height:g} m) misses the loaded face "
+                            f"({', '.join(groups)}): no wave load would be applied")
+        waves.append({"height": w.wave.height, "period": w.wave.period,
+                      "start": w.wave.start, "duration": w.duration,
+                      "front": [list(p) for p in w.front],
+                      "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
+                      "profile_fraction": force / whole})
+    for name, what in (("profile_fraction", "of the front profile lies on the loaded face "
+                        "(the rest is not applied)"),
+                       ("face_fraction", "of the exact integral over the face is applied "
+                        "(profile kinks inside facets: refine the face)")):
+        worst = max(range(len(waves)), key=lambda k: abs(waves[k][name] - 1.0))
+        if abs(waves[worst][name] - 1.0) > FRACTION_WARNING:
+            warnings.append(f"{key}: wave {worst + 1} (H = {waves[worst]['height']:g} m): "
+                            f"{100 * waves[worst][name]:.3g}% {what}; summary.json "
+                            f"loads.{load.name}.storm.waves[].{name}")
+    record = {"lo": names[0], "hi": names[1], "sign": sign,
+              "landward": float(triangle.axis[0]), "length": width,
+              "pair": pair.name, "penetration": f"{pair.name}_penetration",
+              "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,
+              "toe_depth": storm.toe_depth, "density": storm.density}
+    return probes, {"waves": waves, "base_width": width, "duration": storm.waves_train.duration,
+                    "record": record, "warnings": warnings}

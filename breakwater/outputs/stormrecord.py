@@ -1,0 +1,293 @@
+"""A storm's per-wave record: ``waves.csv`` and the summary's ``storm`` block.
+
+Written at the end of a run (finished, failed or interrupted: the waves finished by
+then) from the history rows. A storm load of the case (``[loads.<name>.storm]``)
+adds two pair probes on the contact pair under the caisson's base, at the base's two
+ends (``<load>_base_lo`` at the smaller x, ``<load>_base_hi``), and its summary entry
+(``loads.<name>.storm``) holds the waves and how to read the probes
+(:func:`breakwater.casefile.stormbuild.storm_outputs`). Per wave k, over its interval
+``start < t <= start + T`` (the state at its start: the last row at or before it):
+
+- ``sliding``: the change over the wave of the caisson's horizontal displacement
+  relative to the mound at its base, the mean of the two ends' (caisson minus mound,
+  ``slave_ux − master_ux`` of the pair probes), positive landward (away from the loaded
+  face): the residual slip the wave left (the elastic part returns when the force is
+  off; what is still moving at the wave's end is counted in the next wave);
+- ``cumulative_sliding``: the sum of ``sliding`` up to this wave;
+- ``rocking``: the largest |θ − θ₀| in the wave, θ the slope of the caisson's vertical
+  displacement between the base's ends ((u_y,hi − u_y,lo)/(x_hi − x_lo), rad,
+  counter-clockwise positive), θ₀ that of the static state;
+- ``max_contact_pressure``: ε_n × the pair's largest penetration in the wave (Pa;
+  the penalty law's pressure at the most loaded node or integration point);
+- ``peak_force_per_length``: the largest horizontal force of the front pressure at the
+  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m);
+- ``rigid_sliding``: the rigid-block model's sliding under the same wave load
+  (:func:`rigid_record`; NaN where it does not apply).
+
+:func:`rigid_record` is the rigid-block reference (Shimosako & Takahashi;
+:mod:`breakwater.storms.rigid`) of the same storm on the FE model's caisson: its mass
+and W' (the static normal force on the mound), μ of the pair, no added mass (the FE
+model has no water), each wave from rest.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+__all__ = ["COLUMNS", "read_waves", "rigid_record", "storm_figures", "storm_record",
+           "write_storm_record", "write_waves"]
+
+COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", "sliding",
+           "cumulative_sliding", "rocking", "max_contact_pressure", "rigid_sliding")
+"""The columns of ``waves.csv``."""
+
+
+def _sliding(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+    """The caisson's mean horizontal displacement relative to the mound, landward."""
+    rel = sum(row[f"{p}_slave_ux"] - row[f"{p}_master_ux"] for p in (r["lo"], r["hi"]))
+    return 0.5 * rel * r["sign"] * r["landward"]
+
+
+def _rotation(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+    """The slope of the caisson's u_y between the base's ends (rad)."""
+    side = "slave" if r["sign"] > 0 else "master"
+    return (row[f"{r['hi']}_{side}_uy"] - row[f"{r['lo']}_{side}_uy"]) / r["length"]
+
+
+def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
+                 p1: Callable[[float], float] | None = None,
+                 rigid: Mapping[str, Any] | None = None
+                 ) -> tuple[list[dict[str, float]], dict[str, Any]]:
+    """The per-wave rows of the waves finished, and the summary's ``storm`` block.
+
+    Args:
+        rows: The history rows (the static state's first).
+        storm: The load's ``storm`` summary entry (waves and ``record``: the probes'
+            names, the landward sign, the caisson's side of the pair, the base length,
+            the pair's penetration column and penalty).
+        p1: t ↦ p₁ of the storm (the model's amplitude of the front); None: no peak
+            force.
+        rigid: The rigid-block reference (:func:`rigid_record`), put beside each wave
+            and in the block; None: none.
+    """
+    r = storm["record"]
+    waves = storm["waves"]
+    out: list[dict[str, float]] = []
+    if not rows:
+        return out, _block(out, waves, r)
+    times = [row["t"] for row in rows]
+    θ0 = _rotation(rows[0], r)
+    total = 0.0
+    for k, w in enumerate(waves):
+        start, end = w["start"], w["start"] + w["period"]
+        if times[-1] < end * (1 - 1e-12):
+            break  # not finished
+        i0 = max(i for i, t in enumerate(times) if t <= start)
+        inside = [i for i, t in enumerate(times) if start < t <= end * (1 + 1e-12)]
+        if not inside:
+            inside = [i0]
+        i1 = inside[-1]
+        sliding = _sliding(rows[i1], r) - _sliding(rows[i0], r)
+        total += sliding
+        rocking = max(abs(_rotation(rows[i], r) - θ0) for i in inside)
+        pressure = r["penalty"] * max(rows[i].get(r["penetration"], math.nan) for i in inside)
+        force = math.nan if p1 is None else max(
+            p1(times[i]) * w["front_force_per_p1"] for i in inside)
+        out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
+                    "start": start, "end": end, "peak_force_per_length": force,
+                    "sliding": sliding, "cumulative_sliding": total, "rocking": rocking,
+                    "max_contact_pressure": pressure,
+                    "rigid_sliding": (rigid or {}).get("sliding", [math.nan] * (k + 1))[k]})
+    block = _block(out, waves, r)
+    if rigid is not None:
+        block["rigid"] = dict(rigid)
+    return out, block
+
+
+def rigid_record(loads: Sequence[Any], *, mass: float, weight: float, base_width: float,
+                 toe_depth: float, friction: float, density: float, gravity: float
+                 ) -> dict[str, Any]:
+    """The rigid-block model's sliding under each wave's load (each from rest).
+
+    Args:
+        loads: The waves' loads (:class:`~breakwater.storms.waves.WaveLoad`), the FE run's.
+        mass: The caisson's mass per metre (kg/m).
+        weight: W' (N/m): the FE model's static normal force on the mound.
+        base_width: B (m).
+        toe_depth: h' (m).
+        friction: μ.
+        density: Water density (kg/m³; no added mass: not used but checked).
+        gravity: g (m/s²).
+
+    Returns:
+        ``sliding`` per wave, ``total_sliding``, the inputs, and ``note`` when a wave's
+        slide lasts into the next wave (the from-rest model does not hold there); or
+        ``error`` when the model cannot apply (μ = 0: no resistance).
+    """
+    from breakwater.storms.rigid import Caisson, slide_motion
+
+    inputs = {"mass": mass, "weight": weight, "friction": friction, "added_mass": False,
+              "model": "breakwater.storms.rigid: (M) x'' = P - mu (W' - U), from rest per wave"}
+    try:
+        caisson = Caisson(mass, base_width, toe_depth, friction, added_mass=False,
+                          density=density, gravity=gravity, weight=weight)
+        motions = [slide_motion(load, caisson) for load in loads]
+    except ValueError as e:
+        return {**inputs, "error": str(e)}
+    sliding = [m.distance for m in motions]
+    out: dict[str, Any] = {**inputs, "sliding": sliding, "total_sliding": sum(sliding)}
+    late = [k + 1 for k, (m, load) in enumerate(zip(motions, loads, strict=True))
+            if m.stop is not None and k + 1 < len(loads)
+            and load.wave.start + m.stop > loads[k + 1].wave.start]
+    if late:
+        out["note"] = (f"waves {late}: the rigid block still slides when the next wave "
+                       "begins (the from-rest model does not hold there)")
+    return out
+
+
+def _block(out: list[dict[str, float]], waves: Sequence[Mapping[str, Any]],
+           r: Mapping[str, Any]) -> dict[str, Any]:
+    """The summary's ``storm`` block."""
+    block: dict[str, Any] = {"waves": len(waves), "waves_finished": len(out),
+                             "record": "waves.csv",
+                             "total_sliding": out[-1]["cumulative_sliding"] if out else 0.0,
+                             "sliding_measure": "mean of the base ends' horizontal "
+                             "displacement of the caisson relative to the mound, landward "
+                             f"(pair probes {r['lo']}, {r['hi']})"}
+    if out:
+        big = max(out, key=lambda w: w["height"])
+        block["largest_wave"] = {"wave": int(big["wave"]), "height": big["height"],
+                                 "period": big["period"], "sliding": big["sliding"]}
+        most = max(out, key=lambda w: w["sliding"])
+        block["most_sliding"] = {"wave": int(most["wave"]), "height": most["height"],
+                                 "sliding": most["sliding"]}
+    return block
+
+
+def write_waves(path: Any, waves: Sequence[Mapping[str, float]]) -> Any:
+    """Write ``waves.csv`` (atomically): a header, one row per finished wave."""
+    from breakwater.common import files
+
+    lines = [",".join(COLUMNS)]
+    for w in waves:
+        lines.append(",".join(str(int(w[c])) if c == "wave" else repr(float(w[c]))
+                              for c in COLUMNS))
+    return files.atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def read_waves(path: Any) -> dict[str, Any]:
+    """``waves.csv`` as one NumPy array per column (none when it holds no wave)."""
+    import numpy as np
+
+    lines = [line for line in open(path, encoding="utf-8").read().splitlines() if line]
+    names = lines[0].split(",")
+    values = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    return {n: values[:, k] if len(values) else np.zeros(0) for k, n in enumerate(names)}
+
+
+def storm_figures(directory: Any, folder: Any) -> list[Any]:
+    """The storm's figures from ``waves.csv`` (none without it or a finished wave).
+
+    ``storm_sliding.png``: the cumulative sliding against the waves' end times (and
+    numbers); ``storm_sliding_per_wave.png``: each wave's sliding against H.
+    """
+    import pathlib
+
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from breakwater.common.files import WAVES
+
+    path = pathlib.Path(directory) / WAVES
+    if not path.is_file():
+        return []
+    w = read_waves(path)
+    if not len(w.get("wave", ())):
+        return []
+    out = []
+    fig = Figure(figsize=(7, 4))
+    ax = fig.add_subplot()
+    ax.step([0.0, *w["end"]], [0.0, *(1e3 * w["cumulative_sliding"])], where="post")
+    ax.plot(w["end"], 1e3 * w["cumulative_sliding"], "o")
+    ax.set_xlabel("t (s): the end of each wave")
+    ax.set_ylabel("cumulative sliding (mm)")
+    top = ax.secondary_xaxis("top")
+    top.set_xticks(w["end"], [str(int(k)) for k in w["wave"]])
+    top.set_xlabel("wave")
+    ax.grid(alpha=0.3)
+    out.append(_save(fig, pathlib.Path(folder) / "storm_sliding.png"))
+    fig = Figure(figsize=(6, 4))
+    ax = fig.add_subplot()
+    ax.plot(w["height"], 1e3 * w["sliding"], "o", label="finite elements")
+    if "rigid_sliding" in w and np.isfinite(w["rigid_sliding"]).any():
+        ax.plot(w["height"], 1e3 * w["rigid_sliding"], "x", label="rigid block")
+        ax.legend()
+    ax.set_xlabel("H (m)")
+    ax.set_ylabel("sliding of the wave (mm)")
+    ax.grid(alpha=0.3)
+    out.append(_save(fig, pathlib.Path(folder) / "storm_sliding_per_wave.png"))
+    return out
+
+
+def _save(fig: Any, path: Any) -> Any:
+    """Save a figure atomically (:func:`breakwater.outputs.figures` does the same)."""
+    from breakwater.common.files import temporary_path, writing
+
+    tmp = temporary_path(path)
+    with writing(path):
+        fig.savefig(tmp, dpi=150, bbox_inches="tight")
+        tmp.replace(path)
+    return path
+
+
+def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
+                       summary: dict[str, Any], directory: Any) -> None:
+    """A storm's ``waves.csv`` (rank 0) and the summary's ``storm`` block (collective).
+
+    Every rank computes the same record from the same rows; the rigid-block reference
+    (:func:`rigid_record`) takes the storm's wave loads from the model's front load (its
+    amplitude, a :class:`~breakwater.storms.stormload.WaveHistory`), M and W' from the
+    static state when its pair's slave is the caisson (W' the static normal force: the
+    weight and any load at t = 0), else M from the caisson's weight and W' = M g.
+
+    Args:
+        model: The contact model (:class:`~breakwater.model.model.ContactModel`).
+        rows: The history rows.
+        summary: The run's summary (``loads.<name>.storm`` read, ``storm`` set).
+        directory: The output folder.
+    """
+    import pathlib
+
+    import numpy as np
+
+    from breakwater.common.files import WAVES
+    from breakwater.common.parallel import on_rank_zero
+
+    for name, info in summary.get("loads", {}).items():
+        if "storm" not in info:
+            continue
+        p1 = next((ld.spec.amplitude for ld in model.loads
+                   if ld.spec.name == name and ld.parameters is not None), None)
+        loads = getattr(p1, "loads", None)
+        r = info["storm"]["record"]
+        g = float(np.linalg.norm(model.gravity.value))
+        rigid: dict[str, Any] | None = None
+        if loads is not None and not g > 0:
+            rigid = {"error": "the model has no gravity: the rigid block has no weight"}
+        elif loads is not None:
+            weights = model.weight()  # collective: every rank
+            static = summary.get("static") or {}
+            if static.get("slave") == r["caisson"] and static.get("contact_resultant"):
+                mass, weight = static["weight"] / g, static["contact_resultant"]
+            else:
+                mass = weights[model.body(r["caisson"]).index] / g
+                weight = mass * g
+            rigid = rigid_record(loads, mass=mass, weight=weight, base_width=r["length"],
+                                 toe_depth=r["toe_depth"], friction=r["friction"],
+                                 density=r["density"], gravity=g)
+        waves, block = storm_record(rows, info["storm"], p1, rigid)
+        on_rank_zero(model.comm, lambda waves=waves: bool(  # type: ignore[misc]
+            write_waves(pathlib.Path(directory) / WAVES, waves)))
+        summary["storm"] = {"load": name, **block}
