@@ -5,7 +5,8 @@ The loop asks :meth:`StepSize.propose` for the next step, tries it, and reports
 ``max_cutbacks`` halvings of the nominal Δt in effect) or :meth:`~StepSize.accept`.
 After :data:`GROW_AFTER` accepted steps in a row the step doubles again, never above
 the nominal Δt. The time is the exactly rounded sum of the accepted steps
-(:func:`math.fsum`, no drift), and the step that reaches ``end_time`` lands on it
+(:func:`math.fsum` of their exact partial sums, kept step by step: no drift), and
+the step that reaches ``end_time`` lands on it
 exactly: when what remains is at most the current step (within 1e-6 of it), the
 step is what remains.
 
@@ -87,6 +88,24 @@ def resolved_step(dt: float, levels: int, breakpoints: tuple[float, ...] | list[
     return dt / 2**k
 
 
+def _add_exactly(partials: list[float], x: float) -> None:
+    """Add ``x`` to the exact sum held by ``partials`` (Shewchuk 1997; math.fsum's loop).
+
+    ``math.fsum(partials)`` is then the correctly rounded sum of every value added.
+    """
+    i = 0
+    for y in partials:
+        if abs(x) < abs(y):
+            x, y = y, x
+        hi = x + y
+        lo = y - (hi - x)
+        if lo:
+            partials[i] = lo
+            i += 1
+        x = hi
+    partials[i:] = [x]
+
+
 def error_constant(beta1: float, beta2: float) -> float:
     """The constant c in GN22's local error estimate ``e = c Δt² Δa`` (a bound, in displacement).
 
@@ -125,6 +144,9 @@ class StepSize:
         rejected: Adaptive steps: steps rejected by the error estimate.
         calm: Adaptive steps: accepted steps in a row with a small error.
         ratio: Adaptive steps: the error ratio r of the last step judged.
+        partials: ``accepted``'s exact sum as non-overlapping floats (Shewchuk's
+            expansion, as :func:`math.fsum` keeps it): ``t`` in O(1) per step, not
+            O(steps) (a storm of 280 000 steps spent most of its time summing).
 
     """
 
@@ -147,6 +169,7 @@ class StepSize:
     rejected: int = 0
     calm: int = 0
     ratio: float = 0.0
+    partials: list[float] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if not (self.dt > 0 and self.end_time >= 0 and self.max_cutbacks >= 0):
@@ -155,6 +178,9 @@ class StepSize:
         if self.levels < 0 or (self.levels and not self.tolerance > 0):
             raise ValueError(f"invalid adaptive settings: levels = {self.levels}, "
                              f"tolerance = {self.tolerance}")
+        if not self.partials and len(self.accepted) > 1:  # a checkpoint saved without them
+            for x in self.accepted:
+                _add_exactly(self.partials, x)
         if math.isnan(self.h):
             self.h = self.dt
         if math.isnan(self.min_dt):
@@ -252,7 +278,8 @@ class StepSize:
         """
         trial, last = self._next()
         self.accepted.append(trial)
-        self.t = self.end_time if last else math.fsum(self.accepted)
+        _add_exactly(self.partials, trial)
+        self.t = self.end_time if last else math.fsum(self.partials)
         if self.adaptive:
             return self._adapt()
         self.streak += 1
