@@ -336,22 +336,27 @@ def test_record_of_synthetic_rows_and_an_unfinished_wave():
     # at x from 0 to 2 (the loaded face at x = 0: landward +x), moving by known
     # amounts. Wave 1 (0 < t <= 1): the base slides 1 mm relative to the mound (the
     # mound's own 0.5 mm shear cancels), rotates by 2e-4 rad at t = 0.5, the largest
-    # penetration 2e-6 m (ε_n = 1e9: 2000 Pa). Wave 2 is cut at t = 1.5 (an interrupted
-    # run): not recorded. Exact arithmetic on these numbers: 1e-15.
+    # penetration 2e-6 m (ε_n = 1e9: 2000 Pa); the seaward end (lo) slips 0.7 mm more
+    # on its own (partial slip under the overturning moment): not sliding, the middle's
+    # is. Wave 2 is cut at t = 1.5 (an interrupted run): not recorded. Exact arithmetic
+    # on these numbers: 1e-15.
     from breakwater.outputs.stormrecord import storm_record
 
-    def row(t, slide, mound, rot, pen):
+    def row(t, slide, mound, rot, pen, edge=0.0):
         r = {"t": t, "pair_penetration": pen}
-        for name, x in (("lo", 0.0), ("hi", 2.0)):
-            r.update({f"s_{name}_slave_ux": slide + mound, f"s_{name}_master_ux": mound,
+        for name, x in (("lo", 0.0), ("hi", 2.0), ("mid", 1.0)):
+            extra = edge if name == "lo" else 0.0
+            r.update({f"s_{name}_slave_ux": slide + mound + extra,
+                      f"s_{name}_master_ux": mound,
                       f"s_{name}_slave_uy": rot * x - 1e-5, f"s_{name}_master_uy": 0.0})
         return r
 
-    rows = [row(0.0, 0.0, 0.0, 0.0, 1e-6), row(0.5, 0.6e-3, 0.5e-3, 2e-4, 2e-6),
-            row(1.0, 1e-3, 0.0, 0.0, 1e-6), row(1.5, 3e-3, 0.0, 0.0, 1e-6)]
+    rows = [row(0.0, 0.0, 0.0, 0.0, 1e-6), row(0.5, 0.6e-3, 0.5e-3, 2e-4, 2e-6, 0.3e-3),
+            row(1.0, 1e-3, 0.0, 0.0, 1e-6, 0.7e-3), row(1.5, 3e-3, 0.0, 0.0, 1e-6)]
     storm = {"waves": [{"height": 0.1, "period": 1.0, "start": 0.0, "front_force_per_p1": 0.3},
                        {"height": 0.2, "period": 1.0, "start": 1.0, "front_force_per_p1": 0.3}],
-             "record": {"lo": "s_lo", "hi": "s_hi", "sign": 1, "landward": 1.0, "length": 2.0,
+             "record": {"lo": "s_lo", "hi": "s_hi", "mid": "s_mid", "sign": 1,
+                        "landward": 1.0, "length": 2.0,
                         "penetration": "pair_penetration", "penalty": 1e9}}
     waves, block = storm_record(rows, storm, lambda t: 1000.0 * t)
     assert len(waves) == 1 and block["waves"] == 2 and block["waves_finished"] == 1

@@ -155,9 +155,10 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
         raise CaseError(f"{key}.uplift_group: the base '{storm.uplift_group}' is not "
                         f"horizontal (y from {lo[1]:.6g} to {hi[1]:.6g} m)")
     y = float(lo[1])
-    names = (f"{load.name}_base_lo", f"{load.name}_base_hi")
+    names = (f"{load.name}_base_lo", f"{load.name}_base_hi", f"{load.name}_base_mid")
     probes = (PairProbeSpec(names[0], index, (float(lo[0]), y)),
-              PairProbeSpec(names[1], index, (float(hi[0]), y)))
+              PairProbeSpec(names[1], index, (float(hi[0]), y)),
+              PairProbeSpec(names[2], index, (0.5 * float(lo[0] + hi[0]), y)))
     triangle, _ = base_triangle(storm.uplift_group, data, groups)
     waves: list[dict[str, Any]] = []
     warnings: list[str] = []
@@ -184,7 +185,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
             warnings.append(f"{key}: wave {worst + 1} (H = {waves[worst]['height']:g} m): "
                             f"{100 * waves[worst][name]:.3g}% {what}; summary.json "
                             f"loads.{load.name}.storm.waves[].{name}")
-    record = {"lo": names[0], "hi": names[1], "sign": sign,
+    record = {"lo": names[0], "hi": names[1], "mid": names[2], "sign": sign,
               "landward": float(triangle.axis[0]), "length": width,
               "pair": pair.name, "penetration": f"{pair.name}_penetration",
               "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,
