@@ -186,6 +186,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                             f"{100 * waves[worst][name]:.3g}% {what}; summary.json "
                             f"loads.{load.name}.storm.waves[].{name}")
     record = {"lo": names[0], "hi": names[1], "mid": names[2], "sign": sign,
+              "conforming": not pair.general,
               "landward": float(triangle.axis[0]), "length": width,
               "pair": pair.name, "penetration": f"{pair.name}_penetration",
               "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,

@@ -44,7 +44,8 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-__all__ = ["COLUMNS", "read_waves", "rigid_record", "storm_figures", "storm_record",
+__all__ = ["COLUMNS", "SMALL_SLIDING", "read_waves", "rigid_record", "small_sliding_warning",
+           "storm_figures", "storm_record",
            "write_storm_record", "write_waves"]
 
 COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", "sliding",
@@ -250,6 +251,32 @@ def _save(fig: Any, path: Any) -> Any:
     return path
 
 
+SMALL_SLIDING = 0.1
+"""A conforming pair's slip is small against its element size h below this fraction."""
+
+
+def small_sliding_warning(rows: Sequence[Mapping[str, float]], r: Mapping[str, Any],
+                          h: float | None) -> str | None:
+    """A warning when a conforming pair's base slipped beyond :data:`SMALL_SLIDING` h.
+
+    A conforming (node-to-node) pair holds each slave node to its master node: valid
+    while the slip is small against the element size. A storm that slides the caisson
+    further needs a general pair (bodies meshed apart, finite sliding).
+    """
+    if not r.get("conforming") or not h or not rows:
+        return None
+    names = [r[k] for k in ("lo", "mid", "hi") if k in r]
+    slip = max(abs(row.get(f"{p}_slip", 0.0) - rows[0].get(f"{p}_slip", 0.0))
+               for row in rows for p in names)
+    if slip <= SMALL_SLIDING * h:
+        return None
+    return (f"the caisson's base slipped up to {slip:.3g} m on the conforming pair "
+            f"'{r.get('pair')}', {100 * slip / h:.3g}% of its element size h = {h:.3g} m: "
+            "node-to-node contact holds only for slips small against h (the results "
+            "past that are not reliable); mesh the bodies apart with a general pair "
+            "(finite sliding: examples/goda_nonmatching.toml)")
+
+
 def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
                        summary: dict[str, Any], directory: Any) -> None:
     """A storm's ``waves.csv`` (rank 0) and the summary's ``storm`` block (collective).
@@ -296,6 +323,10 @@ def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
                                  toe_depth=r["toe_depth"], friction=r["friction"],
                                  density=r["density"], gravity=g)
         waves, block = storm_record(rows, info["storm"], p1, rigid)
+        quality = (summary.get("contact_quality") or {}).get(r.get("pair"), {})
+        warning = small_sliding_warning(rows, r, quality.get("element_size"))
+        if warning is not None:
+            block["warning"] = warning
         on_rank_zero(model.comm, lambda waves=waves: bool(  # type: ignore[misc]
             write_waves(pathlib.Path(directory) / WAVES, waves)))
         summary["storm"] = {"load": name, **block}

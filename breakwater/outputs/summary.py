@@ -483,5 +483,7 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
             line += (f" (the highest, wave {big['wave']}, H = {num(big['height'])} m: "
                      f"{num(big['sliding'])} m)")
         lines.append(line + "; waves.csv")
+        if storm.get("warning"):
+            lines.append(f"  warning: {storm['warning']}")
     lines.append(f"  outputs: {directory}")
     return "\n".join(lines)
