@@ -45,6 +45,27 @@ class GodaApplied:
     profile: tuple[float, float]
 
 
+def facet_spans(data: gmshio.MeshData, groups: tuple[str, ...]
+                ) -> list[tuple[float, float]]:
+    """The lowest and highest elevation (y) of each facet of the groups owned here."""
+    import dolfinx
+
+    from breakwater.model.mesh import group_tag
+
+    msh = data.mesh
+    fdim = msh.topology.dim - 1
+    assert data.facet_tags is not None
+    owned = msh.topology.index_map(fdim).size_local
+    spans: list[tuple[float, float]] = []
+    for group in groups:
+        facets = data.facet_tags.find(group_tag(data, group, fdim))
+        facets = facets[facets < owned]
+        if len(facets):
+            y = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets), 1]
+            spans += zip(y.min(axis=1).tolist(), y.max(axis=1).tolist(), strict=True)
+    return spans
+
+
 def goda_applied(load: loadcase.LoadCase, data: gmshio.MeshData) -> GodaApplied:
     """Integrate a Goda load's front profile over its loaded facets (collective).
 
@@ -52,31 +73,19 @@ def goda_applied(load: loadcase.LoadCase, data: gmshio.MeshData) -> GodaApplied:
     elevations, integrated exactly (:meth:`GodaPressure.part`); the sums over the ranks
     are the same on every rank.
     """
-    import dolfinx
     import numpy as np
     from mpi4py import MPI
-
-    from breakwater.model.mesh import group_tag
 
     assert load.goda is not None
     g = load.goda.pressure()
     swl = load.goda.still_water_level
     msh = data.mesh
-    fdim = msh.topology.dim - 1
-    assert data.facet_tags is not None
-    owned = msh.topology.index_map(fdim).size_local
     force = moment = 0.0
     lo, hi = math.inf, -math.inf
-    for group in (load.group, *load.groups):
-        facets = data.facet_tags.find(group_tag(data, group, fdim))
-        facets = facets[facets < owned]
-        if not len(facets):
-            continue
-        y = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets), 1]
-        for y0, y1 in zip(y.min(axis=1).tolist(), y.max(axis=1).tolist(), strict=True):
-            f, m = g.part(y0 - swl, y1 - swl)
-            force, moment = force + f, moment + m
-        lo, hi = min(lo, float(y.min())), max(hi, float(y.max()))
+    for y0, y1 in facet_spans(data, (load.group, *load.groups)):
+        f, m = g.part(y0 - swl, y1 - swl)
+        force, moment = force + f, moment + m
+        lo, hi = min(lo, y0), max(hi, y1)
     force, moment = (float(v) for v in msh.comm.allreduce(np.array([force, moment]),
                                                           op=MPI.SUM))
     lo, hi = msh.comm.allreduce(lo, op=MPI.MIN), msh.comm.allreduce(hi, op=MPI.MAX)

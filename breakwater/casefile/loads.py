@@ -34,7 +34,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from breakwater.casefile.stormcase import StormCase
+from breakwater.casefile.stormcase import StormCase, check_site
 from breakwater.config.fields import InvalidField, positive, setting
 from breakwater.loads.fields import PressureProfile
 from breakwater.loads.signals import (
@@ -201,15 +201,7 @@ class GodaCase:
                                        "front of the upright section (impulsive only)")
 
     def __post_init__(self) -> None:
-        if len(self.factors) != 3:
-            raise InvalidField("factors", f"expected 3 values (got {len(self.factors)})")
-        if self.impulsive and self.berm_width is None:
-            raise InvalidField("berm_width", "missing: impulsive = true needs the berm "
-                               "width B_M")
-        if not self.impulsive and self.berm_width is not None:
-            raise InvalidField("berm_width", "is used only with impulsive = true")
-        if self.berm_width is not None and not self.berm_width > 0:
-            raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
+        check_site(self.factors, self.impulsive, self.berm_width)
         try:
             self.pressure()  # the formula's own range checks
         except GodaRangeError as e:

@@ -57,24 +57,13 @@ def face_integral(points: Any, still_water_level: float, data: gmshio.MeshData,
 
     The horizontal force per unit p₁ that a vertical face receives of a front shape.
     """
-    import dolfinx
     from mpi4py import MPI
 
-    from breakwater.model.mesh import group_tag
+    from breakwater.casefile.godaface import facet_spans
 
+    total = sum(profile_integral(points, y0 - still_water_level, y1 - still_water_level)
+                for y0, y1 in facet_spans(data, groups))
     msh = data.mesh
-    fdim = msh.topology.dim - 1
-    assert data.facet_tags is not None
-    owned = msh.topology.index_map(fdim).size_local
-    total = 0.0
-    for group in groups:
-        facets = data.facet_tags.find(group_tag(data, group, fdim))
-        facets = facets[facets < owned]
-        if not len(facets):
-            continue
-        y = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets), 1]
-        for y0, y1 in zip(y.min(axis=1).tolist(), y.max(axis=1).tolist(), strict=True):
-            total += profile_integral(points, y0 - still_water_level, y1 - still_water_level)
     return float(msh.comm.allreduce(total, op=MPI.SUM))
 
 

@@ -31,7 +31,25 @@ from breakwater.storms.waves import Site, Wave, WaveTrain
 if TYPE_CHECKING:
     from breakwater.storms.waves import WaveLoad
 
-__all__ = ["SeaCase", "StormCase"]
+__all__ = ["SeaCase", "StormCase", "check_site"]
+
+
+def check_site(factors: tuple[float, ...], impulsive: bool, berm_width: float | None
+               ) -> None:
+    """The checks of Goda's site keys shared by ``[goda]`` and ``[storm]``.
+
+    Raises:
+        InvalidField: Not three factors; ``berm_width`` missing with ``impulsive``, given
+            without it, or not > 0.
+    """
+    if len(factors) != 3:
+        raise InvalidField("factors", f"expected 3 values (got {len(factors)})")
+    if impulsive and berm_width is None:
+        raise InvalidField("berm_width", "missing: impulsive = true needs the berm width B_M")
+    if not impulsive and berm_width is not None:
+        raise InvalidField("berm_width", "is used only with impulsive = true")
+    if berm_width is not None and not berm_width > 0:
+        raise InvalidField("berm_width", f"must be > 0 (got {berm_width:g})")
 
 
 @dataclass(frozen=True)
@@ -100,15 +118,7 @@ class StormCase:
         "...] (one after the other from t = 0); or [sea]")
 
     def __post_init__(self) -> None:
-        if len(self.factors) != 3:
-            raise InvalidField("factors", f"expected 3 values (got {len(self.factors)})")
-        if self.impulsive and self.berm_width is None:
-            raise InvalidField("berm_width", "missing: impulsive = true needs the berm "
-                               "width B_M")
-        if not self.impulsive and self.berm_width is not None:
-            raise InvalidField("berm_width", "is used only with impulsive = true")
-        if self.berm_width is not None and not self.berm_width > 0:
-            raise InvalidField("berm_width", f"must be > 0 (got {self.berm_width:g})")
+        check_site(self.factors, self.impulsive, self.berm_width)
         if (self.sea is None) == (self.waves is None):
             raise InvalidField("waves", "give either waves (a file or [[H, T], ...]) or a "
                                "[sea] table (exactly one)")
