@@ -84,6 +84,7 @@ API_SECTIONS = {
     "Foundations (breakwater.common)": "breakwater.common",
     "Settings (breakwater.config)": "breakwater.config",
     "Loads (breakwater.loads)": "breakwater.loads",
+    "Storms (breakwater.storms)": "breakwater.storms",
     "The model (breakwater.model)": "breakwater.model",
     "Contact (breakwater.contact)": "breakwater.contact",
     "Time stepping (breakwater.stepping)": "breakwater.stepping",
