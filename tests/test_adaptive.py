@@ -111,3 +111,27 @@ def test_sliding_block_adaptive(folder: pathlib.Path) -> None:
         _block(path, folder / "block_refused",
                TimeSpec(dt=T_PULSE / 4, end_time=end, adaptive=True),
                lambda t: float(pulse(t)))
+
+
+def test_failure_at_the_smallest_adaptive_step(folder: pathlib.Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    # Every solve from t = T/2 on fails: adaptive steps halve down to their smallest
+    # (dt/2^levels, not max_cutbacks halvings) and the run fails saying so, in one line.
+    from breakwater.common.errors import ConvergenceError
+    from breakwater.run.simulation import SimulationFailed
+    from breakwater.stepping.gn22 import GN22
+
+    path = two_rectangles(folder / "adaptive_fail.msh", COMM, a=(W, H), b=(W, H), h=0.025)
+    solve = GN22.solve
+
+    def failing(self: GN22) -> int:
+        if float(self.t.value) >= 0.5 * T_PULSE * (1 - 1e-9):
+            raise ConvergenceError("injected failure", -5, 3)
+        return solve(self)
+
+    monkeypatch.setattr(GN22, "solve", failing)
+    pulse = Pulse(3.0 * μ_F * N * T_PULSE / 2, T_PULSE, "triangular")
+    time = TimeSpec(dt=T_PULSE / 4, end_time=2 * T_PULSE, adaptive=True, min_dt=T_PULSE / 32)
+    with pytest.raises(SimulationFailed, match=r"did not converge at the smallest adaptive "
+                       r"step \(dt/2\^3; time\.min_dt sets it\): injected failure"):
+        _block(path, folder / "block_fail", time, pulse)

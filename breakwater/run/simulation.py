@@ -233,17 +233,20 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 # The state (u, v, a) is untouched until update(): retry from it.
                 st.failed_steps += 1
                 st.failed_iterations += getattr(e, "iterations", 0)
+                allowed = step.levels if step.adaptive else time.max_cutbacks
                 if not step.reject():
                     floor = (f", and dt/2 = {0.5 * trial:.3g} s would be below time.min_dt "
-                             f"= {time.min_dt:.3g} s" if step.halvings < time.max_cutbacks
-                             else "")
+                             f"= {time.min_dt:.3g} s" if step.halvings < allowed else "")
                     what = "was rejected" if isinstance(e, PenetrationError) else \
                         "did not converge"
+                    halved = (f"at the smallest adaptive step (dt/2^{step.levels}; "
+                              "time.min_dt sets it)" if step.adaptive
+                              else f"after {step.halvings} cut-backs{floor}")
                     raise SimulationFailed(
-                        f"step from t = {t:.6g} s with dt = {trial:.3g} s {what} after "
-                        f"{step.halvings} cut-backs{floor}: {crash_reason(e)}") from e
+                        f"step from t = {t:.6g} s with dt = {trial:.3g} s {what} "
+                        f"{halved}: {crash_reason(e)}") from e
                 log.warning("t = %.6g s: %s; retrying with dt = %.3g s (cut-back %d/%d)",
-                            t, crash_reason(e), step.h, step.halvings, time.max_cutbacks)
+                            t, crash_reason(e), step.h, step.halvings, allowed)
                 continue
             s.update()
             grew = step.accept()
