@@ -15,8 +15,9 @@ Between the end of a wave's force and the next wave's start both are 0.
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from breakwater.loads.fields import StagedProfile
@@ -62,17 +63,15 @@ class WaveHistory:
 
     loads: tuple[WaveLoad, ...]
     part: Literal["p1", "uplift"]
+    starts: tuple[float, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "starts", tuple(w.wave.start for w in self.loads))
 
     def wave(self, t: float) -> int | None:
         """The last wave started at ``t`` (None before the first)."""
-        lo, hi = 0, len(self.loads)
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if self.loads[mid].wave.start <= t:
-                lo = mid + 1
-            else:
-                hi = mid
-        return lo - 1 if lo > 0 else None
+        k = bisect.bisect_right(self.starts, t) - 1
+        return k if k >= 0 else None
 
     @property
     def breakpoints(self) -> tuple[float, ...]:

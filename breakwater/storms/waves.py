@@ -81,22 +81,6 @@ class WaveTrain:
         """The end of the last wave (s)."""
         return self.waves[-1].end
 
-    def index(self, t: float) -> int | None:
-        """The wave whose interval [start, end) holds ``t``.
-
-        Returns:
-            Its index; None before the first wave, in a gap, or after the last.
-        """
-        lo, hi = 0, len(self.waves)
-        while lo < hi:  # the last wave with start <= t
-            mid = (lo + hi) // 2
-            if self.waves[mid].start <= t:
-                lo = mid + 1
-            else:
-                hi = mid
-        i = lo - 1
-        return i if i >= 0 and t < self.waves[i].end else None
-
 
 @dataclass(frozen=True)
 class Site:
