@@ -42,6 +42,7 @@ from petsc4py import PETSc
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
 from breakwater.common.jit import kernel
 from breakwater.energy import dissipation as numerical
+from breakwater.model.parts import StageWatch
 from breakwater.stepping.gn22 import GN22
 
 __all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms",
@@ -240,10 +241,9 @@ class MatrixTerms:
             assert a is not None
             self._amplitudes.append(a)
         self._loads = np.column_stack([np.array(vec.array[:n]) for _, vec in loads])
-        # The loads whose field changes at given times, and the version of each that
-        # the columns hold (LoadData.version).
-        self._versions = {k: ld.version for k, ld in enumerate(m.loads)
-                          if ld.parameters is not None}
+        # The loads whose field changes at given times: their columns taken again when
+        # their stage changes.
+        self._watch = StageWatch(m.loads)
         # One rank: copies of the matrices' CSR arrays (M and K do not change; one
         # sparsity pattern) for matrix_sums, the rows of its vectors, and views of the
         # Functions' owned entries (their storage does not move).
@@ -322,16 +322,13 @@ class MatrixTerms:
 
     def _refresh(self) -> dict[int, np.ndarray]:
         """Take the staged loads' vectors at their current stage; the columns replaced."""
-        if not self._versions:
+        if not self._watch:
             return {}
         loads, n = self.bulk.load_vectors, int(self.layout.offsets[-1])
         old = {}
-        for k, version in self._versions.items():
-            now = self.stepper.model.loads[k].version
-            if now != version:
-                old[k] = self._loads[:, k + 1].copy()
-                self._loads[:, k + 1] = loads[k + 1][1].array[:n]
-                self._versions[k] = now
+        for k in self._watch.changed():
+            old[k] = self._loads[:, k + 1].copy()
+            self._loads[:, k + 1] = loads[k + 1][1].array[:n]
         return old
 
     def _local_sums(self, step: bool) -> np.ndarray:

@@ -9,7 +9,7 @@ The settings a model is built from (:class:`Material`, :class:`Body`, :class:`Fi
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import dolfinx
@@ -19,7 +19,8 @@ from dolfinx import fem
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.loads.fields import StagedField, TractionField
 
-__all__ = ["Body", "BodyData", "Damping", "Fixed", "LoadData", "Material", "SurfaceLoad"]
+__all__ = ["Body", "BodyData", "Damping", "Fixed", "LoadData", "Material", "StageWatch",
+           "SurfaceLoad"]
 
 
 @dataclass(frozen=True)
@@ -211,3 +212,29 @@ class LoadData:
             self.stage = k
             self.version += 1
 
+
+class StageWatch:
+    """The staged loads (``LoadData.parameters``) whose stage changed since the last look.
+
+    Whoever assembled a staged load's ``unit`` (the fast solver's load vectors, the
+    ledger's columns, the applied loads' resultants) asks :meth:`changed` which to
+    assemble again.
+
+    Args:
+        loads: The model's loads (``ContactModel.loads``).
+    """
+
+    def __init__(self, loads: Sequence[LoadData]) -> None:
+        self._loads = loads
+        self._seen = {k: ld.version for k, ld in enumerate(loads) if ld.parameters is not None}
+
+    def __bool__(self) -> bool:
+        """Whether any load is staged."""
+        return bool(self._seen)
+
+    def changed(self) -> list[int]:
+        """The indices of the loads whose stage changed since the last call (now seen)."""
+        out = [k for k, seen in self._seen.items() if self._loads[k].version != seen]
+        for k in out:
+            self._seen[k] = self._loads[k].version
+        return out

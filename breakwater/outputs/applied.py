@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from breakwater.model.model import ContactModel
+from breakwater.model.parts import StageWatch
 
 __all__ = ["AppliedLoads", "applied_warnings"]
 
@@ -52,9 +53,8 @@ class AppliedLoads:
         self._forms = [[model.form(ld.unit[i] * ld.ds) for i in range(gdim)]
                        for ld in model.loads]
         unit = [[model.assemble(f) for f in forms] for forms in self._forms]
-        # The loads whose field changes at given times, and the version ``unit`` holds.
-        self._versions = {k: ld.version for k, ld in enumerate(model.loads)
-                          if ld.parameters is not None}
+        # The loads whose field changes at given times: ``unit`` assembled again then.
+        self._watch = StageWatch(model.loads)
         self.names: list[str] = []
         for k, ld in enumerate(model.loads):
             name = ld.spec.name or f"load {k}"
@@ -78,11 +78,8 @@ class AppliedLoads:
         A staged load's unit resultant is assembled again when its stage changed
         (collective: every rank sets the stages from the same time).
         """
-        for k, version in self._versions.items():
-            now = self.model.loads[k].version
-            if now != version:
-                self.unit[k] = [self.model.assemble(f) for f in self._forms[k]]
-                self._versions[k] = now
+        for k in self._watch.changed():
+            self.unit[k] = [self.model.assemble(f) for f in self._forms[k]]
         amplitudes = np.array([float(ld.amplitude.value) for ld in self.model.loads])
         return self.owner @ (amplitudes[:, None] * self.unit)
 

@@ -23,6 +23,7 @@ from breakwater.contact.surfaces import surface_dofs
 from breakwater.model.layout import MonolithicLayout
 from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
+from breakwater.model.parts import StageWatch
 
 __all__ = ["BulkOperators", "body_index", "interface_dofs"]
 
@@ -77,14 +78,13 @@ class BulkOperators:
         loads = []
         gravity = sum(_body_force(b, m.gravity, w[i]) for i, b in enumerate(m.bodies))
         loads.append((None, self._vector(self._compile(gravity))))
-        self._staged: list[tuple[int, list[tuple[fem.Form, int]]]] = []
-        self._versions: list[int] = []
+        self._staged: dict[int, list[tuple[fem.Form, int]]] = {}
         for k, ld in enumerate(m.loads):
             compiled = self._compile(ufl.dot(ld.unit, w[ld.body]) * ld.ds)
             loads.append((ld.amplitude, self._vector(compiled)))
             if ld.parameters is not None:
-                self._staged.append((k, compiled))
-                self._versions.append(ld.version)
+                self._staged[k] = compiled
+        self._watch = StageWatch(m.loads)
         return loads
 
     def _compile(self, form: ufl.Form) -> list[tuple[fem.Form, int]]:
@@ -119,14 +119,10 @@ class BulkOperators:
         Returns:
             Whether a vector changed.
         """
-        changed = False
-        for j, (k, compiled) in enumerate(self._staged):
-            version = self.model.loads[k].version
-            if version != self._versions[j]:
-                self._vector(compiled, self._loads[k + 1][1])
-                self._versions[j] = version
-                changed = True
-        return changed
+        changed = self._watch.changed()
+        for k in changed:
+            self._vector(self._staged[k], self._loads[k + 1][1])
+        return bool(changed)
 
     def _bc_rows(self) -> np.ndarray:
         rows = []
