@@ -404,9 +404,9 @@ def test_failed_run_records_the_waves_it_finished(stacked, folder, hand_waves, m
     whole = read_waves(folder / "two_storm" / "waves.csv") \
         if (folder / "two_storm" / "waves.csv").is_file() else None
     assert list(cut["wave"]) == [1]
-    # (serially the same steps bit for bit; on 2 ranks to the solves' tolerance, as the
-    # resume tests: measured 3e-11)
-    rtol = 1e-12 if COMM.size == 1 else 1e-7
+    # (serially the same steps bit for bit; on 2 ranks to Newton's tolerance, 1e-6, as
+    # test_resume_in_a_wave_equals_the_whole_run and for its reason: measured 3e-11)
+    rtol = 1e-12 if COMM.size == 1 else 1e-6
     if whole is not None:  # test_two_waves_record_and_ledger ran before: the same wave 1
         for c in ("sliding", "rocking", "max_contact_pressure", "peak_force_per_length"):
             assert cut[c][0] == pytest.approx(whole[c][0], rel=rtol, abs=1e-300), c
@@ -434,10 +434,13 @@ def test_resume_in_a_wave_equals_the_whole_run(stacked, folder, monkeypatch):
     # Killed after the checkpoint at t = 0.31 s, inside the second wave's force (the
     # front's second shape, p₁ ≠ 0), and resumed: the same history as the whole run
     # (serially to round-off, 1e-12 of each column's largest value or of the energy
-    # scale for the ledger's; on 2 ranks 1e-7, as the other resume tests), and the same
-    # record. The resumed ledger starts from the second shape (the stage at the
-    # checkpoint's time), not the first. (On 2 ranks Newton's count may differ by one
-    # where the predictor meets the tolerance to round-off.)
+    # scale for the ledger's), and the same record. The resumed ledger starts from the
+    # second shape (the stage at the checkpoint's time), not the first. On 2 ranks MUMPS'
+    # parallel factorisation is not bit-reproducible between runs, so Newton's count may
+    # differ by one where the predictor meets the tolerance to round-off, and the two
+    # histories then agree to Newton's tolerance, not to round-off: 1e-6, as
+    # test_one_wave_equals_the_goda_load_with_its_table (measured on a CI machine: 1.2e-7
+    # of the energy scale, in the strain energy; 3e-11 here).
     from blocks import run_killed_at
 
     from breakwater.casefile.stormcase import StormCase
@@ -462,7 +465,7 @@ def test_resume_in_a_wave_equals_the_whole_run(stacked, folder, monkeypatch):
     b = read_history(folder / "resumed_storm" / "history.csv")
     np.testing.assert_array_equal(a["t"], b["t"])
     energy = max(np.abs(a[c]).max() for c in ("kinetic", "strain", "penalty", "external_work"))
-    rtol = 1e-12 if COMM.size == 1 else 1e-7
+    rtol = 1e-12 if COMM.size == 1 else 1e-6
     for c in a:
         if c == "newton_iterations" and COMM.size > 1:
             continue
