@@ -90,9 +90,13 @@ class InterfaceNodes:
         fx = dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets)
         cx = dolfinx.mesh.entities_to_geometry(msh, tdim, cells)
         X = msh.geometry.x[:, :gdim]
+        # A facet's vertices: an interval's 2, a triangle's 3, a quadrilateral's 4 (in
+        # dolfinx's tensor order: v₃ is opposite v₀).
+        corners = dolfinx.cpp.mesh.cell_num_vertices(
+            dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, tdim - 1, 0))
         local = []
         for f, c in zip(fx, cx, strict=True):
-            v = X[f[: tdim]]
+            v = X[f[:corners]]
             if gdim == 2:
                 t = v[1] - v[0]
                 n = np.array([t[1], -t[0]])
@@ -112,13 +116,20 @@ class InterfaceNodes:
         return normal / length[:, None]
 
     def _on_facet(self, v: np.ndarray) -> np.ndarray:
-        """Mask of the nodes lying on the simplex facet with vertices ``v``."""
-        A = (v[1:] - v[0]).T
+        """Mask of the nodes lying on the facet with vertices ``v``.
+
+        A simplex (an interval, a triangle), or a quadrilateral taken as the
+        parallelogram of its first three vertices (dolfinx's order: v₁ − v₀ and
+        v₂ − v₀ are its sides).
+        """
+        quad = len(v) == 4
+        A = (v[1:3] - v[0]).T if quad else (v[1:] - v[0]).T
         λ, *_ = np.linalg.lstsq(A, (self.x - v[0]).T, rcond=None)
         dist = np.linalg.norm(A @ λ - (self.x - v[0]).T, axis=0)
         h = np.linalg.norm(A, axis=0).max()
         tol = 1e-9
-        inside = (λ >= -tol).all(axis=0) & (λ.sum(axis=0) <= 1 + tol)
+        inside = (λ >= -tol).all(axis=0) & ((λ <= 1 + tol).all(axis=0) if quad
+                                            else λ.sum(axis=0) <= 1 + tol)
         return inside & (dist <= tol * h)
 
     def gather(self, slave: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

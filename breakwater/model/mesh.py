@@ -20,7 +20,7 @@ log = logging.getLogger("breakwater.model.mesh")
 
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
-              gdim: int = 2, order: int = 2) -> gmshio.MeshData:
+              gdim: int | None = None, order: int = 2) -> gmshio.MeshData:
     """Read a gmsh ``.msh`` (or mesh a ``.geo``) with its physical groups.
 
     Cells are ghosted across shared facets, which interior-facet (interface)
@@ -31,7 +31,8 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
         path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
             temporary folder: nothing is written beside the script).
         comm: Communicator to distribute the mesh over.
-        gdim: Geometric dimension of the model (2 for plane strain).
+        gdim: Geometric dimension of the model: 2 (plane strain) or 3; None: the
+            highest dimension of the file's physical groups.
         order: The displacement's degree: a ``.geo`` whose curves are curved is
             meshed to this geometric order (:func:`mesh_geo`).
 
@@ -55,29 +56,39 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
     with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
         try:
-            on_rank_zero(comm, lambda: _merge(path, gdim))
+            dim = on_rank_zero(comm, lambda: _merge(path, gdim))
         except MeshError:
             raise
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
             raise MeshError(f"{path}: cannot read the mesh ({e})") from e
-        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner)
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=dim, partitioner=partitioner)
     if not data.physical_groups:
         raise MeshError(f"{path}: the mesh has no named physical groups")
     return data
 
 
-def _merge(path: pathlib.Path, gdim: int) -> None:
+def _merge(path: pathlib.Path, gdim: int | None) -> int:
     """Read a ``.msh`` into the current gmsh model (rank 0) and check it is whole.
 
     A truncated file may read without error but lack its elements, nodes or physical
     groups (dolfinx would then fail with a RuntimeError or an IndexError).
 
+    Returns:
+        The model's dimension: ``gdim``, or the highest dimension of its physical
+        groups (2 or 3).
+
     Raises:
         MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups.
     """
     gmsh.merge(str(path))
-    if not gmsh.model.getPhysicalGroups():
+    groups = gmsh.model.getPhysicalGroups()
+    if not groups:
         raise MeshError(f"{path}: cannot read the mesh (no physical groups: truncated?)")
+    if gdim is None:
+        gdim = max(d for d, _ in groups)
+        if gdim not in (2, 3):
+            raise MeshError(f"{path}: no surface (2D) or volume (3D) physical group: "
+                            "name the bodies' cells in gmsh (Physical Surface/Volume)")
     if len(gmsh.model.mesh.getNodes()[0]) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
     types, _, _ = gmsh.model.mesh.getElements(gdim)
@@ -85,6 +96,7 @@ def _merge(path: pathlib.Path, gdim: int) -> None:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
     if gdim == 2:
         check_cells(path)
+    return gdim
 
 
 DEGENERATE = 1e-6
@@ -253,8 +265,8 @@ def curved_edges() -> int:
     return count
 
 
-def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int = 2,
-             order: int = 1) -> pathlib.Path:
+def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
+             dim: int | None = None, order: int = 1) -> pathlib.Path:
     """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
 
     With ``order = 2`` (the P2 displacement) the mesh is made second order
@@ -269,7 +281,7 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
         target: The ``.msh`` file written (its folder is created); the same path on
             every rank.
         comm: Communicator (rank 0 meshes, every rank returns once the file exists).
-        dim: Dimension of the mesh.
+        dim: Dimension of the mesh; None: the script's (3 if it has a volume).
         order: The displacement's degree (1 or 2).
 
     Returns:
@@ -283,7 +295,8 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm, dim: int 
         target.parent.mkdir(parents=True, exist_ok=True)
         with gmsh_session():
             gmsh.merge(str(path))  # into the session's model
-            gmsh.model.mesh.generate(dim)
+            gmsh.model.mesh.generate(dim if dim is not None else
+                                     max(2, gmsh.model.getDimension()))
             if order == 2 and gmsh.option.getNumber("Mesh.ElementOrder") == 1:
                 gmsh.model.mesh.setOrder(2)
                 if not curved_edges():

@@ -20,6 +20,7 @@ loads (:mod:`~breakwater.model.groups`), the forms and assembly helpers
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import dolfinx
 import numpy as np
@@ -45,6 +46,31 @@ from breakwater.model.parts import (
 
 __all__ = ["Body", "BodyData", "ContactModel", "ContactPair", "Damping", "Fixed", "LoadData",
            "Material", "PairData", "SurfaceLoad", "SurfacePair"]
+
+
+def interface_quadrature(msh: dolfinx.mesh.Mesh) -> dict[str, Any]:
+    """The quadrature of the conforming pairs' interface integrals, by facet shape.
+
+    Its points are always the P2 facet's nodes: the paper's node-to-node contact, which
+    also decouples the friction law node by node (Newton's slip guard acts on nodes; at
+    Gauss points between nodes the regularised law, χ = 1e-10 m/s, makes Newton cycle).
+
+    - Intervals (2D) and quadrilaterals (hexahedra): Gauss–Lobatto of degree 3.
+    - Triangles (tetrahedra): no nodal rule with positive weights integrates a six-node
+      triangle's quadratics (the exact one gives its vertices weight 0), so the rule of
+      the facet's four sub-triangles: A/12 at each vertex, A/4 at each mid-edge node,
+      exact for linear fields (areas, resultants of linear pressures). The nodal
+      pressures of a P2 tetrahedral interface then alternate between its vertices and
+      mid-edge nodes around their mean (the consistent split of a uniform pressure is
+      0 and A/3): hexahedra are the 3D element of choice (docs/threed.md).
+    """
+    facet = dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
+    if facet == dolfinx.mesh.CellType.triangle:
+        points = np.array([[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]], float)
+        weights = np.array([1, 1, 1, 3, 3, 3]) / 24.0  # reference triangle: area 1/2
+        return {"quadrature_rule": "custom", "quadrature_points": points,
+                "quadrature_weights": weights, "quadrature_degree": 1}
+    return {"quadrature_rule": "GLL", "quadrature_degree": 3}
 
 
 class ContactModel(ModelGroups):
@@ -158,12 +184,10 @@ class ContactModel(ModelGroups):
         if not (np.all(self._cell_body[d[:, 0]] == s) and np.all(self._cell_body[d[:, 2]] == m)):
             raise MeshError(f"interface '{pair.interface}' does not lie between "
                             f"'{pair.slave}' and '{pair.master}'")
-        # Nodal (Gauss-Lobatto) quadrature: the points are the facet's P2 nodes, i.e. the
-        # paper's node-to-node contact; it also decouples the friction law node by node.
         tag = 1000 + k
         self._interface_data.append((tag, d.ravel()))
         dS = ufl.Measure("dS", domain=msh, subdomain_data=self._interface_data,
-                         metadata={"quadrature_rule": "GLL", "quadrature_degree": 3})(tag)
+                         metadata=interface_quadrature(msh))(tag)
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
         return PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
