@@ -11,6 +11,7 @@ facet length of a pair and the creep velocities of a frictional static state.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import dolfinx
@@ -265,6 +266,15 @@ def release_velocities(model: ContactModel, held: Sequence[PairData],
 
 
 def mean_facet_length(model: ContactModel, pair: PairData) -> float:
-    """Mean facet length of a contact interface (m)."""
-    length = model.assemble(model.form(1.0 * pair.dS))
-    return length / model.comm.allreduce(len(pair.facet_data))
+    """Mean facet size h of a contact interface (m).
+
+    In 2D the facets' mean length; in 3D the side of the square (quadrilaterals) or of
+    the equilateral triangle of their mean area.
+    """
+    measure = model.assemble(model.form(1.0 * pair.dS))
+    mean = measure / model.comm.allreduce(len(pair.facet_data))
+    if model.mesh.topology.dim == 2:
+        return mean
+    triangle = dolfinx.cpp.mesh.cell_entity_type(model.mesh.topology.cell_type, 2, 0) \
+        == dolfinx.mesh.CellType.triangle
+    return math.sqrt(mean * (4 / math.sqrt(3) if triangle else 1.0))

@@ -30,7 +30,7 @@ from petsc4py import PETSc
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
 from breakwater.common.jit import kernel
-from breakwater.contact.conforming import InterfaceNodes, interface_nodes
+from breakwater.contact.conforming import InterfaceNodes, interface_nodes, mean_facet_length
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
 from breakwater.contact.pairstate import conforming_pairs
 from breakwater.contact.slipguard import SlipGuard
@@ -182,11 +182,9 @@ def solve_static(model: ContactModel, u: Sequence[fem.Function] | None = None,
 
 
 def tangential_stiffness(model: ContactModel, pair: PairData) -> float:
-    """min(ε_n, E/h) of a pair: the softer body's E over the mean facet length."""
+    """min(ε_n, E/h) of a pair: the softer body's E over the mean facet size."""
     E = min(model.bodies[i].spec.material.E for i in (pair.slave, pair.master))
-    length = model.assemble(model.form(1.0 * pair.dS))
-    n_facets = model.comm.allreduce(len(pair.facet_data))
-    return min(float(pair.ε_n.value), E * n_facets / length)
+    return min(float(pair.ε_n.value), E / mean_facet_length(model, pair))
 
 
 def initial_acceleration(model: ContactModel, solver: StepSolver, u: Sequence[fem.Function],

@@ -1,0 +1,160 @@
+"""Three dimensions: the 3D model against the 2D one and against closed forms.
+
+The meshes are :func:`blocks3d.block_pair`'s: block ``a`` on block ``b`` of the same width,
+in 2D (quadrilaterals) or extruded along z (hexahedra), or meshed with tetrahedra.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import sys
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from blocks3d import block_pair
+
+COMM = MPI.COMM_WORLD
+
+W, H = 0.2, 0.05          # blocks' width and height (m), as tests/test_friction.py
+T = 0.05                  # thickness of the 3D slab (m)
+ρ, ν, g = 2000.0, 0.25, 9.81
+μ_F = 0.5
+T_PULSE, N_PULSE = 4e-3, 40
+
+
+def _triangle(peak: float) -> Callable[[float], float]:
+    """A triangular pulse of height ``peak`` over [0, T_PULSE]."""
+    return lambda t: peak * max(0.0, 1.0 - abs(2.0 * t / T_PULSE - 1.0))
+
+
+def _stepper(path: pathlib.Path, E: float, penalty: float, traction: Callable[[float], float],
+             direction: tuple[float, ...], fixed: tuple[Fixed, ...], gravity: tuple[float, ...],
+             group: str = "a_left") -> GN22:
+    """Block ``a`` on ``b`` (μ = 0.5, χ = 1e-10 m/s), ``b_bottom`` fixed, a traction on
+    ``group``: the static state under gravity (the traction must be 0 at t = 0) and a
+    GN22 stepper."""
+    mat = Material(ρ, ν, young_modulus=E)
+    model = ContactModel(
+        read_mesh(path, COMM), [Body("a", mat), Body("b", mat)],
+        [ContactPair("interface", "a", "b", penalty=penalty, friction=μ_F)],
+        [Fixed("b_bottom"), *fixed],
+        [SurfaceLoad(group, direction, traction)], gravity=gravity)
+    u, _ = solve_static(model)
+    stepper = GN22(model, T_PULSE / N_PULSE, GN22Parameters())
+    stepper.initialise(u)
+    return stepper
+
+
+def _interface(stepper: GN22, field: str = "u") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The interface nodes' coordinates, slave and master values (every rank)."""
+    f = getattr(stepper, field)
+    nodes = stepper.nodes[0]
+    s, m = nodes.gather(f[0].x.array, f[1].x.array)
+    return nodes.x, s, m
+
+
+def test_plane_strain_slab_is_the_2d_model(folder: pathlib.Path) -> None:
+    # The 2D mesh extruded along z by one layer of hexahedra, u_z fixed on both faces z = 0
+    # and z = T: the 2D (plane-strain) solution, extended constant in z, is the 3D discrete
+    # solution. The 3D space holds the 2D one times each z shape function; the shear
+    # stresses σ_xz, σ_yz of a z-independent field vanish, σ_zz only meets test functions
+    # whose z shape vanishes on both faces, and every integral (the bulk's, and the
+    # interface's Gauss–Lobatto rule, a tensor product) factorises as the 2D one times
+    # ∫ψ dz. So the histories agree to Newton's tolerance (1e-9 of the residual): 1e-6
+    # relative, the issue's bound, for the block sliding on its base under a pulse of
+    # 3μN with gravity (stick, slip and stop) — measured below.
+    two = block_pair(folder / "slab2d.msh", COMM, W, (H, H), 0.025)
+    three = block_pair(folder / "slab3d.msh", COMM, W, (H, H), 0.025, thickness=T)
+    peak = 3.0 * μ_F * ρ * g * W * H / H  # traction (Pa): 3μN over the block's side
+    a = _stepper(two, 1e9, 1e12, _triangle(peak), (1.0, 0.0), (), (0.0, -g))
+    b = _stepper(three, 1e9, 1e12, _triangle(peak), (1.0, 0.0, 0.0),
+                 (Fixed("a_sides", (2,)), Fixed("b_sides", (2,))), (0.0, -g, 0.0))
+    x2, _, _ = _interface(a)
+    x3, _, _ = _interface(b)
+    # Every 3D interface node lies over a 2D one: the 3D values at z = 0, T/2 and T.
+    index = [int(np.argmin(np.linalg.norm(x2 - p[:2], axis=1))) for p in x3]
+    assert np.allclose(x2[index], x3[:, :2], atol=1e-12)
+    worst = {"u": 0.0, "v": 0.0, "u_z": 0.0}
+    slide = 0.0
+    for _ in range(2 * N_PULSE):
+        a.step()
+        b.step()
+        for field in ("u", "v"):
+            _, s2, m2 = _interface(a, field)
+            _, s3, m3 = _interface(b, field)
+            scale = max(np.abs(s2).max(), 1e-300)
+            worst[field] = max(worst[field], np.abs(s3[:, :2] - s2[index]).max() / scale,
+                               np.abs(m3[:, :2] - m2[index]).max() / scale)
+            if field == "u":
+                worst["u_z"] = max(worst["u_z"], np.abs(s3[:, 2]).max() / scale)
+                slide = float(np.mean(s2[:, 0] - m2[:, 0]))
+    if COMM.rank == 0:
+        print(f"\nslab: slide {slide:.4e} m; 3D vs 2D, relative: {worst}")
+    # It slid: sticking, the base would move by the elastic shear displacement of the
+    # interface's mean shear stress (3μN/W) over the block's height, 1.8e-7 m.
+    assert slide > 100 * (peak * H / W) * H / Material(ρ, ν, young_modulus=1e9).G
+    for field, error in worst.items():
+        assert error <= 1e-6, field
+
+
+@pytest.mark.parametrize("cells", ["hexahedra", "tetrahedra"])
+def test_block_pushed_diagonally_slides_along_the_push(folder: pathlib.Path, cells: str) -> None:
+    # A stiff square block (E = 1e11 Pa, ε_n = 1e13 N/m³: the rigid limit of
+    # tests/test_friction.py) on its base under gravity, pushed from t = 0⁺ by a uniform
+    # shear traction on its top face along d = (cos 30°, 0, sin 30°), of resultant
+    # F = 2μN (N = mg). The push's resultant passes over the base's centre: no yaw. A
+    # rigid block slides along d with a = (F − μN)/m = μg (Coulomb, isotropic). Fitted
+    # over 20 steps after 20 steps of elastic transient, the interface's mean slip
+    # velocity grows at that rate within 1 % (the issue's bound; measured 2e-6 on both
+    # meshes), and its direction is d within 1e-4 rad (the elastic block's nodes do not
+    # all slip alike; measured 1e-6 on hexahedra, 2.5e-6 on tetrahedra). At every
+    # slipping node the friction traction is opposite the slip velocity to 1e-6 rad
+    # (the isotropic law, eqs. 14-15, in the tangent plane; measured 2e-8, round-off).
+    L = W
+    path = block_pair(folder / f"push_{cells}.msh", COMM, L, (H, H), 0.05, thickness=L,
+                      tetrahedra=cells == "tetrahedra")
+    N = ρ * g * L * H * L
+    θ = math.radians(30.0)
+    d = np.array([math.cos(θ), 0.0, math.sin(θ)])
+    traction = 2.0 * μ_F * N / (L * L)
+    stepper = _stepper(path, 1e11, 1e13, lambda t: traction if t > 0 else 0.0, tuple(d),
+                       (), (0.0, -g, 0.0), "a_top")
+    times, velocities = [], []
+    for k in range(40):
+        stepper.step()
+        if k >= 20:
+            _, vs, vm = _interface(stepper, "v")
+            times.append(float(stepper.t.value))
+            velocities.append(np.mean(vs - vm, axis=0))
+    slope = np.polyfit(times, np.array(velocities), 1)[0]
+    a_ref = (2.0 * μ_F * N - μ_F * N) / (ρ * L * H * L)
+    angle = math.acos(min(1.0, float(slope @ d) / float(np.linalg.norm(slope))))
+    state = stepper.nodes[0].contact_state(*(f.x.array for f in (stepper.u[0], stepper.u[1])),
+                                           *(f.x.array for f in (stepper.v[0], stepper.v[1])))
+    v_T, t_T = state["slip_velocity"], state["friction_traction"]
+    # The push's moment F·H lifts the rear of the base (eccentricity F H / N = L/4 > L/6):
+    # the open nodes carry no friction; every closed one slips.
+    closed = state["pressure"] > 0
+    speed = np.linalg.norm(v_T, axis=1)
+    slipping = closed & (speed > 1e3 * float(stepper.model.pairs[0].law.friction.χ.value))
+    cosine = -np.sum(v_T * t_T, axis=1)[slipping] / (speed[slipping]
+                                                    * np.linalg.norm(t_T[slipping], axis=1))
+    if COMM.rank == 0:
+        print(f"\n{cells}: a = {np.linalg.norm(slope):.5f} m/s² (rigid {a_ref:.5f}), "
+              f"direction off d by {angle:.2e} rad; {slipping.sum()} of {closed.sum()} closed "
+              f"nodes slip ({len(v_T)} nodes)")
+    assert np.linalg.norm(slope) == pytest.approx(a_ref, rel=0.01)
+    assert angle < 1e-4
+    assert np.array_equal(slipping, closed) and closed.sum() > len(v_T) // 2
+    assert not t_T[~closed].any()
+    assert np.all(np.arccos(np.minimum(1.0, cosine)) < 1e-6)
