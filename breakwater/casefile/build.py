@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from mpi4py import MPI
 
+from breakwater.casefile.dimension import mesh_problem
 from breakwater.casefile.godaface import check_goda_face
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
@@ -104,9 +105,13 @@ def read_mesh(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
 
     """
     try:
-        return _read_msh(mesh_file(case, comm, directory), comm)
+        data = _read_msh(mesh_file(case, comm, directory), comm)
     except MeshError as e:
         raise CaseError(f"mesh.source: {e}") from e
+    problem = mesh_problem(case, data.mesh.geometry.dim)
+    if problem is not None:
+        raise CaseError(f"mesh.source: {problem}")
+    return data
 
 
 def build_model(case: CaseSettings, data: gmshio.MeshData,

@@ -39,6 +39,7 @@ import pathlib
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+from breakwater.casefile.dimension import dimension, mesh_problem
 from breakwater.casefile.loads import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
 from breakwater.casefile.settings import CaseSettings
 from breakwater.casefile.tables import (
@@ -204,43 +205,48 @@ def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     return groups
 
 
-_DIM_NAMES = {0: "point", 1: "facet", 2: "cell"}
-
-
 def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
-    """Every group the case names exists in the mesh with the right dimension."""
+    """The mesh is of the case's dimension, and every group the case names is in it.
+
+    Each with the right dimension: cells the case's, facets one less, points 0.
+    """
     where = "the goda mesh" if case.mesh.generated else case.mesh.source
+    d = dimension(case)
+    problem = mesh_problem(case, max(groups.values()))
+    if problem is not None:
+        raise InvalidField("mesh.source", problem)
+    names = {0: "point", d - 1: "facet", d: "cell" if d == 2 else "volume"}
 
     def need(name: str, dim: int | tuple[int, ...], field_path: str) -> None:
         dims = (dim,) if isinstance(dim, int) else dim
         if groups.get(name) in dims:
             return
         have = sorted(n for n, d in groups.items() if d in dims)
-        kinds = " or ".join(f"{_DIM_NAMES[d]} ({d}D)" for d in dims)
+        kinds = " or ".join(f"{names.get(k, 'edge')} ({k}D)" for k in dims)
         raise InvalidField(field_path, f"no {kinds} physical group "
                            f"'{name}' in {where}{suggest(name, have)} (it has: "
                            f"{', '.join(have) or 'none'})")
 
     for b in case.bodies:
-        need(b.name, 2, f"bodies.{b.name}")
+        need(b.name, d, f"bodies.{b.name}")
     for c in case.contact:
         if c.general:
-            need(c.slave_surface or "", 1, f"contact.{c.name}.slave_surface")
+            need(c.slave_surface or "", d - 1, f"contact.{c.name}.slave_surface")
             if isinstance(c.master_surface, tuple):
                 for k, group in enumerate(c.master_surface):
-                    need(group, 1, f"contact.{c.name}.master_surface[{k}]")
+                    need(group, d - 1, f"contact.{c.name}.master_surface[{k}]")
             else:
-                need(c.master_surface or "", 1, f"contact.{c.name}.master_surface")
+                need(c.master_surface or "", d - 1, f"contact.{c.name}.master_surface")
         else:
-            need(c.name, 1, f"contact.{c.name}")
+            need(c.name, d - 1, f"contact.{c.name}")
     for f in case.fixed:
-        need(f.name, (1, 0), f"fixed.{f.name}")  # a facet group, or points
+        need(f.name, (d - 1, 0), f"fixed.{f.name}")  # a facet group, or points
     for ld in case.loads:
-        need(ld.group, 1, f"loads.{ld.name}.group")
+        need(ld.group, d - 1, f"loads.{ld.name}.group")
         for k, extra in enumerate(ld.groups):
-            need(extra, 1, f"loads.{ld.name}.groups[{k}]")
+            need(extra, d - 1, f"loads.{ld.name}.groups[{k}]")
         if ld.goda is not None and ld.goda.uplift_group is not None:
-            need(ld.goda.uplift_group, 1, f"loads.{ld.name}.goda.uplift_group")
+            need(ld.goda.uplift_group, d - 1, f"loads.{ld.name}.goda.uplift_group")
     for p in case.output.probes:
         if p.group is not None:
             need(p.group, 0, f"output.probes.{p.name}.group")

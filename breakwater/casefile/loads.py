@@ -146,10 +146,12 @@ class ProfileCase:
     origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0")
 
     def __post_init__(self) -> None:
-        if len(self.axis) != 2 or not any(self.axis):
-            raise InvalidField("axis", f"must be a non-zero 2-vector (got {list(self.axis)})")
-        if len(self.origin) != 2:
-            raise InvalidField("origin", f"must have 2 coordinates (got {list(self.origin)})")
+        if len(self.axis) not in (2, 3) or not any(self.axis):
+            raise InvalidField("axis", f"must be a non-zero 2- or 3-vector (got "
+                               f"{list(self.axis)})")
+        if len(self.origin) != len(self.axis):
+            raise InvalidField("origin", f"must have {len(self.axis)} coordinates, as axis "
+                               f"(got {list(self.origin)})")
         if any(len(p) != 2 for p in self.points):
             raise InvalidField("points", "expected [s, p] pairs")
         try:
@@ -268,8 +270,8 @@ class LoadCase:
     table: TableCase | None = setting(None, doc="table: the tabulated factor")  # noqa: RUF009 (a field() with docs)
 
     def __post_init__(self) -> None:
-        if len(self.direction) != 2 or not any(self.direction):
-            raise InvalidField("direction", f"must be a non-zero 2-vector (got "
+        if len(self.direction) not in (2, 3) or not any(self.direction):
+            raise InvalidField("direction", f"must be a non-zero 2- or 3-vector (got "
                                f"{list(self.direction)})")
         norm = math.hypot(*self.direction)
         object.__setattr__(self, "direction", tuple(c / norm for c in self.direction))

@@ -59,7 +59,7 @@ def group_length(data: gmshio.MeshData, group: str) -> float:
 
 
 def load_length(load: LoadCase, data: gmshio.MeshData) -> float:
-    """Length (m) of a load's groups (``group``, then ``groups``) on a mesh."""
+    """Length (m; in 3D area, m²) of a load's groups (``group``, then ``groups``)."""
     return sum(group_length(data, g) for g in (load.group, *load.groups))
 
 
@@ -160,7 +160,7 @@ def surface_loads(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: fl
     else:
         assert load.goda is not None
         field = load.goda.front()
-    direction = (t * d[0], t * d[1]) if field is None else ()
+    direction = tuple(t * c for c in d) if field is None else ()
     loads = [SurfaceLoad(g, direction, factor, field, load.body, load.name) for g in groups]
     if load.goda is not None and load.goda.uplift_group is not None:
         profile, _ = uplift_profile(load.goda, data, groups)

@@ -17,6 +17,7 @@ import pathlib
 from dataclasses import dataclass, replace
 from typing import Any, Self
 
+from breakwater.casefile.dimension import dimension_problem
 from breakwater.casefile.loads import LoadCase
 from breakwater.casefile.tables import (
     BodyCase,
@@ -82,15 +83,17 @@ class CaseSettings:
         if problem is not None:  # the name is the default output folder results/<name>
             raise InvalidField("name", problem)
         positive(self.out_of_plane_length, "out_of_plane_length")
-        if len(self.gravity) != 2:
-            raise InvalidField("gravity", f"must have 2 components (got {list(self.gravity)})")
-        gx, gy = self.gravity
-        if not math.isfinite(gx * gx + gy * gy):  # |g|² of the energy and the weights
-            raise InvalidField("gravity", f"[{gx:g}, {gy:g}] m/s²: gx² + gy² overflows")
+        if len(self.gravity) not in (2, 3):
+            raise InvalidField("gravity", f"must have 2 components (plane strain) or 3 (3D) "
+                               f"(got {list(self.gravity)})")
+        shown = ", ".join(f"{c:g}" for c in self.gravity)
+        if not math.isfinite(sum(c * c for c in self.gravity)):  # |g|² of the energy
+            raise InvalidField("gravity", f"[{shown}] m/s²: |g|² overflows")
         for b in self.bodies:  # the body force ρ g of the run
-            if not math.isfinite(b.density * max(abs(gx), abs(gy))):
+            if not math.isfinite(b.density * max(map(abs, self.gravity))):
                 raise InvalidField(f"bodies.{b.name}.density", f"{b.density:g} kg/m³ times "
-                                   f"gravity [{gx:g}, {gy:g}] m/s² overflows")
+                                   f"gravity [{shown}] m/s² overflows")
+        dimension_problem(self)
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
         names = [b.name for b in self.bodies]

@@ -87,7 +87,7 @@ class BodyCase:
     body whose shear modulus ``[calibration]`` finds.
     """
 
-    name: str = setting(key=True, doc="cell (2D) physical group of the body")
+    name: str = setting(key=True, doc="cell (2D) or volume (3D) physical group of the body")
     density: float = setting(unit="kg/m³", doc="mass density ρ")
     poisson: float = setting(doc="Poisson's ratio ν, in (−1, 0.5)")
     shear_modulus: float | None = setting(None, unit="Pa", doc="shear modulus G")
@@ -97,8 +97,9 @@ class BodyCase:
 
     def __post_init__(self) -> None:
         positive(self.density, "density")
-        if len(self.initial_velocity) != 2 or not all(map(math.isfinite, self.initial_velocity)):
-            raise InvalidField("initial_velocity", f"must be 2 finite numbers (got "
+        if len(self.initial_velocity) not in (2, 3) \
+                or not all(map(math.isfinite, self.initial_velocity)):
+            raise InvalidField("initial_velocity", f"must be 2 or 3 (3D) finite numbers (got "
                                f"{list(self.initial_velocity)})")
         if not -1.0 < self.poisson < 0.5:
             raise InvalidField("poisson", f"Poisson's ratio must be in (-1, 0.5) (got "
@@ -298,8 +299,9 @@ def _one_location(obj: ProbeCase | PairProbeCase) -> None:
     if (obj.group is None) == (obj.point is None):
         raise InvalidField("group", "give either group (a point group) or point "
                            "(coordinates), exactly one")
-    if obj.point is not None and len(obj.point) != 2:
-        raise InvalidField("point", f"must have 2 coordinates (got {list(obj.point)})")
+    if obj.point is not None and len(obj.point) not in (2, 3):
+        raise InvalidField("point", f"must have 2 or 3 (3D) coordinates (got "
+                           f"{list(obj.point)})")
 
 
 @dataclass(frozen=True)

@@ -100,7 +100,10 @@ class PressureProfile:
         """p(s(x)) as a UFL expression (a sum of one linear piece per interval)."""
         import ufl
 
-        s = ufl.dot(x - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
+        # The axis's components are the first coordinates': a 2D axis in 3D measures s in
+        # the x-y plane (the elevation y of (0, 1) in both).
+        xs = ufl.as_vector([x[i] for i in range(len(self.axis))])
+        s = ufl.dot(xs - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
         p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
         pts = self.points
         for k in range(len(pts) - 1):
@@ -195,7 +198,10 @@ class StagedProfile:
         import ufl
 
         k = len(self.stages[0])
-        s = ufl.dot(x - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
+        # The axis's components are the first coordinates': a 2D axis in 3D measures s in
+        # the x-y plane (the elevation y of (0, 1) in both).
+        xs = ufl.as_vector([x[i] for i in range(len(self.axis))])
+        s = ufl.dot(xs - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
         p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
         for j in range(k - 1):
             s0, s1, p0, p1 = c[j], c[j + 1], c[k + j], c[k + j + 1]

@@ -46,6 +46,7 @@ from breakwater.common.files import (
     temporary_path,
     writing,
 )
+from breakwater.outputs.section import mid_row
 from breakwater.outputs.stormrecord import storm_figures
 
 __all__ = ["make_figures"]
@@ -124,7 +125,7 @@ def _pair_probes(h: dict[str, np.ndarray], t_peak: float | None, component: str,
     return _save(fig, path)
 
 
-def _energy(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None:
+def _energy(h: dict[str, np.ndarray], path: pathlib.Path, per: str) -> pathlib.Path | None:
     if not all(k in h for k in LEDGER):
         return None
     fig = Figure(figsize=(7, 6))
@@ -133,17 +134,17 @@ def _energy(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None
         ax.plot(h["t"], h[k], ":" if k == NUMERICAL[1] else "-", label=k.replace("_", " "))
     stored = h["kinetic"] + h["strain"] + h["penalty"]
     ax.plot(h["t"], stored - stored[0], "k--", lw=0.8, label="stored − stored(0)")
-    ax.set_ylabel("energy (J/m)")
+    ax.set_ylabel(f"energy (J{per})")
     ax.set_title("Energy ledger")
     ax.legend(fontsize=7)
     _time_axis(ax, h["t"])
     bx.plot(h["t"], h["balance_error"], "r")
-    bx.set_ylabel("balance error (J/m)")
+    bx.set_ylabel(f"balance error (J{per})")
     _time_axis(bx, h["t"])
     return _save(fig, path)
 
 
-def _contact(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | None:
+def _contact(h: dict[str, np.ndarray], path: pathlib.Path, per: str) -> pathlib.Path | None:
     # The conforming pairs: those with a normal and a tangential resultant.
     pairs = [n.removesuffix("_tangential_force") for n in h if n.endswith("_tangential_force")]
     fig = Figure(figsize=(7, 8))
@@ -153,8 +154,8 @@ def _contact(h: dict[str, np.ndarray], path: pathlib.Path) -> pathlib.Path | Non
         axes[1].plot(h["t"], h[f"{name}_normal_force"], label=name)
         axes[2].plot(h["t"], h[f"{name}_tangential_force"], label=name)
     axes[0].set_ylabel("contact length (m)")
-    axes[1].set_ylabel("normal force (N/m)")
-    axes[2].set_ylabel("tangential force (N/m)")
+    axes[1].set_ylabel(f"normal force (N{per})")
+    axes[2].set_ylabel(f"tangential force (N{per})")
     axes[3].step(h["t"], h["newton_iterations"], where="pre", color="k", lw=0.8)
     axes[3].set_ylabel("Newton iterations")
     ax_dt = axes[3].twinx()
@@ -245,12 +246,18 @@ def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
         return None
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
+    section = ""
     for name, arrays in pairs.items():
-        x = arrays["x"]
+        x, pressure = arrays["x"], arrays["pressure"]
+        if x.shape[1] == 3:  # 3D: the nodes of the row nearest the interface's mid z
+            row = mid_row(x)
+            section = f" at z = {float(x[row, 2].mean()):.4g} m"
+            x, pressure = x[row], pressure[row]
         # Abscissa along the interface: x for a horizontal one, else the arc length.
         span = np.ptp(x, axis=0)
         s = x[:, 0] if span[0] >= span[1] else x[:, 1]
-        ax.plot(s, arrays["pressure"], "o-", ms=3, label=f"contact {name}")
+        order = np.argsort(s)
+        ax.plot(s[order], pressure[order], "o-", ms=3, label=f"contact {name}{section}")
     static = summary.get("static", {})
     mean = static.get("mean_contact_pressure")
     if mean is not None:
@@ -280,6 +287,7 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
     if (directory / SUMMARY).is_file():
         summary = json.loads((directory / SUMMARY).read_text(encoding="utf-8"))
     t_peak = summary.get("dynamic", {}).get("time_of_max_ux")
+    per = "" if summary.get("dimension", 2) == 3 else "/m"  # forces, energies per metre
     drawn: list[pathlib.Path | None] = []
     if (directory / HISTORY).is_file():
         h = _legacy_columns(read_history(directory / HISTORY))
@@ -287,8 +295,8 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
             drawn += [_probes(h, t_peak, folder / "probes_ux.png"),
                       _pair_probes(h, t_peak, "x", folder / "pair_probes_ux.png"),
                       _pair_probes(h, t_peak, "y", folder / "pair_probes_uy.png"),
-                      _energy(h, folder / "energy.png"),
-                      _contact(h, folder / "contact.png")]
+                      _energy(h, folder / "energy.png", per),
+                      _contact(h, folder / "contact.png", per)]
     if (directory / STATIC).is_file():
         with np.load(directory / STATIC) as data:
             drawn += [

@@ -37,6 +37,7 @@ from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair, pair_names
 from breakwater.outputs import quality
 from breakwater.outputs.probes import Probes
+from breakwater.outputs.section import mid_row
 
 __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_quality",
            "dynamic_summary", "energy_summary", "format_report", "merge", "quality_inputs",
@@ -64,10 +65,12 @@ def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
     """Indices of the two end nodes of an interface and of the node nearest its centre.
 
     The nodes are sorted lexicographically (x, then y), so for a straight interface
-    the first and last are its ends.
+    the first and last are its ends. In 3D the same along the row of nodes nearest the
+    interface's mid z (:func:`~breakwater.outputs.section.mid_row`).
     """
-    first, last = 0, len(x) - 1
-    centre = int(np.argmin(np.linalg.norm(x - 0.5 * (x[first] + x[last]), axis=1)))
+    row = np.flatnonzero(mid_row(x))
+    first, last = int(row[0]), int(row[-1])
+    centre = int(row[np.argmin(np.linalg.norm(x[row] - 0.5 * (x[first] + x[last]), axis=1))])
     return first, last, centre
 
 
@@ -129,7 +132,7 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
         "slave": model.bodies[slave].spec.name,
         "weight": weight,
         "contact_resultant": resultant,
-        "contact_length": length,
+        "contact_area" if model.gdim == 3 else "contact_length": length,
         "mean_contact_pressure": resultant / length if length > 0 else None,
         "edge_pressure": 0.5 * (pressure[first_node] + pressure[last]),
         "edge_pressures": [pressure[first_node], pressure[last]],
@@ -315,7 +318,7 @@ def energy_summary(rows: Sequence[Mapping[str, float]]) -> dict[str, Any]:
             "max_balance_error_over_energy_scale": of(largest, scale)}
 
 
-def balance_warning(energy: Mapping[str, Any]) -> str | None:
+def balance_warning(energy: Mapping[str, Any], per: str = "/m") -> str | None:
     """The warning of a run whose energy balance does not close, or None.
 
     See :data:`BALANCE_WARNING`.
@@ -323,9 +326,9 @@ def balance_warning(energy: Mapping[str, Any]) -> str | None:
     ratio = energy.get("max_balance_error_over_energy_scale")
     if ratio is None or ratio <= BALANCE_WARNING:
         return None
-    return (f"energy: the balance error reaches {energy['max_balance_error']:.3g} J/m, "
+    return (f"energy: the balance error reaches {energy['max_balance_error']:.3g} J{per}, "
             f"{100 * ratio:.3g} % of the run's largest energy "
-            f"({energy['energy_scale']:.3g} J/m): the time steps do not resolve the motion "
+            f"({energy['energy_scale']:.3g} J{per}): the time steps do not resolve the motion "
             "(an impact within a step?); these results are not reliable: reduce time.dt")
 
 
@@ -334,8 +337,8 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
                 resumed_from: list[dict[str, Any]], rows: Sequence[Mapping[str, float]],
                 probes: Probes | None, contact_quality: Mapping[str, quality.ContactQuality],
                 solver: Mapping[str, Any], checkpoint: Mapping[str, Any] | None,
-                outputs: Mapping[str, Any], comm: MPI.Comm, extra: Mapping[str, Any]
-                ) -> dict[str, Any]:
+                outputs: Mapping[str, Any], comm: MPI.Comm, extra: Mapping[str, Any],
+                dimension: int = 2) -> dict[str, Any]:
     """The summary of a run (``summary.json``), ``extra`` merged in.
 
     Args:
@@ -356,9 +359,11 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         outputs: The ``outputs`` entry.
         comm: The communicator (its size is in ``versions``).
         extra: Merged into the summary (e.g. calibration results).
+        dimension: The model's (2: plane strain, forces and energies per metre; 3).
     """
     summary: dict[str, Any] = {
         "case_name": case_name,
+        "dimension": dimension,
         "finished": finished,
         "status": status,
         "error": error,
@@ -414,9 +419,15 @@ def merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
 
 # --- on-screen report -------------------------------------------------------------
 
+def per_metre(summary: Mapping[str, Any]) -> str:
+    """``"/m"`` for a plane-strain run's forces and energies (per metre), ``""`` in 3D."""
+    return "" if summary.get("dimension", 2) == 3 else "/m"
+
+
 def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> str:
     """A short human-readable report of a run summary."""
     s, d, sol = summary.get("static", {}), summary.get("dynamic", {}), summary.get("solver", {})
+    per = per_metre(summary)
 
     def num(x: Any, fmt: str = ".4g") -> str:
         return "n/a" if x is None else format(x, fmt)
@@ -428,8 +439,8 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                 if summary.get("status") == "interrupted" else
                 f"FAILED at t = {reached} s: {summary.get('error')}")]
     if s:
-        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N/m, "
-                     f"weight {num(s.get('weight'))} N/m, mean pressure "
+        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N{per}, "
+                     f"weight {num(s.get('weight'))} N{per}, mean pressure "
                      f"{num(s.get('mean_contact_pressure'))} Pa (edge "
                      f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
     for name, peak in d.get("peak_ux", {}).items():
@@ -467,11 +478,11 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"{num(ratios.get('master'), '.3g')} (master): {q.get('verdict')}")
     e = summary.get("energy", {})
     if e.get("max_balance_error") is not None:
-        line = f"  energy: max |balance error| {num(e.get('max_balance_error'))} J/m"
+        line = f"  energy: max |balance error| {num(e.get('max_balance_error'))} J{per}"
         if e.get("max_balance_error_over_external_work") is not None:
             line += (f" ({num(e['max_balance_error_over_external_work'], '.2g')} of the "
                      f"external work); numerical dissipation "
-                     f"{num(e.get('numerical_dissipation'))} J/m "
+                     f"{num(e.get('numerical_dissipation'))} J{per} "
                      f"({pct(e.get('numerical_dissipation_over_external_work'))})")
         lines.append(line)
     storm = summary.get("storm")

@@ -52,6 +52,7 @@ from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair
 from breakwater.outputs.checkpoint import match_nodes
+from breakwater.outputs.section import section
 
 __all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
            "RunFiles", "read_history", "snapshot_arrays"]
@@ -194,6 +195,11 @@ class BodyFields:
         gdim = model.gdim
         degree = body.V.ufl_element().embedded_superdegree
         self.gdim = gdim
+        # 3D: the figures' section, the model's mid-plane across z (the same for every body).
+        x = model.mesh.geometry.x[:, 2]
+        lo, hi = (model.comm.allreduce(float(f(x)) if len(x) else s, op)
+                  for f, s, op in ((np.min, np.inf, MPI.MIN), (np.max, -np.inf, MPI.MAX)))
+        self.section_z = 0.5 * (lo + hi)
         self.u = fem.Function(body.V, name="u_out")
         self.v = fem.Function(body.V, name="v_out")
         Vd = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (gdim,)))
@@ -276,7 +282,9 @@ class BodyFields:
             On rank 0: ``x`` (n, 2) vertex coordinates, ``triangles`` (m, 3),
             ``ux``, ``uy``, ``von_mises``, ``stress_yy`` and the stress tensor's
             components ``stress_xx``, ``stress_xy``, ``stress_zz`` (n,; σ_zz = λ tr ε
-            in plane strain; σ_xz = σ_yz = 0 there, not written).
+            in plane strain; σ_xz = σ_yz = 0 there, not written). In 3D the same on the
+            section z = :attr:`section_z` (:func:`~breakwater.outputs.section.section`):
+            its points and triangles, the values interpolated there.
         """
         sub = self.u.function_space.mesh
         if self._p1 is None:
@@ -306,7 +314,7 @@ class BodyFields:
         cells = imap.local_to_global(dofs.ravel()).reshape(dofs.shape)
         local = {
             "gidx": imap.local_to_global(np.arange(nloc, dtype=np.int32)),
-            "x": S1.tabulate_dof_coordinates()[:nloc, :2],
+            "x": S1.tabulate_dof_coordinates()[:nloc, :self.gdim],
             "cells": cells,
             "ux": u1.x.array.reshape(-1, self.gdim)[:nloc, 0],
             "uy": u1.x.array.reshape(-1, self.gdim)[:nloc, 1],
@@ -317,11 +325,15 @@ class BodyFields:
             return None
         n = imap.size_global
         out: dict[str, np.ndarray] = {k: np.zeros(n) for k in ("ux", "uy", *scalars)}
-        out["x"] = np.zeros((n, 2))
+        out["x"] = np.zeros((n, self.gdim))
         for part in parts:
             for k in out:
                 out[k][part["gidx"]] = part[k]
         cells = np.vstack([part["cells"] for part in parts])
+        if self.gdim == 3:
+            x3 = out.pop("x")
+            xy, triangles, values = section(x3, cells, out, self.section_z)
+            return {"x": xy, "triangles": triangles, **values}
         if cells.shape[1] == 4:  # quadrilaterals (tensor-product order): two triangles each
             cells = np.vstack([cells[:, [0, 1, 3]], cells[:, [0, 3, 2]]])
         out["triangles"] = cells.astype(np.int64)

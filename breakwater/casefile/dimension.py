@@ -1,0 +1,80 @@
+"""A case's dimension: plane strain (2D) or three dimensions, from its vectors and its mesh.
+
+A case's vectors (``gravity``, the ``direction`` of each force, traction or pulse, a
+profile's ``axis`` (which may stay 2D: the x-y plane), the bodies' non-zero
+``initial_velocity``, the probes' ``point``) all have 2 components (plane strain) or
+all 3; ``gravity`` sets the case's dimension (its default is 2D). The mesh must then be
+of the same dimension (:func:`mesh_problem`, once it is read). In 3D,
+``out_of_plane_length`` does not apply (nothing is per metre) and must stay 1, and a
+calibration reads its stiffness as the 3D model's (``stiffness_basis = "block"``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+from breakwater.config.fields import InvalidField
+
+if TYPE_CHECKING:
+    from breakwater.casefile.settings import CaseSettings
+
+__all__ = ["dimension", "dimension_problem", "mesh_problem"]
+
+
+def dimension(case: CaseSettings) -> int:
+    """The case's dimension: 2 (plane strain) or 3, the length of its gravity vector."""
+    return len(case.gravity)
+
+
+def _vectors(case: CaseSettings) -> Iterator[tuple[str, tuple[float, ...]]]:
+    """Every vector of a case but gravity, by key (a zero initial velocity is none)."""
+    for ld in case.loads:
+        if ld.force is not None or ld.traction is not None or ld.kind == "pulse":
+            yield f"loads.{ld.name}.direction", ld.direction  # (unused by pressures)
+        if ld.profile is not None:
+            yield f"loads.{ld.name}.profile.axis", ld.profile.axis
+    for b in case.bodies:
+        if any(b.initial_velocity):
+            yield f"bodies.{b.name}.initial_velocity", b.initial_velocity
+    for kind, probes in (("probes", case.output.probes),
+                         ("pair_probes", case.output.pair_probes)):
+        for p in probes:
+            if p.point is not None:
+                yield f"output.{kind}.{p.name}.point", p.point
+
+
+def dimension_problem(case: CaseSettings) -> None:
+    """Refuse a case whose vectors disagree with its gravity's dimension.
+
+    Raises:
+        InvalidField: The first key with the wrong number of components, or a 3D case
+            with ``out_of_plane_length`` or a per-metre calibration.
+    """
+    d = dimension(case)
+    for key, vector in _vectors(case):
+        if len(vector) != d and not (key.endswith("profile.axis") and d == 3):
+            raise InvalidField(key, f"{len(vector)} components, but gravity has {d}: a "
+                               "case's vectors all have 2 components (plane strain) or all 3 "
+                               f"(got {list(vector)})")
+    if d == 3:
+        if case.out_of_plane_length != 1.0:
+            raise InvalidField("out_of_plane_length", "a 3D case (3-component gravity) has "
+                               "no out-of-plane length: forces and impulses are the bodies' "
+                               "own; remove the key")
+        cal = case.calibration
+        if cal.enabled and cal.stiffness_basis != "block":
+            raise InvalidField("calibration.stiffness_basis", "a 3D case (3-component "
+                               "gravity) calibrates the model's own stiffness: \"block\"")
+
+
+def mesh_problem(case: CaseSettings, gdim: int) -> str | None:
+    """Why a mesh of dimension ``gdim`` does not fit the case, or None."""
+    d = dimension(case)
+    if gdim == d:
+        return None
+    if gdim == 3:
+        return ("the mesh is 3D but the case is plane strain (2-component gravity): give "
+                "gravity, directions, points and velocities 3 components")
+    return ("the mesh is 2D but the case is 3D (3-component gravity): give every vector 2 "
+            "components, or a mesh with volumes")
