@@ -158,3 +158,95 @@ def test_block_pushed_diagonally_slides_along_the_push(folder: pathlib.Path, cel
     assert np.array_equal(slipping, closed) and closed.sum() > len(v_T) // 2
     assert not t_T[~closed].any()
     assert np.all(np.arccos(np.minimum(1.0, cosine)) < 1e-6)
+
+
+def test_section_of_hexahedra_and_tetrahedra() -> None:
+    # The unit cube as one hexahedron and as its six tetrahedra, cut at z = 0.3 and at
+    # z = 1 (through vertices: the cells below, once): the section is the unit square
+    # (its triangles' areas sum to 1) and a linear field f = x + 2y + 3z is exact on it.
+    from breakwater.outputs.section import _HEX_TETS, section
+
+    corners = np.array([[k & 1, k >> 1 & 1, k >> 2 & 1] for k in range(8)], float)
+    f = corners @ np.array([1.0, 2.0, 3.0])
+    for cells in (np.arange(8)[None, :], _HEX_TETS):
+        for z in (0.3, 1.0):
+            xy, tri, values = section(corners, cells, {"f": f}, z)
+            p = xy[tri]
+            area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                                - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+            assert area.sum() == pytest.approx(1.0, rel=1e-14)
+            assert np.allclose(values["f"], xy @ [1.0, 2.0] + 3 * z, atol=1e-14)
+    xy, tri, _ = section(corners, _HEX_TETS, {"f": f}, 1.5)  # above the cube: empty
+    assert len(xy) == len(tri) == 0
+
+
+def test_a_3d_case_file_runs(folder: pathlib.Path) -> None:
+    # The user path in 3D: a case file on a hexahedral mesh, 3-component vectors. The
+    # static contact resultant is the block's weight ρ g V (1e-9: Newton's tolerance),
+    # over the contact area W²; the pulse's applied impulse is the requested one (1e-12,
+    # the trapezoidal rule's exactness on the sampled triangle); the summary reports
+    # whole-body quantities (N, J, m²: no "per length" key); the figures are drawn on
+    # the mid-z section.
+    from breakwater.casefile.case import load_case
+    from breakwater.run import simulation
+
+    mesh = block_pair(folder / "case3d.msh", COMM, W, (H, H), 0.1, thickness=W)
+    path = folder / "case3d.toml"
+    if COMM.rank == 0:
+        path.write_text(f'''name = "push3d"
+gravity = [0.0, -9.81, 0.0]
+mesh.source = "{mesh}"
+[bodies.a]
+density = {ρ}
+poisson = {ν}
+young_modulus = 1e9
+[bodies.b]
+density = {ρ}
+poisson = {ν}
+young_modulus = 1e9
+[contact.interface]
+slave = "a"
+master = "b"
+penalty = 1e12
+friction = {μ_F}
+[fixed.b_bottom]
+[loads.push]
+group = "a_top"
+direction = [1.0, 0.0, 1.0]
+duration = 4e-3
+impulse = 0.5
+[time]
+dt = 2e-4
+end_time = 4e-3
+[output]
+directory = "{folder / 'case3d'}"
+[output.probes.corner]
+body = "a"
+group = "a_corner"
+[output.pair_probes.middle]
+pair = "interface"
+point = [0.0, {H}, {W / 2}]
+''')
+    COMM.barrier()
+    built = load_case(path).build(COMM)
+    summary = simulation.run(built.model, built.time, built.output,
+                             extra_summary=built.extra, report=False)
+    assert summary["finished"] and summary["dimension"] == 3
+    static = summary["static"]
+    weight = ρ * g * W * H * W
+    assert static["weight"] == pytest.approx(weight, rel=1e-12)
+    assert static["contact_resultant"] == pytest.approx(weight, rel=1e-9)
+    assert static["contact_area"] == pytest.approx(W * W, rel=1e-12)
+    push = summary["loads"]["push"]
+    assert push["patch_area"] == pytest.approx(W * W, rel=1e-12)
+    assert push["applied"]["impulse_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert not any("per_length" in k for k in push) and "per_length" not in str(push)
+    assert "/m" not in simulation.format_report(summary, folder)
+    if COMM.rank == 0:
+        assert (folder / "case3d" / "figures" / "max_ux_deformed.png").is_file()
+        with np.load(folder / "case3d" / "snapshot_max_ux.npz") as data:
+            for body in ("a", "b"):  # the section of each block: W × H
+                p = data[f"{body}_x"][data[f"{body}_triangles"]]
+                area = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                                    - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+                assert area.sum() == pytest.approx(W * H, rel=1e-12)

@@ -61,7 +61,7 @@ def dimension_problem(case: CaseSettings) -> None:
         if case.out_of_plane_length != 1.0:
             raise InvalidField("out_of_plane_length", "a 3D case (3-component gravity) has "
                                "no out-of-plane length: forces and impulses are the bodies' "
-                               "own; remove the key")
+                               "own; remove the key (or set it to 1)")
         cal = case.calibration
         if cal.enabled and cal.stiffness_basis != "block":
             raise InvalidField("calibration.stiffness_basis", "a 3D case (3-component "

@@ -419,6 +419,20 @@ def merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
 
 # --- on-screen report -------------------------------------------------------------
 
+def whole_body_keys(tree: Any) -> Any:
+    """A 3D run's load summary with its keys of the whole bodies, not per metre.
+
+    The loads are summarised with plane strain's keys (``impulse_per_length``,
+    ``patch_length``, ...); in 3D the same values are the whole structure's (N s, N)
+    and the patch's area (m²): ``<key>_per_length`` becomes ``<key>`` and
+    ``patch_length`` ``patch_area``, at every level.
+    """
+    if isinstance(tree, dict):
+        return {("patch_area" if k == "patch_length" else k.removesuffix("_per_length")):
+                whole_body_keys(v) for k, v in tree.items()}
+    return tree
+
+
 def per_metre(summary: Mapping[str, Any]) -> str:
     """``"/m"`` for a plane-strain run's forces and energies (per metre), ``""`` in 3D."""
     return "" if summary.get("dimension", 2) == 3 else "/m"

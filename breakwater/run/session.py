@@ -275,4 +275,6 @@ class Session:
         if self.applied is not None:
             sm.merge(extra, {"loads": self.applied.summary()})
             sm.merge(extra, {"loads": compare(extra["loads"])})
+        if self.model.gdim == 3 and "loads" in extra:
+            extra["loads"] = sm.whole_body_keys(extra["loads"])
         return extra
