@@ -48,26 +48,31 @@ __all__ = ["Body", "BodyData", "ContactModel", "ContactPair", "Damping", "Fixed"
            "Material", "PairData", "SurfaceLoad", "SurfacePair"]
 
 
-def interface_quadrature(msh: dolfinx.mesh.Mesh) -> dict[str, Any]:
+def interface_quadrature(msh: dolfinx.mesh.Mesh, degree: int = 2) -> dict[str, Any]:
     """The quadrature of the conforming pairs' interface integrals, by facet shape.
 
-    Its points are always the P2 facet's nodes: the paper's node-to-node contact, which
+    Its points are always the facet's nodes: the paper's node-to-node contact, which
     also decouples the friction law node by node (Newton's slip guard acts on nodes; at
     Gauss points between nodes the regularised law, χ = 1e-10 m/s, makes Newton cycle).
 
-    - Intervals (2D) and quadrilaterals (hexahedra): Gauss–Lobatto of degree 3.
-    - Triangles (tetrahedra): no nodal rule with positive weights integrates a six-node
-      triangle's quadratics (the exact one gives its vertices weight 0), so the rule of
-      the facet's four sub-triangles: A/12 at each vertex, A/4 at each mid-edge node,
-      exact for linear fields (areas, resultants of linear pressures). The nodal
-      pressures of a P2 tetrahedral interface then alternate between its vertices and
-      mid-edge nodes around their mean (the consistent split of a uniform pressure is
-      0 and A/3): hexahedra are the 3D element of choice (docs/threed.md).
+    - Intervals (2D) and quadrilaterals (hexahedra): Gauss–Lobatto of degree 3 (the P2
+      facet's nodes).
+    - Triangles of linear tetrahedra (``degree`` 1): the vertex rule, A/3 at each vertex
+      (exact for the P1 fields, and the consistent split of a uniform pressure).
+      Quadratic tetrahedra are refused by :class:`ContactModel`: no nodal rule with
+      positive weights integrates a six-node triangle's quadratics (the exact one gives
+      its vertices weight 0, the consistent share of a uniform pressure), so their nodal
+      pressures would alternate between vertices and mid-edge nodes.
+
+    Raises:
+        ValueError: Quadratic triangular facets.
     """
     facet = dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
     if facet == dolfinx.mesh.CellType.triangle:
-        points = np.array([[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]], float)
-        weights = np.array([1, 1, 1, 3, 3, 3]) / 24.0  # reference triangle: area 1/2
+        if degree != 1:
+            raise ValueError("quadratic tetrahedra")
+        points = np.array([[0, 0], [1, 0], [0, 1]], float)
+        weights = np.full(3, 1 / 6)  # reference triangle: area 1/2
         return {"quadrature_rule": "custom", "quadrature_points": points,
                 "quadrature_weights": weights, "quadrature_degree": 1}
     return {"quadrature_rule": "GLL", "quadrature_degree": 3}
@@ -112,6 +117,7 @@ class ContactModel(ModelGroups):
         self.comm = msh.comm
         tdim = msh.topology.dim
         self.gdim = msh.geometry.dim
+        self.degree = degree
         if mesh_data.cell_tags is None or mesh_data.facet_tags is None:
             raise MeshError("the mesh needs cell and facet physical groups")
         msh.topology.create_connectivity(tdim - 1, tdim)
@@ -186,8 +192,16 @@ class ContactModel(ModelGroups):
                             f"'{pair.slave}' and '{pair.master}'")
         tag = 1000 + k
         self._interface_data.append((tag, d.ravel()))
+        try:
+            rule = interface_quadrature(msh, self.degree)
+        except ValueError:
+            raise MeshError(f"interface '{pair.interface}': conforming contact on quadratic "
+                            "tetrahedra is not supported (the six-node triangle's vertices "
+                            "take no share of a uniform pressure, so nodal pressures would "
+                            "be wrong): mesh the bodies with hexahedra (gmsh Recombine), or "
+                            "use linear tetrahedra (mesh.degree = 1)") from None
         dS = ufl.Measure("dS", domain=msh, subdomain_data=self._interface_data,
-                         metadata=interface_quadrature(msh))(tag)
+                         metadata=rule)(tag)
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
         return PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
