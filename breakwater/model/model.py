@@ -161,6 +161,9 @@ class ContactModel(ModelGroups):
         # if all its integrals of a type share one subdomain_data object.
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
+        if surface_pairs and self.gdim == 3:
+            raise MeshError("general contact pairs (non-matching surfaces) are plane strain "
+                            "only for now: in 3D the bodies must share their interface's nodes")
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
         self._fixed = []
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
