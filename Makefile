@@ -39,6 +39,8 @@ test-serial: $(STAMP)
 # stops every rank with the test's name); the whole run's limit is only a backstop.
 test-mpi: $(STAMP)
 	timeout 3600 $(BIN)/mpiexec -n $(NP) $(BIN)/python -m pytest -q -m "not serial" tests
+	# 3D on 4 ranks (oversubscribed on a 2-core machine): partition independence.
+	timeout 900 $(BIN)/mpiexec -n 4 $(BIN)/python -m pytest -q -m "not serial" tests/test_threed.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check breakwater forms meshes tests docs/conf.py

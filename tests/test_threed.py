@@ -300,3 +300,53 @@ def test_patch_test_uniform_pressure(folder: pathlib.Path, cells: str) -> None:
         print(f"\n{cells}: {len(pressure)} nodes, pressure / p − 1 in "
               f"[{pressure.min() / p - 1:.2e}, {pressure.max() / p - 1:.2e}]")
     assert np.abs(pressure / p - 1).max() < 1e-8
+
+
+def _pushed(comm: MPI.Comm, path: pathlib.Path) -> dict[str, np.ndarray]:
+    """The diagonal push of the hexahedral block (20 steps): interface u and v, Newton."""
+    mesh = block_pair(path, comm, W, (H, H), 0.05, thickness=W)
+    mat = Material(ρ, ν, young_modulus=1e9)
+    θ = math.radians(30.0)
+    model = ContactModel(
+        read_mesh(mesh, comm), [Body("a", mat), Body("b", mat)],
+        [ContactPair("interface", "a", "b", penalty=1e12, friction=μ_F)], [Fixed("b_bottom")],
+        [SurfaceLoad("a_top", (math.cos(θ), 0.0, math.sin(θ)),
+                     lambda t: 2 * μ_F * ρ * g * H if t > 0 else 0.0)],
+        gravity=(0.0, -g, 0.0))
+    u, its = solve_static(model)
+    stepper = GN22(model, T_PULSE / N_PULSE, GN22Parameters())
+    stepper.initialise(u)
+    counts = [its] + [stepper.step() for _ in range(20)]
+    nodes = stepper.nodes[0]
+    us, um = nodes.gather(stepper.u[0].x.array, stepper.u[1].x.array)
+    vs, vm = nodes.gather(stepper.v[0].x.array, stepper.v[1].x.array)
+    stepper.destroy()
+    return {"its": np.array(counts), "u_slave": us, "u_master": um, "v_slave": vs,
+            "v_master": vm}
+
+
+@pytest.mark.skipif(COMM.size < 2, reason="compares serial and parallel runs (mpiexec)")
+def test_parallel_equals_serial(folder: pathlib.Path) -> None:
+    # The diagonal push on COMM_WORLD and, on rank 0, on COMM_SELF (tests/test_mpi.py's
+    # scheme): the same kinematics to the bounds and for the reasons of test_mpi.py's
+    # fast solver (1e-10 on the displacements, 1e-8 on the velocities: χ = 1e-10 makes
+    # the stick tangent μp/χ magnify round-off), Newton's counts within one.
+    parallel = _pushed(COMM, folder / "pushed_world.msh")
+    serial: dict[str, np.ndarray] | str | None = None
+    if COMM.rank == 0:
+        try:
+            serial = _pushed(MPI.COMM_SELF, folder / "pushed_serial.msh")
+        except Exception as e:  # share the failure instead of leaving the others waiting
+            serial = f"serial run failed on rank 0: {e!r}"
+    serial = COMM.bcast(serial, root=0)
+    if isinstance(serial, str):
+        pytest.fail(serial)
+    assert serial is not None
+    errors = {k: float(np.abs(parallel[k] - serial[k]).max() / np.abs(serial[k]).max())
+              for k in ("u_slave", "u_master", "v_slave", "v_master")}
+    if COMM.rank == 0:
+        print(f"\n3D push, {COMM.size} ranks vs serial: {errors}; Newton "
+              f"{parallel['its'].tolist()} vs {serial['its'].tolist()}")
+    for k, e in errors.items():
+        assert e <= (1e-10 if k.startswith("u") else 1e-8), k
+    assert np.all(np.abs(parallel["its"] - serial["its"]) <= 1)
