@@ -1,8 +1,8 @@
 """Parametric gmsh geometry of Goda's (1994) pendulum test in three dimensions.
 
 SI units (metres), ``x`` horizontal (the pendulum pushes in ``+x``), ``y`` up, ``z``
-across the flume, from ``z = 0`` to ``z = flume_width``; origin at the front-left of the
-mound base's centre line (``x = 0`` at the middle of the mound, as in 2-D). The mound is
+across the flume, from ``z = 0`` to ``z = flume_width``: ``x = 0`` at the middle of the
+mound and ``y = 0`` on its base, as in 2-D, ``z = 0`` on one flume wall. The mound is
 the 2-D trapezoid (:mod:`breakwater.meshes.goda`) extruded across the whole flume; the
 caisson is the 2-D rectangle extruded over ``caisson_length``, centred across the flume.
 A flume wider than the block leaves free crest on both sides of it (part of
@@ -102,8 +102,9 @@ _OPTIONS: Mapping[str, float] = MappingProxyType(
 _MODEL_NAME = "breakwater-goda3d"
 
 THINNEST_STRIP = 1e-3
-"""A flume wider than the block by less than this fraction of ``caisson_length`` is
-refused: the free crest beside the block would be a layer of needle-thin cells."""
+"""Node planes closer than this fraction of the body's extent are refused (a flume wider
+than the block by less than this fraction of ``caisson_length``, a gauge beside a patch
+edge, ...): they would make a layer of needle-thin cells through the body."""
 
 
 @dataclass(frozen=True)
@@ -156,6 +157,37 @@ class Goda3DGeometry(GodaGeometry):
             raise ValueError(f"impact_patch_width ({self.impact_patch_width}) must be "
                              f"smaller than caisson_length ({length}) for the patch to "
                              "lie within the front face")
+        self._check_layers()
+
+    def _check_layers(self) -> None:
+        """Refuse node planes closer than :data:`THINNEST_STRIP` of the body's extent.
+
+        The mesh is structured: two close stations (a gauge beside a patch edge, a
+        patch almost as wide as the block) make a layer of needle-thin cells through
+        the whole body, which no later check of the 3-D mesh catches.
+        """
+        low, high = self.impact_range
+        p0, p1 = self.impact_z
+        z0, z1 = self.caisson_z
+        half_b, half_c = 0.5 * self.caisson_width, 0.5 * self.crest_width
+        for axis, extent, values, names in (
+            ("y", self.caisson_height,
+             (self.caisson_base_y, self.gauge_bottom[1], low, high, self.gauge_top[1],
+              self.caisson_top_y),
+             "bolt_height, impact_patch_height, gauge_offset_top and gauge_offset_bottom"),
+            ("z", self.caisson_length, (z0, p0, self.mid_z, p1, z1),
+             "impact_patch_width and caisson_length"),
+            ("x", self.crest_width, (-half_c, -half_b, half_b, half_c),
+             "caisson_width and crest_width"),
+        ):
+            merge = 1e-9 * extent  # stations this close are one (as in 2-D)
+            ordered = sorted(values)
+            for a, b in itertools.pairwise(ordered):
+                if merge < b - a < THINNEST_STRIP * extent:
+                    raise ValueError(
+                        f"{names} put node planes {1e3 * (b - a):.3g} mm apart at "
+                        f"{axis} = {a:.6g} m (under {THINNEST_STRIP:g} of {extent:g} m: a "
+                        "layer of needle-thin hexahedra): move them apart")
 
     def estimated_elements(self, refinement: float = 1.0) -> float:
         """The number of hexahedra at this refinement: exact (the mesh is structured).

@@ -209,6 +209,10 @@ def test_no_inverted_or_degenerate_cells(slope):
         ({"across_element_size": math.nan}, "across_element_size"),
         ({"conforming": False}, "conforming"),
         ({"caisson_width": 0.400}, "caisson_width"),
+        # Node planes 0.05-0.1 mm apart (under 1e-3 of the body: needle-thin layers).
+        ({"gauge_offset_top": 0.0389}, "gauge_offset_top"),  # 0.1 mm below the patch
+        ({"impact_patch_width": 0.2049}, "impact_patch_width"),  # 0.05 mm from the ends
+        ({"caisson_width": 0.3999}, "caisson_width"),  # 0.05 mm of crest beside it
     ],
 )
 def test_bad_geometry_is_refused_in_one_line(kwargs, field):
