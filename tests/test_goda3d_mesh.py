@@ -77,6 +77,28 @@ def test_groups_cell_type_and_count(data):
     assert _global_cells(d) == goda3d.Goda3DGeometry().estimated_elements() == 1032
 
 
+@pytest.mark.parametrize("mesh", ["default", "wide"])
+def test_cells_positively_oriented(data, mesh):
+    """det J > 0 in every cell (dolfinx's node order): the integral of its sign is the
+    volume; and the outward normal integrates to the faces' areas along the axes."""
+    d = data[mesh]
+    m = d.mesh
+    det = ufl.JacobianDeterminant(m)
+    dx = ufl.dx(domain=m)
+    signed, volume = (COMM.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(f)))
+                      for f in (det / abs(det) * dx, 1.0 * dx))
+    assert signed == pytest.approx(volume, rel=REL)
+    n = ufl.FacetNormal(m)
+    ds = ufl.Measure("ds", domain=m, subdomain_data=d.facet_tags)
+    width = L if mesh == "default" else WIDE
+    for name, axis, area in ((goda3d.BASE, 1, -BASE_WIDTH * width),
+                             (goda3d.CAISSON_TOP, 1, B * L),
+                             (goda3d.CAISSON_REAR, 0, H * L)):
+        form = dolfinx.fem.form(n[axis] * ds(d.physical_groups[name].tag))
+        assert COMM.allreduce(dolfinx.fem.assemble_scalar(form)) == pytest.approx(
+            area, rel=REL), name
+
+
 @pytest.mark.parametrize(("mesh", "width"), [("default", L), ("wide", WIDE)])
 def test_volumes_and_areas(data, mesh, width):
     d = data[mesh]
