@@ -166,8 +166,8 @@ class GodaGeometry:
             raise ValueError(f"conforming must be true or false, got {self.conforming!r}")
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name == "conforming":
-                continue
+            if f.name == "conforming" or (value is None and f.default is None):
+                continue  # a flag, or an optional dimension left out (a subclass's)
             if not (
                 isinstance(value, int | float) and math.isfinite(value) and value > 0
             ):
