@@ -25,6 +25,7 @@ from breakwater.casefile.godaface import check_goda_face
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.casefile.stormbuild import storm_outputs
+from breakwater.casefile.tables import GODA3D
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.contact.surfaces import SurfacePair
@@ -73,7 +74,8 @@ def mesh_file(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
               ) -> pathlib.Path:
     """The gmsh ``.msh`` file of the case (collective).
 
-    The Goda mesh is generated into ``<directory>/mesh/goda.msh`` and a ``.geo`` script
+    The Goda mesh is generated into ``<directory>/mesh/goda.msh`` (the 3D one into
+    ``goda3d.msh``) and a ``.geo`` script
     is meshed into ``<directory>/mesh/<stem>.msh`` (default directory: the output
     folder; nothing is written beside the user's script); a ``.msh`` source is the
     case's file. A ``.geo`` with curved curves is meshed to the displacement's degree
@@ -92,6 +94,9 @@ def mesh_file(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
                         order=case.mesh.degree)
     from breakwater import meshes  # type: ignore[attr-defined]  # breakwater.meshes maps to meshes/
 
+    if case.mesh.source == GODA3D:
+        return meshes.generate3d(folder / "mesh" / "goda3d.msh", case.mesh.goda3d,
+                                 refinement=case.mesh.refinement, comm=comm)
     return meshes.generate(folder / "mesh" / "goda.msh", case.mesh.goda,
                            refinement=case.mesh.refinement, comm=comm)
 
@@ -137,7 +142,7 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
                                  c.regularisation, c.points, c.integration,
                                  c.rotations)
                      for c in case.contact if c.general]
-    fixed = [Fixed(f.name, tuple(f.components)) for f in case.fixed]
+    fixed = [Fixed(f.name, f.components) for f in case.fixed]
     loads: list[SurfaceLoad] = []
     owner: list[str] = []  # the case load each model load comes from
     if dynamic:

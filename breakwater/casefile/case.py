@@ -44,6 +44,7 @@ from breakwater.casefile.loads import GodaCase, LoadCase, PendulumCase, ProfileC
 from breakwater.casefile.settings import CaseSettings
 from breakwater.casefile.tables import (
     GODA,
+    GODA3D,
     BodyCase,
     CalibrationCase,
     ContactCase,
@@ -165,10 +166,10 @@ def builtin_case(name: str) -> pathlib.Path:
     return path
 
 
-_SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA,),
+_SCHEMA = Schema(Case, builtin=builtin_case, paths={"mesh.source": (GODA, GODA3D),
                                                    "loads.*.table.file": (),
                                                    "loads.*.storm.waves": ()})
-"""The TOML form of a case (``mesh.source`` is a path unless it is "goda"; so are a load
+"""The TOML form of a case (``mesh.source`` is a path unless it is "goda" or "goda3d"; so are a load
 table's ``file`` and a storm's ``waves`` when a string)."""
 
 
@@ -187,7 +188,7 @@ def is_file_value(key: str, value: Any) -> bool:
 def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     """The named physical groups of the case's mesh (name -> dimension)."""
     if mesh.generated:
-        return {name: dim for name, (dim, _) in mesh.goda.physical_groups.items()}
+        return {name: dim for name, (dim, _) in mesh.geometry.physical_groups.items()}
     problem = path_problem(mesh.source)  # a whole [mesh] table given by --set
     if problem is not None:
         raise InvalidField("mesh.source", problem)

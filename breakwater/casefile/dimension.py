@@ -54,6 +54,11 @@ def dimension_problem(case: CaseSettings) -> None:
             with ``out_of_plane_length`` or a per-metre calibration.
     """
     d = dimension(case)
+    for f in case.fixed:
+        if f.components is not None and max(f.components) >= d:
+            raise InvalidField(f"fixed.{f.name}.components", f"component {max(f.components)} "
+                               f"(z) in a plane-strain case (2-component gravity): 0 (x) "
+                               f"and 1 (y) only (got {list(f.components)})")
     for key, vector in _vectors(case):
         if len(vector) != d and not (key.endswith("profile.axis") and d == 3):
             raise InvalidField(key, f"{len(vector)} components, but gravity has {d}: a "

@@ -21,37 +21,46 @@ from typing import TYPE_CHECKING, Literal, get_args
 from breakwater.config.fields import InvalidField, positive, setting
 from breakwater.config.runspec import TimeSpec
 from breakwater.meshes.goda import GodaGeometry
+from breakwater.meshes.goda3d import Goda3DGeometry
 
 if TYPE_CHECKING:
     from breakwater.model.model import Material
 
-__all__ = ["GODA", "BodyCase", "CalibrationCase", "ContactCase", "DampingCase", "FixedCase",
-           "InitialCase", "MeshCase", "OutputCase", "PairProbeCase", "ProbeCase",
+__all__ = ["GODA", "GODA3D", "BodyCase", "CalibrationCase", "ContactCase", "DampingCase",
+           "FixedCase", "InitialCase", "MeshCase", "OutputCase", "PairProbeCase", "ProbeCase",
            "StiffnessBasis", "TimeCase"]
 
 GODA = "goda"
 """``mesh.source`` value selecting the built-in Goda mesh generator."""
+GODA3D = "goda3d"
+"""``mesh.source`` value selecting the built-in 3D Goda mesh generator (hexahedra)."""
 
 
 _GODA_GEOMETRY = GodaGeometry()
+_GODA3D_GEOMETRY = Goda3DGeometry()
 
 
 @dataclass(frozen=True)
 class MeshCase:
     """``[mesh]``: where the mesh comes from."""
 
-    source: str = setting(GODA, doc='"goda" (the built-in generator, [mesh.goda]) or a gmsh '
+    source: str = setting(GODA, doc='"goda" (the built-in generator, [mesh.goda]), "goda3d" '
+                          '(its 3D block on the mound, hexahedra, [mesh.goda3d]) or a gmsh '
                           '.msh/.geo file with named physical groups, relative to the case file')
-    refinement: float = setting(1.0, doc="goda only: element sizes are divided by this "
-                                "(cell counts grow as refinement²)")
+    refinement: float = setting(1.0, doc="goda, goda3d only: element sizes are divided by "
+                                "this (cell counts grow as refinement², refinement³ in 3D)")
     degree: int = setting(2, doc="polynomial degree of the displacement (2: six-node "
                           "triangles, as the paper; a .geo with a curved curve is then "
                           "meshed second order, curved cells)")
     goda: GodaGeometry = setting(_GODA_GEOMETRY, unit="m",  # noqa: RUF009 (a field() with docs)
                                  doc="goda only: dimensions of the model (see below)")
-    max_elements: int = setting(1_000_000, doc="goda only: refuse a mesh of more triangles "
-                                "(estimated before meshing: each body's area over its "
-                                "element's); refinement 9 makes about 49000")
+    goda3d: Goda3DGeometry = setting(_GODA3D_GEOMETRY, unit="m",  # noqa: RUF009 (a field() with docs)
+                                     doc="goda3d only: dimensions of the 3D model (goda's "
+                                     "and the block's length, the flume's width)")
+    max_elements: int = setting(1_000_000, doc="goda, goda3d only: refuse a mesh of more "
+                                "cells (estimated before meshing: each body's area over its "
+                                "element's; exact in 3D); refinement 9 makes about 49000 "
+                                "triangles")
 
     def __post_init__(self) -> None:
         if not (self.refinement > 0 and math.isfinite(self.refinement)):
@@ -59,24 +68,30 @@ class MeshCase:
         if self.degree not in (1, 2):
             raise InvalidField("degree", f"must be 1 or 2 (got {self.degree})")
         if not self.source:
-            raise InvalidField("source", 'must be "goda" or a mesh file')
+            raise InvalidField("source", 'must be "goda", "goda3d" or a mesh file')
         positive(self.max_elements, "max_elements")
         if self.generated:
-            coarse = self.goda.coarse_elements(self.refinement)
+            coarse = self.geometry.coarse_elements(self.refinement)
             if coarse is not None:
                 raise InvalidField("refinement", f"{self.refinement:g}: {coarse}")
-            estimate = self.goda.estimated_elements(self.refinement)
+            estimate = self.geometry.estimated_elements(self.refinement)
             if estimate > self.max_elements:
+                cells = "hexahedra" if self.source == GODA3D else "triangles"
                 raise InvalidField("max_elements", f"refinement {self.refinement:g} with "
-                                   "the mesh.goda dimensions and element sizes makes "
-                                   f"about {estimate:.3g} triangles, above the limit "
+                                   f"the mesh.{self.source} dimensions and element sizes "
+                                   f"makes about {estimate:.3g} {cells}, above the limit "
                                    f"{self.max_elements} (raise mesh.max_elements to mesh "
                                    "it)")
 
     @property
     def generated(self) -> bool:
-        """True for the built-in Goda generator."""
-        return self.source == GODA
+        """True for the built-in Goda generators (2D and 3D)."""
+        return self.source in (GODA, GODA3D)
+
+    @property
+    def geometry(self) -> GodaGeometry:
+        """The built-in generator's geometry: ``goda3d`` for "goda3d", else ``goda``."""
+        return self.goda3d if self.source == GODA3D else self.goda
 
 
 @dataclass(frozen=True)
@@ -191,17 +206,19 @@ class ContactCase:
 class FixedCase:
     """``[fixed.<group>]``: zero displacement on a facet group or at a point group's nodes."""
 
-    name: str = setting(key=True, doc="facet (1D) or point (0D) physical group")
-    components: tuple[int, ...] = setting((0, 1), doc="fixed displacement components "
-                                          "(0: x, 1: y)")
+    name: str = setting(key=True, doc="facet (1D; 2D in 3D) or point (0D) physical group")
+    components: tuple[int, ...] | None = setting(None, doc="fixed displacement components "
+                                                 "(0: x, 1: y, 2: z in 3D); default all")
 
     def __post_init__(self) -> None:
+        if self.components is None:
+            return
         if not self.components:
             raise InvalidField("components", "fix at least one component")
-        if any(c not in (0, 1) for c in self.components) or \
+        if any(c not in (0, 1, 2) for c in self.components) or \
                 len(set(self.components)) != len(self.components):
-            raise InvalidField("components", f"must be distinct values among 0 (x) and 1 (y) "
-                               f"(got {list(self.components)})")
+            raise InvalidField("components", f"must be distinct values among 0 (x), 1 (y) "
+                               f"and 2 (z, 3D) (got {list(self.components)})")
 
 
 @dataclass(frozen=True)
