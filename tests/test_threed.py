@@ -350,3 +350,26 @@ def test_parallel_equals_serial(folder: pathlib.Path) -> None:
     for k, e in errors.items():
         assert e <= (1e-10 if k.startswith("u") else 1e-8), k
     assert np.all(np.abs(parallel["its"] - serial["its"]) <= 1)
+
+
+def test_stiffness_of_a_shear_layer_in_3d(folder: pathlib.Path) -> None:
+    # tests/test_calibrate.py's exact reference in 3D: block a (W × h_a × T, G_a) bonded on
+    # layer b (height H, G) fixed at its base; u_y = 0 on every side and u_z = 0 on the z
+    # faces, so u_x(y) is 1D and quadratic (exact in Q2): a uniform acceleration of the
+    # block gives K = W T / (H/G + 1/k_t + h_a/(3 G_a)) (the 2D one per metre, times T)
+    # to the solver's round-off (1e-9, as there).
+    from breakwater.statics.calibrate import HorizontalStiffness
+
+    Wl, Hl, ha, T3, ε, k_factor, Ga = 0.4, 0.2, 0.1, 0.1, 1e9, 10.0, 1e9
+    path = block_pair(folder / "layer3d.msh", COMM, Wl, (ha, Hl), 0.05, thickness=T3)
+    fixed = [Fixed("b_bottom"), *(Fixed(s, (1,)) for s in ("b_left", "b_right", "a_left",
+                                                           "a_right", "a_top")),
+             Fixed("a_sides", (2,)), Fixed("b_sides", (2,))]
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2000.0, 0.3, shear_modulus=Ga)),
+                          Body("b", Material(1700.0, 0.25, shear_modulus=1e7))],
+                         [ContactPair("interface", "a", "b", ε, 0.6)], fixed)
+    problem = HorizontalStiffness(model, "a", tangential_penalty=k_factor)
+    for G in (1e6, 1e8):
+        exact = Wl * T3 / (Hl / G + 1.0 / (k_factor * ε) + ha / (3.0 * Ga))
+        assert problem.stiffness("b", G) == pytest.approx(exact, rel=1e-9)
