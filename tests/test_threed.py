@@ -373,3 +373,30 @@ def test_stiffness_of_a_shear_layer_in_3d(folder: pathlib.Path) -> None:
     for G in (1e6, 1e8):
         exact = Wl * T3 / (Hl / G + 1.0 / (k_factor * ε) + ha / (3.0 * Ga))
         assert problem.stiffness("b", G) == pytest.approx(exact, rel=1e-9)
+
+
+def test_nodal_kernels_step_as_the_forms_in_3d(folder: pathlib.Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    # On hexahedra the fast path's compiled nodal contact (the 3x3 Gauss-Lobatto points of
+    # each quadrilateral facet are its nodes) takes the steps of the UFL forms assembled
+    # over the facets: the diagonal push, 20 steps. Tolerance as tests/test_nodalcontact.py's
+    # 2D one: 1e-9 of the largest displacement (round-off of the sums, magnified by the
+    # stick tangent μp/χ), Newton's counts equal within 2 in all.
+    from breakwater.contact import nodal
+    from breakwater.stepping import gn22 as gn22_module
+
+    model_check: list[bool] = []
+
+    def run(use: bool) -> dict[str, np.ndarray]:
+        def applies(model: ContactModel) -> bool:
+            model_check.append(nodal.nodal_contact_applies(model))
+            return use
+        monkeypatch.setattr(gn22_module, "nodal_contact_applies", applies)
+        return _pushed(COMM, folder / f"nodal_{use}.msh")
+
+    with_kernels, with_forms = run(True), run(False)
+    assert model_check == [True, True]  # the hexahedral interface qualifies
+    for k in ("u_slave", "u_master"):
+        np.testing.assert_allclose(with_forms[k], with_kernels[k], rtol=0,
+                                   atol=1e-9 * np.abs(with_kernels[k]).max())
+    assert abs(int(with_kernels["its"].sum()) - int(with_forms["its"].sum())) <= 2

@@ -14,8 +14,9 @@ kernels (:mod:`breakwater.contact.nodalkernels`) on the interface nodes, gathere
 every rank in a partition-independent order once per step (no form assembly, no
 communication per Newton iteration): the same numbers as the UFL assembly to round-off
 (``tests/test_nodalcontact.py``). :func:`nodal_contact_applies` says when it is exact
-(2D, affine geometry, P2 Lagrange bodies, the penalty and regularised Coulomb laws the
-kernels encode); elsewhere the fast solver assembles the UFL forms
+(P2 Lagrange bodies, flat affine interface facets: intervals in 2D, parallelograms of
+hexahedra in 3D, where the points are the facet's nine nodes; the penalty and regularised
+Coulomb laws the kernels encode); elsewhere the fast solver assembles the UFL forms
 (:class:`~breakwater.stepping.condensed.InterfaceAssembler`).
 """
 
@@ -33,28 +34,95 @@ from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
 from breakwater.contact.nodalkernels import guard_steps, nodal_left_product, nodal_residual
 from breakwater.model.layout import MonolithicLayout
-from breakwater.model.model import ContactModel
+from breakwater.model.model import ContactModel, PairData
 
 __all__ = ["NodalContactForces", "nodal_contact_applies", "quadrature_points"]
 
 
 def nodal_contact_applies(model: ContactModel) -> bool:
-    """Whether the nodal evaluation equals the forms'.
+    """Whether the nodal evaluation equals the forms' (collective).
 
-    2D, affine cells, P2 Lagrange bodies, and every pair's law the one the kernels
-    encode (:class:`forms.PenaltyContact`, :class:`forms.RegularisedCoulomb`).
+    P2 Lagrange bodies, every pair's law the one the kernels encode
+    (:class:`forms.PenaltyContact`, :class:`forms.RegularisedCoulomb`), and flat
+    interface facets on which the nodes are the Gauss–Lobatto points of an affine map:
+    in 2D affine cells; in 3D hexahedra whose interface facets are parallelograms
+    (their geometry nodes, if quadratic, at the affine positions: :func:`_affine_facets`).
     """
-    if model.gdim != 2 or model.mesh.topology.dim != 2:
-        return False
+    tdim = model.mesh.topology.dim
     for p in model.pairs:
         if (type(p.law.normal) is not forms.PenaltyContact
                 or type(p.law.friction) is not forms.RegularisedCoulomb):
             return False
-    if model.mesh.geometry.cmaps[0].degree != 1:
-        return False
     for b in model.bodies:
         e = b.V.ufl_element().basix_element
         if e.family != basix.ElementFamily.P or e.degree != 2 or e.discontinuous:
+            return False
+    if model.gdim != tdim:
+        return False
+    if tdim == 2:
+        return model.mesh.geometry.cmaps[0].degree == 1
+    if tdim != 3 or _facet_type(model.mesh) != dolfinx.mesh.CellType.quadrilateral:
+        return False
+    flat = all(_affine_facets(model, p) for p in model.pairs)
+    return bool(model.comm.allreduce(flat, op=MPI.LAND))
+
+
+def _facet_type(msh: dolfinx.mesh.Mesh) -> dolfinx.mesh.CellType:
+    return dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
+
+
+def _facets(model: ContactModel, pair: PairData) -> tuple[np.ndarray, np.ndarray]:
+    """The geometry nodes of a pair's facets (this rank's) and of their slave cells."""
+    msh = model.mesh
+    tdim = msh.topology.dim
+    c2f = msh.topology.connectivity(tdim, tdim - 1)
+    facets = np.array([c2f.links(c)[lf] for c, lf in pair.facet_data[:, :2]],
+                      dtype=np.int32)
+    return (dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets),
+            dolfinx.mesh.entities_to_geometry(msh, tdim, pair.facet_data[:, 0]))
+
+
+def _reference_points(msh: dolfinx.mesh.Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Lobatto points of degree 3 on the reference facet ([0, 1] or [0, 1]²)."""
+    cell = basix.CellType.interval if msh.topology.dim == 2 else basix.CellType.quadrilateral
+    return basix.make_quadrature(cell, 3, rule=basix.QuadratureType.gll)
+
+
+def _affine_map(v: np.ndarray, points: np.ndarray
+                ) -> tuple[np.ndarray, float, np.ndarray]:
+    """A facet's affine map from its corners ``v``: the points, its measure and normal.
+
+    An interval x = v₀ + ξ (v₁ − v₀); a quadrilateral (dolfinx's order: v₃ opposite
+    v₀) x = v₀ + ξ (v₁ − v₀) + η (v₂ − v₀). The normal is unoriented.
+    """
+    if len(v) == 2:
+        t = v[1] - v[0]
+        length = float(np.linalg.norm(t))
+        return v[0] + points[:, :1] * t, length, np.array([t[1], -t[0]]) / length
+    a, b = v[1] - v[0], v[2] - v[0]
+    cross = np.cross(a, b)
+    area = float(np.linalg.norm(cross))
+    return v[0] + points[:, :1] * a + points[:, 1:2] * b, area, cross / area
+
+
+def _affine_facets(model: ContactModel, pair: PairData) -> bool:
+    """Whether this rank's facets of a 3D pair are parallelograms with affine nodes.
+
+    Each facet's geometry nodes (if quadratic) must lie at the affine map's
+    Gauss–Lobatto points: the nodes are then the quadrature points and the facet's
+    Jacobian is constant.
+    """
+    points, _ = _reference_points(model.mesh)
+    X = model.mesh.geometry.x
+    fx, _ = _facets(model, pair)
+    for f in fx:
+        x = X[f]
+        mapped, _, _ = _affine_map(x[:4], points)
+        tol = 1e-9 * float(np.ptp(x, axis=0).max())
+        if np.linalg.norm(x[3] - (x[1] + x[2] - x[0])) > tol:
+            return False
+        d = np.linalg.norm(x[:, None, :] - mapped[None, :, :], axis=2)
+        if len(x) > 4 and not (d.min(axis=1).max() <= tol and d.min(axis=0).max() <= tol):
             return False
     return True
 
@@ -63,38 +131,32 @@ def quadrature_points(model: ContactModel, nodes: InterfaceNodes
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every quadrature point of a conforming pair: its node, weight and facet normal.
 
-    In a partition-independent order (sorted by node, then by the facet's other
-    node), the same on every rank.
+    The Gauss–Lobatto points of degree 3 of each facet (intervals in 2D,
+    quadrilaterals in 3D) mapped affinely from its corners, each matched to its node.
+    In a partition-independent order (sorted by node, then by weight and normal), the
+    same on every rank.
     """
     msh, pair = model.mesh, nodes.pair
-    tdim = msh.topology.dim
-    points, weights = basix.make_quadrature(basix.CellType.interval, 3,
-                                            rule=basix.QuadratureType.gll)
-    c2f = msh.topology.connectivity(tdim, tdim - 1)
-    facets = np.array([c2f.links(c)[lf] for c, lf in pair.facet_data[:, :2]],
-                      dtype=np.int32)
-    fx = dolfinx.mesh.entities_to_geometry(msh, tdim - 1, facets)
-    cx = dolfinx.mesh.entities_to_geometry(msh, tdim, pair.facet_data[:, 0])
+    points, weights = _reference_points(msh)
+    corners = 2 if msh.topology.dim == 2 else 4
+    fx, cx = _facets(model, pair)
     X = msh.geometry.x[:, : nodes.gdim]
     scale = max(float(np.ptp(nodes.x, axis=0).max()), 1e-300)
     local = []
     for f, c in zip(fx, cx, strict=True):
-        v = X[f[:2]]
-        t = v[1] - v[0]
-        length = float(np.linalg.norm(t))
-        normal = np.array([t[1], -t[0]]) / length
+        v = X[f[:corners]]
+        mapped, measure, normal = _affine_map(v, points)
         if np.dot(X[c].mean(axis=0) - v.mean(axis=0), normal) < 0:  # into the slave
             normal = -normal
-        for xi, w in zip(points[:, 0], weights, strict=True):
-            x = v[0] + xi * t
+        for x, w in zip(mapped, weights, strict=True):
             d = np.linalg.norm(nodes.x - x, axis=1)
             k = int(np.argmin(d))
             if d[k] > 1e-9 * scale:
                 raise ValueError(f"interface '{pair.spec.interface}': a quadrature point "
                                  "is not a node")
-            local.append((k, w * length, *normal))
+            local.append((k, w * measure, *normal))
     table = np.array([row for part in model.comm.allgather(local) for row in part])
-    table = table[np.lexsort((table[:, 3], table[:, 2], table[:, 0]))]
+    table = table[np.lexsort(table[:, ::-1].T)]  # by node, weight, then the normal
     return table[:, 0].astype(np.int64), table[:, 1], table[:, 2:]
 
 
