@@ -144,8 +144,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     built = case.build(comm)
     if "calibration" in built.extra:
         c = built.extra["calibration"]
+        per = " per m" if len(case.gravity) == 2 else ""  # plane strain: per metre
         _say(f"  calibrated {c['body']} shear modulus G = {c['shear_modulus']:.6g} Pa "
-             f"(K_x = {c['stiffness']:.6g} N/m per m, error {c['relative_error']:.1e})",
+             f"(K_x = {c['stiffness']:.6g} N/m{per}, error {c['relative_error']:.1e})",
              args.quiet)
     output = replace(built.output, progress=args.progress)
     simulation.run(built.model, built.time, output, resolved_case=built.case.resolved(),
@@ -208,17 +209,25 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     q = args.quiet
     _say(f"calibration of the shear modulus of '{r.body}' to the horizontal stiffness of "
          f"'{r.structure}' (case '{case.name}')", q)
-    if cal.stiffness_basis == "block":
+    if len(case.gravity) == 3:  # 3D: the model's own stiffness, nothing per metre
+        _say(f"  target   K_x = {target:.6g} N/m", q)
+        _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
+        _say(f"  achieved K_x = {r.stiffness:.6g} N/m (relative error "
+             f"{r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
+        _say(f"  check    K_x = {check:.6g} N/m from a new model with this G (relative "
+             f"error {abs(check - r.target) / r.target:.2e})", q)
+    elif cal.stiffness_basis == "block":
         _say(f"  target   K_x = {target:.6g} N/m over {L:g} m out of plane = "
              f"{r.target:.6g} N/m per m", q)
     else:
         _say(f"  target   K_x = {target:.6g} N/m per m (calibration.stiffness_basis = "
              '"metre")', q)
-    _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
-    _say(f"  achieved K_x = {r.stiffness:.6g} N/m per m = {r.stiffness * L:.6g} N/m "
-         f"(relative error {r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
-    _say(f"  check    K_x = {check:.6g} N/m per m from a new model with this G (relative "
-         f"error {abs(check - r.target) / r.target:.2e})", q)
+    if len(case.gravity) == 2:
+        _say(f"  G        = {r.shear_modulus:.6g} Pa  ({r.iterations} stiffness solves)", q)
+        _say(f"  achieved K_x = {r.stiffness:.6g} N/m per m = {r.stiffness * L:.6g} N/m "
+             f"(relative error {r.relative_error:.2e}, tolerance {cal.tolerance:.1e})", q)
+        _say(f"  check    K_x = {check:.6g} N/m per m from a new model with this G "
+             f"(relative error {abs(check - r.target) / r.target:.2e})", q)
     if _rank() == 0 and args.quiet:
         print(f"{r.shear_modulus:.10g}")
     return EXIT_OK
