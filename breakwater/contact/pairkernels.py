@@ -38,8 +38,12 @@ __all__ = ["NodalPairSums", "nodal_sums_apply"]
 
 
 def nodal_sums_apply(model: ContactModel) -> bool:
-    """Whether the nodal sums equal the forms (2D, affine cells, P2 Lagrange bodies)."""
-    return nodal_contact_applies(model)
+    """Whether the nodal sums equal the forms (2D, affine cells, P2 Lagrange bodies).
+
+    The kernels below are written out in 2D; a 3D pair keeps the assembled forms even
+    where its contact forces are nodal (:func:`~breakwater.contact.nodal.nodal_contact_applies`).
+    """
+    return model.gdim == 2 and nodal_contact_applies(model)
 
 
 @kernel
