@@ -5,6 +5,7 @@ Run on purpose, never in CI::
     .venv/bin/python benchmarks/timeloop.py                       # default Goda case + refinements
     .venv/bin/python benchmarks/timeloop.py --refinements 1 3     # a subset
     .venv/bin/mpiexec -n 2 .venv/bin/python benchmarks/timeloop.py --refinements 9
+    .venv/bin/python benchmarks/timeloop.py --case goda3d --refinements 1 1.5 --no-reference
 
 For each mesh refinement of the built-in Goda case, both solvers (``time.solver =
 "fast"`` and ``"reference"``) run the same case in this one process, one after the other,
@@ -93,9 +94,10 @@ class MemorySampler:
         return float(slope * np.ptp(t))
 
 
-def floor(case_overrides: list[str], comm: MPI.Comm, backsolves: int = 20) -> dict[str, float]:
+def floor(case_overrides: list[str], comm: MPI.Comm, backsolves: int = 20,
+          name: str | None = None) -> dict[str, float]:
     """One factorisation of A and the mean of ``backsolves`` back-solves (s), this process."""
-    case = load_case(None, case_overrides)
+    case = load_case(name, case_overrides)
     model, spec, _, _ = case.build(comm)
     layout = MonolithicLayout(model)
     bulk = BulkOperators(model, layout)
@@ -125,11 +127,12 @@ def floor(case_overrides: list[str], comm: MPI.Comm, backsolves: int = 20) -> di
             "back_solve_cpu": comm.allreduce(statistics.median(cpu), op=MPI.MAX)}
 
 
-def one_run(overrides: list[str], solver: str, comm: MPI.Comm) -> dict[str, Any]:
+def one_run(overrides: list[str], solver: str, comm: MPI.Comm,
+            name: str | None = None) -> dict[str, Any]:
     """Run the case with one solver; the figures of the benchmark table."""
     with tempfile.TemporaryDirectory() as tmp:
         out = comm.bcast(tmp, root=0)
-        case = load_case(None, [*overrides, f"time.solver={solver}", "output.figures=false",
+        case = load_case(name, [*overrides, f"time.solver={solver}", "output.figures=false",
                                 f"output.directory={out}"])
         model, spec, output, extra = case.build(comm)
         dofs = sum(b.V.dofmap.index_map.size_global * b.V.dofmap.index_map_bs
@@ -176,6 +179,9 @@ def table(records: list[dict[str, Any]]) -> str:
 def main() -> None:
     """Run the benchmark and write its record."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--case", default=None,
+                        help="a built-in case or case file (default: the Goda case; "
+                        "goda3d: the 3D one)")
     parser.add_argument("--refinements", type=float, nargs="+", default=[1.0, 3.0, 9.0])
     parser.add_argument("--end-time", type=float, default=0.15,
                         help="end time of the fast runs (s); default the case's 0.15 s")
@@ -195,7 +201,7 @@ def main() -> None:
     records = []
     for r in args.refinements:
         base = [f"mesh.refinement={r}"]
-        fl = floor(base, comm)
+        fl = floor(base, comm, name=args.case)
         runs = {}
         for solver in ("fast", "reference"):
             if solver == "reference" and args.no_reference:
@@ -204,7 +210,7 @@ def main() -> None:
             if solver == "reference" and r > 1 and args.reference_end_time is not None:
                 end = min(end, args.reference_end_time)
             say(f"refinement {r:g}, {solver}: running to t = {end:g} s ...", flush=True)
-            rec = one_run([*base, f"time.end_time={end}"], solver, comm)
+            rec = one_run([*base, f"time.end_time={end}"], solver, comm, args.case)
             rec["refinement"] = r
             rec["per_step"] = rec["loop"]["wall"] / rec["steps"]
             rec["floor"] = fl["factorisation"] + rec["steps"] * fl["back_solve"]
@@ -230,9 +236,11 @@ def main() -> None:
     say("\n" + md)
     if comm.rank == 0:
         args.out.mkdir(parents=True, exist_ok=True)
-        stem = (f"{datetime.date.today().isoformat()}-np{comm.size}-r"
+        stem = (f"{datetime.date.today().isoformat()}-np{comm.size}-"
+                + (f"{pathlib.Path(args.case).stem}-" if args.case else "") + "r"
                 + "-".join(f"{r:g}" for r in args.refinements) + args.suffix)
         meta = {"date": datetime.date.today().isoformat(), "ranks": comm.size,
+                "case": args.case or "goda",
                 "machine": f"{platform.machine()}, {os.cpu_count()} cores",
                 "python": platform.python_version(),
                 "cpus_used": len(os.sched_getaffinity(0)),
