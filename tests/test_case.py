@@ -249,7 +249,7 @@ Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
             "fixed": {"floor": {}},
             "time": {"dt": 1e-4, "end_time": 1e-2}}
     case = load_case(write(tmp_path / "blocks.toml", data))
-    assert case.name == "blocks" and case.fixed[0].components == (0, 1)
+    assert case.name == "blocks" and case.fixed[0].components is None  # all
     data["fixed"] = {"flor": {}}
     with pytest.raises(CaseError, match=r"blocks.toml: fixed.flor: .*did you mean 'floor'"):
         load_case(write(tmp_path / "blocks.toml", data))

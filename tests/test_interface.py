@@ -46,11 +46,18 @@ def test_guard_keeps_other_steps(w0, w1):
     assert guard_slip(a, b, T2, χ) is b
 
 
-def test_guard_3d_tangent_basis():
-    # 3D: master normal +z; tangents x and y. Only the reversing component is zeroed.
-    t = np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]])
-    out = guard_slip(np.array([[1e-3, 1e-3, 0.0]]), np.array([[-1e-3, 2e-3, 3.0]]), t, χ)
-    assert np.allclose(out, [[0.0, 2e-3, 3.0]], rtol=0, atol=1e-15)
+def test_guard_3d_isotropic():
+    # 3D: master normal +z. A slip that turns by less than 90° is Newton's to take (the
+    # x component's sign change alone is no reversal of the isotropic law); one that
+    # turns by more lands at zero in the whole tangent plane, the normal part kept; the
+    # same in any tangent basis (x, y, or turned by 30°).
+    w0 = np.array([[1e-3, 1e-3, 0.0], [1e-3, 1e-3, 0.0]])
+    w1 = np.array([[-1e-3, 2e-3, 3.0], [-2e-3, 5e-4, 3.0]])
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    for t1, t2 in (([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), ([c, s, 0.0], [-s, c, 0.0])):
+        t = np.array([[t1, t2], [t1, t2]])
+        out = guard_slip(w0, w1, t, χ)
+        assert np.allclose(out, [[-1e-3, 2e-3, 3.0], [0.0, 0.0, 3.0]], rtol=0, atol=1e-15)
 
 
 @pytest.fixture(scope="module")

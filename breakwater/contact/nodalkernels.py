@@ -186,10 +186,10 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     """The slip guard of one pair on the interface unknowns; returns the nodes corrected.
 
     Newton's next iterate is ``x − step``; the velocities of the iterate are
-    ``v_pred + dv_dx x`` (zero at a node component that is not an unknown). Where a
-    tangential component (in the node's tangent basis) of the relative slip velocity
-    would change sign from outside the band ``|w| ≤ band``, the slave's step is cut so
-    that it lands at zero: the slave's step becomes
+    ``v_pred + dv_dx x`` (zero at a node component that is not an unknown). Where the
+    relative slip velocity would turn by more than 90° in the tangent plane (w₀·w₁ < 0)
+    from outside the band ``|w₀| ≤ band``, the slave's step is cut so that its tangential
+    velocity lands at zero: the slave's step becomes
     ``ys − (I − nn) ys + (I − nn) ym + (w₀ − w₁')/dv_dx`` (normal part kept), written in
     ``step`` (:func:`~breakwater.contact.slipguard.guard_slip`,
     :class:`~breakwater.contact.slipguard.SlipGuard`).
@@ -219,7 +219,8 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
         for i in range(gdim):
             w0[i] = (vs[0, i] - vs[1, i]) - dw0 * n[i]
             w1[i] = w0[i] - dv_dx * ((ys[0, i] - ys[1, i]) - dy * n[i])
-        any_reverse = False
+        dot = 0.0
+        speed2 = 0.0
         for m in range(ntan):
             c0 = 0.0
             c = 0.0
@@ -227,10 +228,13 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
                 c0 += tangents[k, m, i] * w0[i]
                 c += tangents[k, m, i] * w1[i]
             c1[m] = c
-            rev[m] = (c0 * c < 0.0) and (abs(c0) > band)
-            any_reverse = any_reverse or rev[m]
+            dot += c0 * c
+            speed2 += c0 * c0
+        any_reverse = (dot < 0.0) and (math.sqrt(speed2) > band)
         if not any_reverse:
             continue
+        for m in range(ntan):
+            rev[m] = True
         fix = False
         for i in range(gdim):
             cut = 0.0

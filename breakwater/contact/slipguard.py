@@ -3,10 +3,11 @@
 With χ = 1e-10 the regularised friction law is a step function of the slip velocity:
 a Newton step that reverses the relative tangential velocity of a node jumps from one
 branch ``±μp`` to the other, and Newton 2-cycles between stick and slip. For each node
-whose slip velocity would reverse (and is not already inside the law's stick band,
-``|v_T| > χ``), the slave's tangential step is cut so that the node lands at zero slip
-velocity, where the tangent ``μp/χ`` is exact; Newton then converges to stick or leaves
-zero on the side the residual asks for. Normal components are untouched. The decision
+whose slip velocity would reverse (turn by more than 90° in the tangent plane: in 2D a
+sign change; and is not already inside the law's stick band, ``|v_T| > χ``), the slave's
+tangential step is cut so that the node lands at zero slip velocity, where the tangent
+``μp/χ`` is exact; Newton then converges to stick or leaves zero on the side the residual
+asks for. Normal components are untouched. The decision
 is taken from values gathered on every rank
 (:class:`~breakwater.contact.conforming.InterfaceNodes`), so it is the same for any
 partition.
@@ -33,6 +34,12 @@ from breakwater.contact.conforming import InterfaceNodes
 def guard_slip(w0: np.ndarray, w1: np.ndarray, tangents: np.ndarray, χ: float) -> np.ndarray:
     """Newton's proposal for nodal slip velocities with reversals landed at zero.
 
+    A node's slip reverses when its tangential velocity turns by more than 90°
+    (w₀·w₁ < 0 in the tangent plane) from outside the band ``|w₀| ≤ χ``: the
+    isotropic law's branch jump (in 2D, a sign change along the one tangent). Its
+    tangential velocity is then set to zero, where the tangent μp/χ is exact, whatever
+    the tangent basis.
+
     Args:
         w0: Current relative tangential velocities, shape (n, gdim).
         w1: Newton's proposal, shape (n, gdim).
@@ -40,15 +47,15 @@ def guard_slip(w0: np.ndarray, w1: np.ndarray, tangents: np.ndarray, χ: float) 
         χ: Regularisation velocity.
 
     Returns:
-        The corrected proposal: ``w1`` but for the components (in the tangent basis)
-        that change sign from outside the band ``|w| ≤ χ``, which are set to zero.
+        The corrected proposal: ``w1`` but for its tangential part at the nodes whose
+        slip reverses, which is zero (the normal part is kept).
     """
     c0 = np.einsum("nkd,nd->nk", tangents, w0)
     c1 = np.einsum("nkd,nd->nk", tangents, w1)
-    reverse = (c0 * c1 < 0) & (np.abs(c0) > χ)
+    reverse = (np.sum(c0 * c1, axis=1) < 0) & (np.sqrt(np.sum(c0 * c0, axis=1)) > χ)
     if not reverse.any():
         return w1
-    return w1 - np.einsum("nkd,nk->nd", tangents, np.where(reverse, c1, 0.0))
+    return w1 - np.einsum("nkd,nk->nd", tangents, np.where(reverse[:, None], c1, 0.0))
 
 
 class SlipGuard:
