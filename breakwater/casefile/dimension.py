@@ -14,14 +14,40 @@ a 3D case with one is refused in one line.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
+from breakwater.casefile.loads import LoadCase
+from breakwater.casefile.tables import (
+    BodyCase,
+    CalibrationCase,
+    ContactCase,
+    FixedCase,
+    OutputCase,
+)
 from breakwater.config.fields import InvalidField
 
-if TYPE_CHECKING:
-    from breakwater.casefile.settings import CaseSettings
-
 __all__ = ["dimension", "dimension_problem", "mesh_problem"]
+
+
+class CaseSettings(Protocol):
+    """What this module reads of a case (:class:`breakwater.casefile.settings.CaseSettings`)."""
+
+    @property
+    def gravity(self) -> tuple[float, ...]: ...
+    @property
+    def out_of_plane_length(self) -> float: ...
+    @property
+    def loads(self) -> tuple[LoadCase, ...]: ...
+    @property
+    def bodies(self) -> tuple[BodyCase, ...]: ...
+    @property
+    def contact(self) -> tuple[ContactCase, ...]: ...
+    @property
+    def fixed(self) -> tuple[FixedCase, ...]: ...
+    @property
+    def output(self) -> OutputCase: ...
+    @property
+    def calibration(self) -> CalibrationCase: ...
 
 
 def dimension(case: CaseSettings) -> int:
