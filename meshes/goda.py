@@ -20,7 +20,7 @@ from __future__ import annotations
 import itertools
 import math
 import pathlib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field, fields
 from types import MappingProxyType
@@ -464,13 +464,24 @@ def generate(
     g = GodaGeometry() if geometry is None else geometry
     g.validate()
     _check_mesh_args(refinement, order)
+    return write_mesh(path, comm, gmsh_session, lambda: build_model(g, refinement, order))
+
+
+def write_mesh(path: str | pathlib.Path, comm: MPI.Comm | None,
+               session: Callable[[], AbstractContextManager[None]],
+               build: Callable[[], None]) -> pathlib.Path:
+    """Build a gmsh model in ``session`` on rank 0 and write it to rank 0's ``path``.
+
+    Every rank returns the path once the file exists; what rank 0 raised is raised on
+    every rank (:func:`breakwater.common.parallel.on_rank_zero`).
+    """
     comm = MPI.COMM_WORLD if comm is None else comm
     out = pathlib.Path(on_rank_zero(comm, lambda: str(path)))  # rank 0's path
 
     def write() -> None:
         out.parent.mkdir(parents=True, exist_ok=True)
-        with gmsh_session():
-            build_model(g, refinement, order)
+        with session():
+            build()
             gmsh.write(str(out))
 
     on_rank_zero(comm, write)

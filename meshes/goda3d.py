@@ -37,7 +37,6 @@ import gmsh  # type: ignore[import-untyped]
 from mpi4py import MPI
 
 from breakwater.common.gmshtools import gmsh_session as _session
-from breakwater.common.parallel import on_rank_zero
 
 from .goda import (
     BASE,
@@ -54,6 +53,7 @@ from .goda import (
     MOUND,
     MOUND_SURFACE,
     GodaGeometry,
+    write_mesh,
 )
 
 # Volumes (dim 3): CAISSON, MOUND. Surfaces (dim 2): INTERFACE, BASE, IMPACT,
@@ -553,14 +553,4 @@ def generate(
     g = Goda3DGeometry() if geometry is None else geometry
     g.validate()
     _check_mesh_args(refinement, order)
-    comm = MPI.COMM_WORLD if comm is None else comm
-    out = pathlib.Path(on_rank_zero(comm, lambda: str(path)))  # rank 0's path
-
-    def write() -> None:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        with gmsh_session():
-            build_model(g, refinement, order)
-            gmsh.write(str(out))
-
-    on_rank_zero(comm, write)
-    return out
+    return write_mesh(path, comm, gmsh_session, lambda: build_model(g, refinement, order))
