@@ -29,7 +29,7 @@ from breakwater.config.fields import InvalidField
 __all__ = ["dimension", "dimension_problem", "mesh_problem"]
 
 
-class CaseSettings(Protocol):
+class _Case(Protocol):
     """What this module reads of a case (:class:`breakwater.casefile.settings.CaseSettings`)."""
 
     @property
@@ -50,12 +50,12 @@ class CaseSettings(Protocol):
     def calibration(self) -> CalibrationCase: ...
 
 
-def dimension(case: CaseSettings) -> int:
+def dimension(case: _Case) -> int:
     """The case's dimension: 2 (plane strain) or 3, the length of its gravity vector."""
     return len(case.gravity)
 
 
-def _vectors(case: CaseSettings) -> Iterator[tuple[str, tuple[float, ...]]]:
+def _vectors(case: _Case) -> Iterator[tuple[str, tuple[float, ...]]]:
     """Every vector of a case but gravity, by key (a zero initial velocity is none)."""
     for ld in case.loads:
         if ld.force is not None or ld.traction is not None or ld.kind == "pulse":
@@ -72,7 +72,7 @@ def _vectors(case: CaseSettings) -> Iterator[tuple[str, tuple[float, ...]]]:
                 yield f"output.{kind}.{p.name}.point", p.point
 
 
-def dimension_problem(case: CaseSettings) -> None:
+def dimension_problem(case: _Case) -> None:
     """Refuse a case whose vectors disagree with its gravity's dimension.
 
     Raises:
@@ -113,7 +113,7 @@ def dimension_problem(case: CaseSettings) -> None:
                                "gravity) calibrates the model's own stiffness: \"block\"")
 
 
-def mesh_problem(case: CaseSettings, gdim: int) -> str | None:
+def mesh_problem(case: _Case, gdim: int) -> str | None:
     """Why a mesh of dimension ``gdim`` does not fit the case, or None."""
     d = dimension(case)
     if gdim == d:
