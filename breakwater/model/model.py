@@ -56,7 +56,7 @@ def interface_quadrature(msh: dolfinx.mesh.Mesh, degree: int = 2) -> dict[str, A
     Gauss points between nodes the regularised law, χ = 1e-10 m/s, makes Newton cycle).
 
     - Intervals (2D) and quadrilaterals (hexahedra): Gauss–Lobatto of degree 3 (the P2
-      facet's nodes).
+      facet's nodes); linear hexahedra's quadrilaterals: of degree 1 (their vertices).
     - Triangles of linear tetrahedra (``degree`` 1): the vertex rule, A/3 at each vertex
       (exact for the P1 fields, and the consistent split of a uniform pressure).
       Quadratic tetrahedra are refused by :class:`ContactModel`: no nodal rule with
@@ -75,6 +75,8 @@ def interface_quadrature(msh: dolfinx.mesh.Mesh, degree: int = 2) -> dict[str, A
         weights = np.full(3, 1 / 6)  # reference triangle: area 1/2
         return {"quadrature_rule": "custom", "quadrature_points": points,
                 "quadrature_weights": weights, "quadrature_degree": 1}
+    if facet == dolfinx.mesh.CellType.quadrilateral and degree == 1:
+        return {"quadrature_rule": "GLL", "quadrature_degree": 1}  # the 4 vertices
     return {"quadrature_rule": "GLL", "quadrature_degree": 3}
 
 
