@@ -439,3 +439,38 @@ def test_resume_in_3d(folder: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> 
     rtol = 1e-12 if COMM.size == 1 else 1e-6
     for c in ("corner_ux", "corner_uy", "middle_slip", "kinetic", "strain"):
         assert np.abs(a[c] - b[c]).max() <= rtol * np.abs(a[c]).max(), c
+
+
+def test_pressure_profile_in_3d(folder: pathlib.Path) -> None:
+    # A [profile] load with a 2D axis (the elevation y) on the block's left face
+    # (y = 0.05..0.1 m, W = 0.2 m across): p = 1000 Pa uniform over s = y in 0.05..0.15 m,
+    # half of it on the face. Applied: p × H × W = 10 N along +x (into the block), to
+    # round-off; warned once, as covering 50 % of the profile (the 3D check measures the
+    # face's s-range: the 2D one, ∫ |p| |n × a| dS, would have counted the face's width
+    # and said 20 %).
+    from breakwater.casefile.case import load_case
+
+    base = _case_file(folder, "profile_base")
+    path = folder / "profile3d.toml"
+    if COMM.rank == 0:
+        path.write_text(f'''extends = "{base}"
+name = "profile3d"
+[loads.push]
+enabled = false
+[loads.wave]
+group = "a_left"
+[loads.wave.profile]
+points = [[0.05, 1000.0], [0.15, 1000.0]]
+axis = [0.0, 1.0]
+origin = [0.0, 0.0]
+[output]
+directory = "{folder / 'profile3d'}"
+''')
+    COMM.barrier()
+    built = load_case(path).build(COMM)
+    wave = built.extra["loads"]["wave"]
+    assert len(wave["warnings"]) == 1 and "only 50% of the profile" in wave["warnings"][0]
+    model = built.model
+    load = next(ld for ld in model.loads if ld.spec.group == "a_left")
+    force = [model.assemble(model.form(load.traction[i] * load.ds)) for i in range(3)]
+    assert force == pytest.approx([1000.0 * H * W, 0.0, 0.0], abs=1e-12 * 1000.0 * H * W)

@@ -95,16 +95,41 @@ COVERAGE_TOLERANCE = 0.01
 """A ``[profile]`` may lose this fraction of its ∫|p| ds off the loaded facets unwarned."""
 
 
-def profile_area(profile: PressureProfile) -> float:
-    """∫ |p(s)| ds over the profile's points (Pa m; exact: |p| is piecewise linear)."""
-    area = 0.0
+def profile_area(profile: PressureProfile, lo: float = -math.inf, hi: float = math.inf
+                 ) -> float:
+    """∫ |p(s)| ds over the profile's points within [lo, hi] (Pa m).
+
+    Exact: |p| is linear between the points, the zero crossings and the bounds.
+    """
+    knots = [s for s, _ in profile.points]
     for (s0, p0), (s1, p1) in zip(profile.points, profile.points[1:], strict=False):
-        if p0 * p1 >= 0.0:
-            area += 0.5 * (abs(p0) + abs(p1)) * (s1 - s0)
-        else:  # the piece crosses zero at r
-            r = s0 + (s1 - s0) * p0 / (p0 - p1)
-            area += 0.5 * (abs(p0) * (r - s0) + abs(p1) * (s1 - r))
-    return area
+        if p0 * p1 < 0.0:  # the piece crosses zero
+            knots.append(s0 + (s1 - s0) * p0 / (p0 - p1))
+    knots += [b for b in (lo, hi) if knots[0] < b < knots[-1]]
+    knots = sorted(k for k in knots if lo <= k <= hi)
+    values = [abs(float(profile.pressure(k))) for k in knots]
+    return math.fsum(0.5 * (values[i] + values[i + 1]) * (knots[i + 1] - knots[i])
+                     for i in range(len(knots) - 1))
+
+
+def _s_range(model: ContactModel, profile: PressureProfile, group: str
+             ) -> tuple[float, float]:
+    """The lowest and highest s of a facet group's nodes (every rank; collective)."""
+    import dolfinx
+    import numpy as np
+    from mpi4py import MPI
+
+    from breakwater.model.mesh import group_tag
+
+    msh, data = model.mesh, model.mesh_data
+    fdim = msh.topology.dim - 1
+    assert data.facet_tags is not None
+    facets = data.facet_tags.find(group_tag(data, group, fdim))
+    x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()]
+    s = profile.coordinate(x) if len(x) else np.zeros(0)
+    lo = model.comm.allreduce(float(s.min()) if len(s) else math.inf, op=MPI.MIN)
+    hi = model.comm.allreduce(float(s.max()) if len(s) else -math.inf, op=MPI.MAX)
+    return lo, hi
 
 
 def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | None, str | None]:
@@ -136,6 +161,13 @@ def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | N
         groups.setdefault(field, []).append(ld.spec.group)
     where = f"loads.{load.name}." + ("profile" if load.profile is not None else
                                      "storm" if load.storm is not None else "goda")
+    if model.gdim == 3:
+        # ∫ |p| |n × a| dS is ∫ |p| ds times the face's width across the axis: the profile
+        # covered is that of the groups' s-range instead (a face spanning its s-range).
+        for field, group_names in groups.items():
+            ranges = [_s_range(model, field, g) for g in group_names]
+            covered[field] = profile_area(field, min(r[0] for r in ranges),
+                                          max(r[1] for r in ranges))
     for field, part in covered.items():
         total = profile_area(field)
         names = ", ".join(f"'{g}'" for g in groups[field])
