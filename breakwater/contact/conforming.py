@@ -21,7 +21,7 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
-from breakwater.model.mesh import group_tag
+from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.model import ContactModel, PairData
 
 RELEASE = 100.0
@@ -93,8 +93,7 @@ class InterfaceNodes:
         X = msh.geometry.x[:, :gdim]
         # A facet's vertices: an interval's 2, a triangle's 3, a quadrilateral's 4 (in
         # dolfinx's tensor order: v₃ is opposite v₀).
-        corners = dolfinx.cpp.mesh.cell_num_vertices(
-            dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, tdim - 1, 0))
+        corners = dolfinx.cpp.mesh.cell_num_vertices(facet_type(msh))
         local = []
         for f, c in zip(fx, cx, strict=True):
             v = X[f[:corners]]
@@ -275,6 +274,5 @@ def mean_facet_length(model: ContactModel, pair: PairData) -> float:
     mean = measure / model.comm.allreduce(len(pair.facet_data))
     if model.mesh.topology.dim == 2:
         return mean
-    triangle = dolfinx.cpp.mesh.cell_entity_type(model.mesh.topology.cell_type, 2, 0) \
-        == dolfinx.mesh.CellType.triangle
+    triangle = facet_type(model.mesh) == dolfinx.mesh.CellType.triangle
     return math.sqrt(mean * (4 / math.sqrt(3) if triangle else 1.0))

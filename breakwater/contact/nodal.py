@@ -34,6 +34,7 @@ from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
 from breakwater.contact.nodalkernels import guard_steps, nodal_left_product, nodal_residual
 from breakwater.model.layout import MonolithicLayout
+from breakwater.model.mesh import facet_type
 from breakwater.model.model import ContactModel, PairData
 
 __all__ = ["NodalContactForces", "nodal_contact_applies", "quadrature_points"]
@@ -61,14 +62,10 @@ def nodal_contact_applies(model: ContactModel) -> bool:
         return False
     if tdim == 2:
         return model.mesh.geometry.cmaps[0].degree == 1
-    if tdim != 3 or _facet_type(model.mesh) != dolfinx.mesh.CellType.quadrilateral:
+    if tdim != 3 or facet_type(model.mesh) != dolfinx.mesh.CellType.quadrilateral:
         return False
     flat = all(_affine_facets(model, p) for p in model.pairs)
     return bool(model.comm.allreduce(flat, op=MPI.LAND))
-
-
-def _facet_type(msh: dolfinx.mesh.Mesh) -> dolfinx.mesh.CellType:
-    return dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
 
 
 def _facets(model: ContactModel, pair: PairData) -> tuple[np.ndarray, np.ndarray]:

@@ -202,7 +202,6 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     w1 = np.empty(gdim)
     w1n = np.empty(gdim)
     c1 = np.empty(ntan)
-    rev = np.empty(ntan, np.bool_)
     corrected = 0
     for k in range(nodes):
         for side in range(2):
@@ -230,16 +229,13 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
             c1[m] = c
             dot += c0 * c
             speed2 += c0 * c0
-        any_reverse = (dot < 0.0) and (math.sqrt(speed2) > band)
-        if not any_reverse:
-            continue
-        for m in range(ntan):
-            rev[m] = True
+        if not (dot < 0.0 and math.sqrt(speed2) > band):
+            continue  # no reversal: Newton's step stands
         fix = False
         for i in range(gdim):
             cut = 0.0
             for m in range(ntan):
-                cut += tangents[k, m, i] * (c1[m] if rev[m] else 0.0)
+                cut += tangents[k, m, i] * c1[m]
             w1n[i] = w1[i] - cut
             fix = fix or (w1n[i] != w1[i])
         if not fix:

@@ -54,6 +54,19 @@ class Pressure:
         return -self.value * n
 
 
+def _along(x: ufl.core.expr.Expr, origin: tuple[float, ...], axis: tuple[float, ...]
+           ) -> ufl.core.expr.Expr:
+    """The coordinate s = (x − origin)·axis along a profile, as a UFL expression.
+
+    The axis's components are the first coordinates': a 2D axis in 3D measures s in the
+    x-y plane (the elevation y of (0, 1) in both).
+    """
+    import ufl
+
+    xs = ufl.as_vector([x[i] for i in range(len(axis))])
+    return ufl.dot(xs - ufl.as_vector(origin), ufl.as_vector(axis))
+
+
 @dataclass(frozen=True)
 class PressureProfile:
     """A pressure p(s) (Pa, positive into the body), linear between points, 0 outside.
@@ -100,10 +113,7 @@ class PressureProfile:
         """p(s(x)) as a UFL expression (a sum of one linear piece per interval)."""
         import ufl
 
-        # The axis's components are the first coordinates': a 2D axis in 3D measures s in
-        # the x-y plane (the elevation y of (0, 1) in both).
-        xs = ufl.as_vector([x[i] for i in range(len(self.axis))])
-        s = ufl.dot(xs - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
+        s = _along(x, self.origin, self.axis)
         p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
         pts = self.points
         for k in range(len(pts) - 1):
@@ -198,10 +208,7 @@ class StagedProfile:
         import ufl
 
         k = len(self.stages[0])
-        # The axis's components are the first coordinates': a 2D axis in 3D measures s in
-        # the x-y plane (the elevation y of (0, 1) in both).
-        xs = ufl.as_vector([x[i] for i in range(len(self.axis))])
-        s = ufl.dot(xs - ufl.as_vector(self.origin), ufl.as_vector(self.axis))
+        s = _along(x, self.origin, self.axis)
         p: ufl.core.expr.Expr = ufl.as_ufl(0.0)
         for j in range(k - 1):
             s0, s1, p0, p1 = c[j], c[j + 1], c[k + j], c[k + j + 1]

@@ -310,6 +310,11 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
     return target
 
 
+def facet_type(msh: dolfinx.mesh.Mesh) -> dolfinx.mesh.CellType:
+    """The cell type of a mesh's facets: interval (2D), triangle or quadrilateral (3D)."""
+    return dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
+
+
 def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:
     """The gmsh tag of a named physical group, checking its dimension.
 

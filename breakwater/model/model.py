@@ -32,7 +32,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
 from breakwater.model.groups import ModelGroups
-from breakwater.model.mesh import group_tag
+from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.pairs import ContactPair, PairData, SurfacePair
 from breakwater.model.parts import (
     Body,
@@ -67,7 +67,7 @@ def interface_quadrature(msh: dolfinx.mesh.Mesh, degree: int = 2) -> dict[str, A
     Raises:
         ValueError: Quadratic triangular facets.
     """
-    facet = dolfinx.cpp.mesh.cell_entity_type(msh.topology.cell_type, msh.topology.dim - 1, 0)
+    facet = facet_type(msh)
     if facet == dolfinx.mesh.CellType.triangle:
         if degree != 1:
             raise ValueError("quadratic tetrahedra")
