@@ -115,17 +115,12 @@ def profile_area(profile: PressureProfile, lo: float = -math.inf, hi: float = ma
 def _s_range(model: ContactModel, profile: PressureProfile, group: str
              ) -> tuple[float, float]:
     """The lowest and highest s of a facet group's nodes (every rank; collective)."""
-    import dolfinx
     import numpy as np
     from mpi4py import MPI
 
-    from breakwater.model.mesh import group_tag
+    from breakwater.casefile.meshloads import group_nodes
 
-    msh, data = model.mesh, model.mesh_data
-    fdim = msh.topology.dim - 1
-    assert data.facet_tags is not None
-    facets = data.facet_tags.find(group_tag(data, group, fdim))
-    x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()]
+    x = group_nodes(model.mesh_data, group)
     s = profile.coordinate(x) if len(x) else np.zeros(0)
     lo = model.comm.allreduce(float(s.min()) if len(s) else math.inf, op=MPI.MIN)
     hi = model.comm.allreduce(float(s.max()) if len(s) else -math.inf, op=MPI.MAX)

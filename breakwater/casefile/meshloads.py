@@ -63,10 +63,9 @@ def load_length(load: LoadCase, data: gmshio.MeshData) -> float:
     return sum(group_length(data, g) for g in (load.group, *load.groups))
 
 
-def extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
-    """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
+def group_nodes(data: gmshio.MeshData, group: str) -> Any:
+    """The coordinates of a facet group's geometry nodes on this rank, ``(n, 3)``."""
     import dolfinx
-    import numpy as np
 
     from breakwater.model.mesh import group_tag
 
@@ -74,8 +73,15 @@ def extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
     fdim = msh.topology.dim - 1
     assert data.facet_tags is not None
     facets = data.facet_tags.find(group_tag(data, group, fdim))
-    nodes = dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()
-    x = msh.geometry.x[nodes, :2]
+    return msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, fdim, facets).ravel()]
+
+
+def extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
+    """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
+    import numpy as np
+
+    msh = data.mesh
+    x = group_nodes(data, group)[:, :2]
     lo = x.min(axis=0) if len(x) else np.full(2, np.inf)
     hi = x.max(axis=0) if len(x) else np.full(2, -np.inf)
     return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))

@@ -49,6 +49,7 @@ __all__ = [
     "outputs_entry",
     "overwritten_inputs",
     "path_problem",
+    "per_metre",
     "read_history",
     "remove_temporaries",
     "temporary_path",
@@ -58,6 +59,17 @@ __all__ = [
 
 HISTORY = "history.csv"
 SUMMARY = "summary.json"
+
+
+def per_metre(summary: Mapping[str, Any]) -> str:
+    """``"/m"`` for a plane-strain run's forces and energies (per metre), ``""`` in 3D.
+
+    Args:
+        summary: A run's summary (its ``dimension``; absent in older runs: 2).
+    """
+    return "" if summary.get("dimension", 2) == 3 else "/m"
+
+
 CASE = "case.toml"
 STATIC = "static.npz"
 SNAPSHOT = "snapshot_max_ux.npz"

@@ -42,6 +42,7 @@ from breakwater.common.files import (
     SNAPSHOT,
     STATIC,
     SUMMARY,
+    per_metre,
     read_history,
     temporary_path,
     writing,
@@ -287,7 +288,7 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
     if (directory / SUMMARY).is_file():
         summary = json.loads((directory / SUMMARY).read_text(encoding="utf-8"))
     t_peak = summary.get("dynamic", {}).get("time_of_max_ux")
-    per = "" if summary.get("dimension", 2) == 3 else "/m"  # forces, energies per metre
+    per = per_metre(summary)
     drawn: list[pathlib.Path | None] = []
     if (directory / HISTORY).is_file():
         h = _legacy_columns(read_history(directory / HISTORY))

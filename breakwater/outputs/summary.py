@@ -30,6 +30,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import __version__  # type: ignore[attr-defined]
+from breakwater.common.files import per_metre
 from breakwater.config.runspec import TimeSpec
 from breakwater.contact.general import SurfaceContact
 from breakwater.energy.ledger import FIELDS
@@ -431,11 +432,6 @@ def whole_body_keys(tree: Any) -> Any:
         return {("patch_area" if k == "patch_length" else k.removesuffix("_per_length")):
                 whole_body_keys(v) for k, v in tree.items()}
     return tree
-
-
-def per_metre(summary: Mapping[str, Any]) -> str:
-    """``"/m"`` for a plane-strain run's forces and energies (per metre), ``""`` in 3D."""
-    return "" if summary.get("dimension", 2) == 3 else "/m"
 
 
 def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> str:

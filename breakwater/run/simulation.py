@@ -81,7 +81,7 @@ from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
-from breakwater.outputs.summary import balance_warning, format_report, per_metre
+from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
 from breakwater.run.session import Session
 from breakwater.stepping.gn22 import local_error
@@ -364,7 +364,7 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
     summary = r.finish(error is None, message, status)
     if error is None or not stopped:
         r.log_quality(dynamic=True)
-        warning = balance_warning(summary.get("energy", {}), per_metre(summary))
+        warning = balance_warning(summary.get("energy", {}), files.per_metre(summary))
         if warning is not None:
             log.warning("%s", warning)
 
