@@ -309,10 +309,10 @@ class GodaGeometry:
 
 
 def _check_mesh_args(refinement: float, order: int) -> None:
-    if not (math.isfinite(refinement) and refinement > 0):
-        raise ValueError(
-            f"refinement must be a positive finite number, got {refinement!r}"
-        )
+    """Refuse a refinement that is not a positive finite number, an order not 1 or 2."""
+    if not (isinstance(refinement, int | float) and math.isfinite(refinement)
+            and refinement > 0):
+        raise ValueError(f"refinement must be a positive finite number, got {refinement!r}")
     if order not in (1, 2):
         raise ValueError(f"order must be 1 or 2, got {order!r}")
 

@@ -53,8 +53,10 @@ from .goda import (
     MOUND,
     MOUND_SURFACE,
     GodaGeometry,
+    _check_mesh_args,
     write_mesh,
 )
+from .goda import PHYSICAL_GROUPS as PHYSICAL_GROUPS_2D
 
 # Volumes (dim 3): CAISSON, MOUND. Surfaces (dim 2): INTERFACE, BASE, IMPACT,
 # CAISSON_FRONT, CAISSON_REAR, CAISSON_TOP, MOUND_SURFACE and:
@@ -65,25 +67,15 @@ MOUND_SIDES = "mound_sides"
 # Points (dim 0): GAUGE_TOP, GAUGE_BOTTOM, CORNER_FRONT, CORNER_REAR, at mid-length.
 
 #: Physical group name -> (dimension, tag); the same shape as
-#: ``dolfinx.io.gmsh.MeshData.physical_groups``. The 2-D model's tags where the names
-#: are the same; tags are unique across dimensions.
+#: ``dolfinx.io.gmsh.MeshData.physical_groups``: the 2-D model's groups one dimension up
+#: (points stay points) with their tags, and the two pairs of faces across the flume;
+#: tags are unique across dimensions.
 PHYSICAL_GROUPS: Mapping[str, tuple[int, int]] = MappingProxyType(
     {
-        CAISSON: (3, 1),
-        MOUND: (3, 2),
-        INTERFACE: (2, 11),
-        BASE: (2, 12),
-        IMPACT: (2, 13),
-        CAISSON_FRONT: (2, 14),
-        CAISSON_REAR: (2, 15),
-        CAISSON_TOP: (2, 16),
-        MOUND_SURFACE: (2, 17),
+        **{name: (dim + 1 if dim else 0, tag)
+           for name, (dim, tag) in PHYSICAL_GROUPS_2D.items()},
         CAISSON_SIDES: (2, 31),
         MOUND_SIDES: (2, 32),
-        GAUGE_TOP: (0, 21),
-        GAUGE_BOTTOM: (0, 22),
-        CORNER_FRONT: (0, 23),
-        CORNER_REAR: (0, 24),
     }
 )
 
@@ -441,14 +433,6 @@ def _section(g: Goda3DGeometry, p: _Plan) -> tuple[dict[str, tuple[float, float]
 def gmsh_session() -> AbstractContextManager[None]:
     """A quiet gmsh session with this module's meshing options (see meshes.goda)."""
     return _session(_OPTIONS, _MODEL_NAME)
-
-
-def _check_mesh_args(refinement: float, order: int) -> None:
-    if not (isinstance(refinement, int | float) and math.isfinite(refinement)
-            and refinement > 0):
-        raise ValueError(f"refinement must be a positive finite number, got {refinement!r}")
-    if order not in (1, 2):
-        raise ValueError(f"order must be 1 or 2, got {order!r}")
 
 
 def build_model(geometry: Goda3DGeometry | None = None, refinement: float = 1.0,
