@@ -150,15 +150,17 @@ def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | N
         field = ld.spec.field
         if ld.spec.name != load.name or not isinstance(field, PressureProfile):
             continue
-        a = field.axis
-        measure = abs(field.ufl_pressure(x)) * abs(n[0] * a[1] - n[1] * a[0])
-        covered[field] = covered.get(field, 0.0) + model.assemble(model.form(measure * ld.ds))
         groups.setdefault(field, []).append(ld.spec.group)
+        if model.gdim == 2:
+            a = field.axis
+            measure = abs(field.ufl_pressure(x)) * abs(n[0] * a[1] - n[1] * a[0])
+            covered[field] = covered.get(field, 0.0) \
+                + model.assemble(model.form(measure * ld.ds))
     where = f"loads.{load.name}." + ("profile" if load.profile is not None else
                                      "storm" if load.storm is not None else "goda")
     if model.gdim == 3:
-        # ∫ |p| |n × a| dS is ∫ |p| ds times the face's width across the axis: the profile
-        # covered is that of the groups' s-range instead (a face spanning its s-range).
+        # ∫ |p| |n × a| dS would be ∫ |p| ds times the face's width across the axis: the
+        # profile covered is that of the groups' s-range (a face spanning its s-range).
         for field, group_names in groups.items():
             ranges = [_s_range(model, field, g) for g in group_names]
             covered[field] = profile_area(field, min(r[0] for r in ranges),

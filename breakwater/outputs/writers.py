@@ -196,9 +196,9 @@ class BodyFields:
         degree = body.V.ufl_element().embedded_superdegree
         self.gdim = gdim
         # 3D: the figures' section, the model's mid-plane across z (the same for every body).
-        x = model.mesh.geometry.x[:, 2]
-        lo, hi = (model.comm.allreduce(float(f(x)) if len(x) else s, op)
-                  for f, s, op in ((np.min, np.inf, MPI.MIN), (np.max, -np.inf, MPI.MAX)))
+        z = model.mesh.geometry.x[:, 2]
+        lo = model.comm.allreduce(float(z.min()) if len(z) else np.inf, op=MPI.MIN)
+        hi = model.comm.allreduce(float(z.max()) if len(z) else -np.inf, op=MPI.MAX)
         self.section_z = 0.5 * (lo + hi)
         self.u = fem.Function(body.V, name="u_out")
         self.v = fem.Function(body.V, name="v_out")
