@@ -36,9 +36,10 @@ from breakwater.model.model import (
     Material,
 )
 from breakwater.run import simulation
-from breakwater.stepping import factorisations
+from breakwater.stepping import elimination
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
-from breakwater.stepping.factorisations import Factorisation, Factorisations, x_blocks
+from breakwater.stepping.elimination import x_blocks
+from breakwater.stepping.factorisations import Factorisation, Factorisations
 from breakwater.stepping.gn22 import GN22, solve_static
 
 COMM = MPI.COMM_WORLD
@@ -315,7 +316,7 @@ def test_x_blocks_all_rows_window_leaves_X(monkeypatch: pytest.MonkeyPatch) -> N
     # (It once zeroed X itself, through np.asfortranarray's view: X_II became zero and
     # singular, "LinAlgError: Singular matrix", on a Goda mesh written by hand whose
     # blocks needed the wide window.)
-    monkeypatch.setattr(factorisations, "ALIGNMENTS", ())
+    monkeypatch.setattr(elimination, "ALIGNMENTS", ())
     rng = np.random.default_rng(6)
     X = np.zeros((120, 20), order="F")
     X[:50, :10] = rng.standard_normal((50, 10))

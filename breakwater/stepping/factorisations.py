@@ -2,10 +2,16 @@
 
 For a fixed Δt the matrix of a GN22 step's unknown Δa never changes (the bulk is
 linear: :mod:`breakwater.stepping.bulk`). :class:`Factorisations` assembles A from M and
-K, factorises it (MUMPS) once per distinct Δt, with ``X = A⁻¹ E`` (one multi-right-hand-
-side solve: a column per contact-surface unknown) and the interface Schur complement
+K, factorises it (MUMPS) once per distinct Δt, with ``X = A⁻¹ E`` (a column per
+contact-surface unknown: :mod:`breakwater.stepping.elimination`, kept whole or only its
+interface rows X_II, as memory allows) and the interface Schur complement
 ``S = (X_II)⁻¹``, and keeps the last few (cut-backs come back to the same Δt); the
 back-solves ``A⁻¹ r`` of the steps use them.
+
+Memory (:mod:`breakwater.common.memory`): a factorisation for a new Δt first frees the
+oldest kept ones while it would not fit in the node's available memory, and a
+factorisation that MUMPS could not complete is refused in one line
+(:func:`check_factorisation`) instead of giving the steps infinite or wrong solutions.
 """
 
 from __future__ import annotations
@@ -17,25 +23,13 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from breakwater.common.errors import BreakwaterError
+from breakwater.common.memory import fits
 from breakwater.common.timings import Timings
 from breakwater.stepping.bulk import BulkOperators
+from breakwater.stepping.elimination import Elimination, XBlock
 
-__all__ = ["ALIGNMENTS", "Factorisation", "Factorisations", "XBlock", "x_blocks"]
-
-
-@dataclass
-class XBlock:
-    """A block of X = A⁻¹ E on this rank: some owned rows, the columns they can meet.
-
-    A couples no two bodies (the stacked M and K are block diagonal), so the column of X
-    of a body's interface unknown is zero, exactly, on the other bodies' rows: X is
-    stored as (owned rows of a body) × (a range of columns holding that body's
-    interface unknowns) blocks, or as one block of all its owned rows and columns.
-    """
-
-    rows: slice  # owned rows of the stacked vector
-    cols: np.ndarray  # interface positions (consecutive)
-    X: np.ndarray  # X[rows, cols], shape (rows, len(cols)), column-major (as MUMPS's X)
+__all__ = ["Factorisation", "Factorisations", "check_factorisation"]
 
 
 @dataclass
@@ -49,6 +43,8 @@ class Factorisation:
     X_blocks: list[XBlock] | None
     X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
     S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
+    chunks: int = 0  # X's columns solved in this many chunks (0: whole, X may be kept)
+    bytes: float = 0.0  # this rank's memory for it: MUMPS's (INFO(16)) and X's blocks
 
     def subtract_X(self, fc: np.ndarray, out: np.ndarray) -> None:
         """``out −= X f_c`` on the owned rows (``out``: the owned part of a stacked vector).
@@ -75,8 +71,17 @@ class Factorisations:
         interface_solves: Compute X and S (False: A only, for the benchmark's floor).
         keep_X: Keep X for the step's ``Δa = z − X f_c`` (True), or not (False: the
             step takes a second back-solve ``A⁻¹(r₀ − E f_c)`` instead); None: by the
-            estimated cost (:meth:`keep_X`).
+            estimated cost (:meth:`keep_X`). Either way X is built whole only where it
+            fits (:attr:`Elimination.X_MEMORY
+            <breakwater.stepping.elimination.Elimination.X_MEMORY>`).
+        available: The node's available memory (bytes) that the X's and
+            :attr:`CACHE_MEMORY` are fractions of; None: measured before each
+            factorisation (:func:`~breakwater.common.memory.available_bytes`).
     """
+
+    #: The share of the node's available memory a new factorisation (as large as the
+    #: last) may take before the oldest kept ones are freed to make room.
+    CACHE_MEMORY = 0.8
 
     #: Time per entry of A's factors in a back-solve over the time per entry of X's
     #: body blocks in the product ``X f_c``; both are memory-bound. Measured on the
@@ -88,13 +93,17 @@ class Factorisations:
 
     def __init__(self, bulk: BulkOperators, interface: np.ndarray, beta1: float,
                  beta2: float, cache: int = 4, timings: Timings | None = None,
-                 interface_solves: bool = True, keep_X: bool | None = None) -> None:
+                 interface_solves: bool = True, keep_X: bool | None = None,
+                 available: float | None = None) -> None:
         self.bulk = bulk
         self.model, self.layout = bulk.model, bulk.layout
         self.timings = timings or Timings()
         self._interface_solves_on = interface_solves
         self._keep_X = keep_X
+        self.available = available
         self.interface = interface
+        self.elimination = Elimination(self.model.comm, self.layout.offsets, self.layout.start,
+                                       interface)
         self.beta1, self.beta2 = beta1, beta2
         self._cache: OrderedDict[float, Factorisation] = OrderedDict()
         self.cache_size = cache
@@ -105,7 +114,25 @@ class Factorisations:
             self._cache.move_to_end(dt)
             return self._cache[dt]
         with self.timings("factorisation"):
+            self._make_room()
             return self._factorise(dt)
+
+    def _make_room(self) -> None:
+        """Free the oldest kept factorisations while one more would not fit (collective).
+
+        A new factorisation takes what the last took (the same pattern of A, the same
+        interface): MUMPS's memory and X's blocks.
+        """
+        while self._cache:
+            last = next(reversed(self._cache.values()))
+            if fits(self.model.comm, last.bytes, self.CACHE_MEMORY, self.available):
+                return
+            self._free_oldest()
+
+    def _free_oldest(self) -> None:
+        _, old = self._cache.popitem(last=False)
+        old.ksp.destroy()
+        old.A.destroy()
 
     def _factorise(self, dt: float) -> Factorisation:
         A = self.bulk.M.duplicate(copy=True)
@@ -129,22 +156,23 @@ class Factorisations:
         pc.setFactorSolverType("mumps")
         ksp.setFromOptions()
         ksp.setUp()
+        check_factorisation(ksp, "the step matrix A = M + β₁Δt C + ½β₂Δt² K")
         blocks: list[XBlock] | None
+        chunks = 0
         if self._interface_solves_on and len(self.interface):
-            blocks = self._interface_solves(ksp)
-            X_II = self._gather_rows(blocks)
-            S = np.linalg.inv(X_II)
-            if not self.keep_X(ksp, blocks):
+            blocks, X_II, chunks = self.elimination.solve(ksp, self.available)
+            if blocks is not None and not self.keep_X(ksp, blocks):
                 blocks = None
+            S = np.linalg.inv(X_II)
         else:
             blocks = []
             X_II = S = np.zeros((len(self.interface), len(self.interface)))
-        fact = Factorisation(ksp, A, blocks, X_II, S)
+        mumps = max(ksp.getPC().getFactorMatrix().getMumpsInfo(16), 0) * 2.0**20
+        kept = sum(b.X.nbytes for b in blocks or ())
+        fact = Factorisation(ksp, A, blocks, X_II, S, chunks, mumps + kept)
         self._cache[dt] = fact
         if len(self._cache) > self.cache_size:
-            _, old = self._cache.popitem(last=False)
-            old.ksp.destroy()
-            old.A.destroy()
+            self._free_oldest()
         return fact
 
     def keep_X(self, ksp: PETSc.KSP, blocks: list[XBlock]) -> bool:
@@ -166,58 +194,6 @@ class Factorisations:
         entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.MAX)
         return bool(entries <= self.SOLVE_PER_PRODUCT * factors)
 
-    def _interface_bodies(self) -> np.ndarray:
-        """The body of each interface unknown (the same array on every rank)."""
-        start, n_local = self.layout.start, self.layout.offsets[-1]
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        body = np.zeros(len(self.interface), np.int64)
-        body[mine] = np.searchsorted(self.layout.offsets, self.interface[mine] - start,
-                                     side="right") - 1
-        self.model.comm.Allreduce(MPI.IN_PLACE, body, op=MPI.SUM)
-        return body
-
-    def _interface_solves(self, ksp: PETSc.KSP) -> list[XBlock]:
-        """X = A⁻¹ E (one MUMPS multi-right-hand-side solve), kept by body block.
-
-        The block of a body: its owned rows and a range of columns (aligned to one of
-        :data:`ALIGNMENTS`) holding its interface unknowns; the product with the blocks
-        then skips only exact zeros. Kept only if (checked on this rank) X is zero
-        outside the blocks and the blocks' products give the whole X's, ``X @ f_c``, bit
-        for bit (the BLAS's sums grouped as before: the χ = 1e-10 stick tangent
-        magnifies the last bit into the Newton counts, 5198 → 5206 on the Goda case with
-        the blocks' own sums); else X is one block.
-        """
-        comm = self.model.comm
-        n_i = len(self.interface)
-        n_local = self.layout.offsets[-1]
-        start = self.layout.start
-        E = PETSc.Mat().createDense(((n_local, None), (None, n_i)),
-                                    comm=comm)  # type: ignore[arg-type]
-        E.setUp()
-        E.zeroEntries()
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        cols = np.flatnonzero(mine)
-        for row, col in zip(self.interface[mine], cols, strict=True):
-            E.setValue(int(row), int(col), 1.0)
-        E.assemble()
-        X = E.duplicate()
-        ksp.getPC().getFactorMatrix().matSolve(E, X)
-        out = np.array(X.getDenseArray(), copy=True)
-        E.destroy()
-        X.destroy()
-        return x_blocks(out, self.layout.offsets, self._interface_bodies())
-
-    def _gather_rows(self, blocks: list[XBlock]) -> np.ndarray:
-        """The interface rows of X (owned rows), gathered on every rank."""
-        rows = self.interface - self.layout.start
-        out = np.zeros((len(self.interface), len(self.interface)))
-        for b in blocks:
-            lo, hi = b.rows.start, b.rows.stop
-            at = np.flatnonzero((rows >= lo) & (rows < hi))
-            out[np.ix_(at, b.cols)] += b.X[rows[at] - lo]  # blocks overlap at zeros
-        self.model.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        return out
-
     def solve(self, fact: Factorisation, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
         """Out = A⁻¹ rhs."""
         with self.timings("back_solves"):
@@ -225,68 +201,34 @@ class Factorisations:
 
     def destroy(self) -> None:
         """Free the PETSc objects of the factorisations kept."""
-        for f in self._cache.values():
-            f.ksp.destroy()
-            f.A.destroy()
-        self._cache.clear()
+        while self._cache:
+            self._free_oldest()
 
 
-#: The ranges tried for a body's block: its rows and its interface unknowns' columns,
-#: widened to multiples of each (the BLAS's column-major dgemv takes rows and columns 4
-#: or 8 at a time, the rows left over one by one, in another order), the first whose
-#: product keeps every bit; then all rows and columns.
-ALIGNMENTS = (4, 8, 16, 32, 64, 128, 256, 512)
+def check_factorisation(ksp: PETSc.KSP, what: str) -> None:
+    """Refuse, in one line, a factorisation that MUMPS could not complete (collective).
 
+    A failed factorisation does not raise: its back-solves return infinities (a MUMPS
+    error, e.g. INFOG(1) = -13 when an allocation fails, leaves the factors unusable).
 
-def _aligned(lo: int, hi: int, align: int, size: int) -> slice:
-    return slice(lo // align * align, min(size, -(-hi // align) * align))
+    Raises:
+        BreakwaterError: MUMPS's error code and what it means, on every rank.
 
-
-def x_blocks(X: np.ndarray, offsets: np.ndarray, body: np.ndarray) -> list[XBlock]:
-    """X's owned rows by body block, where that changes no bit of ``X @ f_c``.
-
-    Args:
-        X: The owned rows of X = A⁻¹ E, column-major (as MUMPS gives it).
-        offsets: The bodies' offsets in the owned part of a stacked vector.
-        body: The body of each interface unknown (column).
-
-    Returns:
-        One block per body with owned rows and interface unknowns: its rows and its
-        columns widened to ranges aligned to one of :data:`ALIGNMENTS` (a neighbour's
-        rows in them hold zeros), outside which X is zero, if for every body the blocks'
-        ``out[rows] −= block.X @ f_c`` give ``out − X @ f_c`` bit for bit (two random
-        f_c); else X as one block.
     """
-    m, n_i = X.shape
-    whole = [XBlock(slice(0, m), np.arange(n_i), X)]
-    rng = np.random.default_rng(22)
-    trials = [rng.uniform(0.5, 1.5, n_i) * rng.choice((-1.0, 1.0), n_i) for _ in range(2)]
-    products = [X @ fc for fc in trials]
-    blocks = []
-    for b in range(len(offsets) - 1):
-        own = slice(int(offsets[b]), int(offsets[b + 1]))
-        at = np.flatnonzero(body == b)
-        if own.stop == own.start or not len(at):
-            if np.any(X[own]):
-                return whole
-            continue
-        if np.any(X[own, : at[0]]) or np.any(X[own, at[-1] + 1:]):
-            return whole
-        for align in (*ALIGNMENTS, max(m, n_i)):  # the last: all rows and columns
-            rows = _aligned(own.start, own.stop, align, m)
-            cols = _aligned(int(at[0]), int(at[-1]) + 1, align, n_i)
-            # A copy: the window of all rows and columns is X itself, whose neighbour
-            # rows the next lines zero (np.asfortranarray returned X's own memory there,
-            # and X became zero: a singular X_II on a mesh whose blocks needed it).
-            block = XBlock(rows, np.arange(cols.start, cols.stop),
-                           np.array(X[rows, cols], order="F", copy=True))
-            block.X[: own.start - rows.start] = 0.0  # a neighbour's rows
-            block.X[own.stop - rows.start:] = 0.0
-            mine = slice(own.start - rows.start, own.stop - rows.start)
-            if all(np.array_equal((block.X @ fc[cols])[mine], w[own])
-                   for fc, w in zip(trials, products, strict=True)):
-                break
-        else:
-            return whole
-        blocks.append(block)
-    return blocks
+    pc = ksp.getPC()
+    failed = int(pc.getFailedReason())  # type: ignore[call-overload]  # an int at run time
+    comm = ksp.getComm().tompi4py()
+    failed = comm.allreduce(failed, op=MPI.MAX)
+    if not failed:
+        return
+    info = pc.getFactorMatrix().getMumpsInfog(1) if pc.getFactorSolverType() == "mumps" else 0
+    causes = {-8: "its workspace was too small", -9: "its workspace was too small",
+              -13: "a memory allocation failed", -19: "it needs more memory than allowed",
+              -10: "the matrix is singular"}
+    cause = causes.get(info, "see MUMPS's user guide for INFOG(1)")
+    raise BreakwaterError(f"the factorisation of {what} failed (MUMPS INFOG(1) = {info}: "
+                          f"{cause}): the model is too large for the memory of this machine "
+                          "or its ranks; use a coarser mesh or more nodes"
+                          if info in (-8, -9, -13, -19) else
+                          f"the factorisation of {what} failed (PETSc reason {failed}, MUMPS "
+                          f"INFOG(1) = {info}: {cause})")

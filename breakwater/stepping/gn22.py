@@ -37,6 +37,7 @@ from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
 from breakwater.model.pairs import Pair
 from breakwater.stepping.condensed import CondensedNewton
+from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 from breakwater.stepping.stepsize import error_constant
 from breakwater.stepping.stepsolver import StepSolver
@@ -215,6 +216,8 @@ def initial_acceleration(model: ContactModel, solver: StepSolver, u: Sequence[fe
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
     ksp.getPC().setFactorSolverType("mumps")
+    ksp.setUp()
+    check_factorisation(ksp, "the mass matrix M (the initial acceleration)")
     x = b.duplicate()
     ksp.solve(b, x)
     x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
