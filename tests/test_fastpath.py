@@ -119,6 +119,11 @@ def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
                                            report=False)
     fast, ref = summaries["fast"], summaries["reference"]
     assert fast["solver"]["kind"] == "fast" and ref["solver"]["kind"] == "reference"
+    # How the fast solver eliminated the bulk (this small mesh: X kept, one Δt).
+    assert fast["solver"]["elimination"]["X"] in ("kept", "second back-solve")
+    assert fast["solver"]["elimination"]["factorisations_kept"] == 1
+    assert 0 < fast["solver"]["elimination"]["memory_gb"] < 1
+    assert "elimination" not in ref["solver"]
     compared = _same_kinematics(shared_dir / "fast", shared_dir / "reference")
     assert {"gauge_top_ux", "corner_front_slip", "corner_front_opening"} <= set(compared)
     _same_forces(shared_dir / "fast", shared_dir / "reference")

@@ -85,6 +85,10 @@ def _run(path: pathlib.Path, available: float | None, chunk_bytes: float | None 
     state = [np.concatenate([g.x.array for g in x]) for x in (s.u, s.v, s.a)]
     X_II, chunks = fact.X_II.copy(), fact.chunks
     assert (fact.X_blocks is None) == (chunks > 0)
+    # What the summary reports (solver.elimination): the cost rule keeps X here.
+    described = f.describe()
+    assert described["X"] == ("interface rows only" if chunks else "kept")
+    assert described["chunks"] == chunks and described["factorisations_kept"] == 1
     s.destroy()
     return its, state, X_II, chunks
 

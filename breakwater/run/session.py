@@ -258,6 +258,8 @@ class Session:
                 "tolerance": st.step.tolerance, "smallest_allowed_dt": st.step.dt
                 / 2**st.step.levels, "rejected_steps": st.step.rejected,
                 "smallest_dt": min(taken, default=None), "largest_dt": max(taken, default=None)}
+        if s is not None and s.fast is not None:
+            solver["elimination"] = s.fast.factorisations.describe()
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))

@@ -194,6 +194,23 @@ class Factorisations:
         entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.MAX)
         return bool(entries <= self.SOLVE_PER_PRODUCT * factors)
 
+    def describe(self) -> dict[str, object]:
+        """How the last factorisation eliminates the bulk, for the summary (``solver.elimination``).
+
+        ``X``: ``"kept"`` (the step's Δa = z − X f_c), ``"second back-solve"`` (cheaper
+        than the product with X) or ``"interface rows only"`` (X did not fit in memory:
+        solved in ``chunks``, a second back-solve per step); ``memory_gb``: this rank's
+        MUMPS factors and kept X (not collective: rank 0's in the summary);
+        ``factorisations_kept``: distinct Δt.
+        """
+        if not self._cache:
+            return {}
+        last = next(reversed(self._cache.values()))
+        kind = ("kept" if last.X_blocks is not None else
+                "interface rows only" if last.chunks else "second back-solve")
+        return {"X": kind, "chunks": last.chunks, "memory_gb": last.bytes / 1e9,
+                "factorisations_kept": len(self._cache)}
+
     def solve(self, fact: Factorisation, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
         """Out = A⁻¹ rhs."""
         with self.timings("back_solves"):
