@@ -14,6 +14,8 @@ from __future__ import annotations
 import logging
 import pathlib
 import sys
+import time
+from typing import Any
 
 import numpy as np
 import pytest
@@ -335,3 +337,102 @@ def test_a_3d_goda_case_runs(hexahedra: pathlib.Path, folder: pathlib.Path) -> N
     final = wave["applied"]["final_force"]
     assert final[0] == pytest.approx(T * g.force, rel=1e-12)
     assert final[1] == pytest.approx(T * g.uplift_force(W), rel=1e-12)
+
+
+# --- a storm in 3D -----------------------------------------------------------------------
+#
+# Each wave's load made here from Goda's pressures, as tests/test_stormload.py does: the
+# front shape Goda's profile / p₁, p₁(τ) a triangle 0 → p₁ → 0 over 50 ms, p_u(τ) likewise.
+
+STORM_SITE = f'''
+depth = 0.1
+toe_depth = {SWL - BH}
+berm_depth = 0.06
+crest_height = {BH + AH - SWL}
+still_water_level = {SWL}
+uplift_group = "interface"
+'''
+PULSE = 0.05
+
+
+def _wave_loads(storm: Any, base_width: float) -> tuple[Any, ...]:
+    """StormCase.wave_loads's stand-in: each wave's Goda shape, p₁ and p_u triangles."""
+    from breakwater.loads.signals import Table
+    from breakwater.loads.wavepressure import goda_pressure
+    from breakwater.storms.waves import WaveLoad
+
+    out = []
+    for w in storm.waves_train.waves:
+        λ1, λ2, λ3 = storm.factors
+        g = goda_pressure(w.height, w.period, storm.depth, storm.toe_depth, storm.berm_depth,
+                          storm.crest_height, storm.angle, storm.breaking_depth,
+                          (λ1, λ2, λ3), storm.density, storm.gravity)
+        out.append(WaveLoad(w, tuple((z, p / g.p1) for z, p in g.front_points()),
+                            Table((0.0, 0.5 * PULSE, PULSE), (0.0, g.p1, 0.0)),
+                            Table((0.0, 0.5 * PULSE, PULSE), (0.0, g.uplift, 0.0)), PULSE))
+    return tuple(out)
+
+
+@pytest.mark.timeout(300)
+def test_storm_on_the_slab_is_the_2d_storm(hexahedra: pathlib.Path, folder: pathlib.Path,
+                                           monkeypatch: pytest.MonkeyPatch) -> None:
+    # Two waves through the storm path on the 2D model and on its 3D slab (u_z = 0 on both
+    # faces; H ≥ 0.017 m: η* = 1.5 H above the crest, so that every kink of the front
+    # shapes is on a node and both quadratures are exact; Δt = 5 ms, 10 steps per
+    # wave's force): the slab's solution is the 2D one, constant in z, so the base's pair probes
+    # (in 3D on the base's mid-plane z = T/2) give the 2D history, and the per-wave record
+    # (sliding, rocking, contact pressure, the peak force per metre, the rigid block's
+    # sliding from M and W' per metre of the caisson's length T) the 2D one: 1e-6 of each
+    # column's largest value (Newton's tolerance, as test_slab_is_the_2d_model_under_goda).
+    # The front force per unit p₁ is T times the 2D one (1e-12), the fractions the same.
+    # A light block (g = 0.5 m/s², μ = 0.1) so that the small waves slide it.
+    from breakwater.casefile.stormcase import StormCase
+    from breakwater.common.files import read_history
+    from breakwater.outputs.stormrecord import read_waves
+    from breakwater.run import simulation
+
+    monkeypatch.setattr(StormCase, "wave_loads", _wave_loads)
+    two = block_pair(folder / "storm2d.msh", COMM, W, (AH, BH), SIZE)
+    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{STORM_SITE}"
+             "waves = [[0.02, 0.3], [0.018, 0.3]]\n")
+    out = {}
+    for dim, mesh in ((2, two), (3, hexahedra)):
+        name = f"storm{dim}"
+        path = _case(folder, mesh, name, storm, dim, end_time=0.6)
+        g = "[0.0, -0.5]" if dim == 2 else "[0.0, -0.5, 0.0]"
+        built = load_case(path, ["time.dt=5e-3", f"gravity={g}", "output.figures=false",
+                                 "contact.interface.friction=0.1"]).build(COMM)
+        cpu = time.process_time()
+        summary = simulation.run(built.model, built.time, built.output,
+                                 extra_summary=built.extra, report=False)
+        if COMM.rank == 0:
+            print(f"\n{dim}D storm: {time.process_time() - cpu:.1f} s CPU")
+        assert summary["finished"] and summary["storm"]["waves_finished"] == 2
+        out[dim] = (summary, read_history(folder / name / "history.csv"),
+                    read_waves(folder / name / "waves.csv"))
+    (s2, h2, w2), (s3, h3, w3) = out[2], out[3]
+    for a, b in zip(s2["loads"]["wave"]["storm"]["waves"], s3["loads"]["wave"]["storm"]["waves"],
+                    strict=True):
+        assert b["front_force_per_p1"] == pytest.approx(T * a["front_force_per_p1"], rel=1e-12)
+        for key in ("face_fraction", "profile_fraction"):
+            assert b[key] == pytest.approx(a[key], rel=1e-12)
+    assert s3["loads"]["wave"]["storm"]["record"]["breakwater_length"] == pytest.approx(T)
+    probes = [c for c in h2 if c.startswith("wave_base_")]
+    assert len(probes) == 18 and all(c in h3 for c in probes)  # 3 × (slip, opening, u)
+
+    def column(h: dict[str, np.ndarray], c: str) -> np.ndarray:
+        # A 3D pair probe's slip is the tangential slip's magnitude; the 2D one's signed.
+        return np.abs(h[c]) if c.endswith("_slip") else h[c]
+
+    worst = {c: float(np.abs(column(h3, c) - column(h2, c)).max() / np.abs(h2[c]).max())
+             for c in probes}
+    for c in ("sliding", "cumulative_sliding", "rocking", "max_contact_pressure",
+              "peak_force_per_length", "rigid_sliding"):
+        worst[c] = float(np.abs(w3[c] - w2[c]).max() / np.abs(w2[c]).max())
+    if COMM.rank == 0:
+        print(f"\nstorm slab: sliding {w2['cumulative_sliding'][-1]:.3e} m (rigid "
+              f"{s2['storm']['rigid']['total_sliding']:.3e}); worst 3D vs 2D: "
+              f"{max(worst.values()):.2e} ({max(worst, key=worst.get)})")
+    assert w2["cumulative_sliding"][-1] > 1e-6 and s2["storm"]["rigid"]["total_sliding"] > 0
+    for c, error in worst.items():
+        assert error <= 1e-6, c
