@@ -145,6 +145,13 @@ def test_section_integrals_of_tilted_triangles() -> None:
     assert section_integrals(t[None], t[None, :, 1], flat, 0.0)[0] == pytest.approx(1.0)
     t[:, 1] = 0.5
     assert section_integrals(t[None], t[None, :, 1], flat, 0.0) == (0.0, 0.0)
+    # A profile's end an ulp off a vertex: on the goda3d mesh the face's top at y − SWL =
+    # 0.392 − 0.32 = 0.07200000000000001 m, the crest h_c = 0.072 m, an interval of an
+    # ulp whose midpoint rounds to its top, a horizontal edge: once a division by zero.
+    top = 0.392 - 0.32
+    t = np.array([[0.0, top, 0.0], [0.0, top, 1.0], [0.0, 0.0, 0.0]])
+    f, _ = section_integrals(t[None], t[None, :, 1], ((-1.0, 1.0), (0.072, 1.0)), 0.0)
+    assert 0.072 < top and f == pytest.approx(0.5 * top, rel=1e-12)
 
 
 def test_goda_resultants_on_a_hexahedral_block(hexahedra: pathlib.Path,

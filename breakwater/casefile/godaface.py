@@ -163,8 +163,9 @@ def section_integrals(triangles: np.ndarray, s: np.ndarray,
         for u, v in itertools.pairwise(cuts):
             m = 0.5 * (u + v)
             pu, pm, pv = pressure(u, m, v)
-            # ℓ on this piece: rising from sa to sb, or falling from sb to sc.
-            if m < sb:
+            # ℓ on this piece: rising from sa to sb, or falling from sb to sc (m may
+            # round to sb when v − u is an ulp: a knot an ulp off a vertex).
+            if m < sb or sc == sb:
                 lu, lm, lv = (lb * (w - sa) / (sb - sa) for w in (u, m, v))
             else:
                 lu, lm, lv = (lb * (sc - w) / (sc - sb) for w in (u, m, v))
