@@ -213,6 +213,49 @@ def test_goda_applied_on_tetrahedra(folder: pathlib.Path) -> None:
     assert applied.fraction == pytest.approx(1.0, rel=1e-12)
 
 
+def test_goda_on_the_builtin_goda3d_mesh(folder: pathlib.Path) -> None:
+    # docs/loads.md's design wave on the built-in Goda meshes, 2D and 3D (the 205 mm
+    # block across the flume; its front face caisson_front and the bolt's patch impact,
+    # the crest an ulp off the face's top): the 3D face receives the 2D one's force,
+    # moment and uplift per metre times the block's length, 0.205 m (1e-12), the whole
+    # profile (fraction 1), its width 0.205 m.
+    goda = """
+[loads.impact]
+enabled = false
+[loads.wave]
+group = "caisson_front"
+groups = ["impact"]
+time_function = "ramp"
+rise = 0.05
+[loads.wave.goda]
+wave_height = 0.18
+period = 1.4
+depth = 0.32
+toe_depth = 0.13
+berm_depth = 0.13
+crest_height = 0.072
+still_water_level = 0.32
+uplift_group = "interface"
+"""
+    out = {}
+    for base in ("goda", "goda3d"):
+        path = folder / f"builtin_{base}.toml"
+        if COMM.rank == 0:
+            path.write_text(f'extends = "{base}"\n{goda}')
+        COMM.barrier()
+        case = load_case(path)
+        data = case.read_mesh(COMM, folder / f"builtin_{base}")
+        load = next(ld for ld in case.loads if ld.name == "wave")
+        out[base] = load_summary(load, data, case.out_of_plane_length)
+    two, three = out["goda"], out["goda3d"]
+    for key in ("horizontal_force", "horizontal_moment", "uplift_force", "uplift_moment"):
+        ratio = three[f"{key}_per_length"] / two[f"{key}_per_length"]
+        assert ratio == pytest.approx(0.205, rel=1e-12), key
+    assert three["applied_fraction"] == pytest.approx(1.0, rel=1e-12)
+    assert three["face_width"] == pytest.approx(0.205, rel=1e-12)
+    assert three["goda_force_per_metre"] == two["goda_force_per_length"]
+
+
 def test_slab_is_the_2d_model_under_goda(hexahedra: pathlib.Path,
                                          folder: pathlib.Path) -> None:
     # The 2D mesh extruded into the 3D slab, u_z = 0 on both its faces z = 0 and T: the
