@@ -7,8 +7,9 @@ all 3; ``gravity`` sets the case's dimension (its default is 2D). The mesh must 
 of the same dimension (:func:`mesh_problem`, once it is read). In 3D,
 ``out_of_plane_length`` does not apply (nothing is per metre) and must stay 1, and a
 calibration reads its stiffness as the 3D model's (``stiffness_basis = "block"``).
-General (non-matching) pairs, Goda's pressures and storms are plane strain only for now:
-a 3D case with one is refused in one line.
+General (non-matching) pairs are plane strain only for now: a 3D case with one is refused
+in one line (Goda's pressures and storms run in 3D: p(y) the same across the face's
+width).
 """
 
 from __future__ import annotations
@@ -97,12 +98,6 @@ def dimension_problem(case: _Case) -> None:
                                    "(non-matching surfaces) are plane strain only for now: in "
                                    "3D the bodies must share their interface's nodes (a "
                                    "conforming pair)")
-        for ld in case.loads:
-            for key in ("goda", "storm"):
-                if getattr(ld, key) is not None:
-                    raise InvalidField(f"loads.{ld.name}.{key}", "Goda's pressures and "
-                                       "storms are plane strain only for now (in 3D give the "
-                                       "front's pressure as a [profile] along y)")
         if case.out_of_plane_length != 1.0:
             raise InvalidField("out_of_plane_length", "a 3D case (3-component gravity) has "
                                "no out-of-plane length: forces and impulses are the bodies' "

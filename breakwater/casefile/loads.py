@@ -171,7 +171,8 @@ class GodaCase:
 
     The front pressure acts on the load's group (the seaward face, vertical, its
     elevation the mesh's y); with ``uplift_group`` the triangular uplift acts on the
-    base of the same body, p_u at its edge nearest the loaded face, 0 at the heel.
+    base of the same body, p_u at its edge nearest the loaded face, 0 at the heel. In
+    3D both are the same across the face's and the base's width (along z).
     """
 
     wave_height: float = setting(unit="m", doc="design (highest) wave height H_max")

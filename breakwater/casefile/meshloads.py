@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from breakwater.storms.waves import WaveLoad
 
 __all__ = ["base_triangle", "extent", "group_length", "load_length", "load_summary", "owner",
-           "storm_loads", "storm_wave_loads", "surface_loads", "uplift_profile"]
+           "storm_loads", "storm_wave_loads", "surface_loads", "uplift_applied",
+           "uplift_profile"]
 
 
 def group_length(data: gmshio.MeshData, group: str) -> float:
@@ -264,23 +265,63 @@ def load_summary(load: LoadCase, data: gmshio.MeshData, out_of_plane_length: flo
     elif load.pressure is not None:
         info["pressure"] = load.pressure
     elif load.goda is not None:
-        g = load.goda.pressure()
-        applied = goda_applied(load, data)
-        info.update({"wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
-                     "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3,
-                     "p4": g.p4, "uplift_pressure": g.uplift,
-                     "horizontal_force_per_length": applied.force,
-                     "horizontal_moment_per_length": applied.moment,
-                     "applied_fraction": applied.fraction,
-                     "face_elevations": list(applied.face),
-                     "profile_elevations": list(applied.profile),
-                     "goda_force_per_length": g.force,
-                     "goda_moment_per_length": g.moment})
-        if g.alpha_impulsive is not None:
-            info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
-        if load.goda.uplift_group is not None:
-            _, width = uplift_profile(load.goda, data, (load.group, *load.groups))
-            info.update({"base_width": width, "uplift_force_per_length": g.uplift_force(width),
-                         "uplift_moment_per_length": g.uplift_moment(width)})
+        info.update(_goda_summary(load, data))
     return info
+
+
+def _goda_summary(load: LoadCase, data: gmshio.MeshData) -> dict[str, Any]:
+    """A Goda load's summary entries (collective).
+
+    In plane strain the forces and moments are per metre (``_per_length``); in 3D
+    :func:`breakwater.outputs.summary.whole_body_keys` drops that suffix: the applied
+    front force and moment are then the whole face's (:func:`goda_applied`), the uplift
+    the whole base's (:func:`uplift_applied`), and the formula's own P and M_P, per
+    metre of breakwater, are ``goda_force_per_metre`` and ``goda_moment_per_metre``.
+    """
+    assert load.goda is not None
+    g = load.goda.pressure()
+    applied = goda_applied(load, data)
+    per = "_per_length" if applied.width is None else "_per_metre"
+    info: dict[str, Any] = {
+        "wavelength": g.wavelength, "alpha1": g.alpha1, "alpha2": g.alpha2,
+        "alpha3": g.alpha3, "eta_star": g.eta_star, "p1": g.p1, "p3": g.p3, "p4": g.p4,
+        "uplift_pressure": g.uplift, "horizontal_force_per_length": applied.force,
+        "horizontal_moment_per_length": applied.moment,
+        "applied_fraction": applied.fraction, "face_elevations": list(applied.face),
+        "profile_elevations": list(applied.profile), f"goda_force{per}": g.force,
+        f"goda_moment{per}": g.moment}
+    if applied.width is not None:
+        info["face_width"] = applied.width
+    if g.alpha_impulsive is not None:
+        info.update({"alpha_impulsive": g.alpha_impulsive, "alpha_star": g.alpha_star})
+    if load.goda.uplift_group is not None:
+        profile, width = uplift_profile(load.goda, data, (load.group, *load.groups))
+        force, moment = (uplift_applied(profile, width, data, load.goda.uplift_group)
+                         if applied.width is not None else
+                         (g.uplift_force(width), g.uplift_moment(width)))
+        info.update({"base_width": width, "uplift_force_per_length": force,
+                     "uplift_moment_per_length": moment})
+    return info
+
+
+def uplift_applied(profile: PressureProfile, width: float, data: gmshio.MeshData,
+                   group: str) -> tuple[float, float]:
+    """The vertical force (N) of a 3D uplift on its base, and its moment about the heel.
+
+    ∫ p |n_y| dA over the base's facets: their projections on a horizontal plane, where
+    p (a function of x only) is integrated exactly
+    (:func:`~breakwater.casefile.godaface.section_integrals`); the moment (N m) about
+    the horizontal line across the base at its heel, s = B (collective).
+    """
+    import numpy as np
+    from mpi4py import MPI
+
+    from breakwater.casefile.godaface import facet_triangles, section_integrals
+
+    triangles = facet_triangles(data, (group,))
+    s = profile.coordinate(triangles)
+    triangles[:, :, 1] = 0.0  # the projection on a horizontal plane
+    force, moment = section_integrals(triangles, s, profile.points, width)
+    force, moment = data.mesh.comm.allreduce(np.array([force, -moment]), op=MPI.SUM)
+    return float(force), float(moment)
 

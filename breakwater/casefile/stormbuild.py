@@ -55,16 +55,41 @@ def face_integral(points: Any, still_water_level: float, data: gmshio.MeshData,
                   groups: tuple[str, ...]) -> float:
     """∫ shape(y − SWL) |dy| over the loaded facets (collective; the same on every rank).
 
-    The horizontal force per unit p₁ that a vertical face receives of a front shape.
+    The horizontal force per unit p₁ that a vertical face receives of a front shape; in
+    3D ∫ shape |n_h| dA, the whole face's (m²:
+    :func:`~breakwater.casefile.godaface.section_integrals`).
     """
     from mpi4py import MPI
 
-    from breakwater.casefile.godaface import facet_spans
+    from breakwater.casefile.godaface import facet_spans, facet_triangles, section_integrals
 
-    total = sum(profile_integral(points, y0 - still_water_level, y1 - still_water_level)
-                for y0, y1 in facet_spans(data, groups))
     msh = data.mesh
+    if msh.topology.dim == 3:
+        triangles = facet_triangles(data, groups)
+        shape = tuple((float(p[0]), float(p[1])) for p in points)
+        total = section_integrals(triangles, triangles[:, :, 1] - still_water_level, shape,
+                                  0.0)[0]
+    else:
+        total = sum(profile_integral(points, y0 - still_water_level, y1 - still_water_level)
+                    for y0, y1 in facet_spans(data, groups))
     return float(msh.comm.allreduce(total, op=MPI.SUM))
+
+
+def _span(data: gmshio.MeshData, groups: tuple[str, ...], axis: int) -> tuple[float, float]:
+    """The lowest and highest coordinate ``axis`` of the groups' nodes (collective)."""
+    import math
+
+    from mpi4py import MPI
+
+    from breakwater.casefile.meshloads import group_nodes
+
+    lo, hi = math.inf, -math.inf
+    for g in groups:
+        x = group_nodes(data, g)
+        if len(x):
+            lo, hi = min(lo, float(x[:, axis].min())), max(hi, float(x[:, axis].max()))
+    comm = data.mesh.comm
+    return comm.allreduce(lo, op=MPI.MIN), comm.allreduce(hi, op=MPI.MAX)
 
 
 def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
@@ -95,9 +120,12 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     the run applies (:func:`applied_front`), ``face_fraction``, that over the exact
     integral of the wave's shape over the loaded face (off 1 where the facets do not
     resolve the profile's kinks), and ``profile_fraction``, the exact integral over the
-    face over the whole shape's (below 1 where the face misses part of the profile);
+    face over the whole shape's (below 1 where the face misses part of the profile; in
+    3D the shape's part between the face's elevations);
     ``warnings`` the one-line warnings of the waves off by more than
-    :data:`FRACTION_WARNING`.
+    :data:`FRACTION_WARNING`. In 3D the probes lie on the base's mid-plane in z and the
+    record's ``breakwater_length`` is the base's extent in z (1 in plane strain): the
+    per-wave record divides the whole face's force and the caisson's mass and W' by it.
 
     Args:
         case: The case (its contact pairs).
@@ -145,9 +173,16 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                         f"horizontal (y from {lo[1]:.6g} to {hi[1]:.6g} m)")
     y = float(lo[1])
     names = (f"{load.name}_base_lo", f"{load.name}_base_hi", f"{load.name}_base_mid")
-    probes = (PairProbeSpec(names[0], index, (float(lo[0]), y)),
-              PairProbeSpec(names[1], index, (float(hi[0]), y)),
-              PairProbeSpec(names[2], index, (0.5 * float(lo[0] + hi[0]), y)))
+    across: tuple[float, ...] = ()  # 3D: the probes on the base's mid-plane in z
+    length = 1.0  # 3D: the caisson's length along the breakwater (z), the base's
+    threed = data.mesh.geometry.dim == 3
+    if threed:
+        z0, z1 = _span(data, (storm.uplift_group,), 2)
+        across, length = (0.5 * (z0 + z1),), z1 - z0
+    probes = (PairProbeSpec(names[0], index, (float(lo[0]), y, *across)),
+              PairProbeSpec(names[1], index, (float(hi[0]), y, *across)),
+              PairProbeSpec(names[2], index, (0.5 * float(lo[0] + hi[0]), y, *across)))
+    face = _span(data, groups, 1) if threed else (0.0, 0.0)
     triangle, _ = base_triangle(storm.uplift_group, data, groups)
     waves: list[dict[str, Any]] = []
     warnings: list[str] = []
@@ -156,6 +191,10 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     for k, w in enumerate(wave_loads):
         force = face_integral(w.front, storm.still_water_level, data, groups)
         whole = profile_integral(w.front, w.front[0][0], w.front[-1][0])
+        swl = storm.still_water_level
+        # 3D: the part of the shape between the face's elevations (whatever its width).
+        spanned = force if not threed else \
+            profile_integral(w.front, face[0] - swl, face[1] - swl)
         if not force > 0:
             raise CaseError(f"{key}.still_water_level: the front pressure of wave {k + 1} "
                             f"(H = {w.wave.height:g} m) misses the loaded face "
@@ -164,7 +203,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                       "start": w.wave.start, "duration": w.duration,
                       "front": [list(p) for p in w.front],
                       "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
-                      "profile_fraction": force / whole})
+                      "profile_fraction": spanned / whole})
     for name, what in (("profile_fraction", "of the front profile lies on the loaded face "
                         "(the rest is not applied)"),
                        ("face_fraction", "of the exact integral over the face is applied "
@@ -177,6 +216,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     record = {"lo": names[0], "hi": names[1], "mid": names[2], "sign": sign,
               "conforming": not pair.general,
               "landward": float(triangle.axis[0]), "length": width,
+              "breakwater_length": length,
               "pair": pair.name, "penetration": f"{pair.name}_penetration",
               "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,
               "toe_depth": storm.toe_depth, "density": storm.density}

@@ -28,7 +28,8 @@ ends (``<load>_base_lo`` at the smaller x, ``<load>_base_hi``) and at its middle
 - ``max_contact_pressure``: ε_n × the pair's largest penetration in the wave (Pa;
   the penalty law's pressure at the most loaded node or integration point);
 - ``peak_force_per_length``: the largest horizontal force of the front pressure at the
-  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m);
+  step ends in the wave, p₁(t) × the wave's shape integrated over the loaded face (N/m;
+  in 3D the whole face's over the caisson's length along z, the base's: per metre too);
 - ``rigid_sliding``: the rigid-block model's sliding under the same wave load
   (:func:`rigid_record`; NaN where it does not apply).
 
@@ -87,6 +88,7 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
     if not rows:
         return out, _block(out, waves, r)
     times = [row["t"] for row in rows]
+    length = r.get("breakwater_length", 1.0)  # 3D: the force per metre of the caisson
     θ0 = _rotation(rows[0], r)
     total = 0.0
     for k, w in enumerate(waves):
@@ -103,7 +105,7 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
         rocking = max(abs(_rotation(rows[i], r) - θ0) for i in inside)
         pressure = r["penalty"] * max(rows[i].get(r["penetration"], math.nan) for i in inside)
         force = math.nan if p1 is None else max(
-            p1(times[i]) * w["front_force_per_p1"] for i in inside)
+            p1(times[i]) * w["front_force_per_p1"] for i in inside) / length
         out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
                     "start": start, "end": end, "peak_force_per_length": force,
                     "sliding": sliding, "cumulative_sliding": total, "rocking": rocking,
@@ -285,7 +287,9 @@ def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
     (:func:`rigid_record`) takes the storm's wave loads from the model's front load (its
     amplitude, a :class:`~breakwater.storms.stormload.WaveHistory`), M and W' from the
     static state when its pair's slave is the caisson (W' the static normal force: the
-    weight and any load at t = 0), else M from the caisson's weight and W' = M g.
+    weight and any load at t = 0), else M from the caisson's weight and W' = M g; in 3D
+    both per metre of the caisson's length along z (the record's ``breakwater_length``),
+    as Goda's loads of the waves are.
 
     Args:
         model: The contact model (:class:`~breakwater.model.model.ContactModel`).
@@ -319,6 +323,9 @@ def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
             else:
                 mass = weights[model.body(r["caisson"]).index] / g
                 weight = mass * g
+            # 3D: per metre of the caisson's length along z, as the waves' loads are.
+            length = r.get("breakwater_length", 1.0)
+            mass, weight = mass / length, weight / length
             rigid = rigid_record(loads, mass=mass, weight=weight, base_width=r["length"],
                                  toe_depth=r["toe_depth"], friction=r["friction"],
                                  density=r["density"], gravity=g)
