@@ -497,3 +497,20 @@ def test_build_without_calibration(shared_dir):
         case.loads[0].total_impulse / 0.205, rel=1e-12)
     assert extra["mesh"]["cells"]["caisson"] > 0 and "calibration" not in extra
     assert case.resolved()["calibration"]["enabled"] is False
+
+
+EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize("path", sorted(EXAMPLES.rglob("*.toml")),
+                         ids=lambda p: p.relative_to(EXAMPLES).as_posix())
+def test_every_example_file_reads(path: pathlib.Path, tmp_path: pathlib.Path) -> None:
+    # An example a user copies must be a valid case or study file (a study: its every
+    # point's case read and validated, nothing run).
+    from breakwater.studies.studyfile import check_points, load_study
+
+    if "base" in tomllib.loads(path.read_text(encoding="utf-8")):
+        points, cases = check_points(load_study(path), tmp_path)
+        assert points and len(points) == len(cases)
+    else:
+        assert isinstance(load_case(path), Case)

@@ -473,6 +473,13 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
         if sol.get("round_off_accepts"):
             lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
                          "stalled at round-off (NewtonOptions.floor_atol)")
+        if sol.get("newton_rescues"):
+            lines.append(f"  solver: {sol['newton_rescues']} Newton solves converged only when "
+                         "done again with their overshooting steps halved")
+        if (sol.get("elimination") or {}).get("X") == "interface rows only":
+            e = sol["elimination"]
+            lines.append(f"  solver: X = A⁻¹E did not fit in memory: its interface rows built "
+                         f"in {e['chunks']} chunks, a second back-solve per step")
     def pct(x: Any) -> str:
         return "n/a" if x is None else f"{100 * x:.2g}%"
 

@@ -260,6 +260,8 @@ class Session:
                 "smallest_dt": min(taken, default=None), "largest_dt": max(taken, default=None)}
         if s is not None and s.fast is not None:
             solver["elimination"] = s.fast.factorisations.describe()
+            # Solves done again with their overshooting steps halved (InterfaceNewton).
+            solver["newton_rescues"] = s.fast.newton.rescues
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))

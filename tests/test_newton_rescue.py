@@ -1,0 +1,137 @@
+"""The interface Newton's rescue: a solve that fails is done again with its overshooting
+steps halved (:class:`breakwater.stepping.interfacenewton.InterfaceNewton`).
+
+The contact here is a made-up one-unknown law whose full Newton steps overshoot by
+orders of magnitude and diverge, as a stick/slip or contact change inside a step does
+(the storm case in the module's docstring, where Newton cycled between 1e2 and 2e5 for 40
+iterations): the equation is G(y) = y − z + X f_c(y) = 0 with X = 1, z = 0 and
+G(y) = y^(1/3) for y > 0, −K |y|^(1/3) for y < 0 (K = 1000). Newton maps y to −2y: the
+iterates grow and the residual jumps K times at every other step. Halved while the
+residual would grow more than GROWTH = 10 times, a step from y > 0 is quartered and
+stays on the soft side: y/4 per iteration, the residual 4^(1/3) smaller.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from breakwater.common.errors import ConvergenceError
+from breakwater.common.timings import Timings
+from breakwater.stepping.factorisations import Factorisation
+from breakwater.stepping.interface import ContactSum
+from breakwater.stepping import interfacenewton
+from breakwater.stepping.interfacenewton import InterfaceNewton
+from breakwater.stepping.solver import NewtonOptions
+
+K = 1000.0
+FORCE_SCALE = 1e6  # atol = 1e-9 × 1e6 = 1e-3: |G| < 1e-3 is y < 1e-9
+
+
+class CubeRootLaw:
+    """f_c(y) = G(y) − y for G above (one unknown, no slip guard)."""
+
+    def __init__(self, soft: float = 1.0, stiff: float = K) -> None:
+        self.soft, self.stiff = soft, stiff
+
+    def g(self, y: float) -> float:
+        return float(np.cbrt(y) * (self.soft if y > 0 else self.stiff))
+
+    def dg(self, y: float) -> float:
+        return float((self.soft if y > 0 else self.stiff) / (3.0 * np.cbrt(y) ** 2))
+
+    def begin(self) -> None:
+        pass
+
+    def end(self) -> None:
+        pass
+
+    def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
+        out[0] += self.g(y[0]) - y[0]
+
+    def add_left_product(self, y: np.ndarray, X: np.ndarray, out: np.ndarray) -> bool:
+        return False
+
+    def matrix(self, y: np.ndarray) -> np.ndarray:
+        return np.array([[self.dg(y[0]) - 1.0]])
+
+    def resolution(self, y: np.ndarray) -> float:
+        return 0.0
+
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return None
+
+    def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                 dv_dx: float) -> int:
+        return 0
+
+
+def _newton(law: CubeRootLaw) -> InterfaceNewton:
+    timings = Timings()
+    return InterfaceNewton(1, ContactSum(1, [law], timings), "test", NewtonOptions(),
+                           FORCE_SCALE, timings)
+
+
+def _solve(newton: InterfaceNewton, y0: float) -> int:
+    one = np.ones((1, 1))
+    fact = Factorisation(None, None, None, one, one)  # type: ignore[arg-type]
+    zero = np.zeros(1)
+    return newton.solve(fact, zero, np.array([y0]), zero, 0.0, zero, 1.0)
+
+
+def test_a_diverging_newton_is_rescued_by_halving() -> None:
+    newton = _newton(CubeRootLaw())
+    its = _solve(newton, 1.0)
+    # The first try fails at max_it (40 iterations), the rescue converges: |y| < 1e-9
+    # (|G| < atol) after log(1e9)/log(4) = 15 iterations, each step halved twice.
+    assert newton.rescues == 1
+    assert its > NewtonOptions().max_it
+    rescue = its - NewtonOptions().max_it
+    assert 14 <= rescue <= 16 and newton.halvings == 2 * rescue
+    assert 0 < newton.y[0] < 1e-9
+    assert abs(CubeRootLaw().g(newton.y[0])) < NewtonOptions().atol * FORCE_SCALE
+
+
+def test_a_converging_newton_takes_full_steps() -> None:
+    # Equal sides (K = 1: G = y^(1/3)) would still diverge; a linear law converges in
+    # one full step, and nothing is halved or done again.
+    class Linear(CubeRootLaw):
+        def g(self, y: float) -> float:
+            return 3.0 * y
+
+        def dg(self, y: float) -> float:
+            return 3.0
+
+    newton = _newton(Linear())
+    assert _solve(newton, 1.0) == 1
+    assert newton.rescues == 0 and newton.halvings == 0 and newton.y[0] == 0.0
+
+
+def test_a_failed_rescue_reports_both_tries(monkeypatch: pytest.MonkeyPatch) -> None:
+    newton = _newton(CubeRootLaw())
+    monkeypatch.setattr(interfacenewton, "HALVINGS", 0)  # the rescue: the plain Newton again
+    with pytest.raises(ConvergenceError, match=r"test: Newton did not converge \(SNES reason "
+                       r"-?\d+, \d+ iterations, residual .*\); again with its overshooting "
+                       r"steps halved: \d+ iterations, residual"):
+        _solve(newton, 1.0)
+    assert newton.rescues == 1
+
+
+def test_the_report_says_what_the_solver_did() -> None:
+    # The run's report (outputs.summary.format_report) names the rescues and an X that
+    # did not fit in memory, from the summary's solver entry; silent when neither happened.
+    from breakwater.outputs.summary import format_report
+
+    solver = {"kind": "fast", "steps": 10, "newton_iterations": 30, "cutbacks": 0,
+              "wall_time": 1.0, "time_loop": {"wall": 0.5}, "newton_rescues": 2,
+              "elimination": {"X": "interface rows only", "chunks": 39}}
+    text = format_report({"solver": solver}, "out")
+    assert "2 Newton solves converged only when done again with their overshooting " \
+           "steps halved" in text
+    assert "its interface rows built in 39 chunks, a second back-solve per step" in text
+    quiet = format_report({"solver": {**solver, "newton_rescues": 0,
+                                      "elimination": {"X": "kept", "chunks": 0}}}, "out")
+    assert "halved" not in quiet and "chunks" not in quiet
