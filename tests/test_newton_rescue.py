@@ -21,9 +21,9 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.timings import Timings
+from breakwater.stepping import interfacenewton
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
-from breakwater.stepping import interfacenewton
 from breakwater.stepping.interfacenewton import InterfaceNewton
 from breakwater.stepping.solver import NewtonOptions
 

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 from mpi4py import MPI
 
 from breakwater.casefile.dimension import mesh_problem
-from breakwater.casefile.godaface import check_goda_face
+from breakwater.casefile.godaface import check_goda_face, goda_applied, goda_quadrature
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.casefile.stormbuild import storm_outputs
@@ -249,8 +249,12 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1)
         if sampled:
             extra["loads"][ld.name]["sampled"] = sampled
+        quadrature = None
+        if ld.goda is not None:  # what the facets apply, beside the exact integral
+            entries, quadrature = goda_quadrature(ld, model, goda_applied(ld, data))
+            extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
-        lines = [line for line in (warning, pulse) if line is not None]
+        lines = [line for line in (warning, pulse, quadrature) if line is not None]
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 

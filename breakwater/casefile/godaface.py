@@ -33,9 +33,10 @@ if TYPE_CHECKING:
 
     from breakwater.casefile import loads as loadcase
     from breakwater.loads.wavepressure import GodaPressure
+    from breakwater.model.model import ContactModel
 
-__all__ = ["APPLIED_TOLERANCE", "GodaApplied", "check_goda_face", "facet_triangles",
-           "goda_applied", "section_integrals"]
+__all__ = ["APPLIED_TOLERANCE", "QUADRATURE_WARNING", "GodaApplied", "check_goda_face",
+           "facet_triangles", "goda_applied", "goda_quadrature", "section_integrals"]
 
 
 @dataclass(frozen=True)
@@ -288,3 +289,59 @@ def check_goda_face(load: loadcase.LoadCase, data: gmshio.MeshData, warn: bool =
                     f"{crest:.4g} m), where Goda's profile stops below η* = "
                     f"{g.eta_star:.4g} m: that part of the face is not loaded")
     return applied
+
+
+QUADRATURE_WARNING = 0.01
+"""A Goda front whose load vectors apply a force off its exact integral over the face by
+more than this fraction is warned about (the storms' ``FRACTION_WARNING``)."""
+
+
+def goda_quadrature(load: loadcase.LoadCase, model: ContactModel, exact: GodaApplied
+                    ) -> tuple[dict[str, float], str | None]:
+    """The horizontal force and moment the run applies of a Goda front (collective).
+
+    The run applies the front's load vectors, whose facet quadrature
+    (:meth:`~breakwater.model.model.ContactModel.load_resultant`) does not integrate a
+    kink of the profile inside a facet (at the still water level, η* or the crest)
+    exactly; ``exact`` (:func:`goda_applied`) is the profile's integral over the same
+    facets. The horizontal resultant F_h of the front's load vectors (x, and z in 3D)
+    and their moment Σ_k (y_k − y₀) b_k · F_h/|F_h| about y₀ = SWL − h' (b_k the nodal
+    forces at the nodes' elevations y_k).
+
+    Returns:
+        The summary's entries (``horizontal_force_per_length`` and
+        ``horizontal_moment_per_length`` what the run applies, ``exact_force_per_length``
+        and ``exact_moment_per_length`` the exact integrals, ``face_fraction`` the
+        applied force over the exact) and a one-line warning when that fraction is off
+        1 by more than :data:`QUADRATURE_WARNING`, or None.
+    """
+    import numpy as np
+
+    front = {load.group, *load.groups}
+    y0 = exact.profile[0]
+    axes = (0,) if model.gdim == 2 else (0, 2)
+    force, moment = np.zeros(len(axes)), np.zeros(len(axes))
+    for ld in model.loads:
+        if ld.spec.name == load.name and ld.spec.group in front:
+            for k, i in enumerate(axes):
+                force[k] += model.assemble(model.form(model.load_resultant(ld, i)))
+                moment[k] += model.assemble(model.form(model.load_resultant(
+                    ld, i, lambda x: x[1] - y0)))
+    size = float(np.linalg.norm(force))
+    lever = float(moment @ force / size) if size > 0 else 0.0
+    fraction = size / exact.force if exact.force > 0 else math.nan
+    moment_fraction = lever / exact.moment if exact.moment > 0 else math.nan
+    entries = {"horizontal_force_per_length": size, "horizontal_moment_per_length": lever,
+               "exact_force_per_length": exact.force,
+               "exact_moment_per_length": exact.moment, "face_fraction": fraction,
+               "face_moment_fraction": moment_fraction}
+    warning = None
+    worst = max((fraction, moment_fraction), key=lambda f: abs(f - 1.0))
+    if not abs(worst - 1.0) <= QUADRATURE_WARNING:
+        what = "force" if worst == fraction else "moment"
+        warning = (f"loads.{load.name}.goda: the facets apply {100 * worst:.4g}% of the "
+                   f"{what} of the profile over the loaded face (its kinks, or its end at "
+                   "the crest, fall inside facets, whose quadrature does not integrate them "
+                   "exactly: refine the face there); summary.json face_fraction, "
+                   "face_moment_fraction")
+    return entries, warning

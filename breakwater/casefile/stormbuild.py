@@ -95,11 +95,12 @@ def _span(data: gmshio.MeshData, groups: tuple[str, ...], axis: int) -> tuple[fl
 def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
     """The horizontal force per unit p₁ that the model applies in each stage (collective).
 
-    ∫ t_x ds of the case load's staged front loads (the facet quadrature the run uses),
+    ∫ t_x ds of the case load's staged front loads (with the quadrature of the load
+    vectors the run assembles: :meth:`~breakwater.model.model.ContactModel.load_resultant`),
     each stage's points set in turn, then the stage the model held set back.
     """
     loads = [ld for ld in model.loads if ld.spec.name == name and ld.parameters is not None]
-    forms = [model.form(ld.unit[0] * ld.ds) for ld in loads]
+    forms = [model.form(model.load_resultant(ld, 0)) for ld in loads]
     out = []
     for k in range(stages):
         for ld in loads:

@@ -50,7 +50,8 @@ class AppliedLoads:
         self.beta1 = beta1
         self.model = model
         gdim = model.gdim
-        self._forms = [[model.form(ld.unit[i] * ld.ds) for i in range(gdim)]
+        # The resultants with the load vectors' own quadrature (ContactModel.load_resultant).
+        self._forms = [[model.form(model.load_resultant(ld, i)) for i in range(gdim)]
                        for ld in model.loads]
         unit = [[model.assemble(f) for f in forms] for forms in self._forms]
         # The loads whose field changes at given times: ``unit`` assembled again then.
