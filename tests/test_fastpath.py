@@ -119,9 +119,8 @@ def test_goda_fast_equals_reference(shared_dir: pathlib.Path) -> None:
                                            report=False)
     fast, ref = summaries["fast"], summaries["reference"]
     assert fast["solver"]["kind"] == "fast" and ref["solver"]["kind"] == "reference"
-    # How the fast solver eliminated the bulk (this small mesh: X kept, one Δt).
+    # How the fast solver eliminated the bulk (this small mesh: X kept).
     assert fast["solver"]["elimination"]["X"] in ("kept", "second back-solve")
-    assert fast["solver"]["elimination"]["factorisations_kept"] == 1
     assert 0 < fast["solver"]["elimination"]["memory_gb"] < 1
     assert "elimination" not in ref["solver"]
     assert fast["solver"]["newton_rescues"] == 0  # every solve converged at its first try

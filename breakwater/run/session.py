@@ -99,7 +99,8 @@ class Stepped:
         return dataclasses.replace(
             state, history_rows=history.rows, wall_before=wall_time,
             stepper={"dt": float(s.dt.value), "flips": s.flips,
-                     "floor_accepts": s.solver.floor_accepts, "memory": s.solver.memory()},
+                     "floor_accepts": s.solver.floor_accepts, "memory": s.solver.memory(),
+                     "rescues": s.fast.newton.rescues if s.fast is not None else 0},
             ledger=self.ledger.state(), snapshot={"time": self.peak.time,
                                                   "value": self.peak.value})
 
@@ -108,6 +109,8 @@ class Stepped:
         s = self.stepper
         s.t.value, s.dt.value = state.step.t, state.stepper["dt"]
         s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
+        if s.fast is not None:  # (a checkpoint from before the rescue existed: none)
+            s.fast.newton.rescues = state.stepper.get("rescues", 0)
         s.solver.restore(state.stepper["memory"])
         s.model.set_time(state.step.t)  # a staged field's stage, for the ledger
         self.ledger.restore(state.ledger)

@@ -200,16 +200,16 @@ class Factorisations:
         ``X``: ``"kept"`` (the step's Δa = z − X f_c), ``"second back-solve"`` (cheaper
         than the product with X) or ``"interface rows only"`` (X did not fit in memory:
         solved in ``chunks``, a second back-solve per step); ``memory_gb``: this rank's
-        MUMPS factors and kept X (not collective: rank 0's in the summary);
-        ``factorisations_kept``: distinct Δt.
+        MUMPS factors and kept X (not collective: rank 0's in the summary). The same for
+        a resumed run as for the uninterrupted one (not the cache's size, which a
+        resumed run has filled with fewer step sizes).
         """
         if not self._cache:
             return {}
         last = next(reversed(self._cache.values()))
         kind = ("kept" if last.X_blocks is not None else
                 "interface rows only" if last.chunks else "second back-solve")
-        return {"X": kind, "chunks": last.chunks, "memory_gb": last.bytes / 1e9,
-                "factorisations_kept": len(self._cache)}
+        return {"X": kind, "chunks": last.chunks, "memory_gb": last.bytes / 1e9}
 
     def solve(self, fact: Factorisation, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
         """Out = A⁻¹ rhs."""
