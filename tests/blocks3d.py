@@ -103,3 +103,45 @@ def block_pair(path: str | pathlib.Path, comm: MPI.Comm, width: float,
 
     on_rank_zero(comm, build)
     return pathlib.Path(comm.bcast(str(path), root=0))
+
+
+def interface_values(stepper, field: str = "u") -> tuple:
+    """A GN22 stepper's first conforming pair: its nodes' coordinates, the slave's and
+    the master's values of ``field`` ("u", "v" or "a") there (gathered, every rank)."""
+    f = getattr(stepper, field)
+    nodes = stepper.nodes[0]
+    s, m = nodes.gather(f[0].x.array, f[1].x.array)
+    return nodes.x, s, m
+
+
+def slab_against_2d(two, three, steps: int) -> tuple[dict[str, float], float]:
+    """Step a plane-strain model and its 3D slab together, comparing their interfaces.
+
+    Every 3D interface node lies over a 2D one (the 3D values at each z). After each
+    step, the largest difference of u and v between them, and the largest |u_z|,
+    relative to the 2D slave side's largest |u| (|v|).
+
+    Returns:
+        The worst relative differences over the steps (``u``, ``v``, ``u_z``) and the
+        2D interface's mean slide (slave minus master u_x) at the end.
+    """
+    import numpy as np
+
+    x2, x3 = interface_values(two)[0], interface_values(three)[0]
+    index = [int(np.argmin(np.linalg.norm(x2 - p[:2], axis=1))) for p in x3]
+    assert np.allclose(x2[index], x3[:, :2], atol=1e-12)
+    worst = {"u": 0.0, "v": 0.0, "u_z": 0.0}
+    slide = 0.0
+    for _ in range(steps):
+        two.step()
+        three.step()
+        for field in ("u", "v"):
+            _, s2, m2 = interface_values(two, field)
+            _, s3, m3 = interface_values(three, field)
+            scale = max(np.abs(s2).max(), 1e-300)
+            worst[field] = max(worst[field], np.abs(s3[:, :2] - s2[index]).max() / scale,
+                               np.abs(m3[:, :2] - m2[index]).max() / scale)
+            if field == "u":
+                worst["u_z"] = max(worst["u_z"], np.abs(s3[:, 2]).max() / scale)
+                slide = float(np.mean(s2[:, 0] - m2[:, 0]))
+    return worst, slide

@@ -36,7 +36,7 @@ from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from blocks3d import block_pair
+from blocks3d import block_pair, slab_against_2d
 
 COMM = MPI.COMM_WORLD
 
@@ -274,29 +274,7 @@ def test_slab_is_the_2d_model_under_goda(hexahedra: pathlib.Path,
         stepper.initialise(u)
         steppers.append(stepper)
 
-    def interface(stepper: GN22, field: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        f = getattr(stepper, field)
-        nodes = stepper.nodes[0]
-        s, m = nodes.gather(f[0].x.array, f[1].x.array)
-        return nodes.x, s, m
-
-    x2, x3 = interface(steppers[0], "u")[0], interface(steppers[1], "u")[0]
-    index = [int(np.argmin(np.linalg.norm(x2 - p[:2], axis=1))) for p in x3]
-    assert np.allclose(x2[index], x3[:, :2], atol=1e-12)
-    worst = {"u": 0.0, "v": 0.0, "u_z": 0.0}
-    slide = 0.0
-    for _ in range(12):
-        for stepper in steppers:
-            stepper.step()
-        for field in ("u", "v"):
-            _, s2, m2 = interface(steppers[0], field)
-            _, s3, m3 = interface(steppers[1], field)
-            scale = max(np.abs(s2).max(), 1e-300)
-            worst[field] = max(worst[field], np.abs(s3[:, :2] - s2[index]).max() / scale,
-                               np.abs(m3[:, :2] - m2[index]).max() / scale)
-            if field == "u":
-                worst["u_z"] = max(worst["u_z"], np.abs(s3[:, 2]).max() / scale)
-                slide = float(np.mean(s2[:, 0] - m2[:, 0]))
+    worst, slide = slab_against_2d(steppers[0], steppers[1], 12)
     if COMM.rank == 0:
         print(f"\nGoda slab: slide {slide:.4e} m; 3D vs 2D, relative: {worst}")
     # It slid: sticking, the regularised law (χ = 1e-10 m/s) lets the interface's sides

@@ -21,7 +21,7 @@ from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Mater
 from breakwater.stepping.gn22 import GN22, GN22Parameters, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from blocks3d import block_pair
+from blocks3d import block_pair, interface_values, slab_against_2d
 
 COMM = MPI.COMM_WORLD
 
@@ -55,14 +55,6 @@ def _stepper(path: pathlib.Path, E: float, penalty: float, traction: Callable[[f
     return stepper
 
 
-def _interface(stepper: GN22, field: str = "u") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The interface nodes' coordinates, slave and master values (every rank)."""
-    f = getattr(stepper, field)
-    nodes = stepper.nodes[0]
-    s, m = nodes.gather(f[0].x.array, f[1].x.array)
-    return nodes.x, s, m
-
-
 def test_plane_strain_slab_is_the_2d_model(folder: pathlib.Path) -> None:
     # The 2D mesh extruded along z by one layer of hexahedra, u_z fixed on both faces z = 0
     # and z = T: the 2D (plane-strain) solution, extended constant in z, is the 3D discrete
@@ -79,25 +71,7 @@ def test_plane_strain_slab_is_the_2d_model(folder: pathlib.Path) -> None:
     a = _stepper(two, 1e9, 1e12, _triangle(peak), (1.0, 0.0), (), (0.0, -g))
     b = _stepper(three, 1e9, 1e12, _triangle(peak), (1.0, 0.0, 0.0),
                  (Fixed("a_sides", (2,)), Fixed("b_sides", (2,))), (0.0, -g, 0.0))
-    x2, _, _ = _interface(a)
-    x3, _, _ = _interface(b)
-    # Every 3D interface node lies over a 2D one: the 3D values at z = 0, T/2 and T.
-    index = [int(np.argmin(np.linalg.norm(x2 - p[:2], axis=1))) for p in x3]
-    assert np.allclose(x2[index], x3[:, :2], atol=1e-12)
-    worst = {"u": 0.0, "v": 0.0, "u_z": 0.0}
-    slide = 0.0
-    for _ in range(2 * N_PULSE):
-        a.step()
-        b.step()
-        for field in ("u", "v"):
-            _, s2, m2 = _interface(a, field)
-            _, s3, m3 = _interface(b, field)
-            scale = max(np.abs(s2).max(), 1e-300)
-            worst[field] = max(worst[field], np.abs(s3[:, :2] - s2[index]).max() / scale,
-                               np.abs(m3[:, :2] - m2[index]).max() / scale)
-            if field == "u":
-                worst["u_z"] = max(worst["u_z"], np.abs(s3[:, 2]).max() / scale)
-                slide = float(np.mean(s2[:, 0] - m2[:, 0]))
+    worst, slide = slab_against_2d(a, b, 2 * N_PULSE)
     if COMM.rank == 0:
         print(f"\nslab: slide {slide:.4e} m; 3D vs 2D, relative: {worst}")
     # It slid: sticking, the base would move by the elastic shear displacement of the
@@ -135,7 +109,7 @@ def test_block_pushed_diagonally_slides_along_the_push(folder: pathlib.Path, cel
     for k in range(40):
         stepper.step()
         if k >= 20:
-            _, vs, vm = _interface(stepper, "v")
+            _, vs, vm = interface_values(stepper, "v")
             times.append(float(stepper.t.value))
             velocities.append(np.mean(vs - vm, axis=0))
     slope = np.polyfit(times, np.array(velocities), 1)[0]
