@@ -383,3 +383,35 @@ def test_stiffness_basis(shared_dir):
     assert abs(result.stiffness - 500e3) <= metre.calibration.tolerance * 500e3
     # the softer reading: G = 0.434 MPa at refinement 1 (README), against 2.28 MPa
     assert 0.40e6 < result.shear_modulus < 0.47e6
+
+
+def test_a_stop_poll_does_not_wait_for_rank_0():
+    # The shared counter lives on rank 0, and an atomic read of it completes only when
+    # rank 0 makes MPI progress. A group's run polls it for a stop request once a
+    # second: the poll must not wait (it did, and a group's case took four times as
+    # long while rank 0 computed its own). Here rank 0 computes for 2 s without any
+    # MPI call; every other rank's poll returns at once (bound 0.5 s, against the 2 s
+    # a waiting read takes), and a stop posted by rank 0 reaches every rank's poll.
+    from breakwater.studies.sweep import _Counter
+
+    counter = _Counter(COMM)
+    try:
+        COMM.Barrier()
+        if COMM.rank == 0:
+            end = time.monotonic() + 2.0
+            while time.monotonic() < end:  # busy, no MPI progress
+                pass
+            counter.stop(int(signal.SIGTERM))
+        else:
+            start = time.monotonic()
+            assert counter.stopped() == 0
+            assert time.monotonic() - start < 0.5
+        COMM.Barrier()
+        deadline = time.monotonic() + 30.0
+        while counter.stopped() != int(signal.SIGTERM):
+            assert time.monotonic() < deadline, "the stop never reached this rank"
+            time.sleep(0.01)
+        assert counter.next() >= counter.STOP_UNIT  # no case is taken any more
+    finally:
+        COMM.Barrier()
+        counter.free()
