@@ -4,7 +4,8 @@ A ``[loads.X.goda]`` profile is placed in the mesh by ``still_water_level``: it 
 y = SWL − h' (the base of the upright section, p₃) to SWL + min(η*, h_c) (the crest or
 η*). The mesh's loaded facets receive the part of it at their elevations, nothing else,
 whatever ``toe_depth`` and ``crest_height`` say. :func:`goda_applied` integrates that
-part exactly (the force and moment the run applies, reported by the summary);
+part exactly, and :func:`goda_quadrature` measures what the run's load vectors apply
+of it (their facet quadrature is not exact where a kink falls inside a facet);
 :func:`check_goda_face` refuses a profile that misses the face and warns, with the
 fraction, when only part of it is on the face (a crest height above the face's top, a
 still water level that lifts the profile partly off the face).
@@ -35,7 +36,7 @@ if TYPE_CHECKING:
     from breakwater.loads.wavepressure import GodaPressure
     from breakwater.model.model import ContactModel
 
-__all__ = ["APPLIED_TOLERANCE", "QUADRATURE_WARNING", "GodaApplied", "check_goda_face",
+__all__ = ["APPLIED_TOLERANCE", "FRACTION_WARNING", "GodaApplied", "check_goda_face",
            "facet_triangles", "goda_applied", "goda_quadrature", "section_integrals"]
 
 
@@ -291,9 +292,10 @@ def check_goda_face(load: loadcase.LoadCase, data: gmshio.MeshData, warn: bool =
     return applied
 
 
-QUADRATURE_WARNING = 0.01
-"""A Goda front whose load vectors apply a force off its exact integral over the face by
-more than this fraction is warned about (the storms' ``FRACTION_WARNING``)."""
+FRACTION_WARNING = 0.01
+"""A Goda front (or a storm wave's) whose load vectors apply a force or moment off its
+exact integral over the face, or whose profile lies partly off the face, by more than
+this fraction is warned about."""
 
 
 def goda_quadrature(load: loadcase.LoadCase, model: ContactModel, exact: GodaApplied
@@ -313,7 +315,7 @@ def goda_quadrature(load: loadcase.LoadCase, model: ContactModel, exact: GodaApp
         ``horizontal_moment_per_length`` what the run applies, ``exact_force_per_length``
         and ``exact_moment_per_length`` the exact integrals, ``face_fraction`` the
         applied force over the exact) and a one-line warning when that fraction is off
-        1 by more than :data:`QUADRATURE_WARNING`, or None.
+        1 by more than :data:`FRACTION_WARNING`, or None.
     """
     import numpy as np
 
@@ -337,7 +339,7 @@ def goda_quadrature(load: loadcase.LoadCase, model: ContactModel, exact: GodaApp
                "face_moment_fraction": moment_fraction}
     warning = None
     worst = max((fraction, moment_fraction), key=lambda f: abs(f - 1.0))
-    if not abs(worst - 1.0) <= QUADRATURE_WARNING:
+    if not abs(worst - 1.0) <= FRACTION_WARNING:
         what = "force" if worst == fraction else "moment"
         warning = (f"loads.{load.name}.goda: the facets apply {100 * worst:.4g}% of the "
                    f"{what} of the profile over the loaded face (its kinks, or its end at "

@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 from typing import TYPE_CHECKING, Any
 
+from breakwater.casefile.godaface import FRACTION_WARNING
 from breakwater.common.errors import CaseError
 from breakwater.config.runspec import PairProbeSpec
 from breakwater.loads.fields import StagedField
@@ -23,13 +24,7 @@ if TYPE_CHECKING:
     from breakwater.casefile.settings import CaseSettings
     from breakwater.model.model import ContactModel
 
-FRACTION_WARNING = 0.01
-"""A wave whose applied front force differs from its profile's by more than this
-fraction is warned about (the face misses part of the profile, or the facets do not
-resolve its kinks)."""
-
-__all__ = ["FRACTION_WARNING", "applied_front", "face_integral", "profile_integral",
-           "storm_outputs"]
+__all__ = ["applied_front", "face_integral", "profile_integral", "storm_outputs"]
 
 
 def profile_integral(points: Any, a: float, b: float) -> float:
@@ -124,8 +119,8 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     face over the whole shape's (below 1 where the face misses part of the profile; in
     3D the shape's part between the face's elevations);
     ``warnings`` the one-line warnings of the waves off by more than
-    :data:`FRACTION_WARNING`. In 3D the probes lie on the base's mid-plane in z and the
-    record's ``breakwater_length`` is the base's extent in z (1 in plane strain): the
+    :data:`~breakwater.casefile.godaface.FRACTION_WARNING`. In 3D the probes lie on the
+    base's mid-plane in z and the record's ``breakwater_length`` is the base's extent in z (1 in plane strain): the
     per-wave record divides the whole face's force and the caisson's mass and W' by it.
 
     Args:
