@@ -120,8 +120,9 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     3D the shape's part between the face's elevations);
     ``warnings`` the one-line warnings of the waves off by more than
     :data:`~breakwater.casefile.godaface.FRACTION_WARNING`. In 3D the probes lie on the
-    base's mid-plane in z and the record's ``breakwater_length`` is the base's extent in z (1 in plane strain): the
-    per-wave record divides the whole face's force and the caisson's mass and W' by it.
+    base's mid-plane in z and the record's ``breakwater_length`` is the base's extent in
+    z (1 in plane strain): the per-wave record divides the whole face's force and the
+    caisson's mass and W' by it.
 
     Args:
         case: The case (its contact pairs).
