@@ -226,7 +226,9 @@ def check_factorisation(ksp: PETSc.KSP, what: str) -> None:
     """Refuse, in one line, a factorisation that MUMPS could not complete (collective).
 
     A failed factorisation does not raise: its back-solves return infinities (a MUMPS
-    error, e.g. INFOG(1) = -13 when an allocation fails, leaves the factors unusable).
+    error, e.g. INFOG(1) = -13 when an allocation fails, leaves the factors unusable);
+    inside a SNES it raises PETSc's error 76 with PETSc's traceback
+    (:meth:`~breakwater.stepping.solver.NewtonSolver.solve` asks this function why).
 
     Raises:
         BreakwaterError: MUMPS's error code and what it means, on every rank.
@@ -234,11 +236,13 @@ def check_factorisation(ksp: PETSc.KSP, what: str) -> None:
     """
     pc = ksp.getPC()
     failed = int(pc.getFailedReason())  # type: ignore[call-overload]  # an int at run time
-    comm = ksp.getComm().tompi4py()
-    failed = comm.allreduce(failed, op=MPI.MAX)
-    if not failed:
-        return
+    # (Inside a SNES the PC's reason is reset by the time the error is raised: MUMPS's
+    # own status, INFOG(1) < 0, is the one kept.)
     info = pc.getFactorMatrix().getMumpsInfog(1) if pc.getFactorSolverType() == "mumps" else 0
+    comm = ksp.getComm().tompi4py()
+    failed, info = comm.allreduce(failed, op=MPI.MAX), comm.allreduce(info, op=MPI.MIN)
+    if not failed and info >= 0:
+        return
     causes = {-8: "its workspace was too small", -9: "its workspace was too small",
               -13: "a memory allocation failed", -19: "it needs more memory than allowed",
               -10: "the matrix is singular"}

@@ -15,6 +15,7 @@ from petsc4py import PETSc
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.timings import Timings
 from breakwater.model.model import ContactModel
+from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.stepsolver import StepSolver
 
 
@@ -242,6 +243,10 @@ class NewtonSolver(StepSolver):
 
         """
         t0 = time.perf_counter()
-        self.problem.solve()
+        try:
+            self.problem.solve()
+        except PETSc.Error:  # a factorisation MUMPS could not complete: say so in one line
+            check_factorisation(self.snes.getKSP(), f"the Newton matrix of {self.name}")
+            raise
         self.timings.seconds["newton"] += time.perf_counter() - t0
         return converged_iterations(self.snes, self.name)
