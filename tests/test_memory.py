@@ -23,7 +23,7 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 from petsc4py import PETSc
 
 from breakwater.common.errors import BreakwaterError
-from breakwater.common.memory import available_bytes, fits, node_ranks
+from breakwater.common.memory import available_bytes, fits
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, Material
 from breakwater.stepping.gn22 import GN22, solve_static
@@ -60,7 +60,9 @@ def test_available_memory_is_read_from_meminfo(tmp_path: pathlib.Path) -> None:
 
 def test_fits_counts_every_rank_of_a_node() -> None:
     # The ranks on a node add their needs: 100 bytes each against half of 1000 bytes.
-    ranks = node_ranks(COMM)
+    node = COMM.Split_type(MPI.COMM_TYPE_SHARED)  # the ranks sharing this rank's node
+    ranks = node.size
+    node.Free()
     assert 1 <= ranks <= COMM.size
     assert fits(COMM, 100.0, 0.5, available=1000.0) == (100 * ranks <= 500)
     assert fits(COMM, 300.0, 0.5, available=1000.0) == (300 * ranks <= 500)

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 from mpi4py import MPI
 
 from breakwater.casefile.dimension import mesh_problem
-from breakwater.casefile.godaface import check_goda_face, goda_applied, goda_quadrature
+from breakwater.casefile.godaface import check_goda_face, goda_quadrature
 from breakwater.casefile.loadchecks import face_problems, pulse_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.casefile.stormbuild import storm_outputs
@@ -222,9 +222,10 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     """
     comm = MPI.COMM_WORLD if comm is None else comm
     data = read_mesh(case, comm)
-    for ld in case.loads:  # before the calibration: a misplaced Goda profile fails fast
-        if ld.enabled and ld.goda is not None:
-            check_goda_face(ld, data)
+    # Before the calibration: a misplaced Goda profile fails fast (its exact integral
+    # over the face kept for goda_quadrature below).
+    exact = {ld.name: check_goda_face(ld, data) for ld in case.loads
+             if ld.enabled and ld.goda is not None}
     extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
     if case.calibration.enabled:
         result = calibrate(case, data)
@@ -251,7 +252,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             extra["loads"][ld.name]["sampled"] = sampled
         quadrature = None
         if ld.goda is not None:  # what the facets apply, beside the exact integral
-            entries, quadrature = goda_quadrature(ld, model, goda_applied(ld, data))
+            entries, quadrature = goda_quadrature(ld, model, exact[ld.name])
             extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
         lines = [line for line in (warning, pulse, quadrature) if line is not None]

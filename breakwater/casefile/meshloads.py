@@ -78,13 +78,14 @@ def group_nodes(data: gmshio.MeshData, group: str) -> Any:
 
 
 def extent(data: gmshio.MeshData, group: str) -> tuple[Any, Any]:
-    """Smallest and largest coordinates (x, y) of a facet group's vertices (all ranks)."""
+    """Smallest and largest coordinates (x, y[, z]) of a facet group's vertices (all ranks)."""
     import numpy as np
 
     msh = data.mesh
-    x = group_nodes(data, group)[:, :2]
-    lo = x.min(axis=0) if len(x) else np.full(2, np.inf)
-    hi = x.max(axis=0) if len(x) else np.full(2, -np.inf)
+    gdim = msh.geometry.dim
+    x = group_nodes(data, group)[:, :gdim]
+    lo = x.min(axis=0) if len(x) else np.full(gdim, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(gdim, -np.inf)
     return (np.min(msh.comm.allgather(lo), axis=0), np.max(msh.comm.allgather(hi), axis=0))
 
 

@@ -70,23 +70,6 @@ def face_integral(points: Any, still_water_level: float, data: gmshio.MeshData,
     return float(msh.comm.allreduce(total, op=MPI.SUM))
 
 
-def _span(data: gmshio.MeshData, groups: tuple[str, ...], axis: int) -> tuple[float, float]:
-    """The lowest and highest coordinate ``axis`` of the groups' nodes (collective)."""
-    import math
-
-    from mpi4py import MPI
-
-    from breakwater.casefile.meshloads import group_nodes
-
-    lo, hi = math.inf, -math.inf
-    for g in groups:
-        x = group_nodes(data, g)
-        if len(x):
-            lo, hi = min(lo, float(x[:, axis].min())), max(hi, float(x[:, axis].max()))
-    comm = data.mesh.comm
-    return comm.allreduce(lo, op=MPI.MIN), comm.allreduce(hi, op=MPI.MAX)
-
-
 def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
     """The horizontal force per unit p₁ that the model applies in each stage (collective).
 
@@ -174,12 +157,12 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     length = 1.0  # 3D: the caisson's length along the breakwater (z), the base's
     threed = data.mesh.geometry.dim == 3
     if threed:
-        z0, z1 = _span(data, (storm.uplift_group,), 2)
-        across, length = (0.5 * (z0 + z1),), z1 - z0
+        across, length = (0.5 * float(lo[2] + hi[2]),), float(hi[2] - lo[2])
     probes = (PairProbeSpec(names[0], index, (float(lo[0]), y, *across)),
               PairProbeSpec(names[1], index, (float(hi[0]), y, *across)),
               PairProbeSpec(names[2], index, (0.5 * float(lo[0] + hi[0]), y, *across)))
-    face = _span(data, groups, 1) if threed else (0.0, 0.0)
+    ends = [extent(data, g) for g in groups]  # the face's lowest and highest y
+    face = (min(float(e[0][1]) for e in ends), max(float(e[1][1]) for e in ends))
     triangle, _ = base_triangle(storm.uplift_group, data, groups)
     waves: list[dict[str, Any]] = []
     warnings: list[str] = []

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["MEMINFO", "available_bytes", "fits", "node_ranks"]
+__all__ = ["MEMINFO", "available_bytes", "fits"]
 
 MEMINFO = pathlib.Path("/proc/meminfo")
 
@@ -35,19 +35,6 @@ def available_bytes(meminfo: pathlib.Path = MEMINFO) -> float | None:
     except (OSError, ValueError, IndexError):
         return None
     return None
-
-
-def node_ranks(comm: MPI.Comm) -> int:
-    """How many ranks of ``comm`` share this rank's node (its memory) (collective)."""
-    from mpi4py import MPI
-
-    if comm.size == 1:
-        return 1
-    node = comm.Split_type(MPI.COMM_TYPE_SHARED)
-    try:
-        return int(node.size)
-    finally:
-        node.Free()
 
 
 def fits(comm: MPI.Comm, need: float, fraction: float,

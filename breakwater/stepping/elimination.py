@@ -119,24 +119,33 @@ class Elimination:
         rows = self.interface[mine] - start  # this rank's interface rows (local)
         at = np.flatnonzero(mine)  # their positions among the interface unknowns
         out = np.zeros((n_i, n_i))
-        factor = ksp.getPC().getFactorMatrix()
         for lo in range(0, n_i, chunk):
             hi = min(n_i, lo + chunk)
-            E = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
-                                        comm=comm)  # type: ignore[arg-type]
-            E.setUp()
-            E.zeroEntries()
-            for row, col in zip(self.interface[mine], at, strict=True):
-                if lo <= col < hi:
-                    E.setValue(int(row), int(col - lo), 1.0)
-            E.assemble()
-            X = E.duplicate()
-            factor.matSolve(E, X)
+            X = self._solve_columns(ksp, lo, hi)
             out[at, lo:hi] = X.getDenseArray()[rows]
-            E.destroy()
             X.destroy()
         comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
+
+    def _solve_columns(self, ksp: PETSc.KSP, lo: int, hi: int) -> PETSc.Mat:
+        """A⁻¹ E for E's columns lo to hi (dense, this rank's rows; the caller destroys it).
+
+        Column j of E is the unit vector of interface unknown j (a 1 on its row).
+        """
+        n_local, start = int(self.offsets[-1]), self.start
+        E = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
+                                    comm=self.comm)  # type: ignore[arg-type]
+        E.setUp()
+        E.zeroEntries()
+        mine = (self.interface >= start) & (self.interface < start + n_local)
+        for row, col in zip(self.interface[mine], np.flatnonzero(mine), strict=True):
+            if lo <= col < hi:
+                E.setValue(int(row), int(col - lo), 1.0)
+        E.assemble()
+        X = E.duplicate()
+        ksp.getPC().getFactorMatrix().matSolve(E, X)
+        E.destroy()
+        return X
 
     def _interface_bodies(self) -> np.ndarray:
         """The body of each interface unknown (the same array on every rank)."""
@@ -159,23 +168,8 @@ class Elimination:
         magnifies the last bit into the Newton counts, 5198 → 5206 on the Goda case with
         the blocks' own sums); else X is one block.
         """
-        comm = self.comm
-        n_i = len(self.interface)
-        n_local = self.offsets[-1]
-        start = self.start
-        E = PETSc.Mat().createDense(((n_local, None), (None, n_i)),
-                                    comm=comm)  # type: ignore[arg-type]
-        E.setUp()
-        E.zeroEntries()
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        cols = np.flatnonzero(mine)
-        for row, col in zip(self.interface[mine], cols, strict=True):
-            E.setValue(int(row), int(col), 1.0)
-        E.assemble()
-        X = E.duplicate()
-        ksp.getPC().getFactorMatrix().matSolve(E, X)
+        X = self._solve_columns(ksp, 0, len(self.interface))
         out = np.array(X.getDenseArray(), copy=True)
-        E.destroy()
         X.destroy()
         return x_blocks(out, self.offsets, self._interface_bodies())
 
