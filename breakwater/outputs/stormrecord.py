@@ -45,6 +45,10 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
+from breakwater.outputs.historyrows import column
+
 __all__ = ["COLUMNS", "SMALL_SLIDING", "read_waves", "rigid_record", "small_sliding_warning",
            "storm_figures", "storm_record",
            "write_storm_record", "write_waves"]
@@ -54,16 +58,18 @@ COLUMNS = ("wave", "height", "period", "start", "end", "peak_force_per_length", 
 """The columns of ``waves.csv``."""
 
 
-def _sliding(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+def _sliding(rows: Sequence[Mapping[str, float]], r: Mapping[str, Any]) -> np.ndarray:
     """The caisson's horizontal displacement relative to the mound at mid-base, landward."""
     p = r["mid"]
-    return (row[f"{p}_slave_ux"] - row[f"{p}_master_ux"]) * r["sign"] * r["landward"]
+    return (column(rows, f"{p}_slave_ux") - column(rows, f"{p}_master_ux")) \
+        * r["sign"] * r["landward"]
 
 
-def _rotation(row: Mapping[str, float], r: Mapping[str, Any]) -> float:
+def _rotation(rows: Sequence[Mapping[str, float]], r: Mapping[str, Any]) -> np.ndarray:
     """The slope of the caisson's u_y between the base's ends (rad)."""
     side = "slave" if r["sign"] > 0 else "master"
-    return (row[f"{r['hi']}_{side}_uy"] - row[f"{r['lo']}_{side}_uy"]) / r["length"]
+    return (column(rows, f"{r['hi']}_{side}_uy") - column(rows, f"{r['lo']}_{side}_uy")) \
+        / r["length"]
 
 
 def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
@@ -87,25 +93,28 @@ def storm_record(rows: Sequence[Mapping[str, float]], storm: Mapping[str, Any],
     out: list[dict[str, float]] = []
     if not rows:
         return out, _block(out, waves, r)
-    times = [row["t"] for row in rows]
+    times = column(rows, "t")  # increasing
     length = r.get("breakwater_length", 1.0)  # 3D: the force per metre of the caisson
-    θ0 = _rotation(rows[0], r)
+    slide, rotation = _sliding(rows, r), _rotation(rows, r)
+    penetration = column(rows, r["penetration"], math.nan)
     total = 0.0
     for k, w in enumerate(waves):
         start, end = w["start"], w["start"] + w["period"]
         if times[-1] < end * (1 - 1e-12):
             break  # not finished
-        i0 = max(i for i, t in enumerate(times) if t <= start)
-        inside = [i for i, t in enumerate(times) if start < t <= end * (1 + 1e-12)]
-        if not inside:
-            inside = [i0]
-        i1 = inside[-1]
-        sliding = _sliding(rows[i1], r) - _sliding(rows[i0], r)
+        i0 = int(np.searchsorted(times, start, side="right")) - 1  # the last t <= start
+        # The rows of start < t <= end (none: the row before).
+        inside = slice(i0 + 1, max(int(np.searchsorted(times, end * (1 + 1e-12),
+                                                       side="right")), i0 + 1))
+        if inside.start == inside.stop:
+            inside = slice(i0, i0 + 1)
+        i1 = inside.stop - 1
+        sliding = float(slide[i1] - slide[i0])
         total += sliding
-        rocking = max(abs(_rotation(rows[i], r) - θ0) for i in inside)
-        pressure = r["penalty"] * max(rows[i].get(r["penetration"], math.nan) for i in inside)
+        rocking = float(np.abs(rotation[inside] - rotation[0]).max())
+        pressure = r["penalty"] * float(penetration[inside].max())
         force = math.nan if p1 is None else max(
-            p1(times[i]) * w["front_force_per_p1"] for i in inside) / length
+            p1(float(t)) * w["front_force_per_p1"] for t in times[inside]) / length
         out.append({"wave": k + 1, "height": w["height"], "period": w["period"],
                     "start": start, "end": end, "peak_force_per_length": force,
                     "sliding": sliding, "cumulative_sliding": total, "rocking": rocking,
@@ -190,8 +199,6 @@ def write_waves(path: Any, waves: Sequence[Mapping[str, float]]) -> Any:
 
 def read_waves(path: Any) -> dict[str, Any]:
     """``waves.csv`` as one NumPy array per column (none when it holds no wave)."""
-    import numpy as np
-
     lines = [line for line in open(path, encoding="utf-8").read().splitlines() if line]
     names = lines[0].split(",")
     values = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
@@ -206,7 +213,6 @@ def storm_figures(directory: Any, folder: Any) -> list[Any]:
     """
     import pathlib
 
-    import numpy as np
     from matplotlib.figure import Figure
 
     from breakwater.common.files import WAVES
@@ -268,8 +274,8 @@ def small_sliding_warning(rows: Sequence[Mapping[str, float]], r: Mapping[str, A
     if not r.get("conforming") or not h or not rows:
         return None
     names = [r[k] for k in ("lo", "mid", "hi") if k in r]
-    slip = max(abs(row.get(f"{p}_slip", 0.0) - rows[0].get(f"{p}_slip", 0.0))
-               for row in rows for p in names)
+    slip = max((float(np.abs(s - s[0]).max())
+                for s in (column(rows, f"{p}_slip", 0.0) for p in names)), default=0.0)
     if slip <= SMALL_SLIDING * h:
         return None
     return (f"the caisson's base slipped up to {slip:.3g} m on the conforming pair "
@@ -298,8 +304,6 @@ def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
         directory: The output folder.
     """
     import pathlib
-
-    import numpy as np
 
     from breakwater.common.files import WAVES
     from breakwater.common.parallel import on_rank_zero

@@ -37,6 +37,7 @@ from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair, pair_names
 from breakwater.outputs import quality
+from breakwater.outputs.historyrows import column
 from breakwater.outputs.probes import Probes
 from breakwater.outputs.section import mid_row
 
@@ -170,9 +171,9 @@ def contact_quality(inputs: Sequence[quality.PairInputs], steps: Sequence[Mappin
     for c in inputs:
         δ, when = None, None
         if steps:
-            column = f"{c.name}_penetration"
-            j = int(np.argmax([r[column] for r in steps]))
-            δ, when = steps[j][column], steps[j]["t"]
+            δs = column(steps, f"{c.name}_penetration")
+            j = int(np.argmax(δs))
+            δ, when = float(δs[j]), float(column(steps, "t")[j])
         report[c.name] = c.assess(δ, when)
     return report
 
@@ -212,10 +213,6 @@ class PeakSnapshot:
 
 # --- the time steps ---------------------------------------------------------------
 
-def _column(rows: Sequence[Mapping[str, float]], name: str) -> np.ndarray:
-    return np.array([r[name] for r in rows])
-
-
 def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
                     pair_probes: Sequence[str]) -> dict[str, Any]:
     """The ``dynamic`` entry of the summary, from the history rows (static row first).
@@ -229,21 +226,23 @@ def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
         return {}
     end = rows[-1]
     dynamic: dict[str, Any] = {"peak_ux": {}}
+    t = column(rows, "t")
     for name in probes:
-        k = int(np.argmax(np.abs(_column(rows, f"{name}_ux"))))  # the first largest
-        dynamic["peak_ux"][name] = {"value": rows[k][f"{name}_ux"], "time": rows[k]["t"]}
+        ux = column(rows, f"{name}_ux")
+        k = int(np.argmax(np.abs(ux)))  # the first largest
+        dynamic["peak_ux"][name] = {"value": float(ux[k]), "time": float(t[k])}
     dynamic["residual_ux"] = {name: end[f"{name}_ux"] for name in probes}
     dynamic["residual_uy"] = {name: end[f"{name}_uy"] for name in probes}
     dynamic["time_of_max_ux"] = dynamic["peak_ux"][probes[0]]["time"] if probes else None
     pairs: dict[str, Any] = {}
     for name in pair_probes:
-        slip, opening = _column(rows, f"{name}_slip"), _column(rows, f"{name}_opening")
+        slip, opening = column(rows, f"{name}_slip"), column(rows, f"{name}_opening")
         k = int(np.argmax(opening))
-        pairs[name] = {"residual_slip": slip[-1], "residual_opening": opening[-1],
+        pairs[name] = {"residual_slip": float(slip[-1]), "residual_opening": float(opening[-1]),
                        # the static (frictionless) state may already slip a bit
-                       "static_slip": slip[0], "slip_change": slip[-1] - slip[0],
+                       "static_slip": float(slip[0]), "slip_change": float(slip[-1] - slip[0]),
                        "max_abs_slip": float(np.abs(slip).max()),
-                       "max_opening": opening[k], "time_of_max_opening": rows[k]["t"]}
+                       "max_opening": float(opening[k]), "time_of_max_opening": float(t[k])}
     dynamic["pair_probes"] = pairs
     dynamic["residual_slip"] = pairs[pair_probes[0]]["residual_slip"] if pair_probes else None
     dynamic["max_uplift"] = max((p["max_opening"] for p in pairs.values()), default=None)
@@ -300,18 +299,23 @@ def energy_summary(rows: Sequence[Mapping[str, float]]) -> dict[str, Any]:
     error| as a fraction of the run's energy scale: the largest of the stored energy
     (kinetic + strain + penalty) and of |external work| over the records.
     """
-    balance = [abs(r["balance_error"]) for r in rows]
-    work = rows[-1]["external_work"] if rows else 0.0
-    scale = max((max(r["kinetic"] + r["strain"] + r["penalty"], abs(r["external_work"]))
-                 for r in rows), default=0.0)
+    if not rows:
+        return {"max_balance_error": None, "final": None, "numerical_dissipation": None,
+                "max_balance_error_over_external_work": None,
+                "numerical_dissipation_over_external_work": None, "energy_scale": 0.0,
+                "max_balance_error_over_energy_scale": None}
+    last = rows[-1]
+    work = last["external_work"]
+    stored = column(rows, "kinetic") + column(rows, "strain") + column(rows, "penalty")
+    scale = float(np.maximum(stored, np.abs(column(rows, "external_work"))).max())
 
     def of(x: float | None, y: float) -> float | None:
         return None if x is None or not y else x / abs(y)
 
-    largest = max(balance) if balance else None
-    numerical = rows[-1].get("numerical_dissipation") if rows else None
+    largest = float(np.abs(column(rows, "balance_error")).max())
+    numerical = last.get("numerical_dissipation")
     return {"max_balance_error": largest,
-            "final": {k: rows[-1][k] for k in FIELDS if k in rows[-1]} if rows else None,
+            "final": {k: last[k] for k in FIELDS if k in last},
             "numerical_dissipation": numerical,
             "max_balance_error_over_external_work": of(largest, work),
             "numerical_dissipation_over_external_work": of(numerical, work),

@@ -52,6 +52,7 @@ from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair
 from breakwater.outputs.checkpoint import match_nodes
+from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.section import section
 
 __all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
@@ -84,7 +85,7 @@ class HistoryWriter:
         self.columns = tuple(columns)
         self.comm = comm
         self.rows = 0
-        self.kept: list[dict[str, float]] = []
+        self.kept = HistoryRows(self.columns)
         self._file: IO[str] | None = None
         if keep_rows is None:
             def start() -> None:
@@ -103,7 +104,7 @@ class HistoryWriter:
 
         on_rank_zero(comm, reopen)
 
-    def _cut(self, keep_rows: int) -> list[dict[str, float]]:
+    def _cut(self, keep_rows: int) -> HistoryRows:
         """Keep the header and ``keep_rows`` whole rows, atomically; return the rows."""
         header = ",".join(self.columns) + "\n"
         lines: list[str] = []
@@ -119,8 +120,10 @@ class HistoryWriter:
                              f"{keep_rows} of the checkpoint")
         atomic_write_text(self.path, header + "".join(lines))
         # repr(float) is read back exactly by float().
-        return [dict(zip(self.columns, map(float, line.split(",")), strict=True))
-                for line in lines]
+        values = np.array([[float(x) for x in line.split(",")] for line in lines])
+        if lines and values.shape != (len(lines), len(self.columns)):
+            raise ValueError(f"{self.path}: a row has other columns than the header")
+        return HistoryRows(self.columns, values.reshape(len(lines), len(self.columns)))
 
     def _write(self, line: str) -> None:
         assert self._file is not None
@@ -495,7 +498,7 @@ class RunFiles:
         self.writer: FieldWriter | None = None
 
     def open_history(self, columns: Sequence[str], keep_rows: int | None = None
-                     ) -> list[dict[str, float]]:
+                     ) -> HistoryRows:
         """Start ``history.csv``, or (resume) keep its first ``keep_rows`` rows.
 
         Returns:

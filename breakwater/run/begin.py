@@ -58,7 +58,7 @@ def start(r: Session) -> None:
     s.initialise(init.u, init.v)
     if st.step.adaptive:
         adaptive_start(st.step, m, s.u)
-    out.open_history(x.monitor.columns)
+    r.rows = out.open_history(x.monitor.columns)
     out.open_fields()
     row = r.record(0.0, st.static_iterations)
     interface = interface_state(s.contacts, s.u)

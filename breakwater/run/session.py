@@ -29,6 +29,7 @@ from breakwater.energy.ledger import EnergyLedger
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
+from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.monitor import Monitor, interface_state
 from breakwater.outputs.stormrecord import write_storm_record
 from breakwater.outputs.writers import RunFiles
@@ -129,7 +130,7 @@ class Session:
 
     Attributes:
         state: The bookkeeping a checkpoint saves.
-        rows: The history rows so far (the static state's first).
+        rows: The history rows so far (the static state's first), kept as one array.
         stepped: The stepper and its objects (built by :func:`breakwater.run.begin.start`
             or :func:`breakwater.run.begin.restore`).
         checkpointed: The latest checkpoint written (``summary.json``'s ``checkpoint``).
@@ -149,7 +150,7 @@ class Session:
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
         self.state = RunState.start(time)
-        self.rows: list[dict[str, float]] = []
+        self.rows = HistoryRows(())  # (the run's columns once its history is opened)
         self.stepped: Stepped | None = None
         self.checkpointed: dict[str, Any] | None = None
         self.applied: AppliedLoads | None = None
