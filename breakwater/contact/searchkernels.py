@@ -17,7 +17,7 @@ import numpy as np
 
 from breakwater.common.jit import kernel
 
-__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "nearest_end",
+__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "near", "nearest_end",
            "project", "search", "segment_points", "shape_values", "slave_points"]
 
 
@@ -158,6 +158,29 @@ def candidates(points, nodes, radius):  # type: ignore[no-untyped-def]
 
 
 @kernel
+def near(points, point, nodes, cand, radius, tol):  # type: ignore[no-untyped-def]
+    """:func:`breakwater.contact.projection.near`: the pairs a projection can accept."""
+    keep = np.zeros(len(point), np.bool_)
+    nn = nodes.shape[1]
+    for j in range(len(point)):
+        f, p = cand[j], point[j]
+        inside = True
+        for d in range(2):
+            x0, x1 = nodes[f, 0, d], nodes[f, 1, d]
+            lo, hi = min(x0, x1), max(x0, x1)
+            b, c = 0.5 * abs(x1 - x0), 0.0
+            if nn == 3:
+                x2 = nodes[f, 2, d]
+                lo, hi = min(lo, x2), max(hi, x2)
+                c = abs(0.5 * (x0 + x1) - x2)
+            margin = radius + c + tol * (b + 3 * c)
+            if points[p, d] < lo - margin or points[p, d] > hi + margin:
+                inside = False
+        keep[j] = inside
+    return point[keep], cand[keep]
+
+
+@kernel
 def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     """:func:`breakwater.contact.projection.project` (FacetGrid(nodes, radius) candidates).
 
@@ -168,6 +191,7 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     facet = np.full(m, -1, np.int64)
     out = np.zeros(m)
     point, cand = candidates(points, nodes, radius)
+    point, cand = near(points, point, nodes, cand, radius, tol)
     if len(point) == 0:
         return facet, out
     xi = chord_start(points, point, nodes, cand)

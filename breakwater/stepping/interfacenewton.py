@@ -39,12 +39,13 @@ import numpy as np
 from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError
+from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
-__all__ = ["GROWTH", "HALVINGS", "InterfaceNewton", "damped_step"]
+__all__ = ["GROWTH", "HALVINGS", "InterfaceNewton", "active_system", "damped_step"]
 
 _R = PETSc.SNES.ConvergedReason
 
@@ -206,9 +207,7 @@ class InterfaceNewton:
         # For the forces w = B δ_act: (1 + B X_act,act) w = B G_act (solving for δ_act
         # and forming B δ_act instead multiplies its round-off by B's stick and penalty
         # tangents, 1e12: an impact's Newton diverged).
-        J = B @ X_act[act]
-        J.flat[:: len(J) + 1] += 1.0
-        return G - X_act @ np.linalg.solve(J, B @ G[act])
+        return G - X_act @ np.linalg.solve(active_system(B, X_act, act), B @ G[act])
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -241,6 +240,33 @@ class InterfaceNewton:
         return convergence_reason(norms, xnorm, ynorm, rtol=o.rtol, atol=atol,
                                   stol=o.stol, max_it=o.max_it, floor=self.floor,
                                   stall_its=o.stall_its)
+
+
+@kernel
+def active_system(B, X_act, act):  # type: ignore[no-untyped-def]
+    """``1 + B X_act[act]`` from B's nonzero entries (compiled).
+
+    B, a general pair's Jacobian on the unknowns it couples, has about a dozen nonzero
+    entries in a row of 140 on the separately meshed Goda case (each point couples its
+    slave facet's and master facet's nodes): the product visits those alone, a tenth of
+    the dense product's work, which took half of that case's Newton time.
+
+    Args:
+        B: ∂f_c/∂y on ``act``, shape (m, m).
+        X_act: X_II's columns ``act``, shape (n_I, m).
+        act: The unknowns B couples.
+    """
+    m = len(act)
+    J = np.zeros((m, m))
+    for i in range(m):
+        for k in range(m):
+            b = B[i, k]
+            if b != 0.0:
+                row = act[k]
+                for j in range(m):
+                    J[i, j] += b * X_act[row, j]
+        J[i, i] += 1.0
+    return J
 
 
 def damped_step(residual: Callable[[np.ndarray], tuple[np.ndarray, ...]], x: np.ndarray,
