@@ -343,3 +343,60 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
     assert forcekernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
                                    chi) == fix.sum()
     np.testing.assert_allclose(step, expected_step, rtol=0, atol=1e-12 * np.abs(step).max())
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+def test_candidates_dropped_before_the_projection_could_not_be_accepted(nn: int) -> None:
+    """``near`` drops only (point, facet) pairs that the projection rejects anyway.
+
+    Strongly bent facets (the middle node off the chord by 40 % of the facet and along
+    it by up to 45 %: the curve leaves its nodes' box) and points around them; every
+    pair of the grid is projected without the filter (closest_point, the acceptance of
+    ``project``) and each accepted pair must survive ``near``, in the kernel and in the
+    NumPy reference alike. The nodes' box widened by the radius alone would drop some.
+    """
+    rng = np.random.default_rng(11)
+    F = 30
+    a = np.stack([np.linspace(-0.3, 0.3, F + 1)[:-1], np.zeros(F)], axis=1)
+    b = np.stack([np.linspace(-0.3, 0.3, F + 1)[1:], np.zeros(F)], axis=1)
+    nodes = np.stack([a, b], axis=1)
+    if nn == 3:
+        mid = 0.5 * (a + b) + 0.02 * np.stack([rng.uniform(-0.45, 0.45, F),
+                                                0.4 * rng.choice([-1, 1], F)], axis=1)
+        nodes = np.concatenate([nodes, mid[:, None]], axis=1)
+    from breakwater.contact.projection import curve, near
+
+    # Points about the curves (within 2 mm), a radius below the curves' overshoot.
+    on, s = rng.integers(0, F, 2000), rng.uniform(-1.0, 1.0, 2000)
+    points = curve(nodes[on], s)[0] + rng.normal(0.0, 0.001, (2000, 2))
+    radius, tol = 0.002, 1e-3
+    point, cand = FacetGrid(nodes, radius).candidates(points)
+    xi = np.real(closest_point(points[point], nodes[cand], iterations=8))
+    x, dx, _ = curve(nodes[cand], xi)
+    r = x - points[point]
+    accepted = ((np.abs(xi) <= 1 + tol) & (np.sum(r * r, axis=1) <= radius**2)
+                & (np.abs(np.sum(r * dx, axis=1)) <= 1e-10 * np.sum(dx * dx, axis=1)))
+    kept = {tuple(pair) for pair in zip(*near(points, point, cand, nodes, radius, tol),
+                                        strict=True)}
+    compiled = searchkernels.near(points, point, nodes, cand, radius, tol)
+    assert kept == {tuple(pair) for pair in zip(*compiled, strict=True)}
+    assert accepted.sum() > 100 and len(kept) < 0.8 * len(point)  # it does drop pairs
+    assert {(p, f) for p, f, ok in zip(point, cand, accepted, strict=True) if ok} <= kept
+    if nn == 3:  # the curve's overshoot matters: the nodes' box alone is not enough
+        box = nodes[cand]
+        inside = np.all((points[point] >= box.min(axis=1) - radius)
+                        & (points[point] <= box.max(axis=1) + radius), axis=1)
+        assert np.any(accepted & ~inside)
+
+
+def test_active_system_is_the_dense_product() -> None:
+    """``active_system(B, X_act, act)`` is ``1 + B X_act[act]`` (B sparse, to round-off)."""
+    from breakwater.stepping.interfacenewton import active_system
+
+    rng = np.random.default_rng(3)
+    n, act = 50, np.sort(rng.choice(50, 30, replace=False))
+    B = rng.standard_normal((30, 30)) * (rng.uniform(size=(30, 30)) < 0.1) * 1e10
+    X_act = np.ascontiguousarray(rng.standard_normal((n, 30)) * 1e-9)
+    expected = B @ X_act[act] + np.eye(30)
+    np.testing.assert_allclose(active_system(B, X_act, act), expected, rtol=1e-13,
+                               atol=1e-13 * np.abs(expected).max())
