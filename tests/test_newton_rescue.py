@@ -127,10 +127,10 @@ def test_the_report_says_what_the_solver_did() -> None:
 
     solver = {"kind": "fast", "steps": 10, "newton_iterations": 30, "cutbacks": 0,
               "wall_time": 1.0, "time_loop": {"wall": 0.5}, "newton_rescues": 2,
-              "elimination": {"X": "interface rows only", "chunks": 39}}
+              "newton_halvings": 7, "elimination": {"X": "interface rows only", "chunks": 39}}
     text = format_report({"solver": solver}, "out")
     assert "2 Newton solves converged only when done again with their overshooting " \
-           "steps halved" in text
+           "steps halved (7 halvings)" in text
     assert "its interface rows built in 39 chunks, a second back-solve per step" in text
     quiet = format_report({"solver": {**solver, "newton_rescues": 0,
                                       "elimination": {"X": "kept", "chunks": 0}}}, "out")

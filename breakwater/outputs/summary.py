@@ -479,7 +479,8 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                          "stalled at round-off (NewtonOptions.floor_atol)")
         if sol.get("newton_rescues"):
             lines.append(f"  solver: {sol['newton_rescues']} Newton solves converged only when "
-                         "done again with their overshooting steps halved")
+                         f"done again with their overshooting steps halved "
+                         f"({sol.get('newton_halvings', 0)} halvings)")
         if (sol.get("elimination") or {}).get("X") == "interface rows only":
             e = sol["elimination"]
             lines.append(f"  solver: X = A⁻¹E did not fit in memory: its interface rows built "

@@ -101,7 +101,8 @@ class Stepped:
             state, history_rows=history.rows, wall_before=wall_time,
             stepper={"dt": float(s.dt.value), "flips": s.flips,
                      "floor_accepts": s.solver.floor_accepts, "memory": s.solver.memory(),
-                     "rescues": s.fast.newton.rescues if s.fast is not None else 0},
+                     "rescues": s.fast.newton.rescues if s.fast is not None else 0,
+                     "halvings": s.fast.newton.halvings if s.fast is not None else 0},
             ledger=self.ledger.state(), snapshot={"time": self.peak.time,
                                                   "value": self.peak.value})
 
@@ -112,6 +113,7 @@ class Stepped:
         s.flips, s.solver.floor_accepts = state.stepper["flips"], state.stepper["floor_accepts"]
         if s.fast is not None:  # (a checkpoint from before the rescue existed: none)
             s.fast.newton.rescues = state.stepper.get("rescues", 0)
+            s.fast.newton.halvings = state.stepper.get("halvings", 0)
         s.solver.restore(state.stepper["memory"])
         s.model.set_time(state.step.t)  # a staged field's stage, for the ledger
         self.ledger.restore(state.ledger)
@@ -266,6 +268,7 @@ class Session:
             solver["elimination"] = s.fast.factorisations.describe()
             # Solves done again with their overshooting steps halved (InterfaceNewton).
             solver["newton_rescues"] = s.fast.newton.rescues
+            solver["newton_halvings"] = s.fast.newton.halvings  # the steps halved in them
         outputs = files.outputs_entry(
             self.directory, [*st.field_parts, *(x.files.field_files if x else [])],
             snapshot=x is not None and x.peak.time is not None, static=bool(st.static))
