@@ -33,6 +33,7 @@ from breakwater.common.errors import ConvergenceError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
+from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.checkpoint import CHECKPOINT, CheckpointError, match_nodes
 from breakwater.outputs.writers import read_history
 from breakwater.run import simulation
@@ -266,6 +267,12 @@ def test_resume_after_a_crash(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
     assert written["checkpoint"]["t"] == pytest.approx(5 * DT, rel=1e-12)
     assert written["checkpoint"]["history_rows"] == 7
     assert len(read_history(shared_dir / "history.csv")["t"]) == 8
+    # The per-step lists are arrays of the file (format 5), not JSON lists: their size
+    # grows with the steps (6 MB of text per checkpoint after 250 000 steps).
+    meta, arrays = ckpt.read(shared_dir / ckpt.CHECKPOINT)
+    assert "iterations" not in meta["state"] and "accepted" not in meta["state"]["step"]
+    assert arrays["steps_iterations"].dtype == np.int64 and len(arrays["steps_iterations"]) == 6
+    assert len(arrays["steps_accepted"]) == 7  # the first entry: 0 (the start)
 
     with monkeypatch.context() as mp:
         _flaky(mp)

@@ -48,8 +48,12 @@ __all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_fingerprint", "check
            "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
-FORMAT = 4
+FORMAT = 5
 """Version of the checkpoint layout; a checkpoint of another version is refused.
+
+5: the run state's per-step lists (the Newton iterations and the step sizes of the
+accepted steps) are arrays of the file, ``steps_iterations`` and ``steps_accepted``,
+not lists of its JSON metadata.
 
 4: the stepper's state holds ``memory``, the general pairs' last slip velocities at
 their slave nodes (Newton's start of the next step:

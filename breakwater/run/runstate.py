@@ -144,10 +144,14 @@ def save(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str],
 
     def write() -> None:
         if arrays is not None:
+            data = state.as_dict()
+            # The per-step lists as arrays: in the JSON metadata a storm of 250 000
+            # steps wrote 6 MB of text (24 MB as NumPy's string) at every checkpoint.
+            per_step = {"steps_iterations": np.asarray(data.pop("iterations"), np.int64),
+                        "steps_accepted": np.asarray(data["step"].pop("accepted"), float)}
             meta = {"fingerprint": fingerprint, "mpi_size": comm.size,
-                    "bodies": list(bodies), "columns": list(columns),
-                    "state": state.as_dict()}
-            ckpt.write(directory / ckpt.CHECKPOINT, meta, arrays)
+                    "bodies": list(bodies), "columns": list(columns), "state": data}
+            ckpt.write(directory / ckpt.CHECKPOINT, meta, {**arrays, **per_step})
 
     on_rank_zero(comm, write)  # an OutputError (e.g. a full disk) on every rank
 
@@ -164,5 +168,11 @@ def load(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str], time:
     if meta["bodies"] != list(bodies):
         raise CheckpointError(f"the checkpoint's bodies {meta['bodies']} are not the "
                               "model's")
-    return Checkpoint(RunState.from_dict(meta["state"], time), meta["columns"],
-                      meta["mpi_size"], arrays)
+    data = meta["state"]
+    if "steps_iterations" not in arrays or "steps_accepted" not in arrays:
+        raise CheckpointError(f"{directory / ckpt.CHECKPOINT}: no per-step arrays (a "
+                              "damaged checkpoint)")
+    data["iterations"] = [int(i) for i in arrays.pop("steps_iterations")]
+    data["step"]["accepted"] = [float(h) for h in arrays.pop("steps_accepted")]
+    return Checkpoint(RunState.from_dict(data, time), meta["columns"], meta["mpi_size"],
+                      arrays)
