@@ -251,6 +251,8 @@ class SurfaceContact(SurfaceForces):
     """
 
     _field_points: slavepoints.SlavePoints | None = None  # the slave nodes, on first use
+    # The last state() and the search (_normal's dict) it was built from.
+    _state_of: tuple[dict[str, Any], dict[str, np.ndarray]] | None = None
 
     @property
     def name(self) -> str:
@@ -387,6 +389,8 @@ class SurfaceContact(SurfaceForces):
         """
         _, u1, _ = self._state(accepted=accepted)
         p = self._normal(u1)  # the points of this state (cached: the search once)
+        if self._state_of is not None and self._state_of[0] is p:
+            return self._state_of[1]  # the same search: the measures and the ledger's
         points = p["all_x"]
         total = len(points)
         out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
@@ -399,6 +403,7 @@ class SurfaceContact(SurfaceForces):
             out["pressure"][i] = self.law.normal.pressure(gap)
             out["facet"][i] = p["facet"]
             out["xi"][i] = p["xi_bar"]
+        self._state_of = (p, out)
         return out
 
 

@@ -82,6 +82,10 @@ class InterfaceValues:
         # iterate: then no reduction per evaluation.
         self._step: np.ndarray | None = None
         self._iterate: np.ndarray | None = None
+        # The last iterate's (u₀, u₁, v₁) (:meth:`_state`), with the step's kept state
+        # and Δt it was computed from.
+        self._last_state: tuple[np.ndarray | None, float, np.ndarray,
+                                tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     def begin_step(self) -> None:
         """Gather u, v, a of the staged step once, for the Newton's evaluations (collective).
@@ -130,10 +134,23 @@ class InterfaceValues:
         if accepted:
             u, v = self._values(self.u, self.v)
             return u, u, v
-        u, v, a, da = self._start(y)
         dt = float(self.dt.value)
-        return (u, u + dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da,
-                v + dt * a + self.beta1 * dt * da)
+        iterate = (self._iterate if y is None else y) if self._step is not None else None
+        last = self._last_state
+        if (iterate is not None and last is not None and last[0] is self._step
+                and last[1] == dt and np.array_equal(last[2], iterate)):
+            # The residual, the Jacobian, the guard and the round-off estimate of one
+            # Newton iterate read the same state (within a step: no reduction).
+            return last[3]
+        u, v, a, da = self._start(y)
+        # GN22's update (stepping.gn22.gn22_update), its operations in its order: the
+        # accepted state is then the converged iterate's u₁, v₁ bit for bit, and the
+        # outputs' evaluations there find the Newton's last search (_normal's cache).
+        c_a, c_u, c_v = 0.5 * dt**2, 0.5 * self.beta2 * dt**2, self.beta1 * dt
+        out = (u, u + (dt * v + c_a * a + c_u * da), v + (dt * a + c_v * da))
+        if iterate is not None:
+            self._last_state = (self._step, dt, iterate.copy(), out)
+        return out
 
     def _start(self, y: np.ndarray | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
