@@ -625,28 +625,28 @@ def test_fraction_warnings_weigh_each_wave_by_its_force():
     from breakwater.casefile.godaface import FRACTION_WARNING
     from breakwater.casefile.stormbuild import fraction_warnings
 
-    def wave(h: float, per_p1: float, face: float = 1.0, profile: float = 1.0) -> dict:
-        return {"height": h, "front_force_per_p1": per_p1, "face_fraction": face,
-                "profile_fraction": profile}
+    def wave(h: float, face: float = 1.0, profile: float = 1.0) -> dict:
+        return {"height": h, "face_fraction": face, "profile_fraction": profile}
 
     key = "loads.storm.storm"
-    small, big = wave(0.1, 2.0 * 0.958, face=0.958), wave(8.0, 20.0)
-    peaks = [1e3, 1e5]  # p₁ (Pa): exact front forces 2e3 and 2e6
-    assert fraction_warnings([small, big], peaks, key) == []
+    small, big = wave(0.1, face=0.958), wave(8.0)
+    forces = [2e3, 2e6]  # the exact front forces at the waves' peaks (N/m)
+    assert fraction_warnings([small, big], forces, key) == []
     # Alone, the small wave is the largest: its 4.2 % is warned.
-    (line,) = fraction_warnings([small], peaks[:1], key)
+    (line,) = fraction_warnings([small], forces[:1], key)
     assert line.startswith(f"{key}: wave 1 (H = 0.1 m): 95.8% of the exact integral") \
         and "4.2% of the largest wave's front force" in line and \
         line.endswith(f"summary.json {key}.waves[].face_fraction")
-    off = wave(8.0, 20.0 * 1.013, face=1.013)
-    (line,) = fraction_warnings([small, off], peaks, key)
+    (line,) = fraction_warnings([small, wave(8.0, face=1.013)], forces, key)
     assert line.startswith(f"{key}: wave 2 (H = 8 m): 101% of the exact integral") \
         and "1.3% of the largest" in line
     # A quarter of the profile above the face: 1/0.75 − 1 of the face's force is missing.
-    (line,) = fraction_warnings([small, wave(8.0, 20.0, profile=0.75)], peaks, key)
+    (line,) = fraction_warnings([small, wave(8.0, profile=0.75)], forces, key)
     assert "75% of the front profile lies on the loaded face" in line and "33% of" in line
-    # The threshold: just below and just above 1 % of the largest wave's force.
-    below = wave(8.0, 20.0 * (1 + 0.99 * FRACTION_WARNING), face=1 + 0.99 * FRACTION_WARNING)
-    above = wave(8.0, 20.0 * (1 + 1.01 * FRACTION_WARNING), face=1 + 1.01 * FRACTION_WARNING)
-    assert fraction_warnings([below], [1e5], key) == []
-    assert len(fraction_warnings([above], [1e5], key)) == 1
+    # The threshold: just below and just above 1 % of the largest wave's force; a face
+    # that receives nothing (face_fraction 0) is warned, not a division by zero.
+    assert fraction_warnings([wave(8.0, face=1 + 0.99 * FRACTION_WARNING)], [2e6], key) == []
+    assert len(fraction_warnings([wave(8.0, face=1 + 1.01 * FRACTION_WARNING)], [2e6],
+                                 key)) == 1
+    assert "0% of the exact integral" in fraction_warnings([wave(8.0, face=0.0)], [2e6],
+                                                           key)[0]

@@ -92,7 +92,7 @@ def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
     return out
 
 
-def fraction_warnings(waves: list[dict[str, Any]], peaks: list[float], key: str) -> list[str]:
+def fraction_warnings(waves: list[dict[str, Any]], forces: list[float], key: str) -> list[str]:
     """The one-line warnings of a storm whose applied front force is off (:func:`storm_outputs`).
 
     A wave's error counts by force: its front force error ``p₁ |F_applied − F_exact|``
@@ -103,13 +103,12 @@ def fraction_warnings(waves: list[dict[str, Any]], peaks: list[float], key: str)
     (96 % applied) changes nothing, while a design wave 1 % off does.
 
     Args:
-        waves: The storm summary's waves (``front_force_per_p1``, ``face_fraction``,
-            ``profile_fraction``, ``height``).
-        peaks: Each wave's peak p₁ (Pa).
+        waves: The storm summary's waves (``face_fraction``, ``profile_fraction``,
+            ``height``).
+        forces: Each wave's exact front force over the face at its peak p₁.
         key: The load's case key (``loads.<name>.storm``).
     """
-    exact = [p * w["front_force_per_p1"] / w["face_fraction"] for w, p in zip(waves, peaks,
-                                                                             strict=True)]
+    exact = forces
     largest = max(exact, default=0.0)
     warnings = []
     for name, what in (("profile_fraction", "of the front profile lies on the loaded face "
@@ -208,8 +207,10 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     warnings: list[str] = []
     wave_loads = storm_wave_loads(load, data)
     applied = applied_front(model, load.name, len(wave_loads))
+    forces = []  # each wave's exact front force at its peak p₁
     for k, w in enumerate(wave_loads):
         force = face_integral(w.front, storm.still_water_level, data, groups)
+        forces.append(float(getattr(w.p1, "peak", 1.0)) * force)
         whole = profile_integral(w.front, w.front[0][0], w.front[-1][0])
         swl = storm.still_water_level
         # 3D: the part of the shape between the face's elevations (whatever its width).
@@ -224,8 +225,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                       "front": [list(p) for p in w.front],
                       "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
                       "profile_fraction": spanned / whole})
-    warnings += fraction_warnings(waves, [float(getattr(w.p1, "peak", 1.0))
-                                          for w in wave_loads], key)
+    warnings += fraction_warnings(waves, forces, key)
     record = {"lo": names[0], "hi": names[1], "mid": names[2], "sign": sign,
               "conforming": not pair.general,
               "landward": float(triangle.axis[0]), "length": width,

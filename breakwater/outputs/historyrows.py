@@ -73,13 +73,6 @@ class HistoryRows(Sequence[Mapping[str, float]]):
         view.flags.writeable = False
         return view
 
-    @property
-    def array(self) -> np.ndarray:
-        """The rows as an array of shape (rows, columns) (a read-only view)."""
-        view = self._data[: self._n]
-        view.flags.writeable = False
-        return view
-
     def __len__(self) -> int:
         return self._n
 
