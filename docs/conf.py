@@ -38,6 +38,7 @@ BUILD = DOCS / "_build"
 NOTEBOOK_SETTINGS = {
     "BREAKWATER_NOTEBOOK_END_TIME": "0.05",
     "BREAKWATER_NOTEBOOK_REFINEMENT": "1.0",
+    "BREAKWATER_NOTEBOOK_STORMS": "200",  # the storm notebook's rigid Monte Carlo (1000)
 }
 for _key, _value in NOTEBOOK_SETTINGS.items():
     os.environ.setdefault(_key, _value)

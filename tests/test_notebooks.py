@@ -26,12 +26,17 @@ NOTEBOOKS = pathlib.Path(__file__).resolve().parents[1] / "notebooks"
 GODA = "01_goda_paper_figures.py"
 VARIANT = "02_user_variant.py"
 GENERAL = "03_general_contact.py"
+STORM = "04_storm.py"
 
 # 30 steps of the default Δt = 0.1 ms (the pulse lasts 2 ms: the impact is inside the
 # run), on the mesh of refinement 0.7 (72 + 272 triangles): a few seconds per run.
 END_TIME = 0.003
 SHORT = {"BREAKWATER_NOTEBOOK_END_TIME": str(END_TIME),
          "BREAKWATER_NOTEBOOK_REFINEMENT": "0.7"}
+# The storm notebook's short run: a rigid-block Monte Carlo of 20 storms (its finite-
+# element run is three prototype waves, a few seconds).
+STORMS = 20
+SHORT_STORM = {"BREAKWATER_NOTEBOOK_STORMS": str(STORMS)}
 
 serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
                                  reason="notebooks run in a serial kernel")
@@ -39,7 +44,8 @@ serial_only = pytest.mark.skipif(MPI.COMM_WORLD.size > 1,
 
 def test_sources_are_the_notebooks() -> None:
     """Every notebook of the folder is a ``NN_name.py`` source; no generator, no .ipynb."""
-    assert sorted(p.name for p in NOTEBOOKS.glob("[0-9]*.py")) == [GODA, VARIANT, GENERAL]
+    assert sorted(p.name for p in NOTEBOOKS.glob("[0-9]*.py")) == [GODA, VARIANT, GENERAL,
+                                                                   STORM]
     assert not (NOTEBOOKS / "make_notebooks.py").exists()
 
 
@@ -48,7 +54,7 @@ def _canonical(text: str) -> str:
     return re.sub(r"(?m)^#\s+jupytext_version: .*\n", "", text)
 
 
-@pytest.mark.parametrize("name", [GODA, VARIANT, GENERAL])
+@pytest.mark.parametrize("name", [GODA, VARIANT, GENERAL, STORM])
 def test_source_is_a_percent_notebook(name: str) -> None:
     import jupytext
     import nbformat
@@ -63,7 +69,7 @@ def test_source_is_a_percent_notebook(name: str) -> None:
     assert nb.cells[0].source.startswith("# ")  # the title
     # The settings cell reads the short-run variables (the tests and the docs set them).
     settings = next(c.source for c in nb.cells if c.cell_type == "code")
-    for key in (*SHORT, "BREAKWATER_NOTEBOOK_OUTPUT"):
+    for key in (*(SHORT_STORM if name == STORM else SHORT), "BREAKWATER_NOTEBOOK_OUTPUT"):
         assert f'os.environ.get("{key}"' in settings, key
     # Stored as jupytext writes it (opening and saving it in Jupyter changes nothing).
     assert _canonical(jupytext.writes(nb, fmt="py:percent")) == _canonical(text), \
@@ -86,7 +92,7 @@ def kernel(tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> pathlib.P
     monkeypatch.setenv("JUPYTER_RUNTIME_DIR", str(tmp_path / "runtime"))
     monkeypatch.setenv("IPYTHONDIR", str(tmp_path / "ipython"))
     monkeypatch.setenv("MPLBACKEND", "module://matplotlib_inline.backend_inline")
-    for key, value in SHORT.items():
+    for key, value in {**SHORT, **SHORT_STORM}.items():
         monkeypatch.setenv(key, value)
     work = tmp_path / "work"
     work.mkdir()
@@ -211,3 +217,28 @@ def test_general_contact(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) 
     tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
     assert any("Newton iterations" in t for t in tables)
 
+
+@pytest.mark.serial
+@serial_only
+def test_storm(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from breakwater.outputs.stormrecord import read_waves
+
+    nb, out, _ = _execute(STORM, kernel, "storm_out", monkeypatch)
+    assert not _outputs(nb, "error")
+    # The finite-element storm: the notebook's three waves, each recorded beside the
+    # rigid block's sliding, the record's total the sum of the waves'.
+    summary = json.loads((out / "fe" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["finished"] and summary["error"] is None
+    waves = read_waves(out / "fe" / "waves.csv")
+    assert len(waves["wave"]) == 3 and waves["height"][0] == waves["height"][2] == 8.0
+    assert waves["height"][1] > 15.0  # the storm's highest wave, seed 0
+    assert summary["storm"]["total_sliding"] == pytest.approx(waves["sliding"].sum(),
+                                                              rel=1e-12, abs=1e-15)
+    assert summary["solver"]["adaptive"]["rejected_steps"] >= 0
+    # The rigid-block Monte Carlo over the short run's storms, printed.
+    text = "".join(o.get("text", "") for o in _outputs(nb, "stream"))
+    assert f"{STORMS} storms of 1000 waves: expected sliding" in text
+    assert "P(S > limit): 0.1 m:" in text
+    tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
+    assert any("rigid block (mm)" in t for t in tables)
+    assert len(_outputs(nb, "image/png")) >= 3
