@@ -130,20 +130,27 @@ class Elimination:
     def _solve_columns(self, ksp: PETSc.KSP, lo: int, hi: int) -> PETSc.Mat:
         """A⁻¹ E for E's columns lo to hi (dense, this rank's rows; the caller destroys it).
 
-        Column j of E is the unit vector of interface unknown j (a 1 on its row).
+        Column j of E is the unit vector of interface unknown j (a 1 on its row), given
+        to MUMPS as a sparse right-hand side: its forward elimination then visits only
+        the fronts above each 1 (PETSc passes it as the transpose of an AIJ matrix held
+        on rank 0, as MUMPS asks).
         """
-        n_local, start = int(self.offsets[-1]), self.start
-        E = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
-                                    comm=self.comm)  # type: ignore[arg-type]
-        E.setUp()
-        E.zeroEntries()
-        mine = (self.interface >= start) & (self.interface < start + n_local)
-        for row, col in zip(self.interface[mine], np.flatnonzero(mine), strict=True):
-            if lo <= col < hi:
-                E.setValue(int(row), int(col - lo), 1.0)
-        E.assemble()
-        X = E.duplicate()
+        comm = self.comm
+        n_local, n = int(self.offsets[-1]), comm.allreduce(int(self.offsets[-1]))
+        host = comm.rank == 0
+        Et = PETSc.Mat().createAIJ(((hi - lo if host else 0, hi - lo), (n if host else 0, n)),
+                                   nnz=(1, 1), comm=comm)  # type: ignore[arg-type]
+        Et.setUp()
+        if host:
+            for k, row in enumerate(self.interface[lo:hi]):
+                Et.setValue(k, int(row), 1.0)
+        Et.assemble()
+        E = PETSc.Mat().createTranspose(Et)
+        X = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
+                                    comm=comm)  # type: ignore[arg-type]
+        X.setUp()
         ksp.getPC().getFactorMatrix().matSolve(E, X)
+        Et.destroy()
         E.destroy()
         return X
 
