@@ -650,3 +650,18 @@ def test_fraction_warnings_weigh_each_wave_by_its_force():
                                  key)) == 1
     assert "0% of the exact integral" in fraction_warnings([wave(8.0, face=0.0)], [2e6],
                                                            key)[0]
+
+
+def test_a_waves_peak_from_its_history():
+    # The force warnings weigh each wave by its peak p₁: the storms' pulse knows it; any
+    # other history of τ is sampled over its duration (a triangle peaking at its middle).
+    from breakwater.casefile.stormbuild import _peak
+    from breakwater.storms.waveforce import PulseHistory
+    from breakwater.storms.waves import Wave, WaveLoad
+
+    pulse = PulseHistory(standing=3.0, impulsive=2.0, duration=7.0, impulse_duration=0.7)
+    assert _peak(WaveLoad(Wave(1.0, 14.0), WAVE_1, pulse, pulse, 7.0)) == 5.0
+    def triangle(τ: float) -> float:
+        return max(0.0, 1.0 - abs(τ - 1.5) / 1.5) * 4.0e4
+
+    assert _peak(WaveLoad(Wave(1.0, 6.0), WAVE_1, triangle, triangle, 3.0)) == 4.0e4

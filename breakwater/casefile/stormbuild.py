@@ -92,6 +92,19 @@ def applied_front(model: ContactModel, name: str, stages: int) -> list[float]:
     return out
 
 
+def _peak(load: Any) -> float:
+    """A wave load's largest p₁ (Pa): its history's own ``peak``, else sampled.
+
+    The storms' histories (:class:`~breakwater.storms.waveforce.PulseHistory`) know
+    theirs; another history of τ is sampled at 401 points over its duration (its middle
+    among them).
+    """
+    peak = getattr(load.p1, "peak", None)
+    if peak is None:
+        peak = max(load.p1(load.duration * k / 400) for k in range(401))
+    return float(peak)
+
+
 def fraction_warnings(waves: list[dict[str, Any]], forces: list[float], key: str) -> list[str]:
     """The one-line warnings of a storm whose applied front force is off (:func:`storm_outputs`).
 
@@ -210,7 +223,7 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
     forces = []  # each wave's exact front force at its peak p₁
     for k, w in enumerate(wave_loads):
         force = face_integral(w.front, storm.still_water_level, data, groups)
-        forces.append(float(getattr(w.p1, "peak", 1.0)) * force)
+        forces.append(_peak(w) * force)
         whole = profile_integral(w.front, w.front[0][0], w.front[-1][0])
         swl = storm.still_water_level
         # 3D: the part of the shape between the face's elevations (whatever its width).
