@@ -59,6 +59,7 @@ class Elimination:
                  interface: np.ndarray) -> None:
         self.comm, self.offsets, self.start = comm, offsets, start
         self.interface = interface
+        self.size = comm.allreduce(int(offsets[-1]))  # the stacked vector's, N (collective)
         self._said_chunks = False
 
     def solve(self, ksp: PETSc.KSP, available: float | None
@@ -96,8 +97,7 @@ class Elimination:
         if self._said_chunks:
             return
         self._said_chunks = True
-        comm = self.comm
-        n = comm.allreduce(int(self.offsets[-1]), op=MPI.SUM)
+        comm, n = self.comm, self.size
         if comm.rank == 0:
             n_i = len(self.interface)
             logging.getLogger("breakwater").info(
@@ -135,8 +135,8 @@ class Elimination:
         the fronts above each 1 (PETSc passes it as the transpose of an AIJ matrix held
         on rank 0, as MUMPS asks).
         """
-        comm = self.comm
-        n_local, n = int(self.offsets[-1]), comm.allreduce(int(self.offsets[-1]))
+        comm, n = self.comm, self.size
+        n_local = int(self.offsets[-1])
         host = comm.rank == 0
         Et = PETSc.Mat().createAIJ(((hi - lo if host else 0, hi - lo), (n if host else 0, n)),
                                    nnz=(1, 1), comm=comm)  # type: ignore[arg-type]
