@@ -340,6 +340,18 @@ def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
         _run(mesh_path, shared_dir, resume=True, penalty=2e10)
     COMM.barrier()
     assert all(p.read_bytes() == data for p, data in files.items())
+    # A kept history row edited into text: refused in one line naming the file, and
+    # the history is not cut (it was cut before its rows were read).
+    if COMM.rank == 0:
+        lines = files[shared_dir / "history.csv"].decode().splitlines(keepends=True)
+        lines[3] = "abc" + lines[3][lines[3].index(","):]
+        (shared_dir / "history.csv").write_text("".join(lines), encoding="utf-8")
+    COMM.barrier()
+    edited = (shared_dir / "history.csv").read_bytes()
+    with pytest.raises(CheckpointError, match=r"history\.csv: a kept row does not read"):
+        _run(mesh_path, shared_dir, resume=True)
+    COMM.barrier()
+    assert (shared_dir / "history.csv").read_bytes() == edited
 
 
 @pytest.mark.skipif(COMM.size < 2, reason="resumes a parallel checkpoint serially")

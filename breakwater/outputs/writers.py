@@ -119,13 +119,17 @@ class HistoryWriter:
         if len(lines) < keep_rows:
             raise ValueError(f"{self.path} holds {len(lines)} whole rows, fewer than the "
                              f"{keep_rows} of the checkpoint")
-        atomic_write_text(self.path, header + "".join(lines))
         # repr(float) is read back exactly (NumPy's parser rounds correctly, as float()
-        # does), without a list of Python floats per row (a storm's 250 000 rows).
-        values = np.loadtxt(io.StringIO("".join(lines)), delimiter=",", ndmin=2) if lines \
-            else np.zeros((0, len(self.columns)))
+        # does), without a list of Python floats per row (a storm's 250 000 rows); read
+        # before the file is cut, so that a row that does not read leaves it as it was.
+        try:
+            values = np.loadtxt(io.StringIO("".join(lines)), delimiter=",", ndmin=2) \
+                if lines else np.zeros((0, len(self.columns)))
+        except ValueError as e:
+            raise ValueError(f"{self.path}: a kept row does not read ({e})") from e
         if values.shape != (len(lines), len(self.columns)):
             raise ValueError(f"{self.path}: a row has other columns than the header")
+        atomic_write_text(self.path, header + "".join(lines))
         return HistoryRows(self.columns, values)
 
     def _write(self, line: str) -> None:
