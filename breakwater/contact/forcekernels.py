@@ -104,7 +104,7 @@ def _shape3(xi, nn):  # type: ignore[no-untyped-def]
 
 
 @kernel
-def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type: ignore[no-untyped-def]
+def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl, work):  # type: ignore[no-untyped-def]
     """∂(forces, shares)/∂Δa of one point, all local DOFs at once (forward mode).
 
     The derivatives :func:`point`'s complex steps take (``i h cu`` per local DOF: the
@@ -126,6 +126,10 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type:
         cu: ∂x/∂Δa.
         J: Out, ``(2 (ns + nm), 2 (ns + nm))``: ∂forces/∂Δa (forces flattened).
         Jl: Out, ``(ns, 2 (ns + nm))``: ∂shares/∂Δa (the ``normal_and_shares`` shares).
+        work: Scratch, ``(3, 2 (ns + nm))``.
+
+    Returns:
+        Whether the point is closed (g_n ≤ 0; else J and Jl are zero).
     """
     ns, nm = len(Ns), xm.shape[0]
     L = 2 * (ns + nm)
@@ -133,13 +137,14 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type:
     for k in range(ns):
         x0 += Ns[k] * xs[k, 0]
         x1 += Ns[k] * xs[k, 1]
-    dx0 = np.zeros(L)
-    dx1 = np.zeros(L)
+    dx0, dx1, dxi = work[0], work[1], work[2]
+    dx0[:] = 0.0
+    dx1[:] = 0.0
+    dxi[:] = 0.0
     for k in range(ns):
         dx0[2 * k] = Ns[k] * cu
         dx1[2 * k + 1] = Ns[k] * cu
     xi = xi0
-    dxi = np.zeros(L)
     m0 = 2 * ns  # the master's first local DOF
     for _ in range(2):
         N, D, D2 = _shape3(xi, nm)
@@ -196,7 +201,6 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type:
     closed = g <= 0.0
     p = eps * -g if closed else 0.0
     tw0, tw1 = p * n0 * w, p * n1 * w
-    share = tw0 * n0 + tw1 * n1
     for j in range(L):
         dt0, dt1 = a0 * dxi[j], a1 * dxi[j]
         dc0, dc1 = b0 * dxi[j], b1 * dxi[j]
@@ -225,15 +229,13 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl):  # type:
         dshare = (dtw0 * n0 + tw0 * dn0) + (dtw1 * n1 + tw1 * dn1)
         for k in range(ns):
             Jl[k, j] = dshare * Ns[k]
-    return share
+    return closed
 
 
 @kernel
-def _local(X, pos, f, u):  # type: ignore[no-untyped-def]
-    """Facet f's current nodes ``X[f] + u[pos[f]]`` (−1: the trailing entry)."""
-    nn = X.shape[1]
-    out = np.empty((nn, 2))
-    for a in range(nn):
+def _local(X, pos, f, u, out):  # type: ignore[no-untyped-def]
+    """Facet f's current nodes ``X[f] + u[pos[f]]`` into ``out`` (−1: the trailing entry)."""
+    for a in range(X.shape[1]):
         for d in range(2):
             out[a, d] = X[f, a, d] + u[pos[f, a, d]]
     return out
@@ -272,9 +274,10 @@ def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
     xi_bar = np.zeros(K)
     out = np.zeros(n + 1)
     lam = np.zeros(n_nodes)
+    xs, xm = np.empty((ns, 2)), np.empty((nm, 2))
     for k in range(K):
-        xs = _local(sX, pos_s, f_s[k], u1)
-        xm = _local(mX, pos_m, f_m[k], u1)
+        _local(sX, pos_s, f_s[k], u1, xs)
+        _local(mX, pos_m, f_m[k], u1, xm)
         gap[k], xi_bar[k] = point(Ns[k], xi[k], xs, xm, mX[f_m[k]], small, eps, g0,
                                   weight[k], forces[k], shares[k], True)
         for a in range(ns + nm):
@@ -353,24 +356,34 @@ def add_friction(out, k, force, facet0, N0, node_pos, pos_m):  # type: ignore[no
 
 
 @kernel
-def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0, node_of,
-             n_nodes, cu, cv, use_friction, lam, k, v_T, unit, facet0, N0, t0, node_pos,
-             mu, chi):  # type: ignore[no-untyped-def]
+def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps, g0,
+             node_of, n_nodes, cu, cv, use_friction, lam, k, v_T, unit, facet0, N0, t0,
+             node_pos, mu, chi):  # type: ignore[no-untyped-def]
     """∂f_c/∂Δa (``matrix()``) on the interface unknowns it couples.
 
     The normal part and dλ/dΔa by :func:`point_tangents` (the reference's complex
     steps ``i h cu`` of each local DOF of a point, in forward mode), the friction part
     by the chain rule through λ_k and v_T (∂φ/∂v_T by complex steps), each entry summed
-    in the order of the reference.
+    in the order of the reference. ``gap``: the points' g_n of :func:`residual` at
+    the same state; an open point (g_n > 0) has no tangents and couples nothing.
 
     Returns:
-        The unknowns the matrix couples (sorted: the DOFs of the points with a
-        projection and of the friction's nodes) and the matrix on them, ``A[act, act]``
+        The unknowns the matrix couples (sorted: the DOFs of the closed points, g_n ≤ 0,
+        and of the friction's nodes) and the matrix on them, ``A[act, act]``
         (zero elsewhere).
     """
     K, ns, nm = len(f_s), sX.shape[1], mX.shape[1]
     n = len(u1) - 1
     local = (ns + nm) * 2
+    # Each point's tangents; an open point's are zero and couple nothing.
+    Jp = np.empty((K, local, local))
+    Jl = np.empty((K, ns, local))
+    closed = np.empty(K, np.bool_)
+    xs, xm, work = np.empty((ns, 2)), np.empty((nm, 2)), np.empty((3, local))
+    for p in range(K):
+        closed[p] = gap[p] <= 0.0 and point_tangents(
+            Ns[p], xi[p], _local(sX, pos_s, f_s[p], u1, xs), _local(mX, pos_m, f_m[p], u1, xm),
+            mX[f_m[p]], small, eps, g0, weight[p], cu, Jp[p], Jl[p], work)
     rows = np.empty((K, local), np.int64)
     where = np.full(n + 1, -1, np.int64)
     for p in range(K):
@@ -378,7 +391,7 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
             for d in range(2):
                 q = pos_s[f_s[p], a, d] if a < ns else pos_m[f_m[p], a - ns, d]
                 rows[p, 2 * a + d] = q
-                if q >= 0:
+                if q >= 0 and closed[p]:
                     where[q] = 0
     friction = use_friction and len(k) > 0
     m = len(k) if friction else 0
@@ -400,11 +413,9 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
     for i in range(na):
         where[act[i]] = i
     A = np.zeros((na, na))
-    Jl = np.zeros((K, ns, local))
-    Jp = np.zeros((local, local))
     for p in range(K):
-        point_tangents(Ns[p], xi[p], _local(sX, pos_s, f_s[p], u1), _local(mX, pos_m, f_m[p], u1),
-                       mX[f_m[p]], small, eps, g0, weight[p], cu, Jp, Jl[p])
+        if not closed[p]:
+            continue
         for o in range(local):
             r = rows[p, o]
             if r < 0:
@@ -412,12 +423,14 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
             for j in range(local):
                 c = rows[p, j]
                 if c >= 0:
-                    A[where[r], where[c]] += Jp[o, j]
+                    A[where[r], where[c]] += Jp[p, o, j]
     if not friction:
         return act, A
     # The blocks in the reference's order: the normal part above, then per point.
     dlam = np.zeros((n_nodes, na))
     for p in range(K):
+        if not closed[p]:
+            continue
         for b in range(ns):
             for j in range(local):
                 c = rows[p, j]

@@ -180,7 +180,7 @@ class SurfaceForces(SurfaceSearch):
 
     def _jacobian(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`matrix` on the unknowns it couples: ``(act, A[act, act])``."""
-        dt = float(self.dt.value)
+        dt = self.step_dt()
         cu, cv = 0.5 * self.beta2 * dt**2, self.beta1 * dt
         u0, u1, v1 = self._state()
         p = self._normal(u1)
@@ -196,7 +196,7 @@ class SurfaceForces(SurfaceSearch):
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
         return forcekernels.jacobian(
             self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
-            p["xi"], p["weight"], self.small_rotations, eps, g0, self._node_of,
+            p["xi"], p["weight"], p["gap"], self.small_rotations, eps, g0, self._node_of,
             len(self._node_pos), cu, cv, bool(self.spec.friction), p["lam"], k, v_T, unit,
             facet, N0, t0, self._node_pos, mu, chi)
 
@@ -222,7 +222,7 @@ class SurfaceForces(SurfaceSearch):
         u0, _, v1 = self._state(x)
         facet, N0, t0 = self._frozen(u0)
         return int(forcekernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
-                                           self.beta1 * float(self.dt.value), self._law[3]))
+                                           self.beta1 * self.step_dt(), self._law[3]))
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c at y (:func:`breakwater.contact.newtonaids.resolution`)."""
@@ -235,7 +235,7 @@ class SurfaceForces(SurfaceSearch):
         rank.
         """
         u, v, a, da = self._start(y)
-        dt = float(self.dt.value)
+        dt = self.step_dt()
         # u₁ as GN22.update computes it (gn22_kinematics): the next step's u₀ bit for bit.
         u1 = u + (dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da)
         return self.step_check(u, u1, lambda: (*self._frozen(u), self._frozen_projected))
