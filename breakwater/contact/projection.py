@@ -26,7 +26,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FacetGrid", "closest_point", "curve", "near", "project", "shape"]
+__all__ = ["STEP_TOL", "FacetGrid", "closest_point", "curve", "near", "project", "shape"]
+
+#: The search's projection Newton stops at a point after a |Δξ| below this. Newton
+#: converges quadratically: after a step below 1e-12 the error is of its square,
+#: round-off. A tighter test is below the round-off of ξ itself on a curved facet (its
+#: steps wander at 1e-14).
+STEP_TOL = 1e-12
 
 
 def shape(xi: Any, nn: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -79,7 +85,9 @@ def closest_point(points: np.ndarray, nodes: np.ndarray, xi: np.ndarray | None =
         nodes: The facet of each point, shape ``(m, nn, gdim)``.
         xi: Newton's start (default: the projection onto the chord).
         iterations: At most this many Newton steps (each iterate is kept in [−2, 2]).
-        tol: Stop when every real ``|Δξ|`` is below this.
+        tol: Each point stops after a real ``|Δξ|`` below this (a NaN step does not
+            stop it), or when its clip at ±2 returns the iterate it started from (a
+            fixed point: every further iteration is the same).
 
     Returns:
         ξ, shape ``(m,)``; complex if any input is.
@@ -88,18 +96,22 @@ def closest_point(points: np.ndarray, nodes: np.ndarray, xi: np.ndarray | None =
         a, b = nodes[:, 0], nodes[:, 1]
         chord = b - a
         xi = 2 * np.sum((points - a) * chord, axis=1) / np.sum(chord * chord, axis=1) - 1
-    xi = np.asarray(xi) + 0 * points[:, 0]
+    xi = np.array(np.asarray(xi) + 0 * points[:, 0])
+    going = np.arange(len(xi))
     for _ in range(iterations):
-        x, dx, d2x = curve(nodes, xi)
-        r = x - points
+        if not len(going):
+            break
+        x, dx, d2x = curve(nodes[going], xi[going])
+        r = x - points[going]
         f = np.sum(r * dx, axis=1)
         df = np.sum(dx * dx, axis=1) + np.sum(r * d2x, axis=1)
         step = f / df
-        xi = xi - step
-        real = np.real(xi)
-        xi = np.where(np.abs(real) > 2, np.clip(real, -2, 2), xi)
-        if not len(step) or np.max(np.abs(np.real(step))) < tol:
-            break
+        old = xi[going]
+        new = old - step
+        real = np.real(new)
+        new = np.where(np.abs(real) > 2, np.clip(real, -2, 2), new)
+        xi[going] = new
+        going = going[~((np.abs(np.real(step)) < tol) | (new == old))]
     return xi
 
 
@@ -176,7 +188,7 @@ def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
     point, cand = near(points, *grid.candidates(points), nodes, grid.radius, tol)
     if not len(point):
         return facet, xi_out
-    xi = np.real(closest_point(points[point], nodes[cand], iterations=8))
+    xi = np.real(closest_point(points[point], nodes[cand], iterations=8, tol=STEP_TOL))
     x, dx, _ = curve(nodes[cand], xi)
     r = x - points[point]
     dist = np.sum(r * r, axis=1)

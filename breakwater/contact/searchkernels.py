@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.projection import STEP_TOL
 
 __all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "near", "nearest_end",
            "project", "search", "segment_points", "shape_values", "slave_points"]
@@ -47,31 +48,33 @@ def curve_at(nodes, f, xi):  # type: ignore[no-untyped-def]
 def closest_points(points, point, nodes, cand, xi, iterations, tol):  # type: ignore[no-untyped-def]
     """:func:`~breakwater.contact.projection.closest_point` of the pairs (point[j], cand[j]).
 
-    Newton from ``xi`` (changed in place), all pairs in lockstep: it stops when every
-    real ``|Δξ|`` of an iteration is below ``tol``.
+    Newton from ``xi`` (changed in place); each pair stops after a real ``|Δξ|`` below
+    ``tol`` (a NaN step does not stop it), or when its clip at ±2 returns the iterate it
+    started from (a fixed point: every further iteration is the same).
     """
     m = len(point)
     if m == 0:
         return
+    going = np.ones(m, np.bool_)
+    left = m
     for _ in range(iterations):
-        largest = 0.0
-        nan = False
         for j in range(m):
+            if not going[j]:
+                continue
             x0, x1, dx0, dx1, d2x0, d2x1 = curve_at(nodes, cand[j], xi[j])
             r0, r1 = x0 - points[point[j], 0], x1 - points[point[j], 1]
             f = r0 * dx0 + r1 * dx1
             df = (dx0 * dx0 + dx1 * dx1) + (r0 * d2x0 + r1 * d2x1)
             step = f / df
+            old = xi[j]
             xi[j] = xi[j] - step
             real = xi[j].real
             if abs(real) > 2:
                 xi[j] = min(max(real, -2.0), 2.0)
-            a = abs(step.real)
-            if a != a:
-                nan = True
-            elif a > largest:
-                largest = a
-        if not nan and largest < tol:
+            if abs(step.real) < tol or xi[j] == old:
+                going[j] = False
+                left -= 1
+        if left == 0:
             break
 
 
@@ -195,7 +198,7 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     if len(point) == 0:
         return facet, out
     xi = chord_start(points, point, nodes, cand)
-    closest_points(points, point, nodes, cand, xi, 8, 1e-14)
+    closest_points(points, point, nodes, cand, xi, 8, STEP_TOL)
     best = np.full(m, np.inf)
     for j in range(len(point)):
         p, f = point[j], cand[j]
