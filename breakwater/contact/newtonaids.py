@@ -78,7 +78,7 @@ class SlipMemory:
         along = self.along(v1, facet, N0, t0)
         pos = p._node_pos
         keep = np.isfinite(self.slip) & np.isfinite(along) & np.all(pos >= 0, axis=1)
-        shift = (along[keep] - self.slip[keep]) / (p.beta1 * float(p.dt.value))
+        shift = (along[keep] - self.slip[keep]) / (p.beta1 * p.step_dt())
         y[pos[keep]] -= t0[keep] * shift[:, None]  # distinct positions per node
         return int(keep.sum())
 
@@ -131,7 +131,7 @@ def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
         return 0.0
     ε = float(np.finfo(float).eps)
     _, v, a, da = pair._start(y)
-    dt = float(pair.dt.value)
+    dt = pair.step_dt()
     u0, u1, v1 = pair._state(y)
     p = pair._normal(u1)
     _, _, mu, chi = pair._law

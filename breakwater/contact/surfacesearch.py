@@ -82,6 +82,7 @@ class InterfaceValues:
         # iterate: then no reduction per evaluation.
         self._step: np.ndarray | None = None
         self._iterate: np.ndarray | None = None
+        self._step_dt: float | None = None
         # The last iterate's (u₀, u₁, v₁) (:meth:`_state`), with the step's kept state
         # and Δt it was computed from.
         self._last_state: tuple[np.ndarray | None, float, np.ndarray,
@@ -96,7 +97,9 @@ class InterfaceValues:
         """
         self._step = self._values(self.u, self.v, self.a)
         self._step.flags.writeable = False
+        self._step_rows = tuple(self._step)  # one (read-only) view each: u₀ is one object
         self._iterate = None
+        self._step_dt = float(self.dt.value)
 
     def at(self, y: np.ndarray) -> bool:
         """Evaluate at the iterate y until the next call, within a step.
@@ -113,6 +116,15 @@ class InterfaceValues:
     def end_step(self) -> None:
         """The Newton is done: evaluations gather the state Functions again."""
         self._step = self._iterate = None
+        self._step_dt = None
+
+    def step_dt(self) -> float:
+        """Δt, read once per step within :meth:`begin_step`/:meth:`end_step`.
+
+        The constant's value costs a microsecond, and it is read a few times per
+        Newton iteration.
+        """
+        return float(self.dt.value) if self._step_dt is None else self._step_dt
 
     @staticmethod
     def _positions(interface: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -134,7 +146,7 @@ class InterfaceValues:
         if accepted:
             u, v = self._values(self.u, self.v)
             return u, u, v
-        dt = float(self.dt.value)
+        dt = self.step_dt()
         iterate = (self._iterate if y is None else y) if self._step is not None else None
         last = self._last_state
         if (iterate is not None and last is not None and last[0] is self._step
@@ -163,7 +175,7 @@ class InterfaceValues:
         if self._step is not None:
             y = self._iterate if y is None else y
             if y is not None:
-                u, v, a = self._step
+                u, v, a = self._step_rows
                 return u, v, a, np.append(y, 0.0)
         u, v, a, da = self._values(self.u, self.v, self.a, self.da)
         if y is not None:
@@ -245,6 +257,7 @@ class SurfaceSearch(InterfaceValues):
         self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
         self.node_X = slave.X.reshape(-1, model.gdim)[first]
         self._frozen_key: np.ndarray | None = None
+        self._frozen_of: np.ndarray | None = None  # a read-only u₀ that matched the key
         self._normal_key: np.ndarray | None = None
         self._normal_points: dict[str, Any]  # the points and normal part of _normal_key
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
@@ -345,7 +358,10 @@ class SurfaceSearch(InterfaceValues):
             Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
             and the unit tangent there, in the configuration at the start of the step.
         """
-        if self._frozen_key is not None and np.array_equal(self._frozen_key, u0):
+        if self._frozen_key is not None and (u0 is self._frozen_of
+                                             or np.array_equal(self._frozen_key, u0)):
+            if not u0.flags.writeable:
+                self._frozen_of = u0
             return self._frozen_data
         xm = self._mX + u0[self._pm]
         points = self.node_X + u0[self._node_pos]
@@ -353,6 +369,7 @@ class SurfaceSearch(InterfaceValues):
         facet, N0, t0, self._frozen_projected = searchkernels.frozen(points, xm, surface,
                                                                      self.radius)
         self._frozen_key = u0.copy()
+        self._frozen_of = u0 if not u0.flags.writeable else None
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
 
