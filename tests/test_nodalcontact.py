@@ -115,6 +115,29 @@ def test_left_product_is_the_dense_product() -> None:
         stepper.destroy()
 
 
+def test_active_jacobian_is_the_matrix_on_the_closed_nodes() -> None:
+    # (act, A): the dense ∂f_c/∂y is A on act × act and zero elsewhere; act holds the
+    # unknowns of the closed nodes only (the random state opens some: gaps of both signs).
+    model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
+    stepper = GN22(model, 1e-4)
+    try:
+        _random_state(stepper, 5)
+        provider = stepper.solver.providers[0]
+        provider.begin()
+        y = _interface_values(stepper)
+        act, A = provider.active_jacobian(y)
+        dense = provider.matrix(y)
+        inside = np.zeros_like(dense)
+        inside[np.ix_(act, act)] = A
+        # Exact: the same tangents W scattered, each entry one sum of ± W terms.
+        np.testing.assert_allclose(inside, dense, rtol=0, atol=1e-14 * np.abs(dense).max())
+        coupled = np.flatnonzero((dense != 0).any(axis=0) | (dense != 0).any(axis=1))
+        np.testing.assert_array_equal(act, coupled)
+        assert 0 < len(act) < provider.n
+    finally:
+        stepper.destroy()
+
+
 def test_compiled_guard_equals_slip_guard() -> None:
     # The nodal providers' compiled slip guard cuts the same steps as SlipGuard on body
     # arrays (the assembled path's guard), at random velocities of both signs well

@@ -32,7 +32,14 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
-from breakwater.contact.nodalkernels import guard_steps, nodal_left_product, nodal_residual
+from breakwater.contact.nodalkernels import (
+    guard_steps,
+    nodal_left_product,
+    nodal_residual,
+    nodal_state,
+    nodal_tangents,
+    tangent_block,
+)
 from breakwater.model.layout import MonolithicLayout
 from breakwater.model.mesh import facet_type
 from breakwater.model.model import ContactModel, PairData
@@ -182,6 +189,8 @@ class NodalContactForces:
             ``flip_guard``).
     """
 
+    primal = True  # the Newton solves for δ on the closed nodes (InterfaceNewton._step)
+
     def __init__(self, model: ContactModel, nodes: InterfaceNodes, layout: MonolithicLayout,
                  interface: np.ndarray,
                  state: tuple[Sequence[fem.Function], Sequence[fem.Function],
@@ -286,9 +295,17 @@ class NodalContactForces:
         """0: no estimate (the conforming pairs' Newton meets its tolerance)."""
         return 0.0
 
-    def active_jacobian(self, y: np.ndarray) -> None:
-        """None: the left product from the nodal structure is used instead."""
-        return None
+    def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """∂f_c/∂y at y as ``(act, A)``: the unknowns of the closed nodes and its block there.
+
+        :func:`~breakwater.contact.nodalkernels.tangent_block` from the node tangents:
+        the Newton then solves on the nodes in contact alone (a rocking caisson lifts a
+        part of its base), instead of the whole ``1 + X ∂f_c/∂y``.
+        """
+        nodal_state(y, self._pos, self._base, *self._coefficients, self._U, self._V)
+        nodal_tangents(self._U, self._V, self._node, self._weight, self._normal, self._runs,
+                       *self._law, *self._coefficients, self._W)
+        return tangent_block(self._W, self._run_slave, self._run_master, self.n)
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:

@@ -31,7 +31,7 @@ import numpy as np
 from breakwater.common.jit import kernel
 
 __all__ = ["guard_steps", "nodal_left_product", "nodal_residual", "nodal_state",
-           "nodal_tangents", "tangent_left_product"]
+           "nodal_tangents", "tangent_block", "tangent_left_product"]
 
 
 @kernel
@@ -177,6 +177,47 @@ def tangent_left_product(X: np.ndarray, W: np.ndarray, slave: np.ndarray,
                     out[a, slave[r, j]] += -Y
                 if master[r, j] >= 0:
                     out[a, master[r, j]] += Y
+
+
+@kernel
+def tangent_block(W: np.ndarray, slave: np.ndarray, master: np.ndarray,
+                  n: int) -> tuple[np.ndarray, np.ndarray]:
+    """∂f_c/∂y from the node tangents W on the unknowns it couples: ``(act, A[act, act])``.
+
+    The blocks of :func:`tangent_left_product` with X = I: node r's
+    ``[s_r, s_r] = [m_r, m_r] = −W_r`` and ``[s_r, m_r] = [m_r, s_r] = +W_r``; a node
+    whose W_r is zero (open) couples nothing. ``n``: the interface unknowns.
+    """
+    gdim = W.shape[1]
+    where = np.full(n, -1, np.int64)
+    live = np.zeros(W.shape[0], np.bool_)
+    for r in range(W.shape[0]):
+        for i in range(gdim):
+            for j in range(gdim):
+                if W[r, i, j] != 0.0:
+                    live[r] = True
+        if live[r]:
+            for i in range(gdim):
+                for c in (slave[r, i], master[r, i]):
+                    if c >= 0:
+                        where[c] = 0
+    act = np.flatnonzero(where >= 0)
+    for k in range(len(act)):
+        where[act[k]] = k
+    A = np.zeros((len(act), len(act)))
+    for r in range(W.shape[0]):
+        if not live[r]:
+            continue
+        for i in range(gdim):
+            for j in range(gdim):
+                w = W[r, i, j]
+                for a, sa in ((slave[r, i], -1.0), (master[r, i], 1.0)):
+                    if a < 0:
+                        continue
+                    for b, sb in ((slave[r, j], -1.0), (master[r, j], 1.0)):
+                        if b >= 0:
+                            A[where[a], where[b]] += -(sa * sb) * w
+    return act, A
 
 
 @kernel

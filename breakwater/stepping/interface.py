@@ -295,6 +295,11 @@ class ContactSum:
         self.providers = providers
         self.timings = timings
 
+    @property
+    def primal(self) -> bool:
+        """Whether every provider's Newton solves for δ itself (the conforming pairs)."""
+        return all(getattr(c, "primal", False) for c in self.providers)
+
     def begin(self) -> None:
         """Every provider takes the staged step's state (collective)."""
         with self.timings("interface_assembly"):
