@@ -98,6 +98,7 @@ class SurfaceForces(SurfaceSearch):
         self.memory = newtonaids.SlipMemory(self)
         self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
                                     self.node_X, self.node_pos, self.master.X, self.pos_m)
+        self._near_facets = np.zeros(len(self.master.X), bool)  # the master facets of reach()
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -223,6 +224,32 @@ class SurfaceForces(SurfaceSearch):
         facet, N0, t0 = self._frozen(u0)
         return int(forcekernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
                                            self.beta1 * self.step_dt(), self._law[3]))
+
+    def reach(self) -> np.ndarray | None:
+        """The interface unknowns this step's contact may touch (within a step).
+
+        The slave's DOFs and those of the master facets whose node box comes within
+        twice the search radius of a slave facet's at the start of the step (kept from
+        step to step: the set only grows). A projection is accepted within one radius,
+        so a step that moves the slave less than a radius relative to the master finds
+        no other facet; one that does is caught by the Newton on these unknowns
+        (:class:`breakwater.stepping.reach.NearContact`), which then solves them all.
+
+        Returns:
+            Sorted interface positions; None outside :meth:`begin_step`/:meth:`end_step`.
+        """
+        if self._step is None:
+            return None
+        u0 = self._step_rows[0]
+        reach = 2.0 * self.radius
+        xs = self._sX + u0[self._ps]
+        xm = self._mX + u0[self._pm]
+        lo, hi = xs.min(axis=1) - reach, xs.max(axis=1) + reach
+        m_lo, m_hi = xm.min(axis=1), xm.max(axis=1)
+        overlap = np.all((m_lo[None] <= hi[:, None]) & (m_hi[None] >= lo[:, None]), axis=2)
+        self._near_facets |= overlap.any(axis=0)
+        pos = np.concatenate([self._ps.ravel(), self._pm[self._near_facets].ravel()])
+        return np.unique(pos[pos >= 0])
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c at y (:func:`breakwater.contact.newtonaids.resolution`)."""

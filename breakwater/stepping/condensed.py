@@ -374,7 +374,7 @@ class CondensedNewton(StepSolver):
             with T("bulk_products"):
                 da = out.array
                 da[:] = V["z"].array
-                fact.subtract_X(fc, da)  # Δa = z − X f_c, by body block
+                fact.subtract_X(fc, da, self.newton.support)  # Δa = z − X f_c, by body block
         with T("bulk_products"):
             # At the interface, Newton's converged iterate itself (z_I − X_II f_c equals it
             # only to the residual): the friction law, whose stick tangent is μp/χ, was

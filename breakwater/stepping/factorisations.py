@@ -46,14 +46,33 @@ class Factorisation:
     chunks: int = 0  # X's columns solved in this many chunks (0: whole, X may be kept)
     bytes: float = 0.0  # this rank's memory for it: MUMPS's (INFO(16)) and X's blocks
 
-    def subtract_X(self, fc: np.ndarray, out: np.ndarray) -> None:
+    # X's columns of a set of interface unknowns by block (subtract_X's ``support``).
+    _columns: tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]] | None = None
+
+    def subtract_X(self, fc: np.ndarray, out: np.ndarray,
+                   support: np.ndarray | None = None) -> None:
         """``out −= X f_c`` on the owned rows (``out``: the owned part of a stacked vector).
 
         Block by block: the rows of each body only meet its own interface unknowns.
+        ``support``: the interface unknowns outside which f_c is zero (a Newton on the
+        unknowns a general pair's contact may reach, :mod:`breakwater.stepping.reach`):
+        the product over their columns alone, kept while the set stays.
         """
         assert self.X_blocks is not None, "X is not kept: solve A Δ = E f_c instead"
-        for b in self.X_blocks:
-            out[b.rows] -= b.X @ fc[b.cols]
+        if support is None:
+            for b in self.X_blocks:
+                out[b.rows] -= b.X @ fc[b.cols]
+            return
+        kept = self._columns
+        if kept is None or not np.array_equal(kept[0], support):
+            parts = []
+            for b in self.X_blocks:
+                sel = np.flatnonzero(np.isin(b.cols, support))
+                parts.append((b.cols[sel], np.asfortranarray(b.X[:, sel])))
+            self._columns = kept = (support.copy(), parts)
+        for b, (cols, X) in zip(self.X_blocks, kept[1], strict=True):
+            if len(cols):
+                out[b.rows] -= X @ fc[cols]
 
 
 class Factorisations:

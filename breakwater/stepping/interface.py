@@ -188,6 +188,15 @@ class StateForces:
         """The provider's guard, if any."""
         return self.guard(x, step, v_pred, dv_dx) if self.guard is not None else 0
 
+    def reach(self) -> np.ndarray | None:
+        """The provider's ``reach()``, if it has one; None: any unknown.
+
+        The interface unknowns its forces may touch in this step
+        (:meth:`breakwater.contact.general.SurfaceForces.reach`).
+        """
+        reach = getattr(self.provider, "reach", None)
+        return None if reach is None else reach()
+
 
 class BodyGuard:
     """A slip guard on local body arrays as a guard on the interface unknowns.
@@ -357,6 +366,19 @@ class ContactSum:
                 at = np.searchsorted(act, a)
                 A[np.ix_(at, at)] += block
             return act, A
+
+    def reach(self) -> np.ndarray | None:
+        """The interface unknowns the providers' forces may touch in this step.
+
+        The union of the providers' ``reach()``; None (any) if one has none.
+        """
+        parts = []
+        for c in self.providers:
+            part = getattr(c, "reach", lambda: None)()
+            if part is None:
+                return None
+            parts.append(part)
+        return np.unique(np.concatenate(parts)) if parts else None
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c(y), over the providers (root sum of squares)."""

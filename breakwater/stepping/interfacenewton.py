@@ -43,9 +43,17 @@ from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
+from breakwater.stepping.reach import (
+    NearContact,
+    NearFactors,
+    OutOfReach,
+    Reach,
+    coupled,
+)
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
-__all__ = ["GROWTH", "HALVINGS", "InterfaceNewton", "active_system", "coupled", "damped_step"]
+__all__ = ["GROWTH", "HALVINGS", "InterfaceNewton", "active_step", "active_system", "damped_step",
+           "primal_system"]
 
 _R = PETSc.SNES.ConvergedReason
 
@@ -80,6 +88,9 @@ class InterfaceNewton:
         y: The converged iterate after :meth:`solve`.
         fc: f_c at the last residual evaluation (at the solution after :meth:`solve`).
         F: The residual force ``S G`` there (its norm is the one the test read).
+        reach: The solves on the unknowns the contact may reach.
+        support: The unknowns outside which the last solve's f_c and F are zero (None:
+            any).
     """
 
     def __init__(self, n: int, contact: ContactSum, name: str, options: NewtonOptions,
@@ -89,14 +100,11 @@ class InterfaceNewton:
         self.atol = options.atol * force_scale
         self.floor = options.floor_atol * force_scale
         self.guarded = guarded
-        self.floor_accepts = 0
-        self.rescues = 0
-        self.halvings = 0
-        self.flips = 0
-        self.y = np.zeros(n)
-        self.fc = np.zeros(n)
-        self.F = np.zeros(n)
+        self.floor_accepts = self.rescues = self.halvings = self.flips = 0
+        self.y, self.fc, self.F = np.zeros(n), np.zeros(n), np.zeros(n)
         self._columns_of: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.reach = Reach()
+        self.support: np.ndarray | None = None
 
     def solve(self, fact: Factorisation, z_I: np.ndarray, y0: np.ndarray, w_I: np.ndarray,
               w_norm2: float, v_pred: np.ndarray, dv_dx: float) -> int:
@@ -113,9 +121,35 @@ class InterfaceNewton:
                 iterate's are ``ṽ + dv_dx y``: the guards').
             dv_dx: β₁Δt.
 
+        Where the providers say which unknowns the step's contact may touch
+        (:meth:`ContactSum.reach`), it is solved on those (:mod:`breakwater.stepping.reach`),
+        and on all of them if it touches another.
+
         Raises:
             ConvergenceError: Newton did not converge (its reason, iterations and ‖F‖).
         """
+        near = self.contact.reach()
+        if near is not None and len(near) < len(y0):
+            nf = self.reach.factors(fact, near)
+            whole = self.contact
+            self.contact = NearContact(whole, near, y0, v_pred)  # type: ignore[assignment]
+            try:
+                its = self._solve(nf, z_I[near], y0[near], w_I[near], w_norm2, v_pred[near],
+                                  dv_dx)
+            except OutOfReach:
+                self.reach.fallbacks += 1
+            else:
+                self.y, self.fc, self.F = self.reach.whole(nf, z_I, y0, self.y, self.fc, self.F)
+                self.support = near
+                return its
+            finally:
+                self.contact = whole
+        self.support = None
+        return self._solve(fact, z_I, y0, w_I, w_norm2, v_pred, dv_dx)
+
+    def _solve(self, fact: Factorisation | NearFactors, z_I: np.ndarray, y0: np.ndarray,
+               w_I: np.ndarray, w_norm2: float, v_pred: np.ndarray, dv_dx: float) -> int:
+        """:meth:`solve` on the unknowns of ``fact`` (its X_II and S)."""
         T = self.timings
         assembly = T.seconds["interface_assembly"]
         t0 = time.perf_counter()
@@ -140,7 +174,7 @@ class InterfaceNewton:
         self.y, self.fc, self.F = state
         return its
 
-    def _iterate(self, fact: Factorisation, z_I: np.ndarray, y0: np.ndarray,
+    def _iterate(self, fact: Factorisation | NearFactors, z_I: np.ndarray, y0: np.ndarray,
                  w_I: np.ndarray, w_norm2: float, v_pred: np.ndarray, dv_dx: float,
                  damped: bool) -> tuple[int, list[float], tuple[np.ndarray, ...]]:
         """Newton's iterations from y0 (the arguments of :meth:`solve`).
@@ -181,14 +215,8 @@ class InterfaceNewton:
     def _step(self, x: np.ndarray, X_II: np.ndarray, G: np.ndarray) -> np.ndarray:
         """Newton's step δ: ``(1 + X_II ∂f_c/∂y) δ = G``.
 
-        Where ∂f_c/∂y is nonzero only in the rows and columns ``act`` (a conforming
-        pair: its closed nodes; a general pair: the points in contact and their master
-        facets, a fraction of a master surface that may be long; of them, those B
-        couples: :func:`coupled`), the system is solved on them alone, a dense solve of
-        size |act| instead of n_I: for δ_act itself where every provider is a
-        conforming pair (:func:`primal_system`), else for the forces w = B δ_act (B =
-        ∂f_c/∂y there): ``(1 + B X_act,act) w = B G_act`` and
-        ``δ = G − X_II[:, act] w``. Else the whole matrix.
+        On the unknowns ∂f_c/∂y couples where the providers say which
+        (:func:`active_step`), else the whole matrix.
 
         Raises:
             np.linalg.LinAlgError: A singular system.
@@ -205,19 +233,7 @@ class InterfaceNewton:
         if key is None or key[0] is not X_II or not np.array_equal(key[1], act):
             # X_II's columns act, kept while act stays (the iterations of a step).
             self._columns_of = key = (X_II, act, np.ascontiguousarray(X_II[:, act]))
-        X_act = key[2]
-        if self.contact.primal:
-            # (1 + X_II ∂f_c/∂y) δ = G itself (the conforming pairs' Newton), whose
-            # columns outside act are the identity's: (1 + X_act,act B) δ_act = G_act,
-            # and the other rows by substitution.
-            δ_act = np.linalg.solve(primal_system(B, X_act, act), G[act])
-            δ = G - X_act @ (B @ δ_act)
-            δ[act] = δ_act
-            return δ
-        # For the forces w = B δ_act: (1 + B X_act,act) w = B G_act (solving for δ_act
-        # and forming B δ_act instead multiplies its round-off by B's stick and penalty
-        # tangents, 1e12: an impact's Newton diverged).
-        return G - X_act @ np.linalg.solve(active_system(B, X_act, act), B @ G[act])
+        return active_step(act, B, key[2], G, self.contact.primal)
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -252,35 +268,36 @@ class InterfaceNewton:
                                   stall_its=o.stall_its)
 
 
-@kernel
-def coupled(act, B):  # type: ignore[no-untyped-def]
-    """``(act, B)`` without the unknowns whose row and column of B are zero (compiled).
+def active_step(act: np.ndarray, B: np.ndarray, X_act: np.ndarray, G: np.ndarray,
+                primal: bool) -> np.ndarray:
+    """Newton's step where ∂f_c/∂y is B on the rows and columns ``act`` alone.
 
-    A general pair's ``act`` holds the DOFs of every point with a projection, open or
-    closed; an open point's rows and columns are zero, and so is the Newton step's
-    force there (``w = B δ``): solving without them gives the same step, with a dense
-    solve the size of the contact. On the separately meshed Goda case, rocking on a
-    corner, 63 of the 140 unknowns on average (a fifth of the LU's work).
+    ``act``: a conforming pair's closed nodes; a general pair's points in contact and
+    their master facets, a fraction of a master surface that may be long; of them,
+    those B couples (:func:`~breakwater.stepping.reach.coupled`). The system is solved
+    on them alone, a dense solve of size |act| instead of n_I: for δ_act itself where
+    every provider is a conforming pair (``primal``, :func:`primal_system`), else for
+    the forces w = B δ_act: ``(1 + B X_act,act) w = B G_act`` and
+    ``δ = G − X_II[:, act] w``.
 
     Args:
-        act: The unknowns B couples, shape (m,).
-        B: ∂f_c/∂y on ``act``, shape (m, m).
+        act: The unknowns.
+        B: ∂f_c/∂y there.
+        X_act: X_II's columns act.
+        G: The Newton's residual.
+        primal: Solve for δ_act.
     """
-    m = len(act)
-    keep = np.zeros(m, np.bool_)
-    for i in range(m):
-        for j in range(m):
-            if B[i, j] != 0.0:
-                keep[i] = True
-                keep[j] = True
-    index = np.flatnonzero(keep)
-    if len(index) == m:
-        return act, B
-    out = np.empty((len(index), len(index)))
-    for a in range(len(index)):
-        for b in range(len(index)):
-            out[a, b] = B[index[a], index[b]]
-    return act[index], out
+    if primal:
+        # (1 + X_II ∂f_c/∂y) δ = G itself (the conforming pairs' Newton), whose columns
+        # outside act are the identity's: (1 + X_act,act B) δ_act = G_act, and the other
+        # rows by substitution.
+        δ_act = np.linalg.solve(primal_system(B, X_act, act), G[act])
+        δ = G - X_act @ (B @ δ_act)
+        δ[act] = δ_act
+        return δ
+    # For the forces (solving for δ_act and forming B δ_act instead multiplies its
+    # round-off by B's stick and penalty tangents, 1e12: an impact's Newton diverged).
+    return G - X_act @ np.linalg.solve(active_system(B, X_act, act), B @ G[act])
 
 
 @kernel
