@@ -435,3 +435,25 @@ def test_coupled_unknowns_give_the_same_newton_step() -> None:
     # Nothing to drop: the arrays themselves.
     same = coupled(kept, B_kept)
     assert same[0] is kept and same[1] is B_kept
+
+
+def test_mark_near_is_the_box_test() -> None:
+    """``mark_near`` marks the master facets whose node box comes within the reach of a
+    slave facet's (the box test written with NumPy), keeps earlier marks and counts the
+    new ones."""
+    rng = np.random.default_rng(8)
+    xs = rng.uniform(0.0, 1.0, (6, 3, 2))
+    xm = rng.uniform(-2.0, 3.0, (40, 3, 2))
+    reach = 0.1
+    lo, hi = xs.min(axis=1) - reach, xs.max(axis=1) + reach
+    m_lo, m_hi = xm.min(axis=1), xm.max(axis=1)
+    expected = np.all((m_lo[None] <= hi[:, None]) & (m_hi[None] >= lo[:, None]),
+                      axis=2).any(axis=0)
+    assert 0 < expected.sum() < len(xm)
+    near = np.zeros(len(xm), bool)
+    near[np.flatnonzero(~expected)[0]] = True  # an earlier mark stays
+    earlier = near.copy()
+    added = searchkernels.mark_near(xs, xm, reach, near)
+    np.testing.assert_array_equal(near, expected | earlier)
+    assert added == int((expected & ~earlier).sum())
+    assert searchkernels.mark_near(xs, xm, reach, near) == 0

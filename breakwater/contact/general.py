@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact import forcekernels, newtonaids, slavepoints
+from breakwater.contact import forcekernels, newtonaids, searchkernels, slavepoints
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
@@ -99,6 +99,7 @@ class SurfaceForces(SurfaceSearch):
         self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
                                     self.node_X, self.node_pos, self.master.X, self.pos_m)
         self._near_facets = np.zeros(len(self.master.X), bool)  # the master facets of reach()
+        self._reach: np.ndarray | None = None  # reach()'s unknowns of them
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -241,15 +242,13 @@ class SurfaceForces(SurfaceSearch):
         if self._step is None:
             return None
         u0 = self._step_rows[0]
-        reach = 2.0 * self.radius
-        xs = self._sX + u0[self._ps]
-        xm = self._mX + u0[self._pm]
-        lo, hi = xs.min(axis=1) - reach, xs.max(axis=1) + reach
-        m_lo, m_hi = xm.min(axis=1), xm.max(axis=1)
-        overlap = np.all((m_lo[None] <= hi[:, None]) & (m_hi[None] >= lo[:, None]), axis=2)
-        self._near_facets |= overlap.any(axis=0)
-        pos = np.concatenate([self._ps.ravel(), self._pm[self._near_facets].ravel()])
-        return np.unique(pos[pos >= 0])
+        if (searchkernels.mark_near(searchkernels.current(self._sX, self._ps, u0),
+                                    searchkernels.current(self._mX, self._pm, u0),
+                                    2.0 * self.radius, self._near_facets)
+                or self._reach is None):
+            pos = np.concatenate([self._ps.ravel(), self._pm[self._near_facets].ravel()])
+            self._reach = np.unique(pos[pos >= 0])
+        return self._reach
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c at y (:func:`breakwater.contact.newtonaids.resolution`)."""

@@ -18,8 +18,9 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.projection import STEP_TOL
 
-__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "near", "nearest_end",
-           "project", "search", "segment_points", "shape_values", "slave_points"]
+__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "mark_near", "near",
+           "nearest_end", "project", "search", "segment_points", "shape_values",
+           "slave_points"]
 
 
 @kernel
@@ -360,6 +361,37 @@ def frozen(points, xm, surface, radius):  # type: ignore[no-untyped-def]
             s = np.sqrt(a * a + b * b)
             t0[k, 0], t0[k, 1] = a / s, b / s
     return facet, N0, t0, projected
+
+
+@kernel
+def mark_near(xs, xm, reach, near):  # type: ignore[no-untyped-def]
+    """Mark the master facets whose node box comes within ``reach`` of a slave facet's.
+
+    ``xs``, ``xm``: the current nodes; ``near``: the marks (changed in place).
+
+    Returns:
+        How many were newly marked.
+    """
+    added = 0
+    for f in range(xm.shape[0]):
+        if near[f]:
+            continue
+        for s in range(xs.shape[0]):
+            inside = True
+            for d in range(2):
+                lo, hi = xs[s, 0, d], xs[s, 0, d]
+                for a in range(1, xs.shape[1]):
+                    lo, hi = min(lo, xs[s, a, d]), max(hi, xs[s, a, d])
+                m_lo, m_hi = xm[f, 0, d], xm[f, 0, d]
+                for a in range(1, xm.shape[1]):
+                    m_lo, m_hi = min(m_lo, xm[f, a, d]), max(m_hi, xm[f, a, d])
+                if m_lo > hi + reach or m_hi < lo - reach:
+                    inside = False
+            if inside:
+                near[f] = True
+                added += 1
+                break
+    return added
 
 
 @kernel

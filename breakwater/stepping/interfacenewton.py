@@ -44,9 +44,7 @@ from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
 from breakwater.stepping.reach import (
-    NearContact,
     NearFactors,
-    OutOfReach,
     Reach,
     coupled,
 )
@@ -130,20 +128,9 @@ class InterfaceNewton:
         """
         near = self.contact.reach()
         if near is not None and len(near) < len(y0):
-            nf = self.reach.factors(fact, near)
-            whole = self.contact
-            self.contact = NearContact(whole, near, y0, v_pred)  # type: ignore[assignment]
-            try:
-                its = self._solve(nf, z_I[near], y0[near], w_I[near], w_norm2, v_pred[near],
-                                  dv_dx)
-            except OutOfReach:
-                self.reach.fallbacks += 1
-            else:
-                self.y, self.fc, self.F = self.reach.whole(nf, z_I, y0, self.y, self.fc, self.F)
-                self.support = near
+            its = self.reach.solve(self, fact, near, z_I, y0, w_I, w_norm2, v_pred, dv_dx)
+            if its is not None:
                 return its
-            finally:
-                self.contact = whole
         self.support = None
         return self._solve(fact, z_I, y0, w_I, w_norm2, v_pred, dv_dx)
 

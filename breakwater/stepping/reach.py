@@ -23,7 +23,7 @@ then solves the step on all the unknowns.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -88,6 +88,39 @@ class Reach:
             self._kept = kept = (fact, near_factors(fact, near))
         return kept[1]
 
+    def solve(self, newton: Any, fact: Factorisation, near: np.ndarray, z_I: np.ndarray,
+              y0: np.ndarray, w_I: np.ndarray, w_norm2: float, v_pred: np.ndarray,
+              dv_dx: float) -> int | None:
+        """The interface Newton's solve on the unknowns ``near``; None: out of reach.
+
+        ``newton``: the :class:`~breakwater.stepping.interfacenewton.InterfaceNewton`
+        (its ``_solve`` on ``fact``'s near factors, with its contact seen on the near
+        unknowns); the other arguments are those of its ``solve``. On success its y,
+        f_c and F are set on all the interface unknowns (:meth:`whole`) and its
+        ``support`` to ``near``.
+        """
+        nf = self.factors(fact, near)
+        whole = newton.contact
+        newton.contact = NearContact(whole, near, y0, v_pred)
+        its: int | None = None
+        try:
+            its = newton._solve(nf, z_I[near], y0[near], w_I[near], w_norm2, v_pred[near],
+                                dv_dx)
+        except OutOfReach:
+            pass
+        finally:
+            newton.contact = whole
+        if its is not None:
+            y, fc, F = self.whole(nf, z_I, y0, newton.y, newton.fc, newton.F)
+            # The solution itself (its far rows now the bulk's) reaches no far unknown:
+            # one evaluation, whose search the outputs then find (it is their state).
+            if not np.any(whole.vector(y)[nf.far]):
+                self.solves += 1
+                newton.y, newton.fc, newton.F, newton.support = y, fc, F, near
+                return its
+        self.fallbacks += 1
+        return None
+
     @property
     def near(self) -> np.ndarray | None:
         """The last near set (None: none yet)."""
@@ -95,11 +128,10 @@ class Reach:
 
     def whole(self, nf: NearFactors, z_I: np.ndarray, y0: np.ndarray, y: np.ndarray,
               fc: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """A near solve's (y, f_c, F) on all the interface unknowns (one more solve).
+        """A near solve's (y, f_c, F) on all the interface unknowns.
 
         The far rows: ``y_f = z_f − X_fn (f_c − F)_n``, f_c and F zero.
         """
-        self.solves += 1
         out = np.array(y0, dtype=float)
         out[nf.near] = y
         fc_all, F_all = np.zeros(len(out)), np.zeros(len(out))
