@@ -17,7 +17,8 @@ Exact by construction: :class:`NearContact` evaluates the providers on the whole
 interface (the far unknowns at Newton's start) and raises :class:`OutOfReach` where
 that assumption fails, an evaluation with a force or a Jacobian entry on a far unknown,
 or a slip guard that moved one; :class:`~breakwater.stepping.interfacenewton.InterfaceNewton`
-then solves the step on all the unknowns.
+then solves the step on all the unknowns. The solution itself, its far rows set, is
+evaluated once more and must reach no far unknown either (:meth:`Reach.solve`).
 """
 
 from __future__ import annotations
@@ -152,8 +153,8 @@ class NearContact:
         base: Newton's start on the whole interface.
         v_pred: The predictor's velocities on the whole interface (the guards').
 
-    Raises (from its evaluations):
-        OutOfReach: A force, a Jacobian entry or a guard's step on a far unknown.
+    Its evaluations raise :class:`OutOfReach` at a force, a Jacobian entry or a guard's
+    step on a far unknown.
     """
 
     def __init__(self, contact: ContactSum, near: np.ndarray, base: np.ndarray,
