@@ -115,7 +115,7 @@ class Reach:
             y, fc, F = self.whole(nf, z_I, y0, newton.y, newton.fc, newton.F)
             # The solution itself (its far rows now the bulk's) reaches no far unknown:
             # one evaluation, whose search the outputs then find (it is their state).
-            if not np.any(whole.vector(y)[nf.far]):
+            if not whole.vector(y)[nf.far].any():
                 self.solves += 1
                 newton.y, newton.fc, newton.F, newton.support = y, fc, F, near
                 return its
@@ -175,7 +175,7 @@ class NearContact:
     def vector(self, y: np.ndarray) -> np.ndarray:
         """f_c at the near unknowns."""
         fc = self.contact.vector(self._whole(y))
-        if np.any(fc[self.far]):
+        if fc[self.far].any():
             raise OutOfReach
         return fc[self.near]
 
@@ -186,7 +186,7 @@ class NearContact:
             raise OutOfReach
         act, A = coupled(*active)
         at = self.index[act]
-        if np.any(at < 0):
+        if len(at) and at.min() < 0:
             raise OutOfReach
         return at, A
 
@@ -200,7 +200,7 @@ class NearContact:
         whole = np.zeros(len(self.base))
         whole[self.near] = step
         cut = self.contact.precheck(self._whole(x), whole, self.v_pred, dv_dx)
-        if np.any(whole[self.far]):
+        if whole[self.far].any():
             raise OutOfReach
         step[:] = whole[self.near]
         return cut
