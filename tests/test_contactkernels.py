@@ -407,8 +407,8 @@ def test_coupled_unknowns_give_the_same_newton_step() -> None:
     point's), and the Newton step solved without them is the step solved with them:
     ``δ = G − X_act w``, ``(1 + B X_act[act]) w = B G[act]`` (round-off: 1e-12 of δ,
     a 30-unknown LU of condition ≈ 1e3)."""
+    from breakwater.stepping.interface import coupled
     from breakwater.stepping.interfacenewton import active_system
-    from breakwater.stepping.reach import coupled
 
     rng = np.random.default_rng(4)
     n, m = 50, 30

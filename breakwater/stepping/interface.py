@@ -18,11 +18,12 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
+from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
 from breakwater.model.layout import MonolithicLayout
 
 __all__ = ["BodyGuard", "ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns",
-           "StateForces", "StateProvider"]
+           "StateForces", "StateProvider", "coupled"]
 
 
 class ContactForces(Protocol):
@@ -348,8 +349,9 @@ class ContactSum:
     def active_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """∂f_c/∂y as ``(act, A)`` (rows and columns ``act``), if every provider has it.
 
-        The providers' active unknowns joined, their blocks summed; None if one has
-        no such form (the Newton then forms the whole ``X ∂f_c/∂y``).
+        The providers' active unknowns joined, their blocks summed, less the unknowns
+        the block does not couple (:func:`coupled`); None if one has no such form (the
+        Newton then forms the whole ``X ∂f_c/∂y``).
         """
         parts = []
         with self.timings("interface_assembly"):
@@ -359,13 +361,13 @@ class ContactSum:
                     return None
                 parts.append(part)
             if len(parts) == 1:
-                return parts[0]
+                return coupled(*parts[0])
             act = np.unique(np.concatenate([p[0] for p in parts]))
             A = np.zeros((len(act), len(act)))
             for a, block in parts:
                 at = np.searchsorted(act, a)
                 A[np.ix_(at, at)] += block
-            return act, A
+            return coupled(act, A)
 
     def reach(self) -> np.ndarray | None:
         """The interface unknowns the providers' forces may touch in this step.
@@ -389,3 +391,35 @@ class ContactSum:
                  dv_dx: float) -> int:
         """Every provider's slip guard, in turn, on the step; the nodes corrected."""
         return sum(c.precheck(x, step, v_pred, dv_dx) for c in self.providers)
+
+
+@kernel
+def coupled(act, B):  # type: ignore[no-untyped-def]
+    """``(act, B)`` without the unknowns whose row and column of B are zero (compiled).
+
+    A provider's ``act`` may hold unknowns whose rows and columns are zero (a
+    general pair's friction node or closed point whose tangents vanish there); the
+    Newton step's force there is zero too (``w = B δ``): solving without them gives
+    the same step, with a smaller dense solve, and a Newton on the unknowns a general
+    pair may reach (:class:`breakwater.stepping.reach.NearContact`) does not count
+    them as reached.
+
+    Args:
+        act: The unknowns of a provider's block, shape (m,).
+        B: ∂f_c/∂y on ``act``, shape (m, m).
+    """
+    m = len(act)
+    keep = np.zeros(m, np.bool_)
+    for i in range(m):
+        for j in range(m):
+            if B[i, j] != 0.0:
+                keep[i] = True
+                keep[j] = True
+    index = np.flatnonzero(keep)
+    if len(index) == m:
+        return act, B
+    out = np.empty((len(index), len(index)))
+    for a in range(len(index)):
+        for b in range(len(index)):
+            out[a, b] = B[index[a], index[b]]
+    return act[index], out

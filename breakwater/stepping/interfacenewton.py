@@ -43,7 +43,7 @@ from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
-from breakwater.stepping.reach import NearFactors, Reach, coupled
+from breakwater.stepping.reach import NearFactors, Reach
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
 __all__ = ["GROWTH", "HALVINGS", "InterfaceNewton", "active_step", "active_system", "damped_step",
@@ -209,7 +209,7 @@ class InterfaceNewton:
             J = self.contact.left_jacobian(x, X_II)
             J.flat[:: len(J) + 1] += 1.0
             return np.linalg.solve(J, G)
-        act, B = coupled(*active)
+        act, B = active
         if not len(act):
             return G.copy()
         key = self._columns_of
@@ -257,7 +257,7 @@ def active_step(act: np.ndarray, B: np.ndarray, X_act: np.ndarray, G: np.ndarray
 
     ``act``: a conforming pair's closed nodes; a general pair's points in contact and
     their master facets, a fraction of a master surface that may be long; of them,
-    those B couples (:func:`~breakwater.stepping.reach.coupled`). The system is solved
+    those B couples (:func:`~breakwater.stepping.interface.coupled`). The system is solved
     on them alone, a dense solve of size |act| instead of n_I: for δ_act itself where
     every provider is a conforming pair (``primal``, :func:`primal_system`), else for
     the forces w = B δ_act: ``(1 + B X_act,act) w = B G_act`` and

@@ -28,13 +28,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from breakwater.common.jit import kernel
-
 if TYPE_CHECKING:
     from breakwater.stepping.factorisations import Factorisation
     from breakwater.stepping.interface import ContactSum
 
-__all__ = ["NearContact", "NearFactors", "OutOfReach", "Reach", "coupled", "near_factors"]
+__all__ = ["NearContact", "NearFactors", "OutOfReach", "Reach", "near_factors"]
 
 
 class OutOfReach(Exception):
@@ -184,7 +182,7 @@ class NearContact:
         active = self.contact.active_jacobian(self._whole(y))
         if active is None:
             raise OutOfReach
-        act, A = coupled(*active)
+        act, A = active
         at = self.index[act]
         if len(at) and at.min() < 0:
             raise OutOfReach
@@ -208,34 +206,3 @@ class NearContact:
     def resolution(self, y: np.ndarray) -> float:
         """The providers' round-off of f_c at the iterate."""
         return self.contact.resolution(self._whole(y))
-
-
-@kernel
-def coupled(act, B):  # type: ignore[no-untyped-def]
-    """``(act, B)`` without the unknowns whose row and column of B are zero (compiled).
-
-    A general pair's ``act`` holds the DOFs of every point with a projection, open or
-    closed; an open point's rows and columns are zero, and so is the Newton step's
-    force there (``w = B δ``): solving without them gives the same step, with a dense
-    solve the size of the contact. On the separately meshed Goda case, rocking on a
-    corner, 63 of the 140 unknowns on average (a fifth of the LU's work).
-
-    Args:
-        act: The unknowns B couples, shape (m,).
-        B: ∂f_c/∂y on ``act``, shape (m, m).
-    """
-    m = len(act)
-    keep = np.zeros(m, np.bool_)
-    for i in range(m):
-        for j in range(m):
-            if B[i, j] != 0.0:
-                keep[i] = True
-                keep[j] = True
-    index = np.flatnonzero(keep)
-    if len(index) == m:
-        return act, B
-    out = np.empty((len(index), len(index)))
-    for a in range(len(index)):
-        for b in range(len(index)):
-            out[a, b] = B[index[a], index[b]]
-    return act[index], out
