@@ -17,7 +17,7 @@ factorisation that MUMPS could not complete is refused in one line
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from mpi4py import MPI
@@ -47,7 +47,8 @@ class Factorisation:
     bytes: float = 0.0  # this rank's memory for it: MUMPS's (INFO(16)) and X's blocks
 
     # X's columns of a set of interface unknowns by block (subtract_X's ``support``).
-    _columns: tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]] | None = None
+    _columns: tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]] | None = field(
+        default=None, init=False, repr=False, compare=False)
 
     def subtract_X(self, fc: np.ndarray, out: np.ndarray,
                    support: np.ndarray | None = None) -> None:
