@@ -96,7 +96,7 @@ def closest_point(points: np.ndarray, nodes: np.ndarray, xi: np.ndarray | None =
         a, b = nodes[:, 0], nodes[:, 1]
         chord = b - a
         xi = 2 * np.sum((points - a) * chord, axis=1) / np.sum(chord * chord, axis=1) - 1
-    xi = np.array(np.asarray(xi) + 0 * points[:, 0])
+    xi = np.asarray(xi) + 0 * points[:, 0]  # a new array: changed in place below
     going = np.arange(len(xi))
     for _ in range(iterations):
         if not len(going):
