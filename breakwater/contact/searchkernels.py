@@ -372,26 +372,31 @@ def mark_near(xs, xm, reach, near):  # type: ignore[no-untyped-def]
     Returns:
         How many were newly marked.
     """
+    s_lo, s_hi = _boxes(xs)
+    m_lo, m_hi = _boxes(xm)
     added = 0
     for f in range(xm.shape[0]):
         if near[f]:
             continue
         for s in range(xs.shape[0]):
-            inside = True
-            for d in range(2):
-                lo, hi = xs[s, 0, d], xs[s, 0, d]
-                for a in range(1, xs.shape[1]):
-                    lo, hi = min(lo, xs[s, a, d]), max(hi, xs[s, a, d])
-                m_lo, m_hi = xm[f, 0, d], xm[f, 0, d]
-                for a in range(1, xm.shape[1]):
-                    m_lo, m_hi = min(m_lo, xm[f, a, d]), max(m_hi, xm[f, a, d])
-                if m_lo > hi + reach or m_hi < lo - reach:
-                    inside = False
-            if inside:
+            if (m_lo[f, 0] <= s_hi[s, 0] + reach and m_hi[f, 0] >= s_lo[s, 0] - reach
+                    and m_lo[f, 1] <= s_hi[s, 1] + reach and m_hi[f, 1] >= s_lo[s, 1] - reach):
                 near[f] = True
                 added += 1
                 break
     return added
+
+
+@kernel
+def _boxes(x):  # type: ignore[no-untyped-def]
+    """Each facet's node box: lower and upper corners, ``(F, 2)`` each."""
+    lo, hi = np.empty((x.shape[0], 2)), np.empty((x.shape[0], 2))
+    for f in range(x.shape[0]):
+        for d in range(2):
+            lo[f, d], hi[f, d] = x[f, 0, d], x[f, 0, d]
+            for a in range(1, x.shape[1]):
+                lo[f, d], hi[f, d] = min(lo[f, d], x[f, a, d]), max(hi[f, d], x[f, a, d])
+    return lo, hi
 
 
 @kernel
