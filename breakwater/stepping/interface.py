@@ -380,6 +380,8 @@ class ContactSum:
             if part is None:
                 return None
             parts.append(part)
+        if len(parts) == 1:
+            return parts[0]
         return np.unique(np.concatenate(parts)) if parts else None
 
     def resolution(self, y: np.ndarray) -> float:
