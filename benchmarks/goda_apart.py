@@ -2,7 +2,7 @@ r"""The Goda case meshed apart by hand against the conforming case (issue 23).
 
 Run on purpose, never in CI (three full runs, a few minutes)::
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/goda_apart.py [--out DIR]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/goda_apart.py [--out DIR] [--repeat N]
 
 Issue 23's acceptance: a separately meshed Goda case (``examples/goda_apart/``: a
 ``.geo`` written by hand, gmsh's Delaunay algorithm, caisson elements 12 mm, mound
@@ -21,7 +21,9 @@ Every run takes the mound's shear modulus of the conforming calibration at refin
 1 (2.27789e6 Pa: calibration with a general pair is refused), and point probes of both
 bodies at the caisson's base corners (slip = caisson − mound u_x; the pair probes of
 the conforming runs check them). Printed: the headline table with relative
-differences to ``conforming``, and the solvers' figures with the time loops' ratios.
+differences to ``conforming``, and the solvers' figures with the time loops' ratios;
+with ``--repeat N``, N − 1 more pairs of ``conforming-fine`` and ``apart`` run back to
+back, and the median of the N pairs' ratios.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import pathlib
 import sys
 import tempfile
 
+import numpy as np
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
@@ -51,6 +54,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=pathlib.Path, default=None)
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="run conforming-fine and apart this many times, alternately, "
+                             "and print each pair's ratio and their median (the machine's "
+                             "speed drifts by 20 %% within minutes)")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     tmp = tempfile.mkdtemp(prefix="goda_apart_") if comm.rank == 0 else None
@@ -61,6 +68,11 @@ def main() -> None:
         "conforming-fine": _run("conforming-fine", out, [*FINE, *args.set]),
         "apart": _run("apart", out, [*APART_PROBES, *args.set], (str(APART),), common),
     }
+    pairs = [(runs["conforming-fine"], runs["apart"])]
+    for k in range(1, args.repeat):
+        pairs.append((_run(f"conforming-fine-{k}", out, [*FINE, *args.set]),
+                      _run(f"apart-{k}", out, [*APART_PROBES, *args.set], (str(APART),),
+                           common)))
     if comm.rank > 0:
         return
     rows = {k: _headline(r) for k, r in runs.items()}
@@ -90,6 +102,13 @@ def main() -> None:
           f"x, time loop (CPU) {loop['apart'] / loop['conforming']:.2f}x; apart / "
           f"conforming-fine: {its['apart'] / its['conforming-fine']:.2f}x, "
           f"{loop['apart'] / loop['conforming-fine']:.2f}x")
+    if len(pairs) > 1:
+        cpu = [(f["summary"]["solver"]["time_loop"]["cpu"],
+                a["summary"]["solver"]["time_loop"]["cpu"]) for f, a in pairs]
+        ratios = [a / f for f, a in cpu]
+        print("\nconforming-fine and apart alternately, time loops (CPU): " + ", ".join(
+            f"{f:.2f}/{a:.2f} s ({a / f:.2f}x)" for f, a in cpu)
+              + f"; median ratio {float(np.median(ratios)):.2f}x")
 
 
 if __name__ == "__main__":
