@@ -13,8 +13,9 @@ static stage calls).
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -87,6 +88,23 @@ class InterfaceValues:
         # and Δt it was computed from.
         self._last_state: tuple[np.ndarray | None, float, np.ndarray,
                                 tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        # The accepted state within recording() (gathered once there).
+        self._recording = False
+        self._accepted: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    @contextlib.contextmanager
+    def recording(self) -> Iterator[None]:
+        """Within: the accepted state is gathered once (collective on entry's first use).
+
+        The outputs of an accepted step read it several times (the history row's
+        resultant and measures, the ledger's energies: a reduction each), and nothing
+        changes the state Functions while they do.
+        """
+        self._recording, self._accepted = True, None
+        try:
+            yield
+        finally:
+            self._recording, self._accepted = False, None
 
     def begin_step(self) -> None:
         """Gather u, v, a of the staged step once, for the Newton's evaluations (collective).
@@ -144,7 +162,11 @@ class InterfaceValues:
             accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
         if accepted:
+            if self._accepted is not None:
+                return self._accepted
             u, v = self._values(self.u, self.v)
+            if self._recording:
+                self._accepted = (u, u, v)
             return u, u, v
         dt = self.step_dt()
         iterate = (self._iterate if y is None else y) if self._step is not None else None

@@ -12,6 +12,7 @@ and at the end :meth:`Session.finish`. The bookkeeping a checkpoint saves is
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import logging
@@ -88,7 +89,11 @@ class Stepped:
     def record(self, dt: float, iterations: int) -> dict[str, float]:
         """Measure the stepper's state: one history row, written (collective)."""
         assert self.files.history is not None
-        row = self.monitor.row(dt, iterations, self.ledger.record().as_dict())
+        with contextlib.ExitStack() as stack:  # each general pair's state gathered once
+            for pair in self.stepper.contacts:
+                if hasattr(pair, "recording"):
+                    stack.enter_context(pair.recording())
+            row = self.monitor.row(dt, iterations, self.ledger.record().as_dict())
         self.files.history.append(row)
         self.peak.update(row, self.stepper.u)
         return row
