@@ -457,3 +457,33 @@ def test_mark_near_is_the_box_test() -> None:
     np.testing.assert_array_equal(near, expected | earlier)
     assert added == int((expected & ~earlier).sum())
     assert searchkernels.mark_near(xs, xm, reach, near) == 0
+
+
+def test_friction_round_off_is_the_numpy_estimate() -> None:
+    """``friction_round_off`` against the NumPy estimate newtonaids.resolution used
+    before it (restated), to 1e-14 relative (sums in another order)."""
+    p = _pair(4, 3)
+    r = _points(p, "segments", 1e-9)
+    _, lam, _, _, _ = forcekernels.residual(
+        p.sX, p.mX, p.pos_s, p.pos_m, p.u1, r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"],
+        False, 1e10, 0.0, p.node_of, len(p.node_pos))
+    xm0 = p.mX + p.u1[p.pos_m]
+    facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0, xm0, 0.1)
+    mu, chi = 0.5, 1e-3
+    k, v_T, _, _ = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1, mu,
+                                         chi)
+    assert len(k) > 3
+    rng = np.random.default_rng(12)
+    v, a = p.v1, np.append(rng.normal(size=p.n), 0.0)
+    y = rng.normal(size=p.n)
+    dt, beta1 = 1e-4, 0.6
+    ε = float(np.finfo(float).eps)
+    mag = np.abs(v) + dt * np.abs(a) + beta1 * dt * np.abs(np.append(y, 0.0))
+    node = mag[p.node_pos[k]].sum(axis=1) + np.einsum(
+        "jb,jbd->j", np.abs(N0[k]), mag[p.pos_m[facet[k]]])
+    slope = chi**2 / (np.einsum("jd,jd->j", v_T, v_T) + chi**2) ** 1.5
+    expected = float(np.sqrt(np.sum((mu * lam[k] * slope * ε * node) ** 2)))
+    got = forcekernels.friction_round_off(k, v_T, lam, facet, N0, p.node_pos, p.pos_m, v, a, y,
+                                          dt, beta1 * dt, mu, chi, ε)
+    assert expected > 0
+    assert abs(got - expected) <= 1e-14 * expected

@@ -22,8 +22,8 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
-__all__ = ["add_friction", "friction", "jacobian", "left_product", "point", "point_tangents",
-           "residual", "slip_guard"]
+__all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "left_product", "point",
+           "point_tangents", "residual", "slip_guard"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -331,6 +331,52 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi):  # type: ignore
         force[i, 0], force[i, 1] = (-mu * lam[j]) * d0, (-mu * lam[j]) * d1
         unit[i, 0], unit[i, 1] = (-mu * 1.0) * d0, (-mu * 1.0) * d1
     return k, v_T, force, unit
+
+
+@kernel
+def friction_round_off(k, v_T, lam, facet0, N0, node_pos, pos_m, v, a, y, dt, dv, mu, chi,
+                       eps):  # type: ignore[no-untyped-def]
+    """:func:`breakwater.contact.newtonaids.resolution` from :func:`friction`'s k and v_T.
+
+    Per node k: ``μ λ_k φ'(v_T) ε Σ|v|``, the velocities' magnitudes
+    ``|v| + Δt |a| + β₁Δt |Δa|`` summed over the node's and its master facet's DOFs
+    (weighted by |N̄₀|); their root sum of squares.
+
+    Args:
+        k: The nodes in contact (:func:`friction`).
+        v_T: Their slip velocities.
+        lam: The slave nodes' normal forces.
+        facet0: Their start-of-step master facets.
+        N0: The master shape functions there.
+        node_pos: The slave nodes' interface positions.
+        pos_m: The master facets'.
+        v: v at the start of the step (a trailing 0).
+        a: a there.
+        y: Δa at the interface unknowns (no trailing 0).
+        dt: Δt.
+        dv: β₁Δt.
+        mu: μ.
+        chi: χ.
+        eps: The unit round-off.
+    """
+    n = len(y)
+    total = 0.0
+    for i in range(len(k)):
+        j = k[i]
+        node = 0.0
+        for d in range(node_pos.shape[1]):
+            q = node_pos[j, d]
+            node += abs(v[q]) + dt * abs(a[q]) + dv * abs(y[q] if 0 <= q < n else 0.0)
+        for b in range(N0.shape[1]):
+            for d in range(2):
+                q = pos_m[facet0[j], b, d]
+                node += abs(N0[j, b]) * (abs(v[q]) + dt * abs(a[q])
+                                         + dv * abs(y[q] if 0 <= q < n else 0.0))
+        speed2 = v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]
+        slope = chi**2 / (speed2 + chi**2) ** 1.5
+        r = mu * lam[j] * slope * eps * node
+        total += r * r
+    return np.sqrt(total)
 
 
 @kernel

@@ -129,9 +129,6 @@ def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
     """
     if not pair.spec.friction:
         return 0.0
-    ε = float(np.finfo(float).eps)
-    _, v, a, da = pair._start(y)
-    dt = pair.step_dt()
     u0, u1, v1 = pair._state(y)
     p = pair._normal(u1)
     _, _, mu, chi = pair._law
@@ -140,11 +137,8 @@ def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
     facet, N0, t0 = pair._frozen(u0)
     k, v_T, _, _ = forcekernels.friction(p["lam"], facet, N0, t0, pair._node_pos, pair._pm,
                                          v1, mu, chi)
-    if not len(k):
-        return 0.0
-    mag = np.abs(v) + dt * np.abs(a) + pair.beta1 * dt * np.abs(da)
-    node = mag[pair._node_pos[k]].sum(axis=1) + np.einsum(
-        "jb,jbd->j", np.abs(N0[k]), mag[pair._pm[facet[k]]])
-    speed2 = np.einsum("jd,jd->j", v_T, v_T)
-    slope = chi**2 / (speed2 + chi**2) ** 1.5
-    return float(np.sqrt(np.sum((mu * p["lam"][k] * slope * ε * node) ** 2)))
+    _, v, a, _ = pair._start(y)
+    dt = pair.step_dt()
+    return float(forcekernels.friction_round_off(
+        k, v_T, p["lam"], facet, N0, pair._node_pos, pair._pm, v, a, y, dt,
+        pair.beta1 * dt, mu, chi, float(np.finfo(float).eps)))
