@@ -183,12 +183,15 @@ def test_segment_points(nn: int) -> None:
     np.testing.assert_allclose(xi[facet >= 0], ref["xi"], rtol=0, atol=1e-13)
     # The whole search (segments, and the fixed points of nodes).
     empty = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros((0, nn)))
+    every = np.ones(len(p.mX), bool)
     got = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, True, *empty, 0.1, 1e-9,
-                               g, w)
+                               g, w, every)
     nodes = _points(p, "nodes", 1e-3)
     fixed = (nodes["point_facet"], nodes["xi_s"], nodes["weight"], nodes["Ns"])
     got_nodes = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, False, *fixed, 0.1,
-                                     1e-3, g, w)
+                                     1e-3, g, w, every)
+    assert got[-1] and got_nodes[-1]  # every facet in use: "restricted" to all
+    got, got_nodes = got[:-1], got_nodes[:-1]
     for r, out in ((ref, got), (nodes, got_nodes)):
         expected = (r["point_facet"], r["points"], r["weight"], np.flatnonzero(r["on"]),
                     r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"])
@@ -457,6 +460,90 @@ def test_mark_near_is_the_box_test() -> None:
     np.testing.assert_array_equal(near, expected | earlier)
     assert added == int((expected & ~earlier).sum())
     assert searchkernels.mark_near(xs, xm, reach, near) == 0
+
+
+@pytest.mark.parametrize("nn", [2, 3])
+@pytest.mark.parametrize("integration", ["segments", "nodes"])
+def test_search_restricted_to_the_facets_in_use(nn: int, integration: str) -> None:
+    """A search restricted to the master facets near the slave (``use``) is the whole
+    search, bit for bit, where the others are beyond the radius; where one of them comes
+    within it, ``beyond_reach`` says so and the search takes every facet.
+
+    The master surface: the pair's, and a copy of it 1.2 m away (beyond the radius,
+    0.1, of every slave facet: it would cut nothing and hold no projection)."""
+    p = _pair(3, nn)
+    far = p.mX + np.array([1.2, 0.0])
+    mX = np.concatenate([p.mX, far])
+    pos_m = np.concatenate([p.pos_m, p.pos_m])
+    xs = p.sX + p.u1[p.pos_s]
+    xm = mX + p.u1[pos_m]
+    use = np.zeros(len(mX), bool)
+    searchkernels.mark_near(xs, xm, 0.2, use)
+    assert use[: len(p.mX)].any() and not use[len(p.mX):].any()
+    g, w = np.polynomial.legendre.leggauss(2)
+    edge = 1e-3 if integration == "nodes" else 1e-9
+    r = _points(p, "nodes", edge)
+    fixed = ((np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros((0, nn)))
+             if integration == "segments" else
+             (r["point_facet"], r["xi_s"], r["weight"], r["Ns"]))
+
+    def search(X: np.ndarray, pos: np.ndarray, mask: np.ndarray) -> tuple:  # type: ignore[type-arg]
+        return searchkernels.search(p.sX, X, p.pos_s, pos, p.u1, integration == "segments",
+                                    *fixed, 0.1, edge, g, w, mask)
+
+    every = np.ones(len(mX), bool)
+    whole = search(mX, pos_m, every)
+    restricted = search(mX, pos_m, use)
+    assert restricted[-1] and len(whole[3]) > 10
+    for a, b in zip(restricted, whole, strict=True):
+        np.testing.assert_array_equal(a, b)
+    # One far facet moved under the slave: out of ``use`` but within reach.
+    moved = mX.copy()
+    under = len(p.mX) + len(p.mX) // 2
+    moved[under] = p.mX[len(p.mX) // 2] + np.array([0.0, -0.03])
+    xm_moved = moved + p.u1[pos_m]
+    assert not searchkernels.beyond_reach(xs, xm_moved, use, 0.1, edge)
+    assert searchkernels.beyond_reach(xs, xm_moved, use | (np.arange(len(mX)) == under),
+                                      0.1, edge)
+    fallback, whole = search(moved, pos_m, use), search(moved, pos_m, every)
+    assert not fallback[-1]
+    for a, b in zip(fallback[:-1], whole[:-1], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_beyond_reach_holds_the_curves() -> None:
+    """``beyond_reach``'s boxes hold each quadratic facet's curve, not only its nodes.
+
+    A slave facet on y = 0, x in [0, 1]; a master facet whose nodes are at y = 0.3, 0.1
+    and 0.12 (mid-node): its curve, y(ξ) = 0.12 − 0.1 ξ + 0.08 ξ², dips to 0.08875 at
+    ξ = 0.625 (x = 0.8125), below its nodes. A radius between the two (0.09) reaches the
+    curve: not beyond, where a box of the nodes would say beyond. Its box grown by the
+    sag c = |½(0.3 + 0.1) − 0.12| = 0.08 starts at y = 0.02: beyond any radius below.
+    """
+    xs = np.array([[[0.0, 0.0], [1.0, 0.0], [0.5, 0.0]]])
+    xm = np.array([[[0.0, 0.3], [1.0, 0.1], [0.5, 0.12]]])
+    xi = np.linspace(-1, 1, 20001)
+    lowest = (0.12 - 0.1 * xi + 0.08 * xi**2).min()
+    assert abs(lowest - 0.08875) < 1e-8
+    out = np.zeros(1, bool)
+    assert not searchkernels.beyond_reach(xs, xm, out, 0.09, 1e-9)
+    assert searchkernels.beyond_reach(xs, xm, out, 0.019, 1e-9)
+    assert not searchkernels.beyond_reach(xs, xm, out, 0.021, 1e-9)  # the box: conservative
+    assert searchkernels.beyond_reach(xs, xm, np.ones(1, bool), 0.09, 1e-9)  # in use
+
+
+def test_iterate_state_is_gn22_update() -> None:
+    """u₁ and v₁ of an iterate, compiled, are NumPy's GN22 update bit for bit (the
+    accepted state is then the converged iterate's)."""
+    rng = np.random.default_rng(11)
+    u, v, a = (np.append(rng.normal(size=30), 0.0) for _ in range(3))
+    y = rng.normal(size=30)
+    dt, beta1, beta2 = 1e-4, 0.6, 0.605
+    c_a, c_u, c_v = 0.5 * dt**2, 0.5 * beta2 * dt**2, beta1 * dt
+    da = np.append(y, 0.0)
+    u1, v1 = searchkernels.iterate_state(u, v, a, y, dt, c_a, c_u, c_v)
+    np.testing.assert_array_equal(u1, u + (dt * v + c_a * a + c_u * da))
+    np.testing.assert_array_equal(v1, v + (dt * a + c_v * da))
 
 
 def test_friction_round_off_is_the_numpy_estimate() -> None:

@@ -99,6 +99,7 @@ class SurfaceForces(SurfaceSearch):
         self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
                                     self.node_X, self.node_pos, self.master.X, self.pos_m)
         self._near_facets = np.zeros(len(self.master.X), bool)  # the master facets of reach()
+        self.in_use.mask = self._near_facets  # the searches' too (changed in place)
         self._reach: np.ndarray | None = None  # reach()'s unknowns of them
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,

@@ -18,9 +18,10 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.projection import STEP_TOL
 
-__all__ = ["candidates", "closest_points", "current", "curve_at", "frozen", "mark_near", "near",
-           "nearest_end", "project", "search", "segment_points", "shape_values",
-           "slave_points"]
+__all__ = ["beyond_reach", "candidates", "closest_points", "current", "curve_at", "frozen",
+           "iterate_state", "mark_near", "near", "nearest_end", "project", "search",
+           "segment_points", "shape_values", "slave_points", "used_candidates", "used_project",
+           "used_segment_points"]
 
 
 @kernel
@@ -98,9 +99,15 @@ def candidates(points, nodes, radius):  # type: ignore[no-untyped-def]
     Returns:
         (point, facet) index pairs, in the reference's order.
     """
+    return used_candidates(points, nodes, radius, np.ones(nodes.shape[0], np.bool_))
+
+
+@kernel
+def used_candidates(points, nodes, radius, use):  # type: ignore[no-untyped-def]
+    """:func:`candidates` among the facets ``use`` marks (the grid of those alone)."""
     F, nn = nodes.shape[0], nodes.shape[1]
     m = len(points)
-    if F == 0 or m == 0:
+    if F == 0 or m == 0 or not use.any():
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     lo = np.empty((F, 2))
     hi = np.empty((F, 2))
@@ -111,17 +118,19 @@ def candidates(points, nodes, radius):  # type: ignore[no-untyped-def]
                 a = min(a, nodes[f, k, d])
                 b = max(b, nodes[f, k, d])
             lo[f, d], hi[f, d] = a - radius, b + radius
-    o0, o1 = lo[:, 0].min(), lo[:, 1].min()
-    cell = 0.0
+    o0, o1, cell = np.inf, np.inf, 0.0
     for f in range(F):
-        cell = max(cell, hi[f, 0] - lo[f, 0], hi[f, 1] - lo[f, 1])
-    ilo = np.empty((F, 2), np.int64)
-    ihi = np.empty((F, 2), np.int64)
+        if use[f]:
+            o0, o1 = min(o0, lo[f, 0]), min(o1, lo[f, 1])
+            cell = max(cell, hi[f, 0] - lo[f, 0], hi[f, 1] - lo[f, 1])
+    ilo = np.zeros((F, 2), np.int64)
+    ihi = np.zeros((F, 2), np.int64)
     for f in range(F):
-        ilo[f, 0] = np.int64(np.floor((lo[f, 0] - o0) / cell))
-        ilo[f, 1] = np.int64(np.floor((lo[f, 1] - o1) / cell))
-        ihi[f, 0] = np.int64(np.floor((hi[f, 0] - o0) / cell))
-        ihi[f, 1] = np.int64(np.floor((hi[f, 1] - o1) / cell))
+        if use[f]:
+            ilo[f, 0] = np.int64(np.floor((lo[f, 0] - o0) / cell))
+            ilo[f, 1] = np.int64(np.floor((lo[f, 1] - o1) / cell))
+            ihi[f, 0] = np.int64(np.floor((hi[f, 0] - o0) / cell))
+            ihi[f, 1] = np.int64(np.floor((hi[f, 1] - o1) / cell))
     s0, s1 = ihi[:, 0].max() + 1, ihi[:, 1].max() + 1
     # Each facet in the cells its box touches, sorted by (key, facet).
     keys = np.empty(4 * F, np.int64)
@@ -130,6 +139,8 @@ def candidates(points, nodes, radius):  # type: ignore[no-untyped-def]
     for a in range(2):
         for b in range(2):
             for f in range(F):
+                if not use[f]:
+                    continue
                 i0, i1 = ilo[f, 0] + a, ilo[f, 1] + b
                 if i0 <= ihi[f, 0] and i1 <= ihi[f, 1]:
                     keys[c] = (i0 + 1) * (s1 + 2) + (i1 + 1)
@@ -191,10 +202,21 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     Returns:
         The facet of each point (−1: no projection) and its local coordinate ξ.
     """
+    return used_project(points, nodes, radius, tol, np.ones(nodes.shape[0], np.bool_))
+
+
+@kernel
+def used_project(points, nodes, radius, tol, use):  # type: ignore[no-untyped-def]
+    """:func:`project` onto the facets ``use`` marks (:func:`used_candidates`).
+
+    The same projections as :func:`project` where the others are beyond the radius of
+    every point (:func:`beyond_reach`): each pair's Newton, the filters and the nearest
+    (ties: the lowest facet) do not depend on the other candidates.
+    """
     m = len(points)
     facet = np.full(m, -1, np.int64)
     out = np.zeros(m)
-    point, cand = candidates(points, nodes, radius)
+    point, cand = used_candidates(points, nodes, radius, use)
     point, cand = near(points, point, nodes, cand, radius, tol)
     if len(point) == 0:
         return facet, out
@@ -252,13 +274,29 @@ def segment_points(xs, xm, sX, radius, g, w):  # type: ignore[no-untyped-def]
     facets' vertices (``xm``) project onto it; each segment carries the Gauss rule
     ``(g, w)``; the weight is the reference length.
     """
+    return used_segment_points(xs, xm, sX, radius, g, w, np.ones(xm.shape[0], np.bool_))
+
+
+@kernel
+def used_segment_points(xs, xm, sX, radius, g, w, use):  # type: ignore[no-untyped-def]
+    """:func:`segment_points` cut by the vertices of the master facets ``use`` marks.
+
+    The same points where the others are beyond the radius of the slave facets
+    (:func:`beyond_reach`): their vertices project nowhere.
+    """
     n_f = xs.shape[0]
-    F = xm.shape[0]
+    F = 0
+    for f in range(xm.shape[0]):
+        if use[f]:
+            F += 1
     vertices = np.empty((2 * F, 2))
-    for f in range(F):
-        for v in range(2):
-            vertices[2 * f + v, 0] = xm[f, v, 0]
-            vertices[2 * f + v, 1] = xm[f, v, 1]
+    c = 0
+    for f in range(xm.shape[0]):
+        if use[f]:
+            for v in range(2):
+                vertices[2 * c + v, 0] = xm[f, v, 0]
+                vertices[2 * c + v, 1] = xm[f, v, 1]
+            c += 1
     if n_f and F:
         on, xi = project(vertices, xs, radius, 1e-9)
     else:
@@ -388,6 +426,54 @@ def mark_near(xs, xm, reach, near):  # type: ignore[no-untyped-def]
 
 
 @kernel
+def beyond_reach(xs, xm, use, radius, tol):  # type: ignore[no-untyped-def]
+    """Whether every master facet not in ``use`` is beyond ``radius`` of the slave facets.
+
+    Per coordinate, the node boxes grown to hold the curves (a quadratic facet leaves
+    its node box by at most its sag c = |½(x₀ + x₁) − x₂|; :func:`near`'s margin, with
+    the projections' ``tol`` beyond the master's ends): a facet whose box is more than
+    ``radius`` from every slave facet's can hold no projection of a slave point, and its
+    vertices project onto no slave facet.
+
+    Args:
+        xs: The slave facets' current nodes.
+        xm: The master's.
+        use: The master facets in use.
+        radius: The search radius.
+        tol: A projection at ``|ξ| ≤ 1 + tol`` is inside its master facet.
+    """
+    s_lo, s_hi = _curve_boxes(xs, 1e-9)
+    m_lo, m_hi = _curve_boxes(xm, tol)
+    for f in range(xm.shape[0]):
+        if use[f]:
+            continue
+        for s in range(xs.shape[0]):
+            if (m_lo[f, 0] <= s_hi[s, 0] + radius and m_hi[f, 0] >= s_lo[s, 0] - radius
+                    and m_lo[f, 1] <= s_hi[s, 1] + radius
+                    and m_hi[f, 1] >= s_lo[s, 1] - radius):
+                return False
+    return True
+
+
+@kernel
+def _curve_boxes(x, tol):  # type: ignore[no-untyped-def]
+    """Each facet's box holding its curve for ``|ξ| ≤ 1 + tol`` (:func:`near`'s margin)."""
+    lo, hi = np.empty((x.shape[0], 2)), np.empty((x.shape[0], 2))
+    for f in range(x.shape[0]):
+        for d in range(2):
+            x0, x1 = x[f, 0, d], x[f, 1, d]
+            a, b = min(x0, x1), max(x0, x1)
+            half, c = 0.5 * abs(x1 - x0), 0.0
+            if x.shape[1] == 3:
+                x2 = x[f, 2, d]
+                a, b = min(a, x2), max(b, x2)
+                c = abs(0.5 * (x0 + x1) - x2)
+            margin = c + tol * (half + 3 * c)
+            lo[f, d], hi[f, d] = a - margin, b + margin
+    return lo, hi
+
+
+@kernel
 def _boxes(x):  # type: ignore[no-untyped-def]
     """Each facet's node box: lower and upper corners, ``(F, 2)`` each."""
     lo, hi = np.empty((x.shape[0], 2)), np.empty((x.shape[0], 2))
@@ -411,8 +497,25 @@ def current(X, pos, u):  # type: ignore[no-untyped-def]
 
 
 @kernel
+def iterate_state(u, v, a, y, dt, c_a, c_u, c_v):  # type: ignore[no-untyped-def]
+    """u₁ and v₁ of the Newton iterate Δa = y (compiled; a trailing 0 appended to y).
+
+    GN22's update (:func:`breakwater.stepping.gn22.gn22_update`), its operations in its
+    order, so bit for bit NumPy's ``u + (dt v + c_a a + c_u Δa)`` and
+    ``v + (dt a + c_v Δa)``: one pass instead of a dozen array operations.
+    """
+    n = len(y)
+    u1, v1 = np.empty(n + 1), np.empty(n + 1)
+    for i in range(n + 1):
+        da = y[i] if i < n else 0.0
+        u1[i] = u[i] + ((dt * v[i] + c_a * a[i]) + c_u * da)
+        v1[i] = v[i] + (dt * a[i] + c_v * da)
+    return u1, v1
+
+
+@kernel
 def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weight,
-           fixed_N, radius, edge, g, w):  # type: ignore[no-untyped-def]
+           fixed_N, radius, edge, g, w, use):  # type: ignore[no-untyped-def]
     """A general pair's integration points and their projections at the state u1.
 
     Args:
@@ -430,20 +533,27 @@ def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weig
         edge: A projection at ``|ξ̄| ≤ 1 + edge`` is inside its facet.
         g: The Gauss points of a segment.
         w: Their weights.
+        use: The master facets the search may be restricted to: it is, where every
+            other is beyond the search radius of the slave surface (:func:`beyond_reach`;
+            the same points and projections, without the others' grid and cuts).
 
     Returns:
         Every point's slave facet, position and weight; of those with a projection:
-        their index, slave facet, master facet, shape functions, ξ̄ and weight.
+        their index, slave facet, master facet, shape functions, ξ̄ and weight; and
+        whether the search was restricted to ``use``.
     """
     xs = current(sX, pos_s, u1)
     xm = current(mX, pos_m, u1)
+    restricted = beyond_reach(xs, xm, use, radius, edge)
+    if not restricted:
+        use = np.ones(xm.shape[0], np.bool_)
     if segments:
-        point_facet, xi_s, weight = segment_points(xs, xm, sX, radius, g, w)
+        point_facet, xi_s, weight = used_segment_points(xs, xm, sX, radius, g, w, use)
         Ns = shape_values(xi_s, sX.shape[1])
     else:
         point_facet, weight, Ns = fixed_facet, fixed_weight, fixed_N
     points = slave_points(xs, point_facet, Ns)
-    facet, xi = project(points, xm, radius, edge)
+    facet, xi = used_project(points, xm, radius, edge, use)
     on = np.flatnonzero(facet >= 0)
     return (point_facet, points, weight, on, point_facet[on], facet[on],
-            np.ascontiguousarray(Ns[on]), xi[on], weight[on])
+            np.ascontiguousarray(Ns[on]), xi[on], weight[on], restricted)

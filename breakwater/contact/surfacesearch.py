@@ -23,6 +23,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.arrays import key_of, read_only, unchanged
 from breakwater.contact import forcekernels, searchkernels
 from breakwater.contact.penetration import search_radius
 from breakwater.contact.projection import FacetGrid, project, shape
@@ -172,18 +173,23 @@ class InterfaceValues:
         iterate = (self._iterate if y is None else y) if self._step is not None else None
         last = self._last_state
         if (iterate is not None and last is not None and last[0] is self._step
-                and last[1] == dt and np.array_equal(last[2], iterate)):
+                and last[1] == dt and unchanged(last[2], iterate)):
             # The residual, the Jacobian, the guard and the round-off estimate of one
             # Newton iterate read the same state (within a step: no reduction).
             return last[3]
-        u, v, a, da = self._start(y)
         # GN22's update (stepping.gn22.gn22_update), its operations in its order: the
         # accepted state is then the converged iterate's u₁, v₁ bit for bit, and the
         # outputs' evaluations there find the Newton's last search (_normal's cache).
         c_a, c_u, c_v = 0.5 * dt**2, 0.5 * self.beta2 * dt**2, self.beta1 * dt
-        out = (u, u + (dt * v + c_a * a + c_u * da), v + (dt * a + c_v * da))
         if iterate is not None:
-            self._last_state = (self._step, dt, iterate.copy(), out)
+            u, v, a = self._step_rows
+            u1, v1 = searchkernels.iterate_state(u, v, a, iterate, dt, c_a, c_u, c_v)
+        else:
+            u, v, a, da = self._start(y)
+            u1, v1 = u + (dt * v + c_a * a + c_u * da), v + (dt * a + c_v * da)
+        out = (u, read_only(u1), read_only(v1))
+        if iterate is not None:
+            self._last_state = (self._step, dt, key_of(iterate), out)
         return out
 
     def _start(self, y: np.ndarray | None = None
@@ -279,7 +285,6 @@ class SurfaceSearch(InterfaceValues):
         self.node_pos = self.pos_s.reshape(-1, model.gdim)[first]
         self.node_X = slave.X.reshape(-1, model.gdim)[first]
         self._frozen_key: np.ndarray | None = None
-        self._frozen_of: np.ndarray | None = None  # a read-only u₀ that matched the key
         self._normal_key: np.ndarray | None = None
         self._normal_points: dict[str, Any]  # the points and normal part of _normal_key
         self._frozen_data: tuple[np.ndarray, np.ndarray, np.ndarray]
@@ -289,6 +294,8 @@ class SurfaceSearch(InterfaceValues):
                               for p in (self.pos_s, self.pos_m))
         self._node_of = np.ascontiguousarray(self.node_of, dtype=np.int64)
         self._node_pos = np.ascontiguousarray(self.node_pos, dtype=np.int64)
+        self.in_use = FacetsInUse(self._sX, self._mX, self._ps, self._pm, self.radius,
+                                  self._edge)
         self._law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
         # Integration points that do not move (nodes, gauss): once.
         self._fixed_points: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
@@ -359,16 +366,17 @@ class SurfaceSearch(InterfaceValues):
         t0 = time.perf_counter()
         f0, xi0, w0, N0 = self._fixed_points or self._no_points
         g, w = self._gauss
-        (_, points, weight, on, f_s, f_m, Ns, xi, w_on) = searchkernels.search(
+        (_, points, weight, on, f_s, f_m, Ns, xi, w_on, restricted) = searchkernels.search(
             self._sX, self._mX, self._ps, self._pm, u1, self._fixed_points is None, f0, xi0,
-            w0, N0, self.radius, self._edge, g, w)
+            w0, N0, self.radius, self._edge, g, w, self.in_use.mask)
         self.searches += 1
         elapsed = time.perf_counter() - t0
         self.search_seconds += elapsed
         if self.timings is not None:
             self.timings.seconds["contact_search"] += elapsed
         return {"index": on, "facet": f_m, "slave_facet": f_s, "Ns": Ns, "xi": xi,
-                "weight": w_on, "all_x": points, "all_weight": weight}
+                "weight": w_on, "all_x": points, "all_weight": weight,
+                "use": self.in_use.dofs() if restricted else None}
 
     def _frozen(self, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The projection of each slave node at the start of the step (cached).
@@ -380,18 +388,14 @@ class SurfaceSearch(InterfaceValues):
             Per slave node: the master facet f₀ (−1: none), its shape functions at ξ̄₀
             and the unit tangent there, in the configuration at the start of the step.
         """
-        if self._frozen_key is not None and (u0 is self._frozen_of
-                                             or np.array_equal(self._frozen_key, u0)):
-            if not u0.flags.writeable:
-                self._frozen_of = u0
+        if unchanged(self._frozen_key, u0):  # within a step: the step's (read-only) u₀
             return self._frozen_data
         xm = self._mX + u0[self._pm]
         points = self.node_X + u0[self._node_pos]
         surface = self._mX if self.small_rotations else xm
         facet, N0, t0, self._frozen_projected = searchkernels.frozen(points, xm, surface,
                                                                      self.radius)
-        self._frozen_key = u0.copy()
-        self._frozen_of = u0 if not u0.flags.writeable else None
+        self._frozen_key = key_of(u0)
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data
 
@@ -413,7 +417,11 @@ class SurfaceSearch(InterfaceValues):
             nodes' normal forces ∫ p N_k), ``forces`` (each point's nodal forces),
             ``gap`` and ``xi_bar`` (the points' g_n and refined ξ̄).
         """
-        if self._normal_key is not None and np.array_equal(self._normal_key, u1):
+        if unchanged(self._normal_key, u1):
+            return self._normal_points
+        if self._normal_key is not None and self.in_use.same_search(
+                self._normal_points, self._normal_key, u1):
+            self._normal_key = key_of(u1)
             return self._normal_points
         p = self._points(u1)
         eps, g0, _, _ = self._law
@@ -421,5 +429,60 @@ class SurfaceSearch(InterfaceValues):
             self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
             p["xi"], p["weight"], self.small_rotations, eps, g0, self._node_of,
             len(self._node_pos))
-        self._normal_key, self._normal_points = u1.copy(), p
+        self._normal_key, self._normal_points = key_of(u1), p
         return p
+
+
+class FacetsInUse:
+    """The master facets a general pair's search may be restricted to.
+
+    All of them, unless a stepper's Newton marks the contact's near ones in
+    :attr:`mask` (:meth:`breakwater.contact.general.SurfaceForces.reach`). A search
+    restricted to them (:func:`~breakwater.contact.searchkernels.search`) is the whole
+    search wherever the others are beyond reach, and reads the unknowns of :meth:`dofs`
+    alone.
+
+    Args:
+        sX: The slave facets' reference nodes.
+        mX: The master's.
+        pos_s: The slave facets' interface positions.
+        pos_m: The master's.
+        radius: The search radius.
+        edge: The projections' tolerance beyond a master facet's ends.
+    """
+
+    def __init__(self, sX: np.ndarray, mX: np.ndarray, pos_s: np.ndarray, pos_m: np.ndarray,
+                 radius: float, edge: float) -> None:
+        self.mask = np.ones(len(mX), bool)
+        self._sX, self._mX, self._ps, self._pm = sX, mX, pos_s, pos_m
+        self._radius, self._edge = radius, edge
+        self._dofs: tuple[int, np.ndarray] | None = None
+
+    def dofs(self) -> tuple[int, np.ndarray]:
+        """The number of facets in use and the interface positions a search on them reads.
+
+        The slave's and theirs; the number names the set (the marks only grow).
+        """
+        count = int(np.count_nonzero(self.mask))
+        if self._dofs is None or self._dofs[0] != count:
+            pos = np.concatenate([self._ps.ravel(), self._pm[self.mask].ravel()])
+            self._dofs = (count, np.unique(pos[pos >= 0]))
+        return self._dofs
+
+    def same_search(self, p: dict[str, Any], key: np.ndarray, u1: np.ndarray) -> bool:
+        """Whether the search and the normal part at u1 are ``p``, found at ``key``.
+
+        They are where ``p``'s search was restricted to the facets in use, those are the
+        same, u1 equals the key at every unknown that search and the point kernels read
+        (:meth:`dofs`), and at u1 the others are still beyond reach. A Newton on the
+        unknowns within reach (:mod:`breakwater.stepping.reach`) ends on such a state:
+        its solution differs from its last iterate at the far unknowns alone.
+        """
+        use = p["use"]
+        if use is None or use[0] != np.count_nonzero(self.mask):
+            return False
+        at = use[1]
+        return bool(np.array_equal(key[at], u1[at]) and searchkernels.beyond_reach(
+            searchkernels.current(self._sX, self._ps, u1),
+            searchkernels.current(self._mX, self._pm, u1), self.mask, self._radius,
+            self._edge))

@@ -38,6 +38,7 @@ from collections.abc import Callable
 import numpy as np
 from petsc4py import PETSc
 
+from breakwater.common.arrays import read_only
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
@@ -168,8 +169,8 @@ class InterfaceNewton:
             The convergence reason, the residual norms, and (y, f_c, F) at the last iterate.
         """
         X_II, S = fact.X_II, fact.S
-        x = np.array(y0, dtype=float)
-        fc, G, F = self._residual(x, X_II, S, z_I)
+        x = read_only(np.array(y0, dtype=float))  # each iterate read-only: its evaluations'
+        fc, G, F = self._residual(x, X_II, S, z_I)  # caches know it by identity
         fnorm = float(np.linalg.norm(F))
         # ‖F₀‖ of the relative test is the whole residual at Newton's start, bulk rows
         # included, as for the reference Newton: ‖R(Δa₀)‖² = ‖w‖² − ‖w_I‖² +
@@ -348,7 +349,7 @@ def damped_step(residual: Callable[[np.ndarray], tuple[np.ndarray, ...]], x: np.
     """
     halvings = 0
     while True:
-        trial = x - δ
+        trial = read_only(x - δ)
         r = residual(trial)
         fnorm = float(np.linalg.norm(r[2]))
         if fnorm <= GROWTH * last or halvings == HALVINGS:

@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from breakwater.common.arrays import read_only
+
 if TYPE_CHECKING:
     from breakwater.stepping.factorisations import Factorisation
     from breakwater.stepping.interface import ContactSum
@@ -164,10 +166,16 @@ class NearContact:
         self.index = np.full(len(base), -1, np.int64)
         self.index[near] = np.arange(len(near))
         self.primal = contact.primal
+        self._kept: tuple[np.ndarray, np.ndarray] | None = None  # (y, _whole(y)), y read-only
 
     def _whole(self, y: np.ndarray) -> np.ndarray:
+        """The whole interface vector of the near iterate y (read-only if y is)."""
+        if self._kept is not None and self._kept[0] is y:
+            return self._kept[1]
         out = self.base.copy()
         out[self.near] = y
+        if not y.flags.writeable:  # an iterate: the evaluations of one see one array
+            self._kept = (y, read_only(out))
         return out
 
     def vector(self, y: np.ndarray) -> np.ndarray:
