@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from breakwater.common.arrays import key_of, read_only, unchanged
+from breakwater.common.arrays import equal, equal_at, key_of, read_only, unchanged
 
 
 def test_read_only_array_is_its_own_key() -> None:
@@ -36,3 +36,15 @@ def test_two_read_only_arrays_differ_unless_one() -> None:
     a, b = read_only(np.arange(4.0)), read_only(np.arange(4.0))
     assert not unchanged(a, b)
     assert unchanged(a, np.arange(4.0))
+
+
+def test_compiled_comparisons_are_numpys() -> None:
+    a = np.array([0.0, -0.0, 1.5, np.nan])
+    b = np.array([-0.0, 0.0, 1.5, np.nan])
+    assert equal(a[:3], b[:3]) and np.array_equal(a[:3], b[:3])  # ±0 equal
+    assert not equal(a, b) and not np.array_equal(a, b)  # NaN ≠ NaN, as NumPy
+    assert not equal(a[:3], a[:2])
+    c = a.copy()
+    c[2] = 2.0
+    assert equal_at(a, c, np.array([0, 1])) and not equal_at(a, c, np.array([0, 2]))
+    assert unchanged(key_of(np.arange(3)), np.arange(3))  # not float: NumPy's comparison

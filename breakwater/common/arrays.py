@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["key_of", "read_only", "unchanged"]
+from breakwater.common.jit import kernel
+
+__all__ = ["equal", "equal_at", "key_of", "read_only", "unchanged"]
 
 
 def read_only(x: np.ndarray) -> np.ndarray:
@@ -36,4 +38,28 @@ def unchanged(key: np.ndarray | None, x: np.ndarray) -> bool:
         return False
     if key is x:
         return True
-    return (x.flags.writeable or key.flags.writeable) and np.array_equal(key, x)
+    if not (x.flags.writeable or key.flags.writeable):
+        return False
+    if key.ndim == x.ndim == 1 and key.dtype == x.dtype == np.float64:
+        return bool(equal(key, x))
+    return bool(np.array_equal(key, x))
+
+
+@kernel
+def equal(a, b):  # type: ignore[no-untyped-def]
+    """``np.array_equal`` of two float vectors (compiled: a microsecond less a call)."""
+    if len(a) != len(b):
+        return False
+    for i in range(len(a)):
+        if a[i] != b[i]:
+            return False
+    return True
+
+
+@kernel
+def equal_at(a, b, at):  # type: ignore[no-untyped-def]
+    """Whether ``a[at]`` equals ``b[at]`` (compiled; stops at the first difference)."""
+    for i in at:
+        if a[i] != b[i]:
+            return False
+    return True

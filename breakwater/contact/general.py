@@ -101,6 +101,9 @@ class SurfaceForces(SurfaceSearch):
         self._near_facets = np.zeros(len(self.master.X), bool)  # the master facets of reach()
         self.in_use.mask = self._near_facets  # the searches' too (changed in place)
         self._reach: np.ndarray | None = None  # reach()'s unknowns of them
+        # _friction at the accepted state of a recording(): (that state, λ, the forces).
+        self._accepted_friction: tuple[Any, np.ndarray, dict[str, np.ndarray] | None] | None \
+            = None
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -120,6 +123,9 @@ class SurfaceForces(SurfaceSearch):
                 φ(v_T) turns a change of t₀ of 1e-10 into an O(1) change of the
                 force), or, before any step, that of the state itself.
         """
+        kept = self._accepted_friction
+        if accepted and kept is not None and kept[0] is self._accepted and kept[1] is λ:
+            return kept[2]  # within recording(): the history row's and the ledger's
         if accepted and self._step_frozen is not None:
             facet, N0, t0 = self._step_frozen
         else:
@@ -127,10 +133,12 @@ class SurfaceForces(SurfaceSearch):
         _, _, mu, chi = self._law
         k, v_T, force, unit = forcekernels.friction(λ, facet, N0, t0, self._node_pos, self._pm,
                                                     v1, mu, chi)
-        if not len(k):
-            return None
-        return {"k": k, "pos_s": self.node_pos[k], "pos_m": self.pos_m[facet[k]], "N0": N0[k],
-                "t": t0[k], "v_T": v_T, "force": force, "unit": unit}
+        out = None if not len(k) else {
+            "k": k, "pos_s": self.node_pos[k], "pos_m": self.pos_m[facet[k]], "N0": N0[k],
+            "t": t0[k], "v_T": v_T, "force": force, "unit": unit}
+        if accepted and self._accepted is not None:
+            self._accepted_friction = (self._accepted, λ, out)
+        return out
 
     # --- the provider ---------------------------------------------------------------
 

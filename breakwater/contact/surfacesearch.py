@@ -23,7 +23,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.common.arrays import key_of, read_only, unchanged
+from breakwater.common.arrays import equal_at, key_of, read_only, unchanged
 from breakwater.contact import forcekernels, searchkernels
 from breakwater.contact.penetration import search_radius
 from breakwater.contact.projection import FacetGrid, project, shape
@@ -482,7 +482,7 @@ class FacetsInUse:
         if use is None or use[0] != np.count_nonzero(self.mask):
             return False
         at = use[1]
-        return bool(np.array_equal(key[at], u1[at]) and searchkernels.beyond_reach(
+        return bool(equal_at(key, u1, at) and searchkernels.beyond_reach(
             searchkernels.current(self._sX, self._ps, u1),
             searchkernels.current(self._mX, self._pm, u1), self.mask, self._radius,
             self._edge))
