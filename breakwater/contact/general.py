@@ -98,9 +98,8 @@ class SurfaceForces(SurfaceSearch):
         self.memory = newtonaids.SlipMemory(self)
         self.step_check = StepCheck(spec, self.radius, allowed_depth(self.master, self.radius),
                                     self.node_X, self.node_pos, self.master.X, self.pos_m)
-        self._near_facets = np.zeros(len(self.master.X), bool)  # the master facets of reach()
-        self.in_use.mask = self._near_facets  # the searches' too (changed in place)
-        self._reach: np.ndarray | None = None  # reach()'s unknowns of them
+        # The master facets of reach(), marked in place: the searches' facets in use.
+        self.in_use.mask = np.zeros(len(self.master.X), bool)
         # _friction at the accepted state of a recording(): (that state, λ, the forces).
         self._accepted_friction: tuple[Any, np.ndarray, dict[str, np.ndarray] | None] | None \
             = None
@@ -251,13 +250,10 @@ class SurfaceForces(SurfaceSearch):
         if self._step is None:
             return None
         u0 = self._step_rows[0]
-        if (searchkernels.mark_near(searchkernels.current(self._sX, self._ps, u0),
-                                    searchkernels.current(self._mX, self._pm, u0),
-                                    2.0 * self.radius, self._near_facets)
-                or self._reach is None):
-            pos = np.concatenate([self._ps.ravel(), self._pm[self._near_facets].ravel()])
-            self._reach = np.unique(pos[pos >= 0])
-        return self._reach
+        searchkernels.mark_near(searchkernels.current(self._sX, self._ps, u0),
+                                searchkernels.current(self._mX, self._pm, u0),
+                                2.0 * self.radius, self.in_use.mask)
+        return self.in_use.dofs()[1]  # kept while no facet is added
 
     def resolution(self, y: np.ndarray) -> float:
         """The round-off of f_c at y (:func:`breakwater.contact.newtonaids.resolution`)."""
