@@ -20,6 +20,7 @@ import ufl
 from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks, two_rectangles
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from breakwater.casefile.case import CaseError, load_case
 from breakwater.common.files import read_history
@@ -173,17 +174,31 @@ def _two_blocks(path: pathlib.Path, friction: float | None,
                         damping=damping)
 
 
-def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
+@pytest.mark.parametrize("package", ["default", "mumps"])
+def test_schur_complement_and_linear_step(folder: pathlib.Path, package: str,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
     # S = (X_II)⁻¹ with X = A⁻¹ E is the Schur complement A_II − A_IB A_BB⁻¹ A_BI of
     # A: checked against a dense elimination of A (assembled by dolfinx, gathered).
+    # With the default LU package (PETSc's own on one rank in 2D, lu_package; MUMPS
+    # under MPI) and with MUMPS asked for by the PETSc option a user would give.
     path = two_rectangles(folder / "two.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
     model = _two_blocks(path, 0.5, damping=Damping(alpha=2.0, beta=1e-4))
     layout = MonolithicLayout(model)
     interface = interface_dofs(model, layout)
     dt, β1, β2 = 1e-3, 0.6, 0.605
+    monkeypatch.setattr(model, "options_prefix", lambda name: f"fastpath_test_{name}_")
     bulk = BulkOperators(model, layout)
     factorisations = Factorisations(bulk, interface, β1, β2)
-    fact = factorisations.factorisation(dt)
+    option = "fastpath_test_bulk_pc_factor_mat_solver_type"
+    options = PETSc.Options()
+    if package == "mumps":
+        options[option] = "mumps"
+    try:
+        fact = factorisations.factorisation(dt)
+    finally:
+        options.delValue(option)
+    expected = "mumps" if package == "mumps" or COMM.size > 1 else "petsc"
+    assert fact.ksp.getPC().getFactorSolverType() == expected
     # The whole A, dense, on every rank (the model is small).
     n = layout.vec.getSize()
     A = np.zeros((n, n))
@@ -208,7 +223,7 @@ def test_schur_complement_and_linear_step(folder: pathlib.Path) -> None:
     B = np.setdiff1d(np.arange(n), interface)
     S = A[np.ix_(interface, interface)] - A[np.ix_(interface, B)] @ np.linalg.solve(
         A[np.ix_(B, B)], A[np.ix_(B, interface)])
-    # MUMPS against numpy's dense LU: both backward stable, cond(A) ~ 1e6 here.
+    # MUMPS or PETSc's LU against numpy's dense LU: all backward stable, cond(A) ~ 1e6.
     np.testing.assert_allclose(fact.S, S, rtol=0, atol=1e-8 * np.abs(S).max())
     # X = A⁻¹ E is kept by block (by body, or one block): each against the dense X's
     # (owned rows), which is zero outside them.

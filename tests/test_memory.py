@@ -26,6 +26,7 @@ from breakwater.common.errors import BreakwaterError
 from breakwater.common.memory import available_bytes, fits
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, Material
+from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.gn22 import GN22, solve_static
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
@@ -143,8 +144,10 @@ def test_a_factorisation_mumps_cannot_complete_is_refused(
     model = _two_blocks(path)
     monkeypatch.setattr(model, "options_prefix", lambda name: f"memory_test_{name}_")
     option = "memory_test_bulk_mat_mumps_icntl_23"
+    package = "memory_test_bulk_pc_factor_mat_solver_type"  # MUMPS on one rank too
     options = PETSc.Options()
     options[option] = 1
+    options[package] = "mumps"
     try:
         s = GN22(model, DT)
         with pytest.raises(BreakwaterError, match=r"the factorisation of the step matrix .* "
@@ -155,6 +158,29 @@ def test_a_factorisation_mumps_cannot_complete_is_refused(
         s.destroy()
     finally:
         options.delValue(option)
+        options.delValue(package)
+
+
+def test_a_zero_pivot_of_petsc_lu_is_refused() -> None:
+    # PETSc's own LU (the step matrix's on one rank in 2D, lu_package) does not pivot:
+    # a zero pivot leaves factors whose back-solves give infinities. Refused in one
+    # line naming it (a singular 3 × 3 matrix of ones, on each rank alone).
+    A = PETSc.Mat().createAIJ((3, 3), nnz=3, comm=MPI.COMM_SELF)
+    A.setUp()
+    for i in range(3):
+        A.setValues(i, [0, 1, 2], [1.0, 1.0, 1.0])
+    A.assemble()
+    ksp = PETSc.KSP().create(MPI.COMM_SELF)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("petsc")
+    ksp.setUp()
+    with pytest.raises(BreakwaterError, match=r"^the factorisation of A failed \(PETSc's "
+                       r"LU, reason 2: a zero pivot\)$"):
+        check_factorisation(ksp, "A")
+    ksp.destroy()
+    A.destroy()
 
 
 def test_a_newton_matrix_mumps_cannot_factorise_is_refused(

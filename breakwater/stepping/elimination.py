@@ -130,13 +130,28 @@ class Elimination:
     def _solve_columns(self, ksp: PETSc.KSP, lo: int, hi: int) -> PETSc.Mat:
         """A⁻¹ E for E's columns lo to hi (dense, this rank's rows; the caller destroys it).
 
-        Column j of E is the unit vector of interface unknown j (a 1 on its row), given
-        to MUMPS as a sparse right-hand side: its forward elimination then visits only
+        Column j of E is the unit vector of interface unknown j (a 1 on its row). MUMPS
+        takes it as a sparse right-hand side: its forward elimination then visits only
         the fronts above each 1 (PETSc passes it as the transpose of an AIJ matrix held
-        on rank 0, as MUMPS asks).
+        on rank 0, as MUMPS asks). PETSc's own LU (one rank) takes E dense.
         """
         comm, n = self.comm, self.size
         n_local = int(self.offsets[-1])
+        X = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
+                                    comm=comm)  # type: ignore[arg-type]
+        X.setUp()
+        F = ksp.getPC().getFactorMatrix()
+        if ksp.getPC().getFactorSolverType() != "mumps":
+            E = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
+                                        comm=comm)  # type: ignore[arg-type]
+            E.setUp()
+            rows = self.interface[lo:hi] - self.start
+            mine = np.flatnonzero((rows >= 0) & (rows < n_local))
+            E.getDenseArray()[rows[mine], mine] = 1.0
+            E.assemble()
+            F.matSolve(E, X)
+            E.destroy()
+            return X
         host = comm.rank == 0
         Et = PETSc.Mat().createAIJ(((hi - lo if host else 0, hi - lo), (n if host else 0, n)),
                                    nnz=(1, 1), comm=comm)  # type: ignore[arg-type]
@@ -146,10 +161,7 @@ class Elimination:
                 Et.setValue(k, int(row), 1.0)
         Et.assemble()
         E = PETSc.Mat().createTranspose(Et)
-        X = PETSc.Mat().createDense(((n_local, None), (None, hi - lo)),
-                                    comm=comm)  # type: ignore[arg-type]
-        X.setUp()
-        ksp.getPC().getFactorMatrix().matSolve(E, X)
+        F.matSolve(E, X)
         Et.destroy()
         E.destroy()
         return X
@@ -165,7 +177,7 @@ class Elimination:
         return body
 
     def _interface_solves(self, ksp: PETSc.KSP) -> list[XBlock]:
-        """X = A⁻¹ E (one MUMPS multi-right-hand-side solve), kept by body block.
+        """X = A⁻¹ E (one multi-right-hand-side solve), kept by body block.
 
         The block of a body: its owned rows and a range of columns (aligned to one of
         :data:`ALIGNMENTS`) holding its interface unknowns; the product with the blocks

@@ -2,7 +2,8 @@
 
 For a fixed Δt the matrix of a GN22 step's unknown Δa never changes (the bulk is
 linear: :mod:`breakwater.stepping.bulk`). :class:`Factorisations` assembles A from M and
-K, factorises it (MUMPS) once per distinct Δt, with ``X = A⁻¹ E`` (a column per
+K, factorises it (:func:`lu_package`: PETSc's own LU on one rank in 2D, else MUMPS)
+once per distinct Δt, with ``X = A⁻¹ E`` (a column per
 contact-surface unknown: :mod:`breakwater.stepping.elimination`, kept whole or only its
 interface rows X_II, as memory allows) and the interface Schur complement
 ``S = (X_II)⁻¹``, and keeps the last few (cut-backs come back to the same Δt); the
@@ -10,7 +11,7 @@ back-solves ``A⁻¹ r`` of the steps use them.
 
 Memory (:mod:`breakwater.common.memory`): a factorisation for a new Δt first frees the
 oldest kept ones while it would not fit in the node's available memory, and a
-factorisation that MUMPS could not complete is refused in one line
+factorisation that could not be completed is refused in one line
 (:func:`check_factorisation`) instead of giving the steps infinite or wrong solutions.
 """
 
@@ -29,7 +30,50 @@ from breakwater.common.timings import Timings
 from breakwater.stepping.bulk import BulkOperators
 from breakwater.stepping.elimination import Elimination, XBlock
 
-__all__ = ["Factorisation", "Factorisations", "check_factorisation"]
+__all__ = ["Factorisation", "Factorisations", "check_factorisation", "factor_entries",
+           "lu_package"]
+
+
+def lu_package(comm: MPI.Comm, tdim: int) -> str:
+    """The LU package of the step matrix A: ``"petsc"`` on one rank in 2D, else ``"mumps"``.
+
+    Measured (2026-11-26, one rank, one BLAS thread, the same A, CPU time;
+    ``benchmarks/lu_package.py``, record ``benchmarks/records/2026-11-26-lu-package.md``):
+    PETSc's own LU (nested dissection ordering, no pivoting: A is symmetric positive
+    definite) back-solves 1.8 to 3.1× faster than MUMPS on the 2D Goda meshes, from the
+    prototype storm's 1514 unknowns (26 against 79 µs) to refinement 9 (23 against
+    51 ms), and factorises in about the same CPU time (2.1 against 2.3 s at refinement 9;
+    MUMPS's takes 1.3 s of wall time on two threads there). In 3D its factorisation
+    took 3.6× MUMPS's CPU time (3.9 against 1.1 s on ``goda3d``) for the same back-solve
+    (16.7 against 17.2 ms); under MPI only MUMPS factorises in parallel.
+    """
+    return "petsc" if comm.size == 1 and tdim == 2 else "mumps"
+
+
+def factor_entries(ksp: PETSc.KSP) -> float:
+    """The entries of A's LU factors (MUMPS: INFOG(29), all ranks'; PETSc: its own).
+
+    Both back-solves read each entry once: their cost is proportional to it.
+    """
+    pc = ksp.getPC()
+    F = pc.getFactorMatrix()
+    if pc.getFactorSolverType() == "mumps":
+        info = F.getMumpsInfog(29)
+        return float(info) if info >= 0 else -1e6 * info  # < 0: millions
+    return float(F.getInfo()["nz_used"])
+
+
+def _factor_bytes(ksp: PETSc.KSP) -> float:
+    """The memory of A's factors on this rank, in bytes.
+
+    MUMPS: its INFO(16) (MB). PETSc's LU: a value and a column index per allocated
+    entry (its ``memory`` is 0 without PETSc's logging).
+    """
+    pc = ksp.getPC()
+    F = pc.getFactorMatrix()
+    if pc.getFactorSolverType() == "mumps":
+        return max(F.getMumpsInfo(16), 0) * 2.0**20
+    return F.getInfo()["nz_allocated"] * (8.0 + np.dtype(PETSc.IntType).itemsize)
 
 
 @dataclass
@@ -44,7 +88,7 @@ class Factorisation:
     X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
     S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
     chunks: int = 0  # X's columns solved in this many chunks (0: whole, X may be kept)
-    bytes: float = 0.0  # this rank's memory for it: MUMPS's (INFO(16)) and X's blocks
+    bytes: float = 0.0  # this rank's memory for it: A's factors and X's blocks
 
     # X's columns of a set of interface unknowns by block (subtract_X's ``support``).
     _columns: tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]] | None = field(
@@ -108,7 +152,10 @@ class Factorisations:
     #: Goda case (1 rank, one BLAS thread, the same factorisation, CPU time, 2026-11-25):
     #: 3.1 at refinement 3 (3.0 ms for 3.0e6 factor entries against 0.69 ms for
     #: 2.15e6), 2.95 at refinement 9 (57 ms for 3.48e7 against 28.5 ms for 5.13e7;
-    #: benchmarks/records/2026-11-25-xblocks.md); the smaller, rounded down.
+    #: benchmarks/records/2026-11-25-xblocks.md); with PETSc's LU (:func:`lu_package`,
+    #: another machine, 2026-11-26): 3.8 at refinement 3 (1.50 ms for 2.58e6 against
+    #: 0.33 ms for 2.15e6), 2.5 at 6 and 2.6 at 9 (23.2 ms for 3.09e7 against 14.8 ms for
+    #: 5.13e7; benchmarks/records/2026-11-26-lu-package.md). The smallest, rounded down.
     SOLVE_PER_PRODUCT = 2.5
 
     def __init__(self, bulk: BulkOperators, interface: np.ndarray, beta1: float,
@@ -125,6 +172,7 @@ class Factorisations:
         self.elimination = Elimination(self.model.comm, self.layout.offsets, self.layout.start,
                                        interface)
         self.beta1, self.beta2 = beta1, beta2
+        self.package = lu_package(self.model.comm, self.model.mesh.topology.dim)
         self._cache: OrderedDict[float, Factorisation] = OrderedDict()
         self.cache_size = cache
 
@@ -173,7 +221,9 @@ class Factorisations:
         ksp.setType("preonly")
         pc = ksp.getPC()
         pc.setType("lu")
-        pc.setFactorSolverType("mumps")
+        pc.setFactorSolverType(self.package)
+        if self.package == "petsc":
+            pc.setFactorOrdering("nd")
         ksp.setFromOptions()
         ksp.setUp()
         check_factorisation(ksp, "the step matrix A = M + β₁Δt C + ½β₂Δt² K")
@@ -187,9 +237,8 @@ class Factorisations:
         else:
             blocks = []
             X_II = S = np.zeros((len(self.interface), len(self.interface)))
-        mumps = max(ksp.getPC().getFactorMatrix().getMumpsInfo(16), 0) * 2.0**20
         kept = sum(b.X.nbytes for b in blocks or ())
-        fact = Factorisation(ksp, A, blocks, X_II, S, chunks, mumps + kept)
+        fact = Factorisation(ksp, A, blocks, X_II, S, chunks, _factor_bytes(ksp) + kept)
         self._cache[dt] = fact
         if len(self._cache) > self.cache_size:
             self._free_oldest()
@@ -200,17 +249,17 @@ class Factorisations:
 
         Both read their operands once per step: the product ``X f_c`` the entries of
         X's blocks (each rank its own rows: the largest count), the back-solve
-        ``A⁻¹(r₀ − E f_c)`` those of A's LU factors (MUMPS INFOG(29), all of them: on
-        2 ranks a back-solve was measured to take as much CPU per rank as serially,
-        3.0–3.8 against 2.9 ms at refinement 3), each :attr:`SOLVE_PER_PRODUCT` times
-        slower. In 2D the blocks grow as N^1.5 (n_I ~ √N), the factors as N log N: the
-        back-solve wins on fine enough meshes. The same decision on every rank.
+        ``A⁻¹(r₀ − E f_c)`` those of A's LU factors (:func:`factor_entries`; MUMPS's, all
+        of them: on 2 ranks a back-solve was measured to take as much CPU per rank as
+        serially, 3.0–3.8 against 2.9 ms at refinement 3), each
+        :attr:`SOLVE_PER_PRODUCT` times slower. In 2D the blocks grow as N^1.5
+        (n_I ~ √N), the factors as N log N: the back-solve wins on fine enough meshes.
+        The same decision on every rank.
         """
         if self._keep_X is not None:
             return self._keep_X
         comm = self.model.comm
-        info = comm.allreduce(ksp.getPC().getFactorMatrix().getMumpsInfog(29), op=MPI.MAX)
-        factors = float(info) if info >= 0 else -1e6 * info  # < 0: millions
+        factors = comm.allreduce(factor_entries(ksp), op=MPI.MAX)
         entries = comm.allreduce(sum(b.X.size for b in blocks), op=MPI.MAX)
         return bool(entries <= self.SOLVE_PER_PRODUCT * factors)
 
@@ -220,7 +269,7 @@ class Factorisations:
         ``X``: ``"kept"`` (the step's Δa = z − X f_c), ``"second back-solve"`` (cheaper
         than the product with X) or ``"interface rows only"`` (X did not fit in memory:
         solved in ``chunks``, a second back-solve per step); ``memory_gb``: this rank's
-        MUMPS factors and kept X (not collective: rank 0's in the summary). The same for
+        LU factors and kept X (not collective: rank 0's in the summary). The same for
         a resumed run as for the uninterrupted one (not the cache's size, which a
         resumed run has filled with fewer step sizes).
         """
@@ -243,26 +292,33 @@ class Factorisations:
 
 
 def check_factorisation(ksp: PETSc.KSP, what: str) -> None:
-    """Refuse, in one line, a factorisation that MUMPS could not complete (collective).
+    """Refuse, in one line, a factorisation that could not be completed (collective).
 
     A failed factorisation does not raise: its back-solves return infinities (a MUMPS
-    error, e.g. INFOG(1) = -13 when an allocation fails, leaves the factors unusable);
-    inside a SNES it raises PETSc's error 76 with PETSc's traceback
-    (:meth:`~breakwater.stepping.solver.NewtonSolver.solve` asks this function why).
+    error, e.g. INFOG(1) = -13 when an allocation fails, or a zero pivot of PETSc's
+    LU, leaves the factors unusable); inside a SNES it raises PETSc's error 76 with
+    PETSc's traceback (:meth:`~breakwater.stepping.solver.NewtonSolver.solve` asks this
+    function why).
 
     Raises:
-        BreakwaterError: MUMPS's error code and what it means, on every rank.
+        BreakwaterError: The package's error code and what it means, on every rank.
 
     """
     pc = ksp.getPC()
     failed = int(pc.getFailedReason())  # type: ignore[call-overload]  # an int at run time
     # (Inside a SNES the PC's reason is reset by the time the error is raised: MUMPS's
     # own status, INFOG(1) < 0, is the one kept.)
-    info = pc.getFactorMatrix().getMumpsInfog(1) if pc.getFactorSolverType() == "mumps" else 0
+    mumps = pc.getFactorSolverType() == "mumps"
+    info = pc.getFactorMatrix().getMumpsInfog(1) if mumps else 0
     comm = ksp.getComm().tompi4py()
     failed, info = comm.allreduce(failed, op=MPI.MAX), comm.allreduce(info, op=MPI.MIN)
     if not failed and info >= 0:
         return
+    if not mumps:
+        reasons = {1: "a structurally zero pivot", 2: "a zero pivot",
+                   3: "it ran out of memory"}
+        raise BreakwaterError(f"the factorisation of {what} failed (PETSc's LU, reason "
+                              f"{failed}: {reasons.get(failed, 'see PCFailedReason')})")
     causes = {-8: "its workspace was too small", -9: "its workspace was too small",
               -13: "a memory allocation failed", -19: "it needs more memory than allowed",
               -10: "the matrix is singular"}
