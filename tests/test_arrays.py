@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from breakwater.common.arrays import equal, equal_at, key_of, read_only, unchanged
+from breakwater.common.arrays import equal, equal_at, finite, key_of, read_only, unchanged
 
 
 def test_read_only_array_is_its_own_key() -> None:
@@ -48,3 +48,14 @@ def test_compiled_comparisons_are_numpys() -> None:
     c[2] = 2.0
     assert equal_at(a, c, np.array([0, 1])) and not equal_at(a, c, np.array([0, 2]))
     assert unchanged(key_of(np.arange(3)), np.arange(3))  # not float: NumPy's comparison
+
+
+@pytest.mark.parametrize("bad", [np.inf, -np.inf, np.nan])
+def test_finite_finds_any_infinity_or_nan(bad: float) -> None:
+    # The run's check of each step's state: np.isfinite(x).all(), compiled.
+    x = np.linspace(-1e300, 1e300, 11)
+    assert finite(x) and finite(np.zeros(0))
+    for k in (0, 5, 10):
+        y = x.copy()
+        y[k] = bad
+        assert not finite(y)

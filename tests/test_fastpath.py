@@ -38,7 +38,7 @@ from breakwater.model.model import (
 )
 from breakwater.run import simulation
 from breakwater.stepping import elimination
-from breakwater.stepping.bulk import BulkOperators, interface_dofs
+from breakwater.stepping.bulk import BulkOperators, interface_dofs, predictor_vectors
 from breakwater.stepping.elimination import x_blocks
 from breakwater.stepping.factorisations import Factorisation, Factorisations
 from breakwater.stepping.gn22 import GN22, solve_static
@@ -402,3 +402,16 @@ def test_static_then_fast_step_is_at_rest(folder: pathlib.Path) -> None:
     scale = max(np.abs(g.x.array).max() for g in u0)
     assert COMM.allreduce(moved, op=MPI.MAX) < 1e-6 * COMM.allreduce(scale, op=MPI.MAX)
     s.destroy()
+
+
+def test_predictor_vectors_are_numpys_to_the_bit() -> None:
+    # The predictor's vectors (a compiled loop) are the NumPy expressions they replace,
+    # bit for bit: the step's state, and the serial-vs-MPI and resume tests, rest on it.
+    rng = np.random.default_rng(3)
+    u, v, a = (rng.standard_normal(1001) * s for s in (1e-3, 1e-1, 1e2))
+    dt, α, β = 0.0123, 0.3, 1e-4
+    ṽ = v + dt * a
+    ma, ku = np.empty(1001), np.empty(1001)
+    predictor_vectors(u, v, a, dt, α, β, ma, ku)
+    assert np.array_equal(ma, a + α * ṽ)
+    assert np.array_equal(ku, u + dt * v + 0.5 * dt**2 * a + β * ṽ)

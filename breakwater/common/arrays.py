@@ -13,7 +13,7 @@ import numpy as np
 
 from breakwater.common.jit import kernel
 
-__all__ = ["equal", "equal_at", "key_of", "read_only", "unchanged"]
+__all__ = ["equal", "equal_at", "finite", "key_of", "read_only", "unchanged"]
 
 
 def read_only(x: np.ndarray) -> np.ndarray:
@@ -61,5 +61,14 @@ def equal_at(a, b, at):  # type: ignore[no-untyped-def]
     """Whether ``a[at]`` equals ``b[at]`` (compiled; stops at the first difference)."""
     for i in at:
         if a[i] != b[i]:
+            return False
+    return True
+
+
+@kernel
+def finite(x):  # type: ignore[no-untyped-def]
+    """``np.isfinite(x).all()`` of a float vector (compiled, without a temporary)."""
+    for v in x:
+        if not np.isfinite(v):
             return False
     return True

@@ -261,9 +261,10 @@ class NodalContactForces:
         if self.comm.size > 1:
             self.comm.Allreduce(MPI.IN_PLACE, base, op=MPI.SUM)
         self._coefficients = (0.5 * self.beta2 * dt**2, self.beta1 * dt)
-        law = self.pair.law.values()
-        self._law = (float(law.normal.ε_n), float(law.normal.g0), float(law.friction.μ),
-                     float(law.friction.χ) ** 2)
+        # The parameters' values now (not law.values(): a copy of the law, 20 µs a step).
+        normal, friction = self.pair.law.normal, self.pair.law.friction
+        self._law = (_value(normal.ε_n), _value(normal.g0), _value(friction.μ),
+                     _value(friction.χ) ** 2)
 
     def end(self) -> None:
         """Nothing to release (the gathered state is overwritten by the next :meth:`begin`)."""
@@ -320,4 +321,9 @@ class NodalContactForces:
             return 0
         band = self.pair.law.friction.stick_band
         return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
-                               self._tangents, float(getattr(band, "value", band))))
+                               self._tangents, _value(band)))
+
+
+def _value(parameter: fem.Constant | float) -> float:
+    """A law's parameter as a float (a ``fem.Constant``'s value now)."""
+    return float(getattr(parameter, "value", parameter))

@@ -201,6 +201,7 @@ class ConformingProbe:
         x[:] = np.asarray(point, dtype=float)[: m.gdim]
         self.normal = nd.normal[np.argmin(np.linalg.norm(nd.x - x, axis=1))]
         self.gdim = m.gdim
+        self._tangent = _tangent(self.normal) if m.gdim == 2 else None
 
     def local(self, u: Sequence[fem.Function]) -> np.ndarray:
         """The two sides' displacements at the point, this rank's share (no reduction)."""
@@ -211,8 +212,8 @@ class ConformingProbe:
         us, um = local[: self.slave.size], local[self.slave.size:]
         jump = us - um
         opening = float(jump @ self.normal)
-        if self.gdim == 2:
-            slip = float(jump @ _tangent(self.normal))
+        if self._tangent is not None:
+            slip = float(jump @ self._tangent)
         else:
             slip = float(np.linalg.norm(jump - opening * self.normal))
         return dict(zip(PROBE_KEYS, (slip, opening, float(us[0]), float(us[1]),

@@ -24,6 +24,7 @@ wave by wave: :mod:`breakwater.storms`).
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
@@ -191,7 +192,9 @@ class StagedProfile:
 
     def stage(self, t: float) -> int:
         """The last stage begun at ``t`` (0 before the first)."""
-        return max(0, int(np.searchsorted(np.asarray(self.times), t, side="right")) - 1)
+        # (bisect on the tuple: NumPy's searchsorted took 30 µs converting a storm's
+        # thousand stage times to an array at every step.)
+        return max(0, bisect.bisect_right(self.times, t) - 1)
 
     def profile(self, stage: int) -> PressureProfile:
         """A stage's pressure profile."""

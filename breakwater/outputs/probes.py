@@ -136,7 +136,10 @@ class Probes:
         values = np.concatenate(every)
         if self._comm.size > 1:
             self._comm.Allreduce(MPI.IN_PLACE, values, op=MPI.SUM)
-        parts = np.split(values, np.cumsum([len(x) for x in every])[:-1])
+        parts, k = [], 0  # (slices: np.split took 10 µs a row)
+        for x in every:
+            parts.append(values[k:k + len(x)])
+            k += len(x)
         for p, value in zip(self.points, parts, strict=False):
             r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
         for (name, pp), value in zip(self.pairs, parts[len(self.points):], strict=True):

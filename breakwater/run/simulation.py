@@ -60,12 +60,12 @@ import time as _time
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from breakwater.common import files
+from breakwater.common.arrays import finite
 from breakwater.common.console import Progress, StopSignal, rank_zero_logging
 from breakwater.common.errors import (
     BreakwaterError,
@@ -142,7 +142,7 @@ def crash_reason(error: BaseException) -> str:
 
 def _finite(comm: MPI.Comm, *functions: fem.Function) -> bool:
     """Whether every value of the Functions is finite, on every rank."""
-    ok = all(np.isfinite(f.x.array).all() for f in functions)
+    ok = all(finite(f.x.array) for f in functions)
     return ok if comm.size == 1 else bool(comm.allreduce(ok, op=MPI.LAND))
 
 
