@@ -27,6 +27,8 @@ from blocks import THREE_HEIGHTS, THREE_WIDTH, stacked_blocks, three_blocks
 from mpi4py import MPI
 
 from breakwater.casefile.case import load_case
+from breakwater.energy import dissipation as numerical
+from breakwater.energy.bulkenergy import TERMS
 from breakwater.energy.ledger import FIELDS, EnergyLedger
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import (
@@ -135,13 +137,27 @@ def test_source_is_checked(folder: pathlib.Path) -> None:
     reference.destroy()
 
 
+def _abs_form(csr: list[np.ndarray], which: int, x: np.ndarray, y: np.ndarray) -> float:
+    """|x|ᵀ|A||y| for A = M (which 2) or K (3) of CSR arrays ``csr``."""
+    ptr, col, values = csr[0], csr[1], csr[which]
+    rows = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
+    return float(np.abs(x) @ np.bincount(rows, np.abs(values) * np.abs(y[col]),
+                                         minlength=len(x)))
+
+
 def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
-    # On one rank the ledger's bulk terms are one compiled pass over M's and K's CSR
-    # arrays (breakwater.energy.bulkenergy.matrix_sums); MatMatMult and NumPy's dot
+    # On one rank the ledger's bulk terms come from the state's products, formed once
+    # per accepted step for the predictor too (MatrixTerms._local_sums: ledger_sums,
+    # Mv̄ = ½(Mv₀ + Mv₁), ...); MatMatMult of the combined vectors and NumPy's dot
     # products (MatrixTerms.local_products, the path on several ranks) are the
-    # reference: the same row products, the dot products summed in another order, so
-    # equal to 1e-12 of each term (measured 2e-15), at the first record and along the
-    # pendulum pulse (work, damping, numerical dissipation all nonzero).
+    # reference, at the first record and along the pendulum pulse (work, damping,
+    # numerical dissipation all nonzero). Both are round-off of the same quadratic
+    # forms: each row's product x·(A y) rounds by at most about n_row ε Σ_j |A_ij||y_j|
+    # (n_row ≤ 40 entries, ε = 2.2e-16), so the terms differ by at most
+    # 2 · 40 ε Σ_k |c_k| |x_k|ᵀ|A_k||y_k| over the term's products c_k x_k·A_k y_k:
+    # the bound, with a factor 10 (a single row with the smooth field's cancellation
+    # K v̄ ~ h² |K||v̄| takes the Rayleigh power's relative difference to 3e-11, its
+    # bound ~1e-12 of |v̄|ᵀ|K||v̄|). The external work has no product: 1e-12.
     case = load_case(None, ["mesh.refinement=0.7", "time.end_time=0.006",
                             f"output.directory={(shared_dir / 'goda_sums').as_posix()}"])
     model, spec, _, _ = case.build(COMM)
@@ -152,15 +168,38 @@ def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
     ledger = EnergyLedger(stepper)
     bulk = ledger.bulk
     assert type(bulk).__name__ == "MatrixTerms"
-    compiled = bool(bulk._csr)  # type: ignore[union-attr]
-    assert compiled == (COMM.size == 1)  # several ranks: MatMatMult (ghost exchange)
+    sums = bulk._sums  # type: ignore[union-attr]
+    assert (sums is not None) == (COMM.size == 1)  # several ranks: MatMatMult (ghosts)
+    csr = sums.products.csr if sums is not None else []
+    d = model.damping
+    bound = 10 * 2 * 40 * np.finfo(float).eps
+    v0 = None
     for k in range(12):
         if k:
             stepper.step()
         got, ref = bulk.local(k > 0), bulk.local_products(k > 0)  # type: ignore[union-attr]
         if k > 0:
             assert np.all(np.abs(ref) > 0)
-        np.testing.assert_allclose(got, ref, rtol=1e-12, atol=0)
+        if csr:
+            x = sums.x  # u₁, u₀, v₁, v₀, a₁, Δa
+            u, v, a, da = x[0], x[2], x[4], x[5]
+            scale = [_abs_form(csr, 2, v, v), _abs_form(csr, 3, u, u)]
+            if k > 0:
+                assert v0 is not None and np.array_equal(x[3], v0)
+                vb = 0.5 * (v0 + v)
+                k1, k2, k3, k4 = numerical.bulk_coefficients(
+                    float(stepper.dt.value), spec.beta1, spec.beta2, d.alpha, d.beta)
+                scale += [d.alpha * _abs_form(csr, 2, vb, vb) + d.beta * _abs_form(
+                    csr, 3, vb, vb), 0.0, abs(k1) * _abs_form(csr, 2, da, vb)
+                    + _abs_form(csr, 2, np.abs(k2 * a) + np.abs(k3 * da), da)
+                    + abs(k4) * _abs_form(csr, 3, da, vb)]
+                assert abs(got[3] - ref[3]) <= 1e-12 * abs(ref[3])
+            v0 = v.copy()
+            for term, (g, r, c) in enumerate(zip(got, ref, scale, strict=False)):
+                if term != 3:
+                    assert abs(g - r) <= bound * c, (k, TERMS[term], g, r, c)
+        else:
+            np.testing.assert_allclose(got, ref, rtol=1e-12, atol=0)
         ledger.record()
     ledger.destroy()
     stepper.destroy()

@@ -415,3 +415,78 @@ def test_predictor_vectors_are_numpys_to_the_bit() -> None:
     predictor_vectors(u, v, a, dt, α, β, ma, ku)
     assert np.array_equal(ma, a + α * ṽ)
     assert np.array_equal(ku, u + dt * v + 0.5 * dt**2 * a + β * ṽ)
+
+
+def test_state_products_and_their_uses(folder: pathlib.Path) -> None:
+    # One rank: P = [Mv, Ma, Ku, Kv, Ka] of the state in one compiled pass
+    # (stepping.stateproducts), formed once per state, and the predictor's residual and
+    # Newton's start residual A Δa − r₀ from it equal PETSc's products of the combined
+    # vectors to round-off: each row within 40 ε Σ_j |A_ij||x_j| (40 ≥ the entries of a
+    # row; the two sum in other orders and combine products of different vectors).
+    path = two_rectangles(folder / "products.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    model = _two_blocks(path, 0.5, damping=Damping(alpha=2.0, beta=1e-4))
+    layout = MonolithicLayout(model)
+    bulk = BulkOperators(model, layout)
+    products = bulk.products
+    assert products.on == (COMM.size == 1)
+    if not products.on:
+        with pytest.raises(RuntimeError, match="one rank only"):
+            products.of(np.zeros(1), np.zeros(1), np.zeros(1))
+        bulk.destroy()
+        return
+    rng = np.random.default_rng(11)
+    u, v, a, da, r0, out, ref, tmp = (layout.vec.duplicate() for _ in range(8))
+    for x, s in ((u, 1e-3), (v, 1e-1), (a, 1e2)):
+        x.array[:] = s * rng.standard_normal(x.getLocalSize())
+        x.array[bulk.bc_rows] = 0.0
+    P = products.of(u.array, v.array, a.array)
+    assert products.passes == 1
+    assert products.of(u.array.copy(), v.array, a.array) is P and products.passes == 1
+    ptr, col, m_val, k_val = products.csr
+    rows = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
+
+    def bound(values: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return 40 * np.finfo(float).eps * np.bincount(rows, np.abs(values) * np.abs(x[col]),
+                                                      minlength=len(x))
+
+    for k, (A, x) in enumerate(((bulk.M, v), (bulk.M, a), (bulk.K, u), (bulk.K, v),
+                                (bulk.K, a))):
+        A.mult(x, tmp)
+        assert np.all(np.abs(P[k] - tmp.array) <= bound(m_val if k < 2 else k_val, x.array))
+    # The predictor from P against the two products of the combined vectors.
+    dt, (α, β) = 1e-3, (model.damping.alpha, model.damping.beta)
+    bulk.predictor_residual(u, v, a, dt, out)
+    ma, ku = np.empty(len(P[0])), np.empty(len(P[0]))
+    predictor_vectors(u.array, v.array, a.array, dt, α, β, ma, ku)
+    bulk.load(ref)
+    scale = np.zeros(len(ma))
+    for A, x, values in ((bulk.M, ma, m_val), (bulk.K, ku, k_val)):
+        tmp.array[:] = x
+        A.mult(tmp, r0)
+        ref.array[:] -= r0.array
+        # (P's combination: each product's round-off, of |u| + Δt|v| + Δt²|a| at most)
+        scale += bound(values, x) + bound(values, np.abs(u.array) + np.abs(v.array)
+                                          + np.abs(a.array))
+    ref.array[bulk.bc_rows] = 0.0
+    assert np.all(out.array[bulk.bc_rows] == 0.0)
+    assert np.all(np.abs(out.array - ref.array) <= scale)
+    # Newton's start Δa = −a/β₁: A Δa − r₀ from P against the product with A.
+    layout_dt, β1, β2 = 1e-3, 0.6, 0.605
+    factorisations = Factorisations(bulk, interface_dofs(model, layout), β1, β2)
+    fact = factorisations.factorisation(layout_dt)
+    da.array[:] = -a.array / β1
+    bulk.start_residual(u, v, a, da, out, layout_dt, β1, β2, fact.A, r0)
+    fact.A.mult(da, ref)
+    ref.axpy(-1.0, out)
+    c_m, c_k = 1 + β1 * layout_dt * α, 0.5 * β2 * layout_dt**2 + β1 * layout_dt * β
+    scale = (c_m * bound(m_val, da.array) + c_k * bound(k_val, da.array)) * 2
+    assert np.all(np.abs(r0.array - ref.array) <= scale + 1e-300)
+    assert products.passes == 1  # every use from the one pass
+    # Another state: formed again.
+    a.array[0] += 1.0
+    products.of(u.array, v.array, a.array)
+    assert products.passes == 2
+    for x in (u, v, a, da, r0, out, ref, tmp):
+        x.destroy()
+    factorisations.destroy()
+    bulk.destroy()

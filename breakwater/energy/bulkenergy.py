@@ -19,10 +19,13 @@ quadrature, summed in another order):
   (:class:`~breakwater.stepping.bulk.BulkOperators`, assembled once). Per step two sparse
   products, each a batch of columns in one pass over the matrix (``MatMatMult`` with a
   dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries. On one
-  rank, one compiled pass over copies of the matrices' CSR arrays (one sparsity pattern)
-  instead (:func:`matrix_sums`): each row's products (the same numbers as
-  ``MatMatMult``'s) and their terms at once, the dot products summed row by row (in
-  another order than NumPy's: equal to round-off).
+  rank, from the state's products [Mv, Ma, Ku, Kv, Ka]
+  (:mod:`breakwater.stepping.stateproducts`: one compiled pass over the matrices' CSR
+  arrays per accepted step, which the next step's predictor uses too) and the start
+  state's, kept from the last record (:func:`ledger_sums`: Mv̄ = ½(Mv₀ + Mv₁), ...; no
+  pass of its own); where the start state is not the last record's, one compiled pass
+  forming each row's five products and their terms at once (:func:`matrix_sums`). Both
+  equal the MatMatMult products to round-off.
   BulkOperators assembles M and K without the Dirichlet conditions (only the step
   matrix A has its fixed rows and columns replaced), so their quadratic forms are the
   integrals above; the fixed DOFs are zero anyway.
@@ -40,13 +43,15 @@ from dolfinx import fem
 from petsc4py import PETSc
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms: forms/
+from breakwater.common.arrays import equal
 from breakwater.common.jit import kernel
 from breakwater.energy import dissipation as numerical
 from breakwater.model.parts import StageWatch
 from breakwater.stepping.gn22 import GN22
+from breakwater.stepping.stateproducts import StateProducts
 
 __all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms",
-           "matrix_sums"]
+           "ledger_sums", "matrix_sums"]
 
 #: The bulk terms, in the order of :meth:`BulkTerms.local`.
 TERMS = ("kinetic", "strain", "rayleigh_power", "external_work", "numerical_dissipation")
@@ -194,6 +199,117 @@ def matrix_sums(ptr: np.ndarray, col: np.ndarray, m_val: np.ndarray, k_val: np.n
     return out
 
 
+@kernel
+def ledger_sums(x: np.ndarray, P1: np.ndarray, P0: np.ndarray, loads: np.ndarray,
+                amplitudes: np.ndarray, k2: float, k3: float, step: bool) -> np.ndarray:
+    """:func:`matrix_sums`' sums from the products of the end and start states.
+
+    With P₁ = [Mv₁, Ma₁, Ku₁, Kv₁, Ka₁] (:mod:`breakwater.stepping.stateproducts`) and
+    P₀ = [Mv₀, Ma₀, Kv₀]: Mv̄ = ½(Mv₀ + Mv₁), Kv̄ = ½(Kv₀ + Kv₁), MΔa = Ma₁ − Ma₀; no pass
+    over the matrices (equal to the products of the combined vectors to round-off).
+
+    Args:
+        x: Rows u₁, u₀, v₁, v₀, a₁, Δa (owned entries), shape (6, n).
+        P1: The end state's products, shape (5, n).
+        P0: The start state's Mv, Ma, Kv, shape (3, n) (unread with ``step`` False).
+        loads: The load vectors at unit amplitude, shape (n, loads).
+        amplitudes: Their amplitudes over the step.
+        k2: The coefficient of a₁·MΔa.
+        k3: The coefficient of Δa·MΔa.
+        step: The state is the end of a step (else the first record: two sums only).
+    """
+    u, u0, v, v0, a, da = x[0], x[1], x[2], x[3], x[4], x[5]
+    out = np.zeros(8)
+    for i in range(u.shape[0]):
+        out[0] += v[i] * P1[0, i]
+        out[1] += u[i] * P1[2, i]
+    if not step:
+        return out
+    for i in range(u.shape[0]):
+        vb = (v0[i] + v[i]) * 0.5
+        mvb = (P0[0, i] + P1[0, i]) * 0.5
+        kvb = (P0[2, i] + P1[3, i]) * 0.5
+        mda = P1[1, i] - P0[1, i]
+        f = 0.0
+        for q in range(amplitudes.shape[0]):
+            f += loads[i, q] * amplitudes[q]
+        out[2] += vb * mvb
+        out[3] += vb * kvb
+        out[4] += f * (u[i] - u0[i])
+        out[5] += da[i] * mvb
+        out[6] += mda * (k2 * a[i] + k3 * da[i])
+        out[7] += da[i] * kvb
+    return out
+
+
+class StateSums:
+    """:class:`MatrixTerms`' sums on one rank, from the state's products.
+
+    The end state's products P₁ (:class:`~breakwater.stepping.stateproducts.StateProducts`,
+    formed once per accepted step, the next step's predictor uses them too) and the start
+    state's Mv, Ma, Kv kept from the last record give :func:`ledger_sums`; where the start
+    state is not the last record's (a step taken without a record), :func:`matrix_sums`
+    (one pass of its own) instead.
+
+    Args:
+        products: The bulk's state products (on: one rank, one sparsity pattern).
+        rows: The Functions (one per body) of u₁, u₀, v₁, v₀, a₁ and Δa.
+        offsets: The bodies' ranges in the stacked vector.
+        loads: The load vectors' columns (n, loads) (the caller's, refreshed in place).
+    """
+
+    def __init__(self, products: StateProducts, rows: Sequence[Sequence[fem.Function]],
+                 offsets: np.ndarray, loads: np.ndarray) -> None:
+        self.products, self.offsets, self.loads = products, offsets, loads
+        n = int(offsets[-1])
+        self.x = np.zeros((6, n))
+        # Views of the Functions' owned entries (their storage does not move).
+        self._views = [(self.x[k], [f.x.array[:n_b] for f, n_b in
+                                    zip(fns, np.diff(offsets), strict=True)])
+                       for k, fns in enumerate(rows)]
+        # The start state: its (u, v) and Mv, Ma, Kv.
+        self._start = (np.full(n, np.nan), np.full(n, np.nan), np.zeros((3, n)))
+        ones = np.ones(loads.shape[1])  # compiled (or loaded from numba's cache) now
+        ptr, col, m_val, k_val = products.csr
+        matrix_sums(ptr, col, m_val, k_val, self.x, loads, ones, 0.0, 0.0, True)
+        ledger_sums(self.x, np.zeros((5, n)), self._start[2], loads, ones, 0.0, 0.0, True)
+
+    def _fill(self) -> None:
+        """The rows of x from the Functions."""
+        for row, arrays in self._views:
+            for lo, hi, array in zip(self.offsets[:-1], self.offsets[1:], arrays, strict=True):
+                row[lo:hi] = array
+
+    def _keep(self, P: np.ndarray) -> None:
+        """The state (u₁, v₁) of x and its Mv, Ma, Kv: the next step's start."""
+        u, v, P0 = self._start
+        u[:], v[:] = self.x[0], self.x[2]
+        P0[0], P0[1], P0[2] = P[0], P[1], P[3]
+
+    def restart(self) -> None:
+        """The current state's products kept as the next step's start (a resume).
+
+        A resumed run's are the uninterrupted run's numbers: one kernel, one state.
+        """
+        self._fill()
+        x = self.x
+        self._keep(self.products.of(x[0], x[2], x[4]))
+
+    def sums(self, step: bool, amplitudes: np.ndarray, k2: float, k3: float) -> np.ndarray:
+        """The sums of :func:`matrix_sums` for the Functions' state now."""
+        self._fill()
+        x = self.x
+        P1 = self.products.of(x[0], x[2], x[4])
+        u0, v0, P0 = self._start
+        if not step or (equal(u0, x[1]) and equal(v0, x[3])):
+            out = ledger_sums(x, P1, P0, self.loads, amplitudes, k2, k3, step)
+        else:
+            ptr, col, m_val, k_val = self.products.csr
+            out = matrix_sums(ptr, col, m_val, k_val, x, self.loads, amplitudes, k2, k3, step)
+        self._keep(P1)
+        return out
+
+
 class MatrixTerms:
     """The bulk terms from the fast solver's cached M, K and load vectors.
 
@@ -244,24 +360,10 @@ class MatrixTerms:
         # The loads whose field changes at given times: their columns taken again when
         # their stage changes.
         self._watch = StageWatch(m.loads)
-        # One rank: copies of the matrices' CSR arrays (M and K do not change; one
-        # sparsity pattern) for matrix_sums, the rows of its vectors, and views of the
-        # Functions' owned entries (their storage does not move).
-        self._csr: list[np.ndarray] = []
-        if m.comm.size == 1:
-            (mp, mc, mv), (kp, kc, kv) = (A.getValuesCSR() for A in (bulk.M, bulk.K))
-            if np.array_equal(mp, kp) and np.array_equal(mc, kc):  # one pattern (else PETSc)
-                self._csr = [np.array(mp, dtype=np.int64), np.array(mc, dtype=np.int32),
-                             np.array(mv, dtype=np.float64), np.array(kv, dtype=np.float64)]
-            self._x = np.zeros((6, n))
-            self._views = [(self._x[k], [f.x.array[:n_b] for f, n_b in
-                                         zip(fns, np.diff(self.layout.offsets), strict=True)])
-                           for k, fns in enumerate((stepper.u, u0, stepper.v, v0, stepper.a,
-                                                    stepper.da))]
-            if self._csr:  # compiled (or loaded from numba's cache) now, not in the time loop
-                ptr, col, m_val, k_val = self._csr
-                matrix_sums(ptr, col, m_val, k_val, self._x, self._loads,
-                            np.ones(self._loads.shape[1]), 0.0, 0.0, True)
+        # One rank: the sums from the state's products (else PETSc's products).
+        self._sums = StateSums(bulk.products, (stepper.u, u0, stepper.v, v0, stepper.a,
+                                               stepper.da), self.layout.offsets,
+                               self._loads) if bulk.products.on else None
 
     def _owned(self, functions: Sequence[fem.Function]) -> np.ndarray:
         """The owned entries of one Function per body, stacked."""
@@ -307,7 +409,7 @@ class MatrixTerms:
         its start vector): the sums take ½(A₀ + A₁) f₁·Δu; ½A₀ (f₀ − f₁)·Δu is added.
         """
         old = self._refresh()
-        out = self._local_sums(step) if self._csr else self.local_products(step)
+        out = self._local_sums(step) if self._sums is not None else self.local_products(step)
         if step and old:
             n = int(self.layout.offsets[-1])
             du = self._owned(self.stepper.u) - self._owned(self.u0)
@@ -317,8 +419,14 @@ class MatrixTerms:
         return out
 
     def sync(self) -> None:
-        """The staged loads' columns taken at their current stage, without correction."""
+        """The staged loads' columns taken at their current stage, without correction.
+
+        On one rank the state's products kept as the next step's start
+        (:meth:`StateSums.restart`).
+        """
         self._refresh()
+        if self._sums is not None:
+            self._sums.restart()
 
     def _refresh(self) -> dict[int, np.ndarray]:
         """Take the staged loads' vectors at their current stage; the columns replaced."""
@@ -332,19 +440,15 @@ class MatrixTerms:
         return old
 
     def _local_sums(self, step: bool) -> np.ndarray:
-        """:meth:`local` on one rank: :func:`matrix_sums`."""
+        """:meth:`local` on one rank: :meth:`StateSums.sums`."""
         s = self.stepper
-        offsets = self.layout.offsets
-        for row, arrays in self._views:
-            for lo, hi, array in zip(offsets[:-1], offsets[1:], arrays, strict=True):
-                row[lo:hi] = array
+        assert self._sums is not None
         numerical_on = "Δa" in self._columns["M"]
         k1, k2, k3, k4 = numerical.bulk_coefficients(
             float(s.dt.value), self.beta1, self.beta2, self.alpha, self.beta) \
             if step and numerical_on else (0.0, 0.0, 0.0, 0.0)
-        ptr, col, m_val, k_val = self._csr
-        sums = matrix_sums(ptr, col, m_val, k_val, self._x, self._loads,
-                           self._amplitudes_over_step() if step else np.ones(0), k2, k3, step)
+        sums = self._sums.sums(step, self._amplitudes_over_step() if step else np.ones(0),
+                               k2, k3)
         out = np.zeros(len(TERMS))
         out[0] = 0.5 * sums[0]
         out[1] = 0.5 * sums[1]

@@ -25,6 +25,12 @@ from breakwater.model.layout import MonolithicLayout
 from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
 from breakwater.model.parts import StageWatch
+from breakwater.stepping.stateproducts import (
+    StateProducts,
+    is_start,
+    predictor_from,
+    start_residual_from,
+)
 
 __all__ = ["BulkOperators", "body_index", "interface_dofs"]
 
@@ -64,6 +70,8 @@ class BulkOperators:
         # Dirichlet rows of the stacked vector (owned positions).
         self.bc_rows = self._bc_rows()
         self._work = [self.M.createVecLeft() for _ in range(3)]
+        #: M and K times the state, one pass per state (:mod:`.stateproducts`).
+        self.products = StateProducts(self.M, self.K, model.comm)
         self.offset: PETSc.Vec | None = None
         """A constant force added to F (None: none): the relaxation's contact forces at
         the start of a pseudo step (:mod:`breakwater.statics.pseudostep`)."""
@@ -158,22 +166,52 @@ class BulkOperators:
                            out: PETSc.Vec) -> None:
         """r₀ = f(t₁) − M a₀ − C ṽ − K ũ, zero on Dirichlet rows.
 
-        With C = αM + βK this is f − M (a₀ + α ṽ) − K (ũ + β ṽ): two products.
+        With C = αM + βK this is f − M (a₀ + α ṽ) − K (ũ + β ṽ): on one rank from the
+        state's products (:attr:`products`, one pass per state), else two products.
         """
         with self.timings("bulk_products"):
             self._predictor_residual(u, v, a, dt, out)
 
     def _predictor_residual(self, u: PETSc.Vec, v: PETSc.Vec, a: PETSc.Vec, dt: float,
                             out: PETSc.Vec) -> None:
+        α, β = self.model.damping.alpha, self.model.damping.beta
+        if self.products.on:  # from the state's products (one pass per state)
+            self.load(out)
+            f = out.array
+            predictor_from(self.products.of(u.array, v.array, a.array), dt, α, β, f, f)
+            f[self.bc_rows] = 0.0
+            return
         ma, ku, tmp = self._work
-        predictor_vectors(u.array, v.array, a.array, dt, self.model.damping.alpha,
-                          self.model.damping.beta, ma.array, ku.array)
+        predictor_vectors(u.array, v.array, a.array, dt, α, β, ma.array, ku.array)
         self.load(out)
         self.M.mult(ma, tmp)
         out.axpy(-1.0, tmp)
         self.K.mult(ku, tmp)
         out.axpy(-1.0, tmp)
         out.array[self.bc_rows] = 0.0
+
+    def start_residual(self, u: PETSc.Vec, v: PETSc.Vec, a: PETSc.Vec, da: PETSc.Vec,
+                       r0: PETSc.Vec, dt: float, beta1: float, beta2: float, A: PETSc.Mat,
+                       out: PETSc.Vec) -> None:
+        """``out = A Δa − r₀``, the bulk rows' residual at Newton's start.
+
+        At GN22's start ``Δa = −a/β₁`` from the state's products: A Δa is
+        ``−(c_M Ma + c_K Ka)/β₁`` (:func:`~breakwater.stepping.stateproducts.start_residual_from`;
+        A = c_M M + c_K K as :class:`~breakwater.stepping.factorisations.Factorisations`
+        forms it), with the Dirichlet rows A's identity's: Δa − r₀ there. The product with
+        A where the products are off, the staged Δa is another, or a fixed DOF
+        accelerates (A's zeroed columns).
+        """
+        rows, products = self.bc_rows, self.products
+        d, x, r, w = da.array, a.array, r0.array, out.array
+        if not (products.on and is_start(d, x, beta1) and not x[rows].any()):
+            A.mult(da, out)
+            out.axpy(-1.0, r0)
+            return
+        α, β = self.model.damping.alpha, self.model.damping.beta
+        start_residual_from(products.of(u.array, v.array, x), 1.0 + beta1 * dt * α,
+                            0.5 * beta2 * dt**2 + beta1 * dt * β, beta1, r, w)
+        w[rows] = d[rows] - r[rows]
 
     def destroy(self) -> None:
         """Free the PETSc objects."""

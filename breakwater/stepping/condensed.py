@@ -343,8 +343,8 @@ class CondensedNewton(StepSolver):
             # constant-velocity start: before the general pairs' slip predictor).
             w = V["w"]
             with T("bulk_products"):
-                fact.A.mult(V["da"], w)
-                w.axpy(-1.0, V["r0"])
+                bulk.start_residual(V["u"], V["v"], V["a"], V["da"], V["r0"], dt, self.beta1,
+                                    self.beta2, fact.A, w)
                 w_norm2 = w.norm() ** 2
             z, v_I, a_I, y0, w_I = self.interface.gather(
                 V["z"].array, V["v"].array, V["a"].array, V["da"].array, w.array)
