@@ -23,9 +23,8 @@ quadrature, summed in another order):
   (:mod:`breakwater.stepping.stateproducts`: one compiled pass over the matrices' CSR
   arrays per accepted step, which the next step's predictor uses too) and the start
   state's, kept from the last record (:func:`ledger_sums`: Mv̄ = ½(Mv₀ + Mv₁), ...; no
-  pass of its own); where the start state is not the last record's, one compiled pass
-  forming each row's five products and their terms at once (:func:`matrix_sums`). Both
-  equal the MatMatMult products to round-off.
+  pass of its own), equal to the MatMatMult products to round-off; where the start state
+  is not the last record's, the MatMatMult products.
   BulkOperators assembles M and K without the Dirichlet conditions (only the step
   matrix A has its fixed rows and columns replaced), so their quadratic forms are the
   integrals above; the fixed DOFs are zero anyway.
@@ -51,7 +50,7 @@ from breakwater.stepping.gn22 import GN22
 from breakwater.stepping.stateproducts import StateProducts
 
 __all__ = ["SOURCES", "TERMS", "BulkTerms", "FormTerms", "MatrixTerms", "bulk_terms",
-           "ledger_sums", "matrix_sums"]
+           "ledger_sums"]
 
 #: The bulk terms, in the order of :meth:`BulkTerms.local`.
 TERMS = ("kinetic", "strain", "rayleigh_power", "external_work", "numerical_dissipation")
@@ -135,78 +134,16 @@ class FormTerms:
 
 
 @kernel
-def matrix_sums(ptr: np.ndarray, col: np.ndarray, m_val: np.ndarray, k_val: np.ndarray,
-                x: np.ndarray, loads: np.ndarray, amplitudes: np.ndarray, k2: float,
-                k3: float, step: bool) -> np.ndarray:
-    """The dot products of the bulk terms, from M and K in CSR and the step's vectors.
-
-    With v̄ = ½(v₀ + v₁), Δu = u₁ − u₀ and f = Σ_l amplitudes_l loads[:, l], the sums
-    ``[v·Mv, u·Ku, v̄·Mv̄, v̄·Kv̄, f·Δu, Δa·Mv̄, (MΔa)·(k₂a + k₃Δa), Δa·Kv̄]`` (with
-    ``step`` False only the first two; the rest 0). M and K share their sparsity
-    pattern: one pass over it forms each row's five products (each summed in the row's
-    order, as ``MatMatMult`` sums it: the same products) and adds their terms at once.
-
-    Args:
-        ptr: Row starts (n + 1,) of M and K.
-        col: Column of each entry.
-        m_val: M's entries.
-        k_val: K's entries.
-        x: Rows u₁, u₀, v₁, v₀, a₁, Δa (owned entries), shape (6, n).
-        loads: The load vectors at unit amplitude, shape (n, loads).
-        amplitudes: Their amplitudes over the step.
-        k2: The coefficient of a₁·MΔa
-            (:func:`~breakwater.energy.dissipation.bulk_coefficients`).
-        k3: The coefficient of Δa·MΔa.
-        step: The state is the end of a step (else the first record: two sums only).
-    """
-    n = ptr.shape[0] - 1
-    u, u0, v, v0, a, da = x[0], x[1], x[2], x[3], x[4], x[5]
-    out = np.zeros(8)
-    if not step:
-        for i in range(n):
-            mv = ku = 0.0
-            for p in range(ptr[i], ptr[i + 1]):
-                j = col[p]
-                mv += m_val[p] * v[j]
-                ku += k_val[p] * u[j]
-            out[0] += v[i] * mv
-            out[1] += u[i] * ku
-        return out
-    vb = np.empty(n)
-    for i in range(n):
-        vb[i] = (v0[i] + v[i]) * 0.5
-    for i in range(n):
-        mv = mvb = mda = ku = kvb = 0.0
-        for p in range(ptr[i], ptr[i + 1]):
-            j = col[p]
-            c, d = m_val[p], k_val[p]
-            mv += c * v[j]
-            mvb += c * vb[j]
-            mda += c * da[j]
-            ku += d * u[j]
-            kvb += d * vb[j]
-        f = 0.0
-        for q in range(amplitudes.shape[0]):
-            f += loads[i, q] * amplitudes[q]
-        out[0] += v[i] * mv
-        out[1] += u[i] * ku
-        out[2] += vb[i] * mvb
-        out[3] += vb[i] * kvb
-        out[4] += f * (u[i] - u0[i])
-        out[5] += da[i] * mvb
-        out[6] += mda * (k2 * a[i] + k3 * da[i])
-        out[7] += da[i] * kvb
-    return out
-
-
-@kernel
 def ledger_sums(x: np.ndarray, P1: np.ndarray, P0: np.ndarray, loads: np.ndarray,
                 amplitudes: np.ndarray, k2: float, k3: float, step: bool) -> np.ndarray:
-    """:func:`matrix_sums`' sums from the products of the end and start states.
+    """The dot products of the bulk terms, from the products of the end and start states.
 
-    With P₁ = [Mv₁, Ma₁, Ku₁, Kv₁, Ka₁] (:mod:`breakwater.stepping.stateproducts`) and
-    P₀ = [Mv₀, Ma₀, Kv₀]: Mv̄ = ½(Mv₀ + Mv₁), Kv̄ = ½(Kv₀ + Kv₁), MΔa = Ma₁ − Ma₀; no pass
-    over the matrices (equal to the products of the combined vectors to round-off).
+    ``[v·Mv, u·Ku, v̄·Mv̄, v̄·Kv̄, f·Δu, Δa·Mv̄, (MΔa)·(k₂a + k₃Δa), Δa·Kv̄]`` (with ``step``
+    False only the first two; the rest 0), v̄ = ½(v₀ + v₁), Δu = u₁ − u₀, f = Σ_l
+    amplitudes_l loads[:, l]. With P₁ = [Mv₁, Ma₁, Ku₁, Kv₁, Ka₁]
+    (:mod:`breakwater.stepping.stateproducts`) and P₀ = [Mv₀, Ma₀, Kv₀]:
+    Mv̄ = ½(Mv₀ + Mv₁), Kv̄ = ½(Kv₀ + Kv₁), MΔa = Ma₁ − Ma₀; no pass over the matrices
+    (equal to the products of the combined vectors to round-off).
 
     Args:
         x: Rows u₁, u₀, v₁, v₀, a₁, Δa (owned entries), shape (6, n).
@@ -248,8 +185,8 @@ class StateSums:
     The end state's products P₁ (:class:`~breakwater.stepping.stateproducts.StateProducts`,
     formed once per accepted step, the next step's predictor uses them too) and the start
     state's Mv, Ma, Kv kept from the last record give :func:`ledger_sums`; where the start
-    state is not the last record's (a step taken without a record), :func:`matrix_sums`
-    (one pass of its own) instead.
+    state is not the last record's (a step taken without a record), none
+    (:meth:`MatrixTerms.local` takes the MatMatMult products then).
 
     Args:
         products: The bulk's state products (on: one rank, one sparsity pattern).
@@ -270,8 +207,6 @@ class StateSums:
         # The start state: its (u, v) and Mv, Ma, Kv.
         self._start = (np.full(n, np.nan), np.full(n, np.nan), np.zeros((3, n)))
         ones = np.ones(loads.shape[1])  # compiled (or loaded from numba's cache) now
-        ptr, col, m_val, k_val = products.csr
-        matrix_sums(ptr, col, m_val, k_val, self.x, loads, ones, 0.0, 0.0, True)
         ledger_sums(self.x, np.zeros((5, n)), self._start[2], loads, ones, 0.0, 0.0, True)
 
     def _fill(self) -> None:
@@ -295,17 +230,15 @@ class StateSums:
         x = self.x
         self._keep(self.products.of(x[0], x[2], x[4]))
 
-    def sums(self, step: bool, amplitudes: np.ndarray, k2: float, k3: float) -> np.ndarray:
-        """The sums of :func:`matrix_sums` for the Functions' state now."""
+    def sums(self, step: bool, amplitudes: np.ndarray, k2: float, k3: float
+             ) -> np.ndarray | None:
+        """:func:`ledger_sums` for the Functions' state now (None: the start unknown)."""
         self._fill()
         x = self.x
         P1 = self.products.of(x[0], x[2], x[4])
         u0, v0, P0 = self._start
-        if not step or (equal(u0, x[1]) and equal(v0, x[3])):
-            out = ledger_sums(x, P1, P0, self.loads, amplitudes, k2, k3, step)
-        else:
-            ptr, col, m_val, k_val = self.products.csr
-            out = matrix_sums(ptr, col, m_val, k_val, x, self.loads, amplitudes, k2, k3, step)
+        known = not step or (equal(u0, x[1]) and equal(v0, x[3]))
+        out = ledger_sums(x, P1, P0, self.loads, amplitudes, k2, k3, step) if known else None
         self._keep(P1)
         return out
 
@@ -449,6 +382,8 @@ class MatrixTerms:
             if step and numerical_on else (0.0, 0.0, 0.0, 0.0)
         sums = self._sums.sums(step, self._amplitudes_over_step() if step else np.ones(0),
                                k2, k3)
+        if sums is None:
+            return self.local_products(step)
         out = np.zeros(len(TERMS))
         out[0] = 0.5 * sums[0]
         out[1] = 0.5 * sums[1]
