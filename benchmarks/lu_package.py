@@ -8,8 +8,8 @@ Run on purpose, never in CI::
 The fast solver factorises A = M + β₁Δt C + ½β₂Δt² K once per Δt and back-solves with it
 once per step (:mod:`breakwater.stepping.factorisations`); which package does it is
 :func:`~breakwater.stepping.factorisations.lu_package`'s rule. This benchmark builds the
-case's A once and, in one process, factorises it with each package (PETSc's LU with
-nested-dissection ordering, MUMPS with its defaults) and times ``--solves`` back-solves of
+case's A once and, in one process, factorises it with each package as the runs do
+(:func:`~breakwater.stepping.factorisations.lu_solver`) and times ``--solves`` back-solves of
 one random right-hand side with each, alternating the packages in rounds (this machine's
 speed drifts). Printed: the factorisation's CPU time, the median back-solve's, the
 factors' entries, and the ratios MUMPS/PETSc, with the largest difference of the two
@@ -30,23 +30,15 @@ import breakwater  # noqa: F401  (loads the PETSc of the dolfinx wheel first)
 from breakwater.casefile.case import load_case
 from breakwater.model.layout import MonolithicLayout
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
-from breakwater.stepping.factorisations import Factorisations, factor_entries
+from breakwater.stepping.factorisations import Factorisations, factor_entries, lu_solver
 
 PACKAGES = ("petsc", "mumps")
 
 
 def _factorise(A: PETSc.Mat, package: str) -> tuple[PETSc.KSP, float]:
-    """A factorised by ``package``; the factorisation's CPU time (s)."""
-    ksp = PETSc.KSP().create(MPI.COMM_SELF)  # type: ignore[arg-type]
-    ksp.setOperators(A)
-    ksp.setType("preonly")
-    pc = ksp.getPC()
-    pc.setType("lu")
-    pc.setFactorSolverType(package)
-    if package == "petsc":
-        pc.setFactorOrdering("nd")
+    """A factorised by ``package`` as the runs factorise it; the factorisation's CPU (s)."""
     c0 = time.process_time()
-    ksp.setUp()
+    ksp = lu_solver(A, package)
     return ksp, time.process_time() - c0
 
 

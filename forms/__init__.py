@@ -14,6 +14,7 @@ from .contact import (
     PenaltyContact,
     RegularisedCoulomb,
     contact_residual,
+    parameter_value,
     tangential_part,
 )
 from .elasticity import (
@@ -54,6 +55,7 @@ __all__ = [
     "kinetic_energy",
     "lame_from_shear",
     "lame_from_young",
+    "parameter_value",
     "penalty_energy",
     "rayleigh_damping",
     "rayleigh_power",

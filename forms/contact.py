@@ -104,11 +104,14 @@ def _ops(*args: Any) -> type[_UflOps] | type[_NumpyOps]:
     return _NumpyOps
 
 
+def parameter_value(parameter: Any) -> float:
+    """A law's parameter as a float: a ``fem.Constant``'s value now, or the number."""
+    return float(getattr(parameter, "value", parameter))
+
+
 def _floats(law):
     """A copy of a law (a dataclass) with each parameter a float."""
-    return replace(law, **{f.name: float(getattr(getattr(law, f.name), "value",
-                                                 getattr(law, f.name)))
-                           for f in fields(law)})
+    return replace(law, **{f.name: parameter_value(getattr(law, f.name)) for f in fields(law)})
 
 
 def tangential_part(v, n):

@@ -471,14 +471,14 @@ def test_state_products_and_their_uses(folder: pathlib.Path) -> None:
     assert np.all(out.array[bulk.bc_rows] == 0.0)
     assert np.all(np.abs(out.array - ref.array) <= scale)
     # Newton's start Δa = −a/β₁: A Δa − r₀ from P against the product with A.
-    layout_dt, β1, β2 = 1e-3, 0.6, 0.605
+    step_dt, β1, β2 = 1e-3, 0.6, 0.605
     factorisations = Factorisations(bulk, interface_dofs(model, layout), β1, β2)
-    fact = factorisations.factorisation(layout_dt)
+    fact = factorisations.factorisation(step_dt)
     da.array[:] = -a.array / β1
-    bulk.start_residual(u, v, a, da, out, layout_dt, β1, β2, fact.A, r0)
+    bulk.start_residual(u, v, a, da, out, step_dt, β1, β2, fact.A, r0)
     fact.A.mult(da, ref)
     ref.axpy(-1.0, out)
-    c_m, c_k = 1 + β1 * layout_dt * α, 0.5 * β2 * layout_dt**2 + β1 * layout_dt * β
+    c_m, c_k = 1 + β1 * step_dt * α, 0.5 * β2 * step_dt**2 + β1 * step_dt * β
     scale = (c_m * bound(m_val, da.array) + c_k * bound(k_val, da.array)) * 2
     assert np.all(np.abs(r0.array - ref.array) <= scale + 1e-300)
     assert products.passes == 1  # every use from the one pass

@@ -263,8 +263,9 @@ class NodalContactForces:
         self._coefficients = (0.5 * self.beta2 * dt**2, self.beta1 * dt)
         # The parameters' values now (not law.values(): a copy of the law, 20 µs a step).
         normal, friction = self.pair.law.normal, self.pair.law.friction
-        self._law = (_value(normal.ε_n), _value(normal.g0), _value(friction.μ),
-                     _value(friction.χ) ** 2)
+        value = forms.parameter_value
+        self._law = (value(normal.ε_n), value(normal.g0), value(friction.μ),
+                     value(friction.χ) ** 2)
 
     def end(self) -> None:
         """Nothing to release (the gathered state is overwritten by the next :meth:`begin`)."""
@@ -321,9 +322,4 @@ class NodalContactForces:
             return 0
         band = self.pair.law.friction.stick_band
         return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
-                               self._tangents, _value(band)))
-
-
-def _value(parameter: fem.Constant | float) -> float:
-    """A law's parameter as a float (a ``fem.Constant``'s value now)."""
-    return float(getattr(parameter, "value", parameter))
+                               self._tangents, forms.parameter_value(band)))

@@ -106,5 +106,4 @@ class SlipGuard:
     @staticmethod
     def _band(friction: forms.RegularisedCoulomb) -> float:
         """The law's stick band now (a float; cheaper than the law's ``values()``)."""
-        band = friction.stick_band
-        return float(getattr(band, "value", band))
+        return forms.parameter_value(friction.stick_band)

@@ -31,7 +31,7 @@ from breakwater.stepping.bulk import BulkOperators
 from breakwater.stepping.elimination import Elimination, XBlock
 
 __all__ = ["Factorisation", "Factorisations", "check_factorisation", "factor_entries",
-           "lu_package"]
+           "lu_package", "lu_solver"]
 
 
 def lu_package(comm: MPI.Comm, tdim: int) -> str:
@@ -48,6 +48,33 @@ def lu_package(comm: MPI.Comm, tdim: int) -> str:
     (16.7 against 17.2 ms); under MPI only MUMPS factorises in parallel.
     """
     return "petsc" if comm.size == 1 and tdim == 2 else "mumps"
+
+
+def lu_solver(A: PETSc.Mat, package: str, prefix: str | None = None) -> PETSc.KSP:
+    """A direct solver of A by ``package`` (:func:`lu_package`'s), factorised.
+
+    PETSc's own LU with nested-dissection ordering; MUMPS with its defaults.
+
+    Args:
+        A: The matrix.
+        package: ``"petsc"`` or ``"mumps"``.
+        prefix: The PETSc options prefix whose options are read before factorising
+            (None: none read).
+    """
+    ksp = PETSc.KSP().create(A.getComm())
+    if prefix is not None:
+        ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(A)
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("lu")
+    pc.setFactorSolverType(package)
+    if package == "petsc":
+        pc.setFactorOrdering("nd")
+    if prefix is not None:
+        ksp.setFromOptions()
+    ksp.setUp()
+    return ksp
 
 
 def factor_entries(ksp: PETSc.KSP) -> float:
@@ -209,23 +236,14 @@ class Factorisations:
         A.axpy(0.5 * self.beta2 * dt**2 + self.beta1 * dt * d.beta, self.bulk.K)
         A.zeroRowsColumns((self.layout.start + self.bulk.bc_rows).astype(PETSc.IntType), diag=1.0)
         # Its one product per step (the bulk rows' residual at Newton's start, for the
-        # relative test) row by row, without PETSc's "inode" grouping of rows: 3.4×
+        # relative test; on one rank from the state's products instead, BulkOperators.
+        # start_residual) row by row, without PETSc's "inode" grouping of rows: 3.4×
         # faster on these P2 matrices (0.93 against 0.27 ms at refinement 3). M and K keep
         # the grouping: the row sums differ from it in the last bit, and the predictor's
         # products feed the state, whose 2-rank equality (tests/test_mpi.py) the χ = 1e-10
         # stick tangent holds to 5e-11 with it and 3.6e-10 without (2026-11-23).
         A.setOption(PETSc.Mat.Option.USE_INODES, False)  # type: ignore[arg-type]
-        ksp = PETSc.KSP().create(self.model.comm)  # type: ignore[arg-type]
-        ksp.setOptionsPrefix(self.model.options_prefix("bulk"))
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("lu")
-        pc.setFactorSolverType(self.package)
-        if self.package == "petsc":
-            pc.setFactorOrdering("nd")
-        ksp.setFromOptions()
-        ksp.setUp()
+        ksp = lu_solver(A, self.package, self.model.options_prefix("bulk"))
         check_factorisation(ksp, "the step matrix A = M + β₁Δt C + ½β₂Δt² K")
         blocks: list[XBlock] | None
         chunks = 0
