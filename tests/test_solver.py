@@ -150,3 +150,72 @@ def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
     assert refs[1]() is None
     assert refs[0]() is not None  # the leak destroy() exists for
     refs[0]().destroy()  # type: ignore[union-attr]
+
+
+def test_residual_without_the_zero_lifting_is_dolfinx_residual(folder: pathlib.Path) -> None:
+    """The SNES residual skips the Dirichlet lifting exactly where it is zero.
+
+    Where x vanishes at every constrained unknown (the conditions are homogeneous) the
+    lifted term ``J (g − x)`` is zero: the residual without it equals dolfinx's
+    (:func:`dolfinx.fem.petsc.assemble_residual`) bit for bit, and no lifting is done.
+    Where x does not vanish there, the residual lifts, as dolfinx's, and differs from
+    the residual assembled without the lifting (so the first comparison can fail).
+    """
+    from dolfinx import fem
+    from dolfinx.fem import petsc as fem_petsc
+
+    path = two_rectangles(folder / "lifting.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8, friction=0.6)],
+                         [Fixed("b_bottom"), Fixed("a_top", (0,))], gravity=(0.0, -9.81))
+    u = model.functions("u")
+    solver = NewtonSolver(model, model.residual(u), u, "static")
+    residual, problem = solver.residual, solver.problem
+    assert residual.homogeneous
+    assert COMM.allreduce(int(residual._constrained.sum())) > 0
+    blocks = problem.b.getAttr("_blocks")
+
+    def vec() -> PETSc.Vec:
+        v = problem.b.duplicate()
+        v.setAttr("_blocks", blocks)
+        return v
+
+    def dolfinx_residual(x: PETSc.Vec) -> np.ndarray:
+        b = vec()
+        fem_petsc.assemble_residual(solver.snes, x, b, problem.u, problem.F, problem.J,
+                                    model.bcs, _blocks=blocks)
+        return b.getArray().copy()
+
+    x = vec()
+    rng = np.random.default_rng(COMM.rank)
+    values = 1e-4 * rng.standard_normal(x.getLocalSize())
+    values[residual._constrained] = 0.0
+    x.setArray(values)
+    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    b = vec()
+    residual(solver.snes, x, b)
+    assert (residual.skipped, residual.lifted) == (1, 0)
+    assert np.array_equal(b.getArray(), dolfinx_residual(x))
+
+    values[residual._constrained] = 1e-4  # x no longer satisfies the conditions
+    x.setArray(values)
+    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    residual(solver.snes, x, b)
+    assert (residual.skipped, residual.lifted) == (1, 1)
+    lifted = dolfinx_residual(x)
+    assert np.array_equal(b.getArray(), lifted)
+    # Here the lifting is not zero: the residual assembled without it differs.
+    residual.lifting_is_zero = lambda x: True  # type: ignore[method-assign]
+    residual(solver.snes, x, b)
+    free = ~residual._constrained
+    changed = np.abs(b.getArray()[free] - lifted[free]).max(initial=0.0)
+    assert COMM.allreduce(changed, op=MPI.MAX) > 0.0
+    solver.destroy()
+
+    V = model.functions("g")[0].function_space
+    one = fem.dirichletbc(np.float64(1.0), np.array([0], np.int32), V.sub(0))
+    from breakwater.stepping.solver import _zero_constant
+    assert not _zero_constant(one)
+    assert all(_zero_constant(bc) for bc in model.bcs)
