@@ -127,3 +127,25 @@ def test_build_calibrates_and_resolves(goda, tmp_path):
     assert data["calibration"]["enabled"] is False
     assert case.resolved() == before and case.body("mound").shear_modulus is None
     assert {**data, "bodies": before["bodies"], "calibration": before["calibration"]} == before
+
+
+def test_a_long_calibration_reports_its_solves(layer_model, monkeypatch, caplog):
+    # A phase longer than SlowPhase.AFTER (here 0 s) logs each unit of work at info, as
+    # a 3D case's calibration and static state do after 10 s: each stiffness solve with
+    # its G and K, and the Newton's iterations of each solve.
+    import logging
+
+    from breakwater.common.console import SlowPhase
+
+    monkeypatch.setattr(SlowPhase, "AFTER", 0.0)
+    monkeypatch.setattr(SlowPhase, "EVERY", 0.0)
+    target = layer_stiffness(3.7e6)
+    with caplog.at_level(logging.INFO, logger="breakwater"):
+        r = calibrate_shear_modulus(layer_model, "b", "a", target, tolerance=1e-6,
+                                    initial_guess=1e8, tangential_penalty=K_T_FACTOR)
+    lines = [rec.getMessage() for rec in caplog.records]
+    solves = [m for m in lines if m.startswith("calibrating the shear modulus of 'b': solve")]
+    assert len(solves) == len(r.history) == r.iterations
+    G, K = r.history[-1]
+    assert f"solve {r.iterations}, G = {G:.6g} Pa: K = {K:.6g} N/m" in solves[-1]
+    assert any(m.startswith("Newton of calibration: iteration 1, residual") for m in lines)

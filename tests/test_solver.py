@@ -219,3 +219,33 @@ def test_residual_without_the_zero_lifting_is_dolfinx_residual(folder: pathlib.P
     from breakwater.stepping.solver import _zero_constant
     assert not _zero_constant(one)
     assert all(_zero_constant(bc) for bc in model.bcs)
+
+
+def test_slow_phase_shows_its_lines_after_a_while() -> None:
+    # A phase shows nothing for its first AFTER seconds, then one line every EVERY
+    # seconds at most, with the time elapsed (a clock written here).
+    import logging
+
+    from breakwater.common.console import SlowPhase
+
+    now = [0.0]
+    shown: list[str] = []
+
+    class Collect(logging.Handler):
+        def emit(self, record: logging.LogRecord) -> None:
+            shown.append(record.getMessage())
+
+    logger = logging.getLogger("test_solver.slowphase")
+    logger.setLevel(logging.INFO)
+    logger.propagate = False
+    handler = Collect()
+    logger.addHandler(handler)
+    try:
+        phase = SlowPhase(logger, "static", clock=lambda: now[0])
+        for t in (1.0, 9.9, 10.0, 15.0, 19.9, 20.0, 31.0):
+            now[0] = t
+            phase("iteration %d", int(t))
+    finally:
+        logger.removeHandler(handler)
+    assert shown == ["static: iteration 10 (10 s)", "static: iteration 20 (20 s)",
+                     "static: iteration 31 (31 s)"]

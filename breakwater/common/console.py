@@ -2,7 +2,8 @@
 
 :func:`rank_zero_logging` lets only rank 0 log on a logger while a run goes (set up by
 the run itself, not on import, so that importing breakwater changes no logging);
-:class:`Progress` draws a tqdm bar in simulated seconds on rank 0; :class:`StopSignal`
+:class:`Progress` draws a tqdm bar in simulated seconds on rank 0; :class:`SlowPhase`
+reports a long phase of work (statics, X's solves) as it goes; :class:`StopSignal`
 turns SIGTERM and SIGINT into a request to stop at the next step boundary.
 """
 
@@ -20,7 +21,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-__all__ = ["Progress", "StopSignal", "rank_zero_logging"]
+__all__ = ["Progress", "SlowPhase", "StopSignal", "rank_zero_logging"]
 
 
 class _RankZero(logging.Filter):
@@ -185,3 +186,41 @@ class StopSignal:
         self._previous.clear()
         if outer is not None and self._received:
             outer._received = outer._received or self._received
+
+
+class SlowPhase:
+    """Progress lines of a phase of work that turns out long (statics, X's solves).
+
+    The phase calls itself after each unit of work (a Newton iteration, a calibration
+    solve, a chunk of back-solves) with what it did. Nothing is shown while the phase
+    is younger than :attr:`AFTER` seconds, so that a phase of a few seconds (every 2D
+    case, every step of the reference solver) prints nothing more than before; then a
+    line goes to ``info`` at most every :attr:`EVERY` seconds, with the time elapsed: a
+    3D case's calibration and static state, minutes of silence otherwise, report how
+    far they are.
+
+    Args:
+        logger: Where the lines go (under a run: rank 0 only,
+            :func:`rank_zero_logging`).
+        name: The phase, the start of each line.
+        clock: Seconds (monotonic).
+    """
+
+    #: Seconds of a phase before its lines are shown, and between two of them.
+    AFTER = 10.0
+    EVERY = 10.0
+
+    def __init__(self, logger: logging.Logger, name: str,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.logger, self.name, self.clock = logger, name, clock
+        self.start = clock()
+        self._shown: float | None = None  # when the last line was shown
+
+    def __call__(self, message: str, *args: object) -> None:
+        """A unit of work done: ``message % args``."""
+        now = self.clock()
+        elapsed = now - self.start
+        if elapsed < self.AFTER or (self._shown is not None and now - self._shown < self.EVERY):
+            return
+        self._shown = now
+        self.logger.info("%s: %s (%.0f s)", self.name, message % args, elapsed)

@@ -31,6 +31,7 @@ and the moduli are Constants).
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -40,6 +41,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.console import SlowPhase
 from breakwater.common.errors import BreakwaterError, ConvergenceError
 from breakwater.model.model import ContactModel
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
@@ -190,6 +192,8 @@ def calibrate_shear_modulus(model: ContactModel, body: str, structure: str, targ
     problem = HorizontalStiffness(model, structure, tangential_penalty)
     G = float(model.body(body).spec.material.G if initial_guess is None else initial_guess)
     history: list[tuple[float, float]] = []
+    phase = SlowPhase(logging.getLogger("breakwater.statics.calibrate"),
+                      f"calibrating the shear modulus of '{body}'")
 
     def solve(G: float) -> float:
         try:
@@ -197,6 +201,7 @@ def calibrate_shear_modulus(model: ContactModel, body: str, structure: str, targ
         except ConvergenceError as e:
             raise CalibrationError(f"stiffness solve failed at G = {G:.4g} Pa: {e}") from e
         history.append((G, K))
+        phase("solve %d, G = %.6g Pa: K = %.6g N/m (target %.6g)", len(history), G, K, target)
         return K
 
     try:

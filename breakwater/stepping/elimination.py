@@ -17,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from breakwater.common.console import SlowPhase
 from breakwater.common.memory import fits
 
 __all__ = ["ALIGNMENTS", "Elimination", "XBlock", "x_blocks"]
@@ -54,6 +55,9 @@ class Elimination:
     #: Bytes per rank of one chunk's right-hand sides and solutions when X is built in
     #: chunks (at least one column).
     CHUNK_BYTES = 2.0**28
+    #: X of at least this many entries (N × n_I) is announced before its solves: the 3D
+    #: Goda case's at refinement 1.5 (2.2e8) took 40 s of a first step.
+    ANNOUNCE = 5e7
 
     def __init__(self, comm: MPI.Comm, offsets: np.ndarray, start: int,
                  interface: np.ndarray) -> None:
@@ -74,6 +78,10 @@ class Elimination:
         """
         chunk = self._chunk_columns(available)
         if chunk is None:
+            if self.comm.rank == 0 and self.size * len(self.interface) >= self.ANNOUNCE:
+                logging.getLogger("breakwater").info(
+                    "interface compliance X = A⁻¹E: %d back-solves of %d unknowns (%.3g GB)",
+                    len(self.interface), self.size, 8e-9 * self.size * len(self.interface))
             blocks = self._interface_solves(ksp)
             return blocks, self._gather_rows(blocks), 0
         self._say_chunks(chunk)
@@ -119,11 +127,14 @@ class Elimination:
         rows = self.interface[mine] - start  # this rank's interface rows (local)
         at = np.flatnonzero(mine)  # their positions among the interface unknowns
         out = np.zeros((n_i, n_i))
+        phase = SlowPhase(logging.getLogger("breakwater"), "interface compliance X_II")
         for lo in range(0, n_i, chunk):
             hi = min(n_i, lo + chunk)
             X = self._solve_columns(ksp, lo, hi)
             out[at, lo:hi] = X.getDenseArray()[rows]
             X.destroy()
+            if comm.rank == 0:
+                phase("%d of %d columns", hi, n_i)
         comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 

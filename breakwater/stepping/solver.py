@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -14,11 +15,14 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from breakwater.common.console import SlowPhase
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.timings import Timings
 from breakwater.model.model import ContactModel
 from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.stepsolver import StepSolver
+
+log = logging.getLogger("breakwater.stepping.solver")
 
 
 @dataclass(frozen=True)
@@ -279,6 +283,13 @@ class NewtonSolver(StepSolver):
         if precheck is not None:
             self.snes.setLineSearchPreCheck(precheck)
         self.name = name
+        # A solve that runs long (a 3D static state: minutes) reports its iterations.
+        self._phase: SlowPhase | None = None
+        self.snes.setMonitor(self._monitor)
+
+    def _monitor(self, snes: PETSc.SNES, it: int, fnorm: float) -> None:
+        if self._phase is not None:
+            self._phase("iteration %d, residual %.3e", it, fnorm)
 
     def _converged(self, snes: PETSc.SNES, it: int, norms: tuple[float, float, float]
                    ) -> int:
@@ -328,6 +339,7 @@ class NewtonSolver(StepSolver):
 
         """
         t0 = time.perf_counter()
+        self._phase = SlowPhase(log, f"Newton of {self.name}")
         try:
             self.problem.solve()
         except PETSc.Error:  # a factorisation MUMPS could not complete: say so in one line
