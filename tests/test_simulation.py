@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
+import math
 import pathlib
 import re
 import sys
@@ -366,3 +367,41 @@ def test_contact_quality(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
         warned = [r.getMessage() for r in caplog.records if "too soft" in r.getMessage()]
         assert warned and all("suggested ε_n" in w for w in warned)
         assert "contact 'interface'" in capsys.readouterr().out
+
+
+def test_batch_log_shows_the_loop_progress(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+                                           monkeypatch: pytest.MonkeyPatch,
+                                           caplog: pytest.LogCaptureFixture) -> None:
+    # Without the bar (a batch job: stderr not a terminal) the log has a line on the
+    # loop's progress every HEARTBEAT seconds (here 0: every step), with t, the steps,
+    # the mean Newton iterations and the time left; with the bar, none.
+    monkeypatch.setattr(simulation, "HEARTBEAT", 0.0)
+    caplog.set_level("INFO", logger="breakwater")
+    end = 4 * DT
+    for bar in (False, True):
+        caplog.clear()
+        summary = simulation.run(_model(mesh_path), TimeSpec(dt=DT, end_time=end),
+                                 _output(shared_dir, field_interval=0, figures=False,
+                                         progress=bar))
+        lines = [r.getMessage() for r in caplog.records
+                 if r.getMessage().startswith("time stepping: ")]
+        if bar or COMM.rank > 0:  # the bar's run; only rank 0 logs
+            assert lines == []
+            continue
+        steps = summary["solver"]["steps"]
+        assert len(lines) == steps == 4
+        pattern = (r"time stepping: t = (\S+) s of 0\.008 s \((\d+)%\), (\d+) steps, "
+                   r"(\S+) Newton iterations per step; \d+ s elapsed, about \d+ s left")
+        last = re.fullmatch(pattern, lines[-1])
+        assert last is not None, lines[-1]
+        assert float(last[1]) == end and last[2] == "100" and int(last[3]) == steps
+        mean = summary["solver"]["newton_iterations"] / steps
+        assert float(last[4]) == pytest.approx(mean, abs=0.005)
+        assert lines[-1].endswith("about 0 s left")
+
+
+def test_durations_read_as_time() -> None:
+    assert simulation._duration(42.4) == "42 s"
+    assert simulation._duration(185.0) == "3 min 05 s"
+    assert simulation._duration(3725.0) == "1 h 02 min"
+    assert simulation._duration(math.inf) == "?"

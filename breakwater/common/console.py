@@ -204,6 +204,8 @@ class SlowPhase:
             :func:`rank_zero_logging`).
         name: The phase, the start of each line.
         clock: Seconds (monotonic).
+        every: Seconds before the first line and between two (default :attr:`AFTER`
+            and :attr:`EVERY`).
     """
 
     #: Seconds of a phase before its lines are shown, and between two of them.
@@ -211,16 +213,29 @@ class SlowPhase:
     EVERY = 10.0
 
     def __init__(self, logger: logging.Logger, name: str,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic,
+                 every: float | None = None) -> None:
         self.logger, self.name, self.clock = logger, name, clock
+        self.after = self.AFTER if every is None else every
+        self.every = self.EVERY if every is None else every
         self.start = clock()
         self._shown: float | None = None  # when the last line was shown
 
+    def due(self) -> bool:
+        """Whether a line is shown now (then counted as shown)."""
+        now = self.clock()
+        if now - self.start < self.after or (
+                self._shown is not None and now - self._shown < self.every):
+            return False
+        self._shown = now
+        return True
+
+    @property
+    def elapsed(self) -> float:
+        """Seconds since the phase started."""
+        return self.clock() - self.start
+
     def __call__(self, message: str, *args: object) -> None:
         """A unit of work done: ``message % args``."""
-        now = self.clock()
-        elapsed = now - self.start
-        if elapsed < self.AFTER or (self._shown is not None and now - self._shown < self.EVERY):
-            return
-        self._shown = now
-        self.logger.info("%s: %s (%.0f s)", self.name, message % args, elapsed)
+        if self.due():
+            self.logger.info("%s: %s (%.0f s)", self.name, message % args, self.elapsed)

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import re
 import signal
 import sys
@@ -66,7 +67,7 @@ from petsc4py import PETSc
 
 from breakwater.common import files
 from breakwater.common.arrays import finite
-from breakwater.common.console import Progress, StopSignal, rank_zero_logging
+from breakwater.common.console import Progress, SlowPhase, StopSignal, rank_zero_logging
 from breakwater.common.errors import (
     BreakwaterError,
     CaseError,
@@ -92,6 +93,10 @@ __all__ = ["GROW_AFTER", "Monitor", "RunInterrupted", "SimulationFailed", "inter
            "pair_names", "run"]
 
 log = logging.getLogger("breakwater.run.simulation")
+
+#: Without the progress bar (stderr not a terminal: a batch job's log), a line on the
+#: time loop's progress every this many seconds of wall time.
+HEARTBEAT = 60.0
 
 
 class SimulationFailed(BreakwaterError):
@@ -209,6 +214,8 @@ def _loop(r: Session, stop: StopSignal) -> None:
     else:
         log.info("time stepping to t = %g s with dt = %g s", time.end_time, time.dt)
     clock = _LoopClock(st.time_loop, s.solver)
+    beat = None if show else SlowPhase(log, "time stepping", every=HEARTBEAT)
+    t_start, steps_start, iterations = step.t, st.steps, 0  # of this process
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
                   step.t) as progress, clock:
         while not step.finished:
@@ -269,6 +276,36 @@ def _loop(r: Session, stop: StopSignal) -> None:
                 r.checkpoint()
             clock.add("outputs", _time.perf_counter() - outputs)
             progress.update(row["t"], its=its, cutbacks=step.cutbacks)
+            iterations += its
+            if beat is not None and beat.due():
+                _beat(beat, row["t"], t_start, time.end_time, st.steps,
+                      iterations / (st.steps - steps_start))
+
+
+def _beat(beat: SlowPhase, t: float, t_start: float, end: float, steps: int,
+          mean_iterations: float) -> None:
+    """The time loop's progress line (a batch job's log): t, steps, time left.
+
+    The time left is this process's rate in simulated seconds (from ``t_start``, where
+    it started or resumed) over what remains.
+    """
+    elapsed = beat.elapsed
+    left = elapsed * (end - t) / (t - t_start) if t > t_start else math.inf
+    log.info("time stepping: t = %.6g s of %g s (%.0f%%), %d steps, %.2f Newton "
+             "iterations per step; %s elapsed, about %s left", t, end, 100 * t / end, steps,
+             mean_iterations, _duration(elapsed), _duration(left))
+
+
+def _duration(seconds: float) -> str:
+    """``1 h 02 min``, ``3 min 05 s`` or ``42 s``."""
+    if not math.isfinite(seconds):
+        return "?"
+    s = round(seconds)
+    if s >= 3600:
+        return f"{s // 3600} h {s % 3600 // 60:02d} min"
+    if s >= 60:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s} s"
 
 
 def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
