@@ -216,7 +216,7 @@ def test_residual_without_the_zero_lifting_is_dolfinx_residual(folder: pathlib.P
 
     V = model.functions("g")[0].function_space
     one = fem.dirichletbc(np.float64(1.0), np.array([0], np.int32), V.sub(0))
-    from breakwater.stepping.solver import _zero_constant
+    from breakwater.stepping.snesassembly import _zero_constant
     assert not _zero_constant(one)
     assert all(_zero_constant(bc) for bc in model.bcs)
 
@@ -249,3 +249,56 @@ def test_slow_phase_shows_its_lines_after_a_while() -> None:
         logger.removeHandler(handler)
     assert shown == ["static: iteration 10 (10 s)", "static: iteration 20 (20 s)",
                      "static: iteration 31 (31 s)"]
+
+
+def test_jacobian_with_its_bulk_assembled_once_is_dolfinx_jacobian(folder: pathlib.Path
+                                                                   ) -> None:
+    """The SNES Jacobian: the bodies' cell part once per solve, the rest every iteration.
+
+    At a state in contact, after the first iteration (dolfinx's Jacobian whole), the sum
+    of the kept bulk part and the contact terms equals dolfinx's Jacobian bit for bit
+    (the same kernels, each entry summed in the same order); after a change of a body's
+    modulus and a new solve, again; without the new solve the kept bulk part is stale
+    and differs (so the comparison can fail).
+    """
+    from dolfinx.fem import petsc as fem_petsc
+
+    path = two_rectangles(folder / "jacobian.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8, friction=0.6)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    u, _ = solve_static(model)  # a state with the interface closed
+    solver = NewtonSolver(model, model.residual(u), u, "static")
+    jacobian, problem = solver.jacobian, solver.problem
+    assert jacobian.split
+    x = problem.x
+    fem_petsc.assign(u, x)
+
+    def dolfinx_jacobian() -> tuple[np.ndarray, ...]:
+        A = fem_petsc.create_matrix(problem.J, kind="mpi")
+        fem_petsc.assemble_jacobian(solver.snes, x, A, None, problem.u, problem.J, None,
+                                    model.bcs)
+        csr = A.getValuesCSR()
+        A.destroy()
+        return csr
+
+    def ours() -> tuple[np.ndarray, ...]:
+        jacobian(solver.snes, x, problem.A, None)
+        return problem.A.getValuesCSR()
+
+    def same(a: tuple[np.ndarray, ...], b: tuple[np.ndarray, ...]) -> bool:
+        local = all(np.array_equal(p, q) for p, q in zip(a, b, strict=True))
+        return bool(COMM.allreduce(local, op=MPI.LAND))
+
+    solver.jacobian.new_solve()
+    ours()  # the first iteration: dolfinx's whole
+    assert same(ours(), dolfinx_jacobian())
+    b = model.body("b")
+    b.μ.value *= 2.0
+    b.λ.value *= 2.0
+    assert not same(ours(), dolfinx_jacobian())  # the bulk part kept from before
+    jacobian.new_solve()
+    assert same(ours(), dolfinx_jacobian())
+    solver.destroy()

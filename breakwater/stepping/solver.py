@@ -8,11 +8,9 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
-from mpi4py import MPI
 from petsc4py import PETSc
 
 from breakwater.common.console import SlowPhase
@@ -20,6 +18,7 @@ from breakwater.common.errors import ConvergenceError
 from breakwater.common.timings import Timings
 from breakwater.model.model import ContactModel
 from breakwater.stepping.factorisations import check_factorisation
+from breakwater.stepping.snesassembly import ConstantBulk, HomogeneousLifting
 from breakwater.stepping.stepsolver import StepSolver
 
 log = logging.getLogger("breakwater.stepping.solver")
@@ -142,87 +141,6 @@ class NewtonTimings(Timings):
         self.seconds = {"newton": 0.0}
 
 
-def _zero_constant(bc: fem.DirichletBC) -> bool:
-    """Whether a condition's value is a constant zero.
-
-    A Function's value is not known to stay zero: False.
-    """
-    value = getattr(bc.g, "value", None)  # a Constant (Python or C++), else a Function
-    return value is not None and not isinstance(bc.g, fem.Function) and \
-        not np.asarray(value).any()
-
-
-class HomogeneousLifting:
-    """The SNES residual of a :class:`fem_petsc.NonlinearProblem`, its lifting skipped where zero.
-
-    dolfinx's residual (:func:`dolfinx.fem.petsc.assemble_residual`) lifts the Dirichlet
-    conditions at every evaluation: ``b −= J (g − x)`` on the columns of the constrained
-    unknowns, an assembly of the Jacobian's element matrices on every cell that touches
-    one. The model's conditions are homogeneous (``fixed`` groups: g = 0) and a Newton
-    started from a state that satisfies them keeps it exactly (the constrained rows of
-    the step are ``x − g``), so the lifted term is ``J · 0``: zero. It took a quarter of
-    the 3D Goda case's static and calibration solves (its mound's cells all touch the
-    flume's walls, 2026-11-27). Here the residual is assembled without it whenever every
-    condition's value is zero and x vanishes at every constrained unknown (on every
-    rank: one decision); otherwise dolfinx's residual, lifting included.
-
-    Args:
-        problem: The nonlinear problem whose residual this replaces.
-        bcs: Its Dirichlet conditions.
-
-    Attributes:
-        lifted: Evaluations that needed the lifting.
-        skipped: Evaluations without it.
-    """
-
-    def __init__(self, problem: fem_petsc.NonlinearProblem, bcs: Sequence[fem.DirichletBC]
-                 ) -> None:
-        self.problem, self.bcs = problem, list(bcs)
-        self.lifted = self.skipped = 0
-        b = problem.b
-        self._blocks = b.getAttr("_blocks")
-        forms = problem.F if isinstance(problem.F, Sequence) else [problem.F]
-        self._bcs0 = fem.bcs_by_block(fem.extract_function_spaces(forms), self.bcs)
-        self.homogeneous = all(_zero_constant(bc) for bc in self.bcs)
-        # The constrained unknowns' owned entries: set_bc writes −(0 − 1) = 1 there.
-        t, ones = b.duplicate(), b.duplicate()
-        for v in (t, ones):
-            v.setAttr("_blocks", self._blocks)
-        t.set(0.0)
-        ones.set(1.0)
-        fem_petsc.set_bc(t, self._bcs0, x0=ones, alpha=-1.0)
-        self._constrained = t.getArray(readonly=True) != 0.0
-        t.destroy()
-        ones.destroy()
-
-    def lifting_is_zero(self, x: PETSc.Vec) -> bool:
-        """Whether ``J (g − x)`` vanishes on the constrained columns (collective)."""
-        zero = self.homogeneous and not x.getArray(readonly=True)[self._constrained].any()
-        return bool(x.getComm().tompi4py().allreduce(zero, op=MPI.LAND))
-
-    def __call__(self, snes: PETSc.SNES, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """F(x) into b: :func:`dolfinx.fem.petsc.assemble_residual`, its lifting where nonzero."""
-        p = self.problem
-        if not self.lifting_is_zero(x):
-            self.lifted += 1
-            fem_petsc.assemble_residual(snes, x, b, p.u, p.F, p.J, self.bcs,
-                                        _blocks=self._blocks)
-            return
-        self.skipped += 1
-        # assemble_residual's steps, in its order, without apply_lifting.
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        fem_petsc.assign(x, p.u)
-        if self._blocks is not None:
-            b.setAttr("_blocks", self._blocks)
-            x.setAttr("_blocks", self._blocks)
-        with b.localForm() as local:
-            local.set(0.0)
-        fem_petsc.assemble_vector(b, p.F)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem_petsc.set_bc(b, self._bcs0, x0=x, alpha=-1.0)
-        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-
-
 class NewtonSolver(StepSolver):
     """SNES Newton on ``F(x) = 0`` for one Function per body.
 
@@ -272,6 +190,9 @@ class NewtonSolver(StepSolver):
         self.snes: PETSc.SNES = self.problem.solver
         self.residual = HomogeneousLifting(self.problem, model.bcs)
         self.snes.setFunction(self.residual, self.problem.b)
+        self.jacobian = ConstantBulk(self.problem, jacobian_of or F, self.x, model.bcs,
+                                     model.entity_maps)
+        self.snes.setJacobian(self.jacobian, self.problem.A, self.problem.P_mat)
         # The friction law makes the residual jump by orders of magnitude while the
         # stick/slip state settles: no divergence test on the growth of the residual.
         self.snes.setDivergenceTolerance(1e300)
@@ -326,6 +247,7 @@ class NewtonSolver(StepSolver):
         for obj in (p.solver, p.A, p.b, p.x, p.P_mat):
             if obj is not None:
                 obj.destroy()
+        self.jacobian.destroy()
 
     def add_surface_forces(self, vec: PETSc.Vec, scale: float = 1.0) -> None:
         """Nothing to add: F holds every force (the reference path has no general pair)."""
@@ -340,6 +262,7 @@ class NewtonSolver(StepSolver):
         """
         t0 = time.perf_counter()
         self._phase = SlowPhase(log, f"Newton of {self.name}")
+        self.jacobian.new_solve()
         try:
             self.problem.solve()
         except PETSc.Error:  # a factorisation MUMPS could not complete: say so in one line
