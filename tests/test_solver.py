@@ -256,10 +256,13 @@ def test_jacobian_with_its_bulk_assembled_once_is_dolfinx_jacobian(folder: pathl
     """The SNES Jacobian: the bodies' cell part once per solve, the rest every iteration.
 
     At a state in contact, after the first iteration (dolfinx's Jacobian whole), the sum
-    of the kept bulk part and the contact terms equals dolfinx's Jacobian bit for bit
-    (the same kernels, each entry summed in the same order); after a change of a body's
-    modulus and a new solve, again; without the new solve the kept bulk part is stale
-    and differs (so the comparison can fail).
+    of the kept bulk part and the contact terms equals dolfinx's Jacobian: bit for bit on
+    one rank (the same kernels, each entry summed in the same order); on several to
+    1e-14 of its largest entry (PETSc adds the contributions to other ranks' rows at the
+    end of each assembly, so the entries on the ranks' boundary are summed in another
+    order: round-off, 1e-16 relative each). After a change of a body's modulus and a new
+    solve, again; without the new solve the kept bulk part is stale and differs by
+    O(1) of the changed entries (so the comparison can fail).
     """
     from dolfinx.fem import petsc as fem_petsc
 
@@ -289,8 +292,12 @@ def test_jacobian_with_its_bulk_assembled_once_is_dolfinx_jacobian(folder: pathl
         return problem.A.getValuesCSR()
 
     def same(a: tuple[np.ndarray, ...], b: tuple[np.ndarray, ...]) -> bool:
-        local = all(np.array_equal(p, q) for p, q in zip(a, b, strict=True))
-        return bool(COMM.allreduce(local, op=MPI.LAND))
+        pattern = np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+        if COMM.size == 1:
+            return pattern and np.array_equal(a[2], b[2])
+        scale = COMM.allreduce(np.abs(b[2]).max(initial=0.0), op=MPI.MAX)
+        close = pattern and np.abs(a[2] - b[2]).max(initial=0.0) <= 1e-14 * scale
+        return bool(COMM.allreduce(close, op=MPI.LAND))
 
     solver.jacobian.new_solve()
     ours()  # the first iteration: dolfinx's whole

@@ -124,7 +124,9 @@ class ConstantBulk:
     change between solves), copied into the Jacobian at each iteration, and the other
     integrals added, with the Dirichlet rows and columns as dolfinx sets them. The sum
     is dolfinx's: the same kernels, each matrix entry summed in the same order (cells,
-    then exterior and interior facets).
+    then exterior and interior facets), bit for bit on one rank; on several, PETSc adds
+    the contributions to other ranks' rows at the end of each assembly, so the entries
+    on the ranks' boundary are summed in another order (round-off).
 
     Where the cell integrals' Jacobian depends on the unknowns, or splitting the forms
     would leave a block row or column without a form, dolfinx's Jacobian is used.
