@@ -119,10 +119,11 @@ class ConstantBulk:
     (:func:`dolfinx.fem.petsc.assemble_jacobian`) assembles them at every Newton
     iteration with the contact and load terms, and on the 3D Goda case they are 99 % of
     it (2.45 s of an assembly, the interface and load terms 0.03 s: 27-node hexahedra).
-    Here they are assembled into a matrix of the Jacobian's pattern at the first
+    Here they are assembled into a matrix of the Jacobian's pattern at the second
     iteration of each solve (their constants, G of a calibration or Δt of a step, may
-    change between solves), copied into the Jacobian at each iteration, and the other
-    integrals added, with the Dirichlet rows and columns as dolfinx sets them. The sum
+    change between solves; a solve's first Jacobian is assembled whole, and a linear
+    solve takes no other), copied into the Jacobian at each later iteration, and the
+    other integrals added, with the Dirichlet rows and columns as dolfinx sets them. The sum
     is dolfinx's: the same kernels, each matrix entry summed in the same order (cells,
     then exterior and interior facets), bit for bit on one rank; on several, PETSc adds
     the contributions to other ranks' rows at the end of each assembly, so the entries
@@ -145,7 +146,8 @@ class ConstantBulk:
                  entity_maps: Any) -> None:
         self.problem, self.bcs = problem, list(bcs)
         self._bulk: PETSc.Mat | None = None
-        self._fresh = True
+        self._fresh = True  # the next Jacobian is a solve's first
+        self._kept = False  # the kept matrix holds this solve's cell part
         cell = [i for i in F.integrals() if i.integral_type() == "cell"]
         rest = [i for i in F.integrals() if i.integral_type() != "cell"]
         self.split = bool(cell and rest)
@@ -160,7 +162,7 @@ class ConstantBulk:
             self.a_rest = fem.form(a_rest, entity_maps=entity_maps)
 
     def new_solve(self) -> None:
-        """A new solve starts: the bulk part is assembled again at its first iteration."""
+        """A new solve starts: its first Jacobian is assembled whole, the cell part kept again."""
         self._fresh = True
 
     def destroy(self) -> None:
@@ -175,28 +177,37 @@ class ConstantBulk:
         if not self.split:
             fem_petsc.assemble_jacobian(snes, x, J, P, p.u, p.J, p.preconditioner, self.bcs)
             return
-        first = self._bulk is None
-        if first:
-            # dolfinx's Jacobian, whole: it fixes J's nonzero pattern (PETSc drops the
-            # preallocated entries an assembly leaves unused), which the bulk part's
-            # matrix then shares, with J's local numbering.
-            fem_petsc.assemble_jacobian(snes, x, J, P, p.u, p.J, p.preconditioner, self.bcs)
-            self._bulk = J.duplicate()
-            self._bulk.setLGMap(*J.getLGMap())
-        else:
-            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            fem_petsc.assign(x, p.u)
-        assert self._bulk is not None
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        fem_petsc.assign(x, p.u)
         if self._fresh:
-            self._bulk.zeroEntries()
-            fem_petsc.assemble_matrix(self._bulk, self.a_cell, self.bcs, diag=1.0)
-            self._bulk.assemble()
-            self._fresh = False
-        if first:
+            # A solve's first Jacobian: the cell part and the rest assembled into J, each
+            # entry summed as dolfinx sums it (a linear solve takes no other). A second
+            # iteration keeps the cell part from then on (_keep). J's first assembly
+            # also fixes its nonzero pattern, which the kept part's matrix shares (PETSc
+            # drops the preallocated entries a final assembly leaves unused).
+            J.zeroEntries()
+            fem_petsc.assemble_matrix(J, self.a_cell, self.bcs, diag=1.0)
+            J.assemble(PETSc.Mat.AssemblyType.FLUSH)  # the diagonal was set: now adds
+            fem_petsc.assemble_matrix(J, self.a_rest, self.bcs, diag=1.0)
+            J.assemble()
+            self._fresh, self._kept = False, False
             return
+        if not self._kept:
+            self._keep(J)
+        assert self._bulk is not None
         self._bulk.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)  # type: ignore[arg-type]
         fem_petsc.assemble_matrix(J, self.a_rest, self.bcs, diag=1.0)
         J.assemble()
+
+    def _keep(self, J: PETSc.Mat) -> None:
+        """Assemble the cell part into the kept matrix (J's pattern and local numbering)."""
+        if self._bulk is None:
+            self._bulk = J.duplicate()
+            self._bulk.setLGMap(*J.getLGMap())
+        self._bulk.zeroEntries()
+        fem_petsc.assemble_matrix(self._bulk, self.a_cell, self.bcs, diag=1.0)
+        self._bulk.assemble()
+        self._kept = True
 
 
 def _jacobian_blocks(F: ufl.Form, x: Sequence[fem.Function]) -> list[list[ufl.Form | None]]:
