@@ -38,7 +38,9 @@ run, from point probes of both bodies at ``corner_front`` and ``corner_rear``
 opening the u_y jump, as the pair probes' ``slip``/``opening``); the conforming run's
 pair probes check them. Printed: a Markdown table of the headline results (summary.json
 ``dynamic``: peak and residual u_x per gauge, time of the largest u_x, residual slip
-and largest uplift) with the relative differences, and the solvers' figures.
+and largest uplift) with the relative differences, and the solvers' figures: the
+Newton counts, the whole run's wall time, the time loops (wall and CPU) and the loops'
+ratios to the conforming run's (issue 22's target is on the loops).
 
 Every run starts from its static state (the general ones from
 :mod:`breakwater.statics.relaxation`). The results are in the README ("general pairs").
@@ -150,12 +152,20 @@ def main() -> None:
         print(f"| {key} | {x:.6g} | " + " | ".join(cells) + " |")
     print("\n| solver | conforming | " + " | ".join(general) + " |")
     print("|---|---|" + "---|" * len(general))
+    runs = [conforming, *general.values()]
     for key in ("steps", "newton_iterations", "max_newton_iterations", "cutbacks",
                 "wall_time"):
-        cells = [conforming["summary"]["solver"].get(key),
-                 *(run["summary"]["solver"].get(key) for run in general.values())]
-        print(f"| {key} | " + " | ".join(f"{c:.4g}" if isinstance(c, float) else str(c)
-                                         for c in cells) + " |")
+        cells = [run["summary"]["solver"].get(key) for run in runs]
+        label = "wall_time (the whole run)" if key == "wall_time" else key
+        print(f"| {label} | " + " | ".join(f"{c:.4g}" if isinstance(c, float) else str(c)
+                                           for c in cells) + " |")
+    # Issue 22's target is on the time loops (the run's set-up and static state aside).
+    loops = [run["summary"]["solver"]["time_loop"] for run in runs]
+    for key in ("wall", "cpu"):
+        print(f"| time loop {key} (s) | " + " | ".join(f"{t[key]:.3g}" for t in loops) + " |")
+    print("\ntime loop (CPU) / conforming's: " + ", ".join(
+        f"{v} {t['cpu'] / loops[0]['cpu']:.2f}x"
+        for v, t in zip(general, loops[1:], strict=True)))
 
 
 if __name__ == "__main__":
