@@ -21,7 +21,7 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
 from breakwater import forms  # type: ignore[attr-defined]
-from breakwater.contact import forcekernels, searchkernels
+from breakwater.contact import forcekernels, guardkernels, searchkernels
 from breakwater.contact.pointkernels import (
     DenseEntries,
     H,
@@ -32,6 +32,7 @@ from breakwater.contact.pointkernels import (
     unit_tangent,
 )
 from breakwater.contact.projection import FacetGrid, closest_point, nearest_end, project, shape
+from breakwater.contact.slipguard import land
 from breakwater.contact.surfacesearch import SurfaceSearch
 
 RTOL = 1e-12
@@ -326,26 +327,34 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
     np.testing.assert_allclose(forcekernels.left_product(X, act, A_act), X @ A, rtol=0,
                                atol=RTOL * np.abs(X).max() * scale * p.n)
     # The slip guard (SurfaceForces.precheck before the kernels).
-    step = np.random.default_rng(7).normal(size=p.n) * 1e3
     dv, chi = 0.5e-3, 1e-3
     keep = np.flatnonzero((facet >= 0) & np.all(p.node_pos >= 0, axis=1))
-    ps, N, t = p.node_pos[keep], N0[keep], t0[keep]
-    ext = np.append(step, 0.0)
+    ps, N, t_all = p.node_pos[keep], N0[keep], t0[keep]
     pm = p.pos_m[facet[keep]]
     v_m = np.einsum("kn,knd->kd", N, p.v1[pm])
-    y_m = np.einsum("kn,knd->kd", N, ext[pm])
-    y_s = ext[ps]
-    c0 = np.sum((p.v1[ps] - v_m) * t, axis=1)
-    c1 = c0 - dv * np.sum((y_s - y_m) * t, axis=1)
-    fix = (c0 * c1 < 0) & (np.abs(c0) > chi)
-    expected_step = step.copy()
-    t, ys = t[fix], y_s[fix]
-    along = (np.sum(y_m[fix] * t, axis=1) + c0[fix] / dv)[:, None]
-    expected_step[ps[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
-    assert fix.sum() > 0
-    assert forcekernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
-                                   chi) == fix.sum()
-    np.testing.assert_allclose(step, expected_step, rtol=0, atol=1e-12 * np.abs(step).max())
+    c0 = np.sum((p.v1[ps] - v_m) * t_all, axis=1)
+    # Large steps reverse slips (landed at zero); small ones land on the law's curve
+    # (the NumPy reference slipguard.land).
+    for scale, kind in ((1e3, "reverse"), (3e-3, "on_curve")):
+        step = np.random.default_rng(7).normal(size=p.n) * scale
+        ext = np.append(step, 0.0)
+        y_m = np.einsum("kn,knd->kd", N, ext[pm])
+        y_s = ext[ps]
+        c1 = c0 - dv * np.sum((y_s - y_m) * t_all, axis=1)
+        reverse = (c0 * c1 < 0) & (np.abs(c0) > chi)
+        landed, on_curve = land(c0[:, None], c1[:, None], chi)
+        on_curve &= ~reverse & (landed[:, 0] != c1)
+        fix = reverse | on_curve
+        assert {"reverse": reverse, "on_curve": on_curve}[kind].sum() > 0
+        target = np.where(on_curve, landed[:, 0], 0.0)
+        expected_step = step.copy()
+        t, ys = t_all[fix], y_s[fix]
+        along = (np.sum(y_m[fix] * t, axis=1) + (c0[fix] - target[fix]) / dv)[:, None]
+        expected_step[ps[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
+        assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
+                                       chi) == fix.sum()
+        np.testing.assert_allclose(step, expected_step, rtol=0,
+                                   atol=1e-12 * np.abs(step).max())
 
 
 @pytest.mark.parametrize("nn", [2, 3])

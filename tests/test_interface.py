@@ -18,7 +18,9 @@ from dolfinx import fem, la
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.common.errors import MeshError
 from breakwater.contact.conforming import InterfaceNodes
-from breakwater.contact.slipguard import SlipGuard, guard_slip
+from breakwater.contact.guardkernels import CURVED
+from breakwater.contact.guardkernels import land as land_kernel
+from breakwater.contact.slipguard import SlipGuard, guard_slip, land
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Material
 
@@ -58,6 +60,70 @@ def test_guard_3d_isotropic():
         t = np.array([[t1, t2], [t1, t2]])
         out = guard_slip(w0, w1, t, χ)
         assert np.allclose(out, [[-1e-3, 2e-3, 3.0], [0.0, 0.0, 3.0]], rtol=0, atol=1e-15)
+
+
+def _φ(c: float) -> float:
+    return c / np.sqrt(c * c + χ * χ)
+
+
+def _newton(c: float, target: float, guarded: bool) -> tuple[float, int]:
+    """Newton on the scalar law φ(c) = target (a node whose friction force is fixed)."""
+    for its in range(1, 200):
+        step = (_φ(c) - target) / (χ * χ / (c * c + χ * χ) ** 1.5)  # next c − step
+        w1 = np.array([[c - step, 0.0]])
+        c = float((guard_slip(np.array([[c, 0.0]]), w1, T2, χ) if guarded else w1)[0, 0])
+        if abs(_φ(c) - target) < 1e-14:
+            return c, its
+    raise AssertionError("no convergence")
+
+
+@pytest.mark.parametrize("target", [0.3, 0.9, 0.99, -0.999])
+def test_landing_solves_the_scalar_law_at_once(target):
+    # Newton on the saturating law from zero slip crawls (about one χ per iteration
+    # towards a slip of 22χ at φ = 0.999); the landing inverts the law at the linear
+    # model's force, which for one node is the force asked for: one step, exact.
+    exact = χ * target / np.sqrt(1.0 - target * target)
+    c, its = _newton(0.0, target, guarded=True)
+    assert its == 1 and abs(c - exact) <= 1e-13 * abs(exact)
+    c_plain, its_plain = _newton(0.0, target, guarded=False)
+    assert abs(c_plain - exact) <= 1e-6 * abs(exact)
+    if abs(target) > 0.5:
+        assert its_plain >= 4
+
+
+def test_landing_keeps_converged_slips_and_leaves_saturation_to_newton():
+    # At a solution (a zero step) the landing is the slip itself: guard_slip returns
+    # w1. Near saturation (a slip beyond CURVED χ) Newton's step stands.
+    w = np.array([[5.0 * χ, 2.0], [-30.0 * χ, 0.0]])
+    out = guard_slip(w, w.copy(), T2, χ)
+    np.testing.assert_allclose(out, w, rtol=1e-14, atol=0)
+    far = np.array([[2.0 * CURVED * χ, 0.0]])
+    assert guard_slip(far, far * 1.01, T2, χ)[0, 0] == far[0, 0] * 1.01
+
+
+def test_landing_compiled_equals_numpy_and_is_isotropic():
+    # The compiled landing gives the NumPy reference's numbers bit for bit (tangent
+    # planes of 1 and 2 dimensions); in 3D the guarded proposal is the same in any
+    # tangent basis.
+    rng = np.random.default_rng(3)
+    for ntan in (1, 2):
+        c0 = χ * rng.normal(size=(200, ntan)) * 10.0 ** rng.uniform(-1, 2, size=(200, 1))
+        c1 = c0 + χ * rng.normal(size=(200, ntan)) * 10.0 ** rng.uniform(-2, 2, size=(200, 1))
+        ref, on = land(c0, c1, χ)
+        assert 20 < on.sum() < 180
+        for k in range(200):
+            out = np.empty(ntan)
+            assert land_kernel(c0[k], c1[k], χ, out) == on[k]
+            if on[k]:
+                assert np.array_equal(out, ref[k])
+    w0 = np.array([[3e-10, -1e-10, 0.0]])
+    w1 = np.array([[3.5e-10, -0.5e-10, 4.0]])
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    outs = [guard_slip(w0, w1, np.array([[t1, t2]]), χ)
+            for t1, t2 in (([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), ([c, s, 0.0], [-s, c, 0.0]))]
+    assert not np.array_equal(outs[0], w1)  # it landed
+    np.testing.assert_allclose(outs[1], outs[0], rtol=0, atol=1e-12 * χ)  # round-off
+    assert outs[0][0, 2] == 4.0  # the normal part kept
 
 
 @pytest.fixture(scope="module")

@@ -102,7 +102,7 @@ def test_run_outputs(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
     assert written["solver"]["steps"] == steps
     assert written["solver"]["cutbacks"] == 0
     for key in ("newton_iterations", "mean_newton_iterations", "max_newton_iterations",
-                "failed_steps", "flip_corrections", "round_off_accepts", "wall_time"):
+                "failed_steps", "slip_guard_corrections", "round_off_accepts", "wall_time"):
         assert key in written["solver"], key
     for key in ("dolfinx", "petsc4py", "ufl", "basix", "ffcx", "gmsh", "python", "mpi_size"):
         assert key in written["versions"], key

@@ -1,4 +1,4 @@
-"""The compiled forces of a general contact pair: f_c, its Jacobian, the slip guard.
+"""The compiled forces of a general contact pair: f_c and its Jacobian.
 
 The arithmetic of the NumPy references (:mod:`breakwater.contact.pointkernels`, the
 friction of :class:`breakwater.contact.general.SurfaceForces`) in loops
@@ -9,8 +9,8 @@ the normal part of ``vector()`` with the slave nodes' normal forces λ,
 :func:`friction` its friction part, :func:`jacobian` the dense ∂f_c/∂Δa of
 ``matrix()`` (:func:`point_tangents`: the derivatives of :func:`point` that the
 reference takes by complex steps, in forward mode, summed in the reference's order),
-:func:`left_product` ``X @ J`` from J's structure and :func:`slip_guard` the
-pre-check. The interface arrays carry a trailing entry
+:func:`left_product` ``X @ J`` from J's structure (the pre-check, the slip guard:
+:func:`breakwater.contact.guardkernels.slip_guard`). The interface arrays carry a trailing entry
 (position −1: Dirichlet, 0). ``tests/test_contactkernels.py`` checks each against its
 reference.
 """
@@ -23,7 +23,7 @@ from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
 __all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "left_product", "point",
-           "point_tangents", "residual", "slip_guard"]
+           "point_tangents", "residual"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -545,50 +545,3 @@ def left_product(X, act, A):  # type: ignore[no-untyped-def]
         for j in range(na):
             out[i, act[j]] = row[j]
     return out
-
-
-@kernel
-def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ignore[no-untyped-def]
-    """``SurfaceForces.precheck``: cut the steps that reverse a slave node's slip.
-
-    Args:
-        step: Newton's step (changed in place where cut).
-        v1: The iterate's velocities at the interface unknowns (a trailing 0).
-        facet0: The slave nodes' start-of-step master facet (−1: none).
-        N0: Its shape functions at ξ̄₀.
-        t0: The unit tangent there.
-        node_pos: Interface positions of the slave nodes.
-        pos_m: Of the master facets.
-        dv: β₁ Δt.
-        chi: The stick band χ.
-
-    Returns:
-        The nodes corrected.
-    """
-    n = len(step)
-    ext = np.zeros(n + 1)
-    ext[:n] = step
-    fixed = 0
-    nm = N0.shape[1]
-    for j in range(len(facet0)):
-        f = facet0[j]
-        p0, p1 = node_pos[j, 0], node_pos[j, 1]
-        if f < 0 or p0 < 0 or p1 < 0:
-            continue
-        vm0, vm1, ym0, ym1 = 0.0, 0.0, 0.0, 0.0
-        for b in range(nm):
-            vm0 += N0[j, b] * v1[pos_m[f, b, 0]]
-            vm1 += N0[j, b] * v1[pos_m[f, b, 1]]
-            ym0 += N0[j, b] * ext[pos_m[f, b, 0]]
-            ym1 += N0[j, b] * ext[pos_m[f, b, 1]]
-        t_0, t_1 = t0[j, 0], t0[j, 1]
-        c0 = (v1[p0] - vm0) * t_0 + (v1[p1] - vm1) * t_1
-        c1 = c0 - dv * ((ext[p0] - ym0) * t_0 + (ext[p1] - ym1) * t_1)
-        if c0 * c1 < 0 and abs(c0) > chi:
-            ys0, ys1 = ext[p0], ext[p1]
-            along = (ym0 * t_0 + ym1 * t_1) + c0 / dv
-            normal = ys0 * t_0 + ys1 * t_1
-            step[p0] = (ys0 - t_0 * normal) + t_0 * along
-            step[p1] = (ys1 - t_1 * normal) + t_1 * along
-            fixed += 1
-    return fixed

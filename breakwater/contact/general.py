@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact import forcekernels, newtonaids, searchkernels, slavepoints
+from breakwater.contact import forcekernels, guardkernels, newtonaids, searchkernels, slavepoints
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
@@ -217,21 +217,23 @@ class SurfaceForces(SurfaceSearch):
         node's slip velocity (relative to the master material point under its
         projection at the start of the step, along the tangent there) from outside the
         stick band χ, the node's tangential step is cut so that it lands at zero slip
-        velocity, where the stick tangent is exact. The slip velocity is linear in Δa,
-        so the landing is exact (:func:`~breakwater.contact.forcekernels.slip_guard`).
+        velocity, where the stick tangent is exact; a step whose linear model asks for a
+        friction force in the law's curved zone lands where the law gives that force
+        (:mod:`breakwater.contact.guardkernels`). The slip velocity is linear in Δa, so
+        the landings are exact (:func:`~breakwater.contact.guardkernels.slip_guard`).
 
         Args:
             x: The current iterate (Δa at the interface unknowns).
             step: Newton's step, changed in place where cut.
 
         Returns:
-            The nodes corrected (the same on every rank).
+            The nodes whose step changed (the same on every rank).
         """
         if not self.spec.friction:
             return 0
         u0, _, v1 = self._state(x)
         facet, N0, t0 = self._frozen(u0)
-        return int(forcekernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
+        return int(guardkernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
                                            self.beta1 * self.step_dt(), self._law[3]))
 
     def reach(self) -> np.ndarray | None:

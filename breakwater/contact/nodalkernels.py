@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.guardkernels import land
 
 __all__ = ["guard_steps", "nodal_left_product", "nodal_residual", "nodal_state",
            "nodal_tangents", "tangent_block", "tangent_left_product"]
@@ -229,8 +230,9 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     Newton's next iterate is ``x − step``; the velocities of the iterate are
     ``v_pred + dv_dx x`` (zero at a node component that is not an unknown). Where the
     relative slip velocity would turn by more than 90° in the tangent plane (w₀·w₁ < 0)
-    from outside the band ``|w₀| ≤ band``, the slave's step is cut so that its tangential
-    velocity lands at zero: the slave's step becomes
+    from outside the band ``|w₀| ≤ band``, its tangential velocity lands at zero; any
+    other step lands on the law's curve where
+    :func:`~breakwater.contact.guardkernels.land` applies. The slave's step becomes
     ``ys − (I − nn) ys + (I − nn) ym + (w₀ − w₁')/dv_dx`` (normal part kept), written in
     ``step`` (:func:`~breakwater.contact.slipguard.guard_slip`,
     :class:`~breakwater.contact.slipguard.SlipGuard`).
@@ -242,7 +244,9 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     w0 = np.empty(gdim)
     w1 = np.empty(gdim)
     w1n = np.empty(gdim)
+    c0s = np.empty(ntan)
     c1 = np.empty(ntan)
+    target = np.empty(ntan)
     corrected = 0
     for k in range(nodes):
         for side in range(2):
@@ -267,16 +271,19 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
             for i in range(gdim):
                 c0 += tangents[k, m, i] * w0[i]
                 c += tangents[k, m, i] * w1[i]
+            c0s[m] = c0
             c1[m] = c
             dot += c0 * c
             speed2 += c0 * c0
-        if not (dot < 0.0 and math.sqrt(speed2) > band):
-            continue  # no reversal: Newton's step stands
+        if dot < 0.0 and math.sqrt(speed2) > band:
+            target[:] = 0.0  # a reversal: lands at zero
+        elif not land(c0s, c1, band, target):
+            continue  # Newton's step stands
         fix = False
         for i in range(gdim):
             cut = 0.0
             for m in range(ntan):
-                cut += tangents[k, m, i] * c1[m]
+                cut += tangents[k, m, i] * (c1[m] - target[m])
             w1n[i] = w1[i] - cut
             fix = fix or (w1n[i] != w1[i])
         if not fix:

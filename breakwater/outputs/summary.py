@@ -261,7 +261,9 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
     solver, ``factorisation``, ``back_solves``, ``bulk_products``,
     ``interface_assembly``, ``newton`` and ``contact_search`` (the general pairs' search,
     a part of ``interface_assembly``); for the reference solver, ``newton`` (its SNES
-    solves in total).
+    solves in total). ``flips``: the nodal Newton steps the slip guard changed
+    (``slip_guard_corrections``: reversals landed at zero slip and slips landed on the
+    law's curve, :mod:`breakwater.contact.slipguard`).
     """
     its = iterations
     return {
@@ -274,7 +276,7 @@ def solver_summary(steps: int, iterations: Sequence[int], failed_steps: int,
         "failed_newton_iterations": failed_iterations,
         "cutbacks": cutbacks,
         "min_dt": min_dt,
-        "flip_corrections": flips,
+        "slip_guard_corrections": flips,
         "round_off_accepts": round_off_accepts,
         "wall_time": wall_time,
         "time_loop": dict(time_loop or {}),

@@ -23,7 +23,9 @@ its start with every step that would multiply the residual by more than
 change inside a step makes the full step overshoot by orders of magnitude: on a caisson
 meshed apart from its mound, sliding under a storm wave with adaptive steps, Newton
 cycled between such overshoots for 40 iterations at every step size down to the smallest
-and the run failed (2.2e3 → 1.2e5 → ... → 24 after 40 iterations). The halving is not the
+and the run failed (2.2e3 → 1.2e5 → ... → 24 after 40 iterations; since the slip guard
+lands slips on the friction law's curve, :mod:`breakwater.contact.guardkernels`, that
+step converges without the rescue). The halving is not the
 first try: a penalty's first step into contact raises the residual by ε_n times the
 compliance, and halving it creeps towards the contact instead of the two iterations a
 full step takes; as a rescue it leaves every solve that converges as it was.

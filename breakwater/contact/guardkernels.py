@@ -1,0 +1,132 @@
+"""The slip guards' compiled parts: the landing on the friction law's curve, a general pair's guard.
+
+The slip guard (:mod:`breakwater.contact.slipguard`) changes a node's tangential step in
+two cases. A step that reverses the node's slip from outside the stick band lands at zero
+slip (the reversal cut). Any other step whose linear model asks for a friction force in
+the law's curved zone lands where the law gives that force (:func:`land`): the
+regularised law ``φ(c) = c / sqrt(|c|² + χ²)`` saturates within a few χ, and Newton on
+the slip velocity c crawls along it (from stick towards a slip of 20χ, each iteration
+gains about one χ: the residual fell by a factor of 2–3 per iteration for up to 20
+iterations at the separately meshed Goda caisson's base corners). The linear model's
+force ``f = φ(c₀) + φ'(c₀)(c₁ − c₀)`` is what the step's tangential equilibrium asks of
+the law; inverting the law there, ``c = χ f / sqrt(1 − |f|²)``, gives in one step the
+slip a scalar law reaches in many. At a solution the step is zero and f = φ(c₀), so the
+landing is c₀ itself: the converged states are those of Newton's own iteration, and the
+landing only changes the way there. It is used where the force is within the curved
+zone, ``|f| < F_MAX`` (a slip of at most :data:`CURVED` χ): nearer saturation, the
+inversion turns round-off and the coupling between nodes into large slips.
+
+:func:`land` is the compiled form of :func:`breakwater.contact.slipguard.land` (the
+same floating-point operations), used by the conforming pairs' compiled guard
+(:func:`breakwater.contact.nodalkernels.guard_steps`) and by :func:`slip_guard`, the
+general pair's (:meth:`breakwater.contact.general.SurfaceForces.precheck`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from breakwater.common.jit import kernel
+
+__all__ = ["CURVED", "F_MAX", "land", "slip_guard"]
+
+#: The landing applies where the linear model's slip is within this many χ.
+CURVED = 100.0
+#: |φ| at a slip of CURVED χ: the landing's bound on the linear model's force.
+F_MAX = CURVED / math.sqrt(1.0 + CURVED * CURVED)
+
+
+@kernel
+def land(c0, c1, chi, out):  # type: ignore[no-untyped-def]
+    """The landing of one node's tangential slip on the law's curve (compiled).
+
+    Args:
+        c0: The iterate's tangential slip velocity (components in the tangent basis).
+        c1: Newton's proposal.
+        chi: χ.
+        out: Out: the slip where the law gives the linear model's force.
+
+    Returns:
+        Whether the force is within the curved zone (else ``out`` is not the landing).
+    """
+    n = len(c0)
+    s = 0.0
+    for m in range(n):
+        s += c0[m] * c0[m]
+    r = math.sqrt(s + chi * chi)
+    p = 0.0
+    for m in range(n):
+        p += (c0[m] / r) * (c1[m] - c0[m])
+    f2 = 0.0
+    for m in range(n):
+        phi = c0[m] / r
+        out[m] = phi + ((c1[m] - c0[m]) - phi * p) / r
+        f2 += out[m] * out[m]
+    if not f2 < F_MAX * F_MAX:
+        return False
+    scale = chi / math.sqrt(1.0 - f2)
+    for m in range(n):
+        out[m] = scale * out[m]
+    return True
+
+
+@kernel
+def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ignore[no-untyped-def]
+    """``SurfaceForces.precheck``: a general pair's slip guard on Newton's step.
+
+    Per slave node with a start-of-step master point: the slip velocity along the
+    tangent there, of the iterate (c₀) and of Newton's proposal (c₁); a reversal from
+    outside the band lands at zero, any other step on the law's curve where
+    :func:`land` applies. The slave's tangential step is set to give the landing slip
+    (the slip is linear in Δa: exact).
+
+    Args:
+        step: Newton's step (changed in place where cut).
+        v1: The iterate's velocities at the interface unknowns (a trailing 0).
+        facet0: The slave nodes' start-of-step master facet (−1: none).
+        N0: Its shape functions at ξ̄₀.
+        t0: The unit tangent there.
+        node_pos: Interface positions of the slave nodes.
+        pos_m: Of the master facets.
+        dv: β₁ Δt.
+        chi: The stick band χ.
+
+    Returns:
+        The nodes whose step changed.
+    """
+    n = len(step)
+    ext = np.zeros(n + 1)
+    ext[:n] = step
+    fixed = 0
+    nm = N0.shape[1]
+    a, b, out = np.empty(1), np.empty(1), np.empty(1)
+    for j in range(len(facet0)):
+        f = facet0[j]
+        p0, p1 = node_pos[j, 0], node_pos[j, 1]
+        if f < 0 or p0 < 0 or p1 < 0:
+            continue
+        vm0, vm1, ym0, ym1 = 0.0, 0.0, 0.0, 0.0
+        for k in range(nm):
+            vm0 += N0[j, k] * v1[pos_m[f, k, 0]]
+            vm1 += N0[j, k] * v1[pos_m[f, k, 1]]
+            ym0 += N0[j, k] * ext[pos_m[f, k, 0]]
+            ym1 += N0[j, k] * ext[pos_m[f, k, 1]]
+        t_0, t_1 = t0[j, 0], t0[j, 1]
+        c0 = (v1[p0] - vm0) * t_0 + (v1[p1] - vm1) * t_1
+        c1 = c0 - dv * ((ext[p0] - ym0) * t_0 + (ext[p1] - ym1) * t_1)
+        if c0 * c1 < 0 and abs(c0) > chi:
+            target = 0.0
+        else:
+            a[0], b[0] = c0, c1
+            if not land(a, b, chi, out) or out[0] == c1:
+                continue
+            target = out[0]
+        ys0, ys1 = ext[p0], ext[p1]
+        along = (ym0 * t_0 + ym1 * t_1) + (c0 - target) / dv
+        normal = ys0 * t_0 + ys1 * t_1
+        step[p0] = (ys0 - t_0 * normal) + t_0 * along
+        step[p1] = (ys1 - t_1 * normal) + t_1 * along
+        fixed += 1
+    return fixed
