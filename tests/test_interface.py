@@ -99,6 +99,10 @@ def test_landing_keeps_converged_slips_and_leaves_saturation_to_newton():
     np.testing.assert_allclose(out, w, rtol=1e-14, atol=0)
     far = np.array([[2.0 * CURVED * χ, 0.0]])
     assert guard_slip(far, far * 1.01, T2, χ)[0, 0] == far[0, 0] * 1.01
+    # A step that lands (from 2χ to 3χ) is left alone by the reference path's guard.
+    w0, w1 = np.array([[2.0 * χ, 0.0]]), np.array([[3.0 * χ, 0.0]])
+    assert guard_slip(w0, w1, T2, χ)[0, 0] > 5.0 * χ
+    assert guard_slip(w0, w1, T2, χ, landing=False) is w1
 
 
 def test_landing_compiled_equals_numpy_and_is_isotropic():

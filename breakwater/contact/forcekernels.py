@@ -9,10 +9,10 @@ the normal part of ``vector()`` with the slave nodes' normal forces λ,
 :func:`friction` its friction part, :func:`jacobian` the dense ∂f_c/∂Δa of
 ``matrix()`` (:func:`point_tangents`: the derivatives of :func:`point` that the
 reference takes by complex steps, in forward mode, summed in the reference's order),
-:func:`left_product` ``X @ J`` from J's structure (the pre-check, the slip guard:
-:func:`breakwater.contact.guardkernels.slip_guard`). The interface arrays carry a trailing entry
-(position −1: Dirichlet, 0). ``tests/test_contactkernels.py`` checks each against its
-reference.
+:func:`left_product` ``X @ J`` from J's structure (the pair's slip guard, its
+pre-check, is :func:`breakwater.contact.guardkernels.slip_guard`). The interface arrays
+carry a trailing entry (position −1: Dirichlet, 0). ``tests/test_contactkernels.py``
+checks each against its reference.
 """
 
 from __future__ import annotations

@@ -66,8 +66,10 @@ def guard_slip(w0: np.ndarray, w1: np.ndarray, tangents: np.ndarray, χ: float,
     c0 = np.einsum("nkd,nd->nk", tangents, w0)
     c1 = np.einsum("nkd,nd->nk", tangents, w1)
     reverse = (np.sum(c0 * c1, axis=1) < 0) & (np.sqrt(np.sum(c0 * c0, axis=1)) > χ)
-    landed, on_curve = land(c0, c1, χ)
-    on_curve &= ~reverse & landing
+    landed, on_curve = c1, np.zeros(len(c1), bool)
+    if landing:
+        landed, on_curve = land(c0, c1, χ)
+        on_curve &= ~reverse
     if not (reverse.any() or on_curve.any()):
         return w1
     target = np.where(on_curve[:, None], landed, np.where(reverse[:, None], 0.0, c1))

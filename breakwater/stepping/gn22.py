@@ -267,10 +267,9 @@ class GN22:
             gn22_kinematics(u, v, a, d, self.dt, p.beta1, p.beta2)
             for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)), strict=True))
         self.nodes: Sequence[InterfaceNodes] = interface_nodes(model) if flip_guard else ()
-        self.guard = SlipGuard(self.nodes) if self.nodes else None
-        # The reference path's Newton keeps the guard's reversal cuts alone (as it was
-        # before the fast path's landings on the friction law's curve).
-        self._reference_guard = SlipGuard(self.nodes, landing=False) if self.nodes else None
+        # The fast path's guard also lands slips on the friction law's curve; the
+        # reference path's Newton keeps the reversal cuts alone (as it was before them).
+        self.guard = SlipGuard(self.nodes, landing=solver == "fast") if self.nodes else None
         self._flips = 0  # nodes the guard cut outside the fast solver's Newton
         self.solver: StepSolver
         #: The fast path's solver, for what only it has (its bulk operators and
@@ -409,7 +408,7 @@ class GN22:
         v₁ per unit Δa, and may cut the step ``y``; its corrections count in
         :attr:`flips`.
         """
-        assert self._reference_guard is not None
+        assert self.guard is not None
         y.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         fem_petsc.assign(y, self._y)
@@ -417,7 +416,7 @@ class GN22:
         Δt, β1, β2 = float(self.dt.value), self.params.beta1, self.params.beta2
         v1 = [gn22_kinematics(u.x.array, v.x.array, a.x.array, d.x.array, Δt, β1, β2)[1]
               for u, v, a, d in zip(self.u, self.v, self.a, self.da, strict=True)]
-        corrected = self._reference_guard(v1, [f.x.array for f in self._y], β1 * Δt)
+        corrected = self.guard(v1, [f.x.array for f in self._y], β1 * Δt)
         if corrected:
             self.flips += corrected
             fem_petsc.assign(self._y, y)
