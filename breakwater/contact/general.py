@@ -55,7 +55,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.contact import forcekernels, guardkernels, newtonaids, searchkernels, slavepoints
+from breakwater.contact import (
+    forcekernels,
+    guardkernels,
+    newtonaids,
+    recordkernels,
+    searchkernels,
+    slavepoints,
+)
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
@@ -69,6 +76,10 @@ __all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces"]
 
 QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
+
+
+_NO_NODES = np.zeros(0, np.int64)
+_NO_PAIRS = np.zeros((0, 2))
 
 
 def scatter_add(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -286,6 +297,8 @@ class SurfaceContact(SurfaceForces):
     _field_points: slavepoints.SlavePoints | None = None  # the slave nodes, on first use
     # The last state() and the search (_normal's dict) it was built from.
     _state_of: tuple[dict[str, Any], dict[str, np.ndarray]] | None = None
+    # The last _record() of a recording: (the accepted state, the search, the record).
+    _record_of: tuple[Any, dict[str, Any], np.ndarray] | None = None
 
     @property
     def name(self) -> str:
@@ -303,12 +316,9 @@ class SurfaceContact(SurfaceForces):
         The resultant on the slave (:meth:`resultant`), the reference length of the
         integration points where g_n ≤ 0 and the largest ⟨−g_n⟩₊ there.
         """
-        force = self.resultant()
-        state = self.state()
-        closed = state["gap"] <= 0  # NaN (no projection): open
+        r = self._record()
         return dict(zip(self.columns, (
-            float(force[0]), float(force[1]), float(state["weight"][closed].sum()),
-            float(-state["gap"][closed].min(initial=0.0))), strict=True))
+            float(r[4] + r[6]), float(r[5] + r[7]), float(r[2]), float(r[3])), strict=True))
 
     def resultant(self, accepted: bool = True) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N, or N/m in plane strain).
@@ -322,17 +332,30 @@ class SurfaceContact(SurfaceForces):
 
     def resultants(self, accepted: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """The normal (pressure) and friction parts of :meth:`resultant`."""
+        r = self._record(accepted)
+        return r[4:6].copy(), r[6:8].copy()
+
+    def _record(self, accepted: bool = True) -> np.ndarray:
+        """:func:`~breakwater.contact.recordkernels.pair_record` at the state (collective).
+
+        Within a :meth:`recording` of the accepted state: once (the history row's
+        resultant and measures, the ledger's energies).
+        """
         u0, u1, v1 = self._state(accepted=accepted)
         p = self._normal(u1)
-        nn = self.slave.X.shape[1]
-        # The slave's nodal residual is −∫ t_s N_k, and Σ_k N_k = 1.
-        normal = -p["forces"][:, :nn].sum(axis=(0, 1))
-        friction = np.zeros_like(normal)
-        if self.spec.friction:
-            fr = self._friction(u0, v1, p["lam"], accepted)
-            if fr is not None:
-                friction = fr["force"].sum(axis=0)
-        return normal, friction
+        kept = self._record_of
+        if accepted and kept is not None and kept[0] is self._accepted and kept[1] is p:
+            return kept[2]
+        eps, _, mu, chi = self._law
+        fr = self._friction(u0, v1, p["lam"], accepted) if self.spec.friction else None
+        k, v_T, force = ((fr["k"], fr["v_T"], fr["force"]) if fr is not None
+                         else (_NO_NODES, _NO_PAIRS, _NO_PAIRS))
+        r = recordkernels.pair_record(p["index"], p["gap"], p["all_weight"], p["forces"],
+                                      self.slave.X.shape[1], eps, k, p["lam"], v_T, force,
+                                      mu, chi)
+        if accepted and self._accepted is not None:
+            self._record_of = (self._accepted, p, r)
+        return r
 
     def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
         """The slave nodes in contact at the current iterate and their slip velocities.
@@ -356,18 +379,8 @@ class SurfaceContact(SurfaceForces):
         ``∫ ½ ε_n ⟨−g_n⟩₊²`` on the normal integration points and
         ``Σ_k μ λ_k |v_T|²/sqrt(|v_T|² + χ²)`` on the slave nodes.
         """
-        state = self.state()
-        closed = state["gap"] <= 0
-        energy = float(np.sum(state["weight"][closed]
-                              * self.law.normal.energy(state["gap"][closed])))
-        power = 0.0
-        if self.spec.friction:
-            u0, u1, v1 = self._state(accepted=True)
-            lam = self._normal(u1)["lam"]
-            fr = self._friction(u0, v1, lam, accepted=True)
-            if fr is not None:
-                power = float(np.sum(self.law.friction.power(lam[fr["k"]], fr["v_T"])))
-        return energy, power
+        r = self._record()
+        return float(r[0]), float(r[1])
 
     def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
                      ) -> SurfaceEnergy:
