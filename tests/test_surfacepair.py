@@ -701,6 +701,13 @@ def test_slip_predictor_keeps_the_last_slip_velocity(shared_dir: pathlib.Path) -
             u0, _, v1 = provider._state(y)
             frozen = provider._frozen(u0)
             along = provider.memory.along(v1, *frozen)
+            # The compiled slip velocities against their NumPy statement (NaN: no
+            # facet), to the round-off of a sum of four products of |v| each.
+            facet, N0, t0 = frozen
+            vm = np.einsum("jb,jbd->jd", N0, v1[provider._pm[np.maximum(facet, 0)]])
+            ref = np.einsum("jd,jd->j", v1[provider.node_pos] - vm, t0)
+            ref[facet < 0] = np.nan
+            np.testing.assert_allclose(along, ref, rtol=0, atol=1e-15 * np.abs(v1).max())
             keep = np.isfinite(provider.memory.slip) & np.isfinite(along)
             scale = np.maximum(np.abs(provider.memory.slip[keep]), χ)
             assert np.all(np.abs(along[keep] - provider.memory.slip[keep]) < 1e-6 * scale)

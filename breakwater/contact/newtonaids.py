@@ -12,10 +12,12 @@ so every rank takes the same decisions).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from breakwater.common.jit import kernel
 from breakwater.contact import forcekernels
 
 if TYPE_CHECKING:
@@ -58,11 +60,7 @@ class SlipMemory:
     def along(self, v1: np.ndarray, facet: np.ndarray, N0: np.ndarray, t0: np.ndarray
               ) -> np.ndarray:
         """Per slave node, ``(v_k − v̄_m(ξ̄₀))·t₀`` at the velocities v1 (NaN: no facet)."""
-        p = self.pair
-        vm = np.einsum("jb,jbd->jd", N0, v1[p._pm[np.maximum(facet, 0)]])
-        out = np.einsum("jd,jd->j", v1[p._node_pos] - vm, t0)
-        out[facet < 0] = np.nan
-        return out
+        return slip_along(v1, facet, N0, t0, self.pair._node_pos, self.pair._pm)
 
     def predict(self, y: np.ndarray) -> int:
         """Move Newton's start y (in place) to the last step's slip velocities.
@@ -75,12 +73,8 @@ class SlipMemory:
             return 0
         u0, _, v1 = p._state(y)
         facet, N0, t0 = p._frozen(u0)
-        along = self.along(v1, facet, N0, t0)
-        pos = p._node_pos
-        keep = np.isfinite(self.slip) & np.isfinite(along) & np.all(pos >= 0, axis=1)
-        shift = (along[keep] - self.slip[keep]) / (p.beta1 * p.step_dt())
-        y[pos[keep]] -= t0[keep] * shift[:, None]  # distinct positions per node
-        return int(keep.sum())
+        return int(shift_start(y, self.slip, self.along(v1, facet, N0, t0), t0, p._node_pos,
+                               p.beta1 * p.step_dt()))
 
     def converged(self, y: np.ndarray) -> None:
         """Keep the converged step's slip velocities at the slave nodes in contact.
@@ -111,6 +105,41 @@ class SlipMemory:
         """Set :attr:`slip` from :meth:`saved` (a resumed run)."""
         self.slip = None if saved is None else np.array(
             [np.nan if x is None else x for x in saved], dtype=float)
+
+
+@kernel
+def slip_along(v1, facet, N0, t0, node_pos, pos_m):  # type: ignore[no-untyped-def]
+    """:meth:`SlipMemory.along` (compiled): per slave node ``(v_k − Σ_b N̄₀_b v_b)·t₀``."""
+    out = np.empty(len(facet))
+    for j in range(len(facet)):
+        f = facet[j]
+        if f < 0:
+            out[j] = np.nan
+            continue
+        a0, a1 = 0.0, 0.0
+        for b in range(N0.shape[1]):
+            a0 += N0[j, b] * v1[pos_m[f, b, 0]]
+            a1 += N0[j, b] * v1[pos_m[f, b, 1]]
+        out[j] = (v1[node_pos[j, 0]] - a0) * t0[j, 0] + (v1[node_pos[j, 1]] - a1) * t0[j, 1]
+    return out
+
+
+@kernel
+def shift_start(y, slip, along, t0, node_pos, dv):  # type: ignore[no-untyped-def]
+    """:meth:`SlipMemory.predict`'s move of y (in place, compiled); the nodes moved.
+
+    Where a node has a last slip and a slip now and its DOFs are unknowns:
+    ``y_k −= t₀ (along − slip)/dv`` (``dv = β₁Δt``).
+    """
+    moved = 0
+    for j in range(len(slip)):
+        if (math.isfinite(slip[j]) and math.isfinite(along[j]) and node_pos[j, 0] >= 0
+                and node_pos[j, 1] >= 0):
+            shift = (along[j] - slip[j]) / dv
+            y[node_pos[j, 0]] -= t0[j, 0] * shift
+            y[node_pos[j, 1]] -= t0[j, 1] * shift
+            moved += 1
+    return moved
 
 
 def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
