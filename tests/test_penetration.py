@@ -25,7 +25,12 @@ from breakwater.meshes.apart import Rectangle, rectangles
 from breakwater import cli
 from breakwater.common.errors import MeshError
 from breakwater.common.files import read_history
-from breakwater.contact.penetration import allowed_depth, step_penetration
+from breakwater.contact.penetration import (
+    _motion_bound,
+    allowed_depth,
+    screen_bound,
+    step_penetration,
+)
 from breakwater.contact.surfaces import Surface, SurfacePair
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, Fixed, Material
@@ -85,6 +90,25 @@ def test_step_check_depth_motion_and_far_nodes() -> None:
     assert _check((1.0, 5.0), (0.0, -2.0), -1) is None
     far = _check((1.0, 5.0), (0.0, -6.0), -1)
     assert far is not None and "more than its distance 5 m from the master surface" in far
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_screen_bound_is_the_motion_bound(seed: int) -> None:
+    """StepCheck's compiled screen bound equals ``_motion_bound``'s largest entry.
+
+    Random motions of 7 slave nodes and 5 quadratic master facets, some positions
+    Dirichlet (−1: u's trailing 0); the same sums in another order: 1e-14 relative.
+    """
+    rng = np.random.default_rng(seed)
+    n = 40
+    u0, u1 = np.append(rng.normal(size=n), 0.0), np.append(rng.normal(size=n), 0.0)
+    node_pos = rng.integers(-1, n, size=(7, 2))
+    pos_m = rng.integers(-1, n, size=(5, 3, 2))
+    expected = _motion_bound(u1[node_pos] - u0[node_pos], u1[pos_m] - u0[pos_m])[0].max()
+    assert screen_bound(u0, u1, node_pos, pos_m) == pytest.approx(expected, rel=1e-14)
+    # No master facet: the nodes' own motion.
+    assert screen_bound(u0, u1, node_pos, pos_m[:0]) == pytest.approx(
+        np.linalg.norm(u1[node_pos] - u0[node_pos], axis=1).max(), rel=1e-14)
 
 
 # --- the tunnelling block, through the command line -------------------------------------

@@ -47,6 +47,8 @@ import numpy as np
 from dolfinx import geometry
 from mpi4py import MPI
 
+from breakwater.common.arrays import equal
+from breakwater.common.jit import kernel
 from breakwater.contact.projection import FacetGrid, curve, project
 from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
 
@@ -177,6 +179,40 @@ def _motion_bound(du_s: np.ndarray, du_m: np.ndarray) -> tuple[np.ndarray, float
     return np.linalg.norm(du_s - centre, axis=1) + _SHAPE_SUM * spread, spread, centre
 
 
+@kernel
+def screen_bound(u0, u1, node_pos, pos_m):  # type: ignore[no-untyped-def]
+    """``_motion_bound(Δu_s, Δu_m)[0].max(initial=0)`` from u0 and u1 (compiled).
+
+    Δu = u1 − u0 at the slave nodes' positions ``node_pos`` ``(K, gdim)`` and the master
+    facets' ``pos_m`` ``(F, nn, gdim)``: one pass, no temporaries.
+    """
+    gdim = node_pos.shape[1]
+    F, nn = pos_m.shape[0], pos_m.shape[1]
+    centre = np.zeros(gdim)
+    for f in range(F):
+        for a in range(nn):
+            for d in range(gdim):
+                centre[d] += u1[pos_m[f, a, d]] - u0[pos_m[f, a, d]]
+    if F:
+        centre /= F * nn
+    spread = 0.0
+    for f in range(F):
+        for a in range(nn):
+            r = 0.0
+            for d in range(gdim):
+                x = (u1[pos_m[f, a, d]] - u0[pos_m[f, a, d]]) - centre[d]
+                r += x * x
+            spread = max(spread, np.sqrt(r))
+    bound = 0.0
+    for j in range(node_pos.shape[0]):
+        r = 0.0
+        for d in range(gdim):
+            x = (u1[node_pos[j, d]] - u0[node_pos[j, d]]) - centre[d]
+            r += x * x
+        bound = max(bound, np.sqrt(r) + _SHAPE_SUM * spread)
+    return bound
+
+
 def step_penetration(spec: SurfacePair, radius: float, allowed: np.ndarray,
                      start: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
                      node_X: np.ndarray, node_pos: np.ndarray, master_X: np.ndarray,
@@ -293,9 +329,8 @@ class StepCheck:
             start: Gives the slave nodes' start-of-step projection (called only for a
                 full check; see :func:`step_penetration`).
         """
-        if self._screen is not None and np.array_equal(self._screen[0], u0):
-            bound = float(_motion_bound(u1[self.node_pos] - u0[self.node_pos],
-                                        u1[self.pos_m] - u0[self.pos_m])[0].max(initial=0.0))
+        if self._screen is not None and equal(self._screen[0], u0):
+            bound = float(screen_bound(u0, u1, self.node_pos, self.pos_m))
             depth = self._screen[1] + bound
             if bound <= self.radius and depth <= self.floor:
                 self._screen = (u1.copy(), depth)
