@@ -495,13 +495,22 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps
         for a in range(2):
             for b in range(2):
                 B[i, a, b] = cv * ((D[a, 0] * t[0] * t[b]) + (D[a, 1] * t[1] * t[b]))
-    # Rows (and columns): the slave node, then the master nodes of its f₀.
+    # Rows (and columns): the slave node, then the master nodes of its f₀. dλ_k is
+    # nonzero in the columns of the points on the node's facets alone: those visited.
+    cols = np.empty((m, na), np.int64)
+    ncols = np.zeros(m, np.int64)
+    for i in range(m):
+        for c in range(na):
+            if dlam[k[i], c] != 0.0:
+                cols[i, ncols[i]] = c
+                ncols[i] += 1
     for r in range(R):
         for i in range(m):
             for a in range(2):
                 q = row_pos[i, r, a]
                 if q >= 0:
-                    for c in range(na):
+                    for j in range(ncols[i]):
+                        c = cols[i, j]
                         A[where[q], c] += sign[i, r] * (unit[i, a] * dlam[k[i], c])
     for r in range(R):
         for cc in range(R):
