@@ -4,6 +4,7 @@ Run on purpose, never in CI (a conforming run of 6 s and general runs of 2-3 min
 
     .venv/bin/python benchmarks/general_vs_conforming.py
     .venv/bin/python benchmarks/general_vs_conforming.py --variant nodes-small
+    .venv/bin/python benchmarks/general_vs_conforming.py --repeat 5
     .venv/bin/python benchmarks/general_vs_conforming.py --set mesh.refinement=2 \
         --set bodies.mound.shear_modulus=2.30835e6
     .venv/bin/mpiexec -n 2 .venv/bin/python benchmarks/general_vs_conforming.py
@@ -40,7 +41,9 @@ pair probes check them. Printed: a Markdown table of the headline results (summa
 ``dynamic``: peak and residual u_x per gauge, time of the largest u_x, residual slip
 and largest uplift) with the relative differences, and the solvers' figures: the
 Newton counts, the whole run's wall time, the time loops (wall and CPU) and the loops'
-ratios to the conforming run's (issue 22's target is on the loops).
+ratios to the conforming run's (issue 22's target is on the loops); with ``--repeat N``,
+N − 1 more rounds of the conforming case and the variants, alternately, and the median
+of each variant's N ratios.
 
 Every run starts from its static state (the general ones from
 :mod:`breakwater.statics.relaxation`). The results are in the README ("general pairs").
@@ -124,13 +127,23 @@ def main() -> None:
                         help="a general run to make (default: all)")
     parser.add_argument("--out", type=pathlib.Path, default=None,
                         help="output folder (default: a temporary one)")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="run the conforming case and each variant this many times, "
+                             "alternately, and print each round's loop ratios and their "
+                             "medians (the machine's speed drifts by 20 %% within minutes)")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     tmp = tempfile.mkdtemp(prefix="general_vs_conforming_") if comm.rank == 0 else None
     out = args.out or pathlib.Path(comm.bcast(tmp, root=0))
     conforming = _run("conforming", out, args.set)
-    general = {v: _run(v, out, [*args.set, *GENERAL, *VARIANTS[v]])
-               for v in args.variant or VARIANTS}
+    variants = args.variant or list(VARIANTS)
+    general = {v: _run(v, out, [*args.set, *GENERAL, *VARIANTS[v]]) for v in variants}
+    rounds = [{v: general[v]["summary"]["solver"]["time_loop"]["cpu"]
+               / conforming["summary"]["solver"]["time_loop"]["cpu"] for v in variants}]
+    for k in range(1, args.repeat):
+        base = _run(f"conforming-{k}", out, args.set)["summary"]["solver"]["time_loop"]["cpu"]
+        rounds.append({v: _run(f"{v}-{k}", out, [*args.set, *GENERAL, *VARIANTS[v]])[
+            "summary"]["solver"]["time_loop"]["cpu"] / base for v in variants})
     if comm.rank > 0:
         return
     # The corner probes reproduce the conforming run's pair probes.
@@ -166,6 +179,11 @@ def main() -> None:
     print("\ntime loop (CPU) / conforming's: " + ", ".join(
         f"{v} {t['cpu'] / loops[0]['cpu']:.2f}x"
         for v, t in zip(general, loops[1:], strict=True)))
+    if args.repeat > 1:
+        print("\nthe conforming case and the variants alternately, loop ratios per round: "
+              + "; ".join(", ".join(f"{v} {r[v]:.2f}x" for v in variants) for r in rounds))
+        print("median ratios: " + ", ".join(
+            f"{v} {float(np.median([r[v] for r in rounds])):.2f}x" for v in variants))
 
 
 if __name__ == "__main__":
