@@ -8,7 +8,7 @@ nearest), :func:`nearest_end` is :func:`~breakwater.contact.projection.nearest_e
 :func:`segment_points` the ``segments`` integration of
 :meth:`breakwater.contact.surfacesearch.SurfaceSearch._integration` and
 :func:`frozen` its start-of-step projection of the slave nodes. 2-D, facets of 2 or 3
-nodes. ``tests/test_searchkernels.py`` checks each against its reference.
+nodes. ``tests/test_contactkernels.py`` checks each against its reference.
 """
 
 from __future__ import annotations
