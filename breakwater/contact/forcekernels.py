@@ -23,7 +23,7 @@ from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
 __all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "left_product", "point",
-           "point_tangents", "residual"]
+           "point_tangents", "residual", "tangential_slip"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -310,27 +310,34 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi):  # type: ignore
         if facet0[j] >= 0 and lam[j] > 0:
             k[c] = j
             c += 1
-    nm = N0.shape[1]
     v_T = np.empty((m, 2))
     force = np.empty((m, 2))
     unit = np.empty((m, 2))
     for i in range(m):
         j = k[i]
-        f = facet0[j]
-        s0 = v1[node_pos[j, 0]]
-        s1 = v1[node_pos[j, 1]]
-        a0, a1 = 0.0, 0.0
-        for b in range(nm):
-            a0 += N0[j, b] * v1[pos_m[f, b, 0]]
-            a1 += N0[j, b] * v1[pos_m[f, b, 1]]
-        s0, s1 = s0 - a0, s1 - a1
-        along = s0 * t0[j, 0] + s1 * t0[j, 1]
+        along = tangential_slip(v1, j, facet0[j], N0, t0, node_pos, pos_m)
         v_T[i, 0], v_T[i, 1] = t0[j, 0] * along, t0[j, 1] * along
         s = np.sqrt((v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]) + chi ** 2)
         d0, d1 = v_T[i, 0] / s, v_T[i, 1] / s
         force[i, 0], force[i, 1] = (-mu * lam[j]) * d0, (-mu * lam[j]) * d1
         unit[i, 0], unit[i, 1] = (-mu * 1.0) * d0, (-mu * 1.0) * d1
     return k, v_T, force, unit
+
+
+@kernel
+def tangential_slip(v, j, f, N0, t0, node_pos, pos_m):  # type: ignore[no-untyped-def]
+    """Slave node j's velocity relative to master facet f's point under it, along t₀.
+
+    ``(v_j − Σ_b N̄₀_b v_b)·t₀`` at the interface vector ``v`` (a trailing 0), the
+    slip velocity of :func:`friction`, of the slip guard
+    (:func:`breakwater.contact.guardkernels.slip_guard`) and of the slip memory
+    (:func:`breakwater.contact.newtonaids.slip_along`).
+    """
+    a0, a1 = 0.0, 0.0
+    for b in range(N0.shape[1]):
+        a0 += N0[j, b] * v[pos_m[f, b, 0]]
+        a1 += N0[j, b] * v[pos_m[f, b, 1]]
+    return (v[node_pos[j, 0]] - a0) * t0[j, 0] + (v[node_pos[j, 1]] - a1) * t0[j, 1]
 
 
 @kernel

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.forcekernels import tangential_slip
 
 __all__ = ["CURVED", "F_MAX", "land", "slip_guard"]
 
@@ -107,15 +108,8 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ign
         p0, p1 = node_pos[j, 0], node_pos[j, 1]
         if f < 0 or p0 < 0 or p1 < 0:
             continue
-        vm0, vm1, ym0, ym1 = 0.0, 0.0, 0.0, 0.0
-        for k in range(nm):
-            vm0 += N0[j, k] * v1[pos_m[f, k, 0]]
-            vm1 += N0[j, k] * v1[pos_m[f, k, 1]]
-            ym0 += N0[j, k] * ext[pos_m[f, k, 0]]
-            ym1 += N0[j, k] * ext[pos_m[f, k, 1]]
-        t_0, t_1 = t0[j, 0], t0[j, 1]
-        c0 = (v1[p0] - vm0) * t_0 + (v1[p1] - vm1) * t_1
-        c1 = c0 - dv * ((ext[p0] - ym0) * t_0 + (ext[p1] - ym1) * t_1)
+        c0 = tangential_slip(v1, j, f, N0, t0, node_pos, pos_m)
+        c1 = c0 - dv * tangential_slip(ext, j, f, N0, t0, node_pos, pos_m)
         if c0 * c1 < 0 and abs(c0) > chi:
             target = 0.0
         else:
@@ -123,6 +117,11 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ign
             if not land(a, b, chi, out) or out[0] == c1:
                 continue
             target = out[0]
+        ym0, ym1 = 0.0, 0.0
+        for k in range(nm):
+            ym0 += N0[j, k] * ext[pos_m[f, k, 0]]
+            ym1 += N0[j, k] * ext[pos_m[f, k, 1]]
+        t_0, t_1 = t0[j, 0], t0[j, 1]
         ys0, ys1 = ext[p0], ext[p1]
         along = (ym0 * t_0 + ym1 * t_1) + (c0 - target) / dv
         normal = ys0 * t_0 + ys1 * t_1

@@ -113,14 +113,8 @@ def slip_along(v1, facet, N0, t0, node_pos, pos_m):  # type: ignore[no-untyped-d
     out = np.empty(len(facet))
     for j in range(len(facet)):
         f = facet[j]
-        if f < 0:
-            out[j] = np.nan
-            continue
-        a0, a1 = 0.0, 0.0
-        for b in range(N0.shape[1]):
-            a0 += N0[j, b] * v1[pos_m[f, b, 0]]
-            a1 += N0[j, b] * v1[pos_m[f, b, 1]]
-        out[j] = (v1[node_pos[j, 0]] - a0) * t0[j, 0] + (v1[node_pos[j, 1]] - a1) * t0[j, 1]
+        out[j] = np.nan if f < 0 else forcekernels.tangential_slip(v1, j, f, N0, t0,
+                                                                     node_pos, pos_m)
     return out
 
 
