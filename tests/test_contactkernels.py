@@ -300,11 +300,25 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
                                             p.mX if small else xm0, 0.1)
     fr = _reference_friction(law, lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1)
     assert len(fr["k"]) > 3
+    none = np.full(len(p.node_pos), np.nan)  # no linearisation slips: the law itself
     k, v_T, force, unit = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1,
-                                                0.5, 1e-3)
+                                                0.5, 1e-3, none)
     np.testing.assert_array_equal(k, fr["k"])
     for a, b in ((v_T, fr["v_T"]), (force, fr["force"]), (unit, fr["unit"])):
         np.testing.assert_array_equal(a, b)
+    # With linearisation slips h at every other node (the guard's crawl points): there
+    # the force is the law's tangent line at h, −μλ (φ(h) + φ'(h)(c − h)) t₀.
+    lin = none.copy()
+    lin[k[::2]] = np.linspace(-5e-3, 5e-3, len(k[::2]))
+    _, _, force_lin, unit_lin = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m,
+                                                      p.v1, 0.5, 1e-3, lin)
+    h, c = lin[k], np.einsum("kd,kd->k", fr["v_T"], t0[k])
+    ρ = np.sqrt(h**2 + 1e-6)
+    line = np.where(np.isnan(h), np.nan, h / ρ + 1e-6 / ρ**3 * (c - h))[:, None] * t0[k]
+    expected_lin = np.where(np.isnan(h)[:, None], fr["force"], -0.5 * lam[k][:, None] * line)
+    np.testing.assert_allclose(force_lin, expected_lin, rtol=1e-14, atol=1e-14 * abs(force).max())
+    np.testing.assert_allclose(unit_lin, expected_lin / lam[k][:, None], rtol=1e-14,
+                               atol=1e-14 * abs(unit).max())
     total = expected.copy()
     _scatter(total, fr["pos_s"], -fr["force"])
     _scatter(total, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])
@@ -351,10 +365,25 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
         t, ys = t_all[fix], y_s[fix]
         along = (np.sum(y_m[fix] * t, axis=1) + (c0[fix] - target[fix]) / dv)[:, None]
         expected_step[ps[fix]] = ys - t * np.sum(ys * t, axis=1)[:, None] + t * along
+        # A slip that grows by more than CRAWL times beyond the curved zone is not moved:
+        # its next linearisation slip is where the law gives the linear model's force f,
+        # at most GROW |c₁| (crawl_point).
+        ρ = np.sqrt(c0**2 + chi**2)
+        f = c0 / ρ + (c1 - c0) * (1 - (c0 / ρ) ** 2) / ρ
+        crawl = ~reverse & ~(f**2 < guardkernels.F_MAX**2) & (c0 * c1 > 0) & (
+            np.abs(c1) > guardkernels.CRAWL * np.abs(c0))
+        with np.errstate(divide="ignore"):  # |f| ≥ 1: infinitely far
+            far = chi * np.abs(f) / np.sqrt(np.maximum(1 - f**2, 0.0))
+        point = np.sign(c1) * np.minimum(far, guardkernels.GROW * np.abs(c1))
+        lin_next = np.full(len(p.node_pos), np.nan)
+        lin_next[keep[crawl]] = point[crawl]
+        got = none.copy()
         assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
-                                       chi) == fix.sum()
+                                       chi, none, got) == fix.sum()
         np.testing.assert_allclose(step, expected_step, rtol=0,
                                    atol=1e-12 * np.abs(step).max())
+        np.testing.assert_allclose(got, lin_next, rtol=1e-12)
+        assert crawl.sum() > 0 if kind == "reverse" else True
 
 
 @pytest.mark.parametrize("nn", [2, 3])
@@ -567,7 +596,7 @@ def test_friction_round_off_is_the_numpy_estimate() -> None:
     facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0, xm0, 0.1)
     mu, chi = 0.5, 1e-3
     k, v_T, _, _ = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1, mu,
-                                         chi)
+                                         chi, np.full(len(p.node_pos), np.nan))
     assert len(k) > 3
     rng = np.random.default_rng(12)
     v, a = p.v1, np.append(rng.normal(size=p.n), 0.0)

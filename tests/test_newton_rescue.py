@@ -68,6 +68,9 @@ class CubeRootLaw:
                  dv_dx: float) -> int:
         return 0
 
+    def true_law(self) -> bool:
+        return False
+
 
 def _newton(law: CubeRootLaw) -> InterfaceNewton:
     timings = Timings()
@@ -108,6 +111,44 @@ def test_a_converging_newton_takes_full_steps() -> None:
     newton = _newton(Linear())
     assert _solve(newton, 1.0) == 1
     assert newton.rescues == 0 and newton.halvings == 0 and newton.y[0] == 0.0
+
+
+def test_a_solve_converged_on_tangent_lines_is_tested_on_the_law() -> None:
+    # A provider whose guard, twice, sets a tangent line that is not the
+    # law (a general pair's crawl point far from the solution, guardkernels): with it
+    # G = 3y − 1, zero at y = 1/3; the law's G = 3y − 2, zero at y = 2/3. The solve
+    # converges on the line in one step; tested again on the law it is not converged,
+    # and one more step reaches the law's root.
+    class Line(CubeRootLaw):
+        def __init__(self) -> None:
+            super().__init__()
+            self.lin, self.guarded, self.dropped = False, 0, 0
+
+        def g(self, y: float) -> float:
+            return 3.0 * y - (1.0 if self.lin else 2.0)
+
+        def dg(self, y: float) -> float:
+            return 3.0
+
+        def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
+                     dv_dx: float) -> int:
+            self.guarded += 1
+            self.lin = self.guarded <= 2  # for the next two iterates
+            return 0
+
+        def true_law(self) -> bool:
+            was, self.lin = self.lin, False
+            self.dropped += was
+            return was
+
+    law = Line()
+    newton = _newton(law)
+    # Iterates: 0 → 2/3 (the law's root, the line's residual 1) → 1/3 (the line's root)
+    # → 2/3 on the law.
+    assert _solve(newton, 0.0) == 3
+    assert law.dropped == 1 and not law.lin
+    assert abs(newton.y[0] - 2.0 / 3.0) < 1e-15
+    assert abs(law.g(newton.y[0])) < NewtonOptions().atol * FORCE_SCALE
 
 
 def test_a_failed_rescue_reports_both_tries(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -291,7 +291,7 @@ def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
 
 
 @kernel
-def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi):  # type: ignore[no-untyped-def]
+def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi, lin):  # type: ignore[no-untyped-def]
     """The slave nodes' friction forces (``SurfaceForces._friction``).
 
     Per slave node k in contact (λ_k > 0, a start-of-step master point), the force
@@ -317,8 +317,14 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi):  # type: ignore
         j = k[i]
         along = tangential_slip(v1, j, facet0[j], N0, t0, node_pos, pos_m)
         v_T[i, 0], v_T[i, 1] = t0[j, 0] * along, t0[j, 1] * along
-        s = np.sqrt((v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]) + chi ** 2)
-        d0, d1 = v_T[i, 0] / s, v_T[i, 1] / s
+        h = lin[j]
+        if h == h:  # the law's tangent line at the slip h (Newton's linearisation point)
+            s = np.sqrt(h * h + chi ** 2)
+            phi = h / s + (chi ** 2 / (s * s * s)) * (along - h)
+            d0, d1 = t0[j, 0] * phi, t0[j, 1] * phi
+        else:
+            s = np.sqrt((v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]) + chi ** 2)
+            d0, d1 = v_T[i, 0] / s, v_T[i, 1] / s
         force[i, 0], force[i, 1] = (-mu * lam[j]) * d0, (-mu * lam[j]) * d1
         unit[i, 0], unit[i, 1] = (-mu * 1.0) * d0, (-mu * 1.0) * d1
     return k, v_T, force, unit

@@ -57,7 +57,6 @@ from dolfinx import fem
 
 from breakwater.contact import (
     forcekernels,
-    guardkernels,
     newtonaids,
     recordkernels,
     searchkernels,
@@ -114,6 +113,7 @@ class SurfaceForces(SurfaceSearch):
         # _friction at the accepted state of a recording(): (that state, λ, the forces).
         self._accepted_friction: tuple[Any, np.ndarray, dict[str, np.ndarray] | None] | None \
             = None
+        self.crawl = newtonaids.CrawlPoints(len(self.node_pos))
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -142,7 +142,7 @@ class SurfaceForces(SurfaceSearch):
             facet, N0, t0 = self._frozen(u0)
         _, _, mu, chi = self._law
         k, v_T, force, unit = forcekernels.friction(λ, facet, N0, t0, self._node_pos, self._pm,
-                                                    v1, mu, chi)
+                                                    v1, mu, chi, self.crawl.none)
         out = None if not len(k) else {
             "k": k, "pos_s": self.node_pos[k], "pos_m": self.pos_m[facet[k]], "N0": N0[k],
             "t": t0[k], "v_T": v_T, "force": force, "unit": unit}
@@ -164,8 +164,9 @@ class SurfaceForces(SurfaceSearch):
         if self.spec.friction:
             self._step_frozen = facet, N0, t0 = self._frozen(u0)
             _, _, mu, chi = self._law
-            k, _, force, _ = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
-                                                   self._pm, v1, mu, chi)
+            k, _, force, _ = forcekernels.friction(
+                p["lam"], facet, N0, t0, self._node_pos, self._pm, v1, mu, chi,
+                self.crawl.none if accepted else self.crawl.at)
             if len(k):
                 forcekernels.add_friction(out, k, force, facet, N0, self._node_pos, self._pm)
         return out
@@ -212,7 +213,8 @@ class SurfaceForces(SurfaceSearch):
         if self.spec.friction and len(p["index"]):
             facet, N0, t0 = self._frozen(u0)
             k, v_T, _, unit = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
-                                                    self._pm, v1, mu, chi)
+                                                    self._pm, v1, mu, chi, self.crawl.at)
+            v_T = self.crawl.slopes(k, v_T, t0)
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
         return forcekernels.jacobian(
@@ -222,16 +224,13 @@ class SurfaceForces(SurfaceSearch):
             facet, N0, t0, self._node_pos, mu, chi)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
-        """Newton's slip guard (:mod:`breakwater.contact.slipguard`) at the slave nodes.
+        """Newton's slip guard at the slave nodes (:class:`~.newtonaids.CrawlPoints`).
 
-        Where Newton's step (the next iterate is ``x − step``) would reverse a slave
-        node's slip velocity (relative to the master material point under its
-        projection at the start of the step, along the tangent there) from outside the
-        stick band χ, the node's tangential step is cut so that it lands at zero slip
-        velocity, where the stick tangent is exact; a step whose linear model asks for a
-        friction force in the law's curved zone lands where the law gives that force
-        (:mod:`breakwater.contact.guardkernels`). The slip velocity is linear in Δa, so
-        the landings are exact (:func:`~breakwater.contact.guardkernels.slip_guard`).
+        A slave node's slip velocity (relative to the master point under its start-of-step
+        projection, along the tangent there; linear in Δa) that reverses from outside the
+        stick band lands at zero, one in the law's curved zone on the law; one crawling
+        along the saturated law stays, the next iterates' law linearised further along
+        until :meth:`true_law` (:mod:`breakwater.contact.guardkernels`).
 
         Args:
             x: The current iterate (Δa at the interface unknowns).
@@ -243,9 +242,12 @@ class SurfaceForces(SurfaceSearch):
         if not self.spec.friction:
             return 0
         u0, _, v1 = self._state(x)
-        facet, N0, t0 = self._frozen(u0)
-        return int(guardkernels.slip_guard(step, v1, facet, N0, t0, self._node_pos, self._pm,
-                                           self.beta1 * self.step_dt(), self._law[3]))
+        return self.crawl.guard(step, v1, self._frozen(u0), self._node_pos, self._pm,
+                                self.beta1 * self.step_dt(), self._law[3])
+
+    def true_law(self) -> bool:
+        """The iterates' friction is the law itself again; whether it was not."""
+        return self.crawl.drop()
 
     def reach(self) -> np.ndarray | None:
         """The interface unknowns this step's contact may touch (within a step).

@@ -16,6 +16,25 @@ landing only changes the way there. It is used where the force is within the cur
 zone, ``|f| < F_MAX`` (a slip of at most :data:`CURVED` χ): nearer saturation, the
 inversion turns round-off and the coupling between nodes into large slips.
 
+Beyond the curved zone, Newton crawls too, towards a slip far along the saturated law:
+there ``φ(c) ≈ 1 − χ²/2c²`` and a Newton step multiplies a slip c well below the solution's
+by about 1.5 (measured: a base corner of the separately meshed Goda caisson took 15
+iterations from 1.2χ to 551χ, its residual halving each time). Moving such a slip (a
+landing from a force within 1e-5 of saturation, or ten times Newton's proposal) failed
+runs. A general pair's guard (:func:`slip_guard`) leaves it where Newton put it and moves
+the law's linearisation instead: where the slip grows by more than :data:`CRAWL` times in
+its direction, the next iterate's friction force is the law's tangent line at the slip
+where the law gives the linear model's force, at most :data:`GROW` times Newton's
+proposal (:func:`crawl_point`; :func:`breakwater.contact.forcekernels.friction`). This is
+Newton with the node's force as its unknown, whose law (the inverse of φ) is smooth where
+φ saturates: the next step treats the node as sliding at nearly the full friction force.
+A solve that converges on such tangent lines is tested again on the law itself
+(:meth:`breakwater.stepping.interfacenewton.InterfaceNewton`), so the accepted states
+are the law's. Measured on the separately meshed Goda case: 4114 → 3698 Newton
+iterations, the longest solve 23 → 12, every headline digit the same; without the bound
+(GROW infinite) the first steps of the impact failed, with GROW from 10 to 1e4 the run
+took 3660–3810 iterations.
+
 :func:`land` is the compiled form of :func:`breakwater.contact.slipguard.land` (the
 same floating-point operations), used by the conforming pairs' compiled guard
 (:func:`breakwater.contact.nodalkernels.guard_steps`) and by :func:`slip_guard`, the
@@ -31,12 +50,16 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.forcekernels import tangential_slip
 
-__all__ = ["CURVED", "F_MAX", "land", "slip_guard"]
+__all__ = ["CRAWL", "CURVED", "F_MAX", "GROW", "crawl_point", "land", "slip_guard"]
 
 #: The landing applies where the linear model's slip is within this many χ.
 CURVED = 100.0
 #: |φ| at a slip of CURVED χ: the landing's bound on the linear model's force.
 F_MAX = CURVED / math.sqrt(1.0 + CURVED * CURVED)
+#: A slip that Newton grows by more than this factor beyond the curved zone crawls.
+CRAWL = 1.25
+#: A crawling slip's linearisation point is at most this many times Newton's proposal.
+GROW = 100.0
 
 
 @kernel
@@ -74,14 +97,33 @@ def land(c0, c1, chi, out):  # type: ignore[no-untyped-def]
 
 
 @kernel
-def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ignore[no-untyped-def]
+def crawl_point(force, c1, chi):  # type: ignore[no-untyped-def]
+    """Where a crawling slip's law is linearised next (the module doc).
+
+    Args:
+        force: |f|, the linear model's force (of magnitude at least F_MAX).
+        c1: Newton's proposal for the slip.
+        chi: χ.
+
+    Returns:
+        The slip where the law gives ``force`` (infinite from |f| ≥ 1 on), at most
+        GROW |c₁|, with c₁'s sign.
+    """
+    far = chi * force / math.sqrt(1.0 - force * force) if force < 1.0 else np.inf
+    return math.copysign(min(far, GROW * abs(c1)), c1)
+
+
+@kernel
+def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next):  # type: ignore[no-untyped-def]
     """``SurfaceForces.precheck``: a general pair's slip guard on Newton's step.
 
     Per slave node with a start-of-step master point: the slip velocity along the
     tangent there, of the iterate (c₀) and of Newton's proposal (c₁); a reversal from
     outside the band lands at zero, any other step on the law's curve where
-    :func:`land` applies. The slave's tangential step is set to give the landing slip
-    (the slip is linear in Δa: exact).
+    :func:`land` applies (its linear model at the iterate's linearisation slip where it
+    has one). The slave's tangential step is set to give the landing slip (the slip is
+    linear in Δa: exact). A crawling slip is not moved: ``lin_next`` says where its law
+    is linearised at the next iterate (:func:`crawl_point`).
 
     Args:
         step: Newton's step (changed in place where cut).
@@ -93,6 +135,8 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ign
         pos_m: Of the master facets.
         dv: β₁ Δt.
         chi: The stick band χ.
+        lin: The iterate's linearisation slips (NaN: the law at the slip itself).
+        lin_next: Out: the next iterate's.
 
     Returns:
         The nodes whose step changed.
@@ -104,6 +148,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ign
     nm = N0.shape[1]
     a, b, out = np.empty(1), np.empty(1), np.empty(1)
     for j in range(len(facet0)):
+        lin_next[j] = np.nan
         f = facet0[j]
         p0, p1 = node_pos[j, 0], node_pos[j, 1]
         if f < 0 or p0 < 0 or p1 < 0:
@@ -113,10 +158,15 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi):  # type: ign
         if c0 * c1 < 0 and abs(c0) > chi:
             target = 0.0
         else:
-            a[0], b[0] = c0, c1
-            if not land(a, b, chi, out) or out[0] == c1:
+            a[0], b[0] = (lin[j] if lin[j] == lin[j] else c0), c1
+            if land(a, b, chi, out):
+                if out[0] == c1:
+                    continue
+                target = out[0]
+            else:
+                if c1 * a[0] > 0 and abs(c1) > CRAWL * abs(a[0]):
+                    lin_next[j] = crawl_point(abs(out[0]), c1, chi)
                 continue
-            target = out[0]
         ym0, ym1 = 0.0, 0.0
         for k in range(nm):
             ym0 += N0[j, k] * ext[pos_m[f, k, 0]]

@@ -4,8 +4,10 @@
   the last accepted step kept (the frame it is measured in moves between steps).
 - :func:`resolution`: the round-off of f_c at an iterate, below which the residual
   carries no information (the Newton's test converges there).
+- :class:`CrawlPoints`: the slip guard's decisions, and where it linearises the law of a
+  slip that crawls along the saturated law (:mod:`~breakwater.contact.guardkernels`).
 
-Both read the pair's state at the interface unknowns
+The first two read the pair's state at the interface unknowns
 (:class:`~breakwater.contact.surfacesearch.SurfaceSearch`; every rank holds the same values,
 so every rank takes the same decisions).
 """
@@ -18,12 +20,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from breakwater.common.jit import kernel
-from breakwater.contact import forcekernels
+from breakwater.contact import forcekernels, guardkernels
 
 if TYPE_CHECKING:
     from breakwater.contact.surfacesearch import SurfaceSearch
 
-__all__ = ["SlipMemory", "resolution"]
+__all__ = ["CrawlPoints", "SlipMemory", "resolution"]
 
 
 class SlipMemory:
@@ -159,9 +161,77 @@ def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
         return 0.0
     facet, N0, t0 = pair._frozen(u0)
     k, v_T, _, _ = forcekernels.friction(p["lam"], facet, N0, t0, pair._node_pos, pair._pm,
-                                         v1, mu, chi)
+                                         v1, mu, chi, np.full(len(facet), np.nan))
     _, v, a, _ = pair._start(y)
     dt = pair.step_dt()
     return float(forcekernels.friction_round_off(
         k, v_T, p["lam"], facet, N0, pair._node_pos, pair._pm, v, a, y, dt,
         pair.beta1 * dt, mu, chi, float(np.finfo(float).eps)))
+
+
+class CrawlPoints:
+    """A general pair's slip guard, with the slaves' crawl points between iterates.
+
+    Where the guard finds a slip crawling along the saturated law, the next iterate's
+    friction force at the node is the law's tangent line at a crawl point
+    (:func:`~breakwater.contact.guardkernels.slip_guard`,
+    :func:`~breakwater.contact.forcekernels.friction`) until :meth:`drop`.
+
+    Args:
+        nodes: The slave nodes.
+
+    Attributes:
+        none: No crawl point (NaN at every node): the law itself.
+        at: The current iterate's crawl points (NaN: none at the node).
+        any: Whether ``at`` holds one.
+    """
+
+    def __init__(self, nodes: int) -> None:
+        self.none = np.full(nodes, np.nan)
+        self.at, self._next = self.none.copy(), self.none.copy()
+        self.any = False
+
+    def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
+              node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float) -> int:
+        """The slip guard on Newton's step (in place); the crawl points of the next iterate.
+
+        Args:
+            step: Newton's step, cut in place.
+            v1: The iterate's velocities at the interface unknowns (a trailing 0).
+            frozen: The slave nodes' start-of-step master facet, N̄₀ and t₀.
+            node_pos: The slave nodes' interface positions.
+            pos_m: The master facets'.
+            dv: β₁Δt.
+            chi: χ.
+
+        Returns:
+            The nodes whose step changed.
+        """
+        facet, N0, t0 = frozen
+        fixed = int(guardkernels.slip_guard(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi,
+                                            self.at, self._next))
+        self.at, self._next = self._next, self.at
+        self.any = not np.isnan(self.at).all()
+        return fixed
+
+    def slopes(self, k: np.ndarray, v_T: np.ndarray, t0: np.ndarray) -> np.ndarray:
+        """The slips at which ∂φ is taken for nodes k: v_T, the crawl point's where one is.
+
+        Args:
+            k: The nodes in contact (:func:`~breakwater.contact.forcekernels.friction`).
+            v_T: Their slip velocities (changed in place where a crawl point is).
+            t0: The slave nodes' tangents.
+        """
+        if self.any:
+            h = self.at[k]
+            at = ~np.isnan(h)
+            v_T[at] = t0[k[at]] * h[at, None]
+        return v_T
+
+    def drop(self) -> bool:
+        """No crawl points from now on; whether there were."""
+        was = self.any
+        if was:
+            self.at.fill(np.nan)
+            self.any = False
+        return was

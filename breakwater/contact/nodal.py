@@ -323,3 +323,7 @@ class NodalContactForces:
         band = self.pair.law.friction.stick_band
         return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
                                self._tangents, forms.parameter_value(band)))
+
+    def true_law(self) -> bool:
+        """Always the law itself (the guard moves slips alone): False."""
+        return False

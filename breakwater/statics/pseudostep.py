@@ -242,6 +242,10 @@ class _Offset:
         """No guard."""
         return 0
 
+    def true_law(self) -> bool:
+        """A constant: False."""
+        return False
+
 
 # --- model estimates -----------------------------------------------------------------
 

@@ -83,6 +83,17 @@ class ContactForces(Protocol):
         """
         ...
 
+    def true_law(self) -> bool:
+        """The next iterates' forces from the law itself, not from the guard's tangent lines.
+
+        A general pair's guard may linearise a node's law at a crawl point
+        (:mod:`breakwater.contact.guardkernels`) for the next iterates.
+
+        Returns:
+            Whether the last iterate's were not (the Newton then tests it again).
+        """
+        ...
+
 
 class StateProvider(Protocol):
     """Contact forces evaluated at the state Functions (Δa holding the iterate)."""
@@ -147,8 +158,9 @@ class StateForces:
         self.provider.begin_step()
 
     def end(self) -> None:
-        """The provider's :meth:`StateProvider.end_step`."""
+        """The provider's :meth:`StateProvider.end_step`; its law itself from now on."""
         self.provider.end_step()
+        self.true_law()
 
     def _set(self, y: np.ndarray) -> None:
         """The iterate y for the provider: given, or written into Δa."""
@@ -188,6 +200,11 @@ class StateForces:
                  dv_dx: float) -> int:
         """The provider's guard, if any."""
         return self.guard(x, step, v_pred, dv_dx) if self.guard is not None else 0
+
+    def true_law(self) -> bool:
+        """The provider's ``true_law()``, if it has one (a general pair)."""
+        law = getattr(self.provider, "true_law", None)
+        return bool(law()) if law is not None else False
 
     def reach(self) -> np.ndarray | None:
         """The provider's ``reach()``, if it has one; None: any unknown.
@@ -393,6 +410,10 @@ class ContactSum:
                  dv_dx: float) -> int:
         """Every provider's slip guard, in turn, on the step; the nodes corrected."""
         return sum(c.precheck(x, step, v_pred, dv_dx) for c in self.providers)
+
+    def true_law(self) -> bool:
+        """Every provider's :meth:`ContactForces.true_law`; whether any's was not."""
+        return any([c.true_law() for c in self.providers])
 
 
 @kernel

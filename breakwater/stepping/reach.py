@@ -211,6 +211,10 @@ class NearContact:
         step[:] = whole[self.near]
         return cut
 
+    def true_law(self) -> bool:
+        """The providers' ``true_law()``."""
+        return self.contact.true_law()
+
     def resolution(self, y: np.ndarray) -> float:
         """The providers' round-off of f_c at the iterate."""
         return self.contact.resolution(self._whole(y))
