@@ -377,13 +377,21 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
         point = np.sign(c1) * np.minimum(far, guardkernels.GROW * np.abs(c1))
         lin_next = np.full(len(p.node_pos), np.nan)
         lin_next[keep[crawl]] = point[crawl]
-        got = none.copy()
+        got, banned = none.copy(), np.zeros(len(p.node_pos), bool)
+        original = step.copy()
         assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
-                                       chi, none, got) == fix.sum()
+                                       chi, none, got, banned) == fix.sum()
         np.testing.assert_allclose(step, expected_step, rtol=0,
                                    atol=1e-12 * np.abs(step).max())
         np.testing.assert_allclose(got, lin_next, rtol=1e-12)
         assert crawl.sum() > 0 if kind == "reverse" else True
+        # A reversing node takes no crawl point for the rest of the solve (banned); with
+        # every node banned (a rescue), none takes one.
+        np.testing.assert_array_equal(np.flatnonzero(banned), np.sort(keep[reverse]))
+        step, got = original, none.copy()
+        guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv, chi, none,
+                                got, np.ones(len(p.node_pos), bool))
+        assert np.isnan(got).all()
 
 
 @pytest.mark.parametrize("nn", [2, 3])

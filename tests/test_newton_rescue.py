@@ -68,7 +68,7 @@ class CubeRootLaw:
                  dv_dx: float) -> int:
         return 0
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         return False
 
 
@@ -136,7 +136,7 @@ def test_a_solve_converged_on_tangent_lines_is_tested_on_the_law() -> None:
             self.lin = self.guarded <= 2  # for the next two iterates
             return 0
 
-        def true_law(self) -> bool:
+        def true_law(self, crawl: bool = True) -> bool:
             was, self.lin = self.lin, False
             self.dropped += was
             return was

@@ -245,9 +245,9 @@ class SurfaceForces(SurfaceSearch):
         return self.crawl.guard(step, v1, self._frozen(u0), self._node_pos, self._pm,
                                 self.beta1 * self.step_dt(), self._law[3])
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         """The iterates' friction is the law itself again; whether it was not."""
-        return self.crawl.drop()
+        return self.crawl.drop(crawl)
 
     def reach(self) -> np.ndarray | None:
         """The interface unknowns this step's contact may touch (within a step).

@@ -175,7 +175,8 @@ class CrawlPoints:
     Where the guard finds a slip crawling along the saturated law, the next iterate's
     friction force at the node is the law's tangent line at a crawl point
     (:func:`~breakwater.contact.guardkernels.slip_guard`,
-    :func:`~breakwater.contact.forcekernels.friction`) until :meth:`drop`.
+    :func:`~breakwater.contact.forcekernels.friction`) until :meth:`drop`. A node whose
+    slip reverses takes none until then.
 
     Args:
         nodes: The slave nodes.
@@ -190,6 +191,7 @@ class CrawlPoints:
         self.none = np.full(nodes, np.nan)
         self.at, self._next = self.none.copy(), self.none.copy()
         self.any = False
+        self._banned = np.zeros(nodes, bool)
 
     def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
               node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float) -> int:
@@ -209,7 +211,7 @@ class CrawlPoints:
         """
         facet, N0, t0 = frozen
         fixed = int(guardkernels.slip_guard(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi,
-                                            self.at, self._next))
+                                            self.at, self._next, self._banned))
         self.at, self._next = self._next, self.at
         self.any = not np.isnan(self.at).all()
         return fixed
@@ -228,10 +230,15 @@ class CrawlPoints:
             v_T[at] = t0[k[at]] * h[at, None]
         return v_T
 
-    def drop(self) -> bool:
-        """No crawl points from now on; whether there were."""
+    def drop(self, allowed: bool = True) -> bool:
+        """No crawl points from now on; new ones allowed at every node or at none.
+
+        Returns:
+            Whether there were any.
+        """
         was = self.any
         if was:
             self.at.fill(np.nan)
             self.any = False
+        self._banned.fill(not allowed)
         return was

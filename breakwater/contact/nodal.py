@@ -324,6 +324,6 @@ class NodalContactForces:
         return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
                                self._tangents, forms.parameter_value(band)))
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         """Always the law itself (the guard moves slips alone): False."""
         return False

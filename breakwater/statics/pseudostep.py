@@ -242,7 +242,7 @@ class _Offset:
         """No guard."""
         return 0
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         """A constant: False."""
         return False
 

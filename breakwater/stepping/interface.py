@@ -83,11 +83,13 @@ class ContactForces(Protocol):
         """
         ...
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         """The next iterates' forces from the law itself, not from the guard's tangent lines.
 
         A general pair's guard may linearise a node's law at a crawl point
-        (:mod:`breakwater.contact.guardkernels`) for the next iterates.
+        (:mod:`breakwater.contact.guardkernels`) for the next iterates; ``crawl``: whether
+        it may set new ones (not in a rescue, :class:`~breakwater.stepping.interfacenewton.
+        InterfaceNewton`).
 
         Returns:
             Whether the last iterate's were not (the Newton then tests it again).
@@ -201,10 +203,10 @@ class StateForces:
         """The provider's guard, if any."""
         return self.guard(x, step, v_pred, dv_dx) if self.guard is not None else 0
 
-    def true_law(self) -> bool:
-        """The provider's ``true_law()``, if it has one (a general pair)."""
+    def true_law(self, crawl: bool = True) -> bool:
+        """The provider's ``true_law(crawl)``, if it has one (a general pair)."""
         law = getattr(self.provider, "true_law", None)
-        return bool(law()) if law is not None else False
+        return bool(law(crawl)) if law is not None else False
 
     def reach(self) -> np.ndarray | None:
         """The provider's ``reach()``, if it has one; None: any unknown.
@@ -411,9 +413,9 @@ class ContactSum:
         """Every provider's slip guard, in turn, on the step; the nodes corrected."""
         return sum(c.precheck(x, step, v_pred, dv_dx) for c in self.providers)
 
-    def true_law(self) -> bool:
+    def true_law(self, crawl: bool = True) -> bool:
         """Every provider's :meth:`ContactForces.true_law`; whether any's was not."""
-        return any([c.true_law() for c in self.providers])
+        return any([c.true_law(crawl) for c in self.providers])
 
 
 @kernel

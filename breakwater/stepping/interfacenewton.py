@@ -171,7 +171,7 @@ class InterfaceNewton:
             The convergence reason, the residual norms, and (y, f_c, F) at the last iterate.
         """
         X_II, S = fact.X_II, fact.S
-        self.contact.true_law()
+        self.contact.true_law(crawl=not damped)  # the rescue: Newton without crawl points
         x = read_only(np.array(y0, dtype=float))  # each iterate read-only: its evaluations'
         fc, G, F = self._residual(x, X_II, S, z_I)  # caches know it by identity
         fnorm = float(np.linalg.norm(F))
@@ -196,8 +196,7 @@ class InterfaceNewton:
             norms.append(fnorm)
             reason, stalled = self._test(norms, float(np.linalg.norm(x)),
                                          float(np.linalg.norm(δ)), x)
-            if reason > 0 and self.contact.true_law():
-                # converged on the law's tangent lines: the test again on the law itself
+            if reason > 0 and self.contact.true_law(not damped):  # on tangent lines: the law
                 fc, G, F = self._residual(x, X_II, S, z_I)
                 norms[-1] = fnorm = float(np.linalg.norm(F))
                 reason, stalled = self._test(norms, float(np.linalg.norm(x)),

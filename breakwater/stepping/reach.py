@@ -211,9 +211,9 @@ class NearContact:
         step[:] = whole[self.near]
         return cut
 
-    def true_law(self) -> bool:
-        """The providers' ``true_law()``."""
-        return self.contact.true_law()
+    def true_law(self, crawl: bool = True) -> bool:
+        """The providers' ``true_law(crawl)``."""
+        return self.contact.true_law(crawl)
 
     def resolution(self, y: np.ndarray) -> float:
         """The providers' round-off of f_c at the iterate."""
