@@ -151,6 +151,48 @@ def test_a_solve_converged_on_tangent_lines_is_tested_on_the_law() -> None:
     assert abs(law.g(newton.y[0])) < NewtonOptions().atol * FORCE_SCALE
 
 
+def test_a_residual_at_its_round_off_is_converged() -> None:
+    # F = S G with S = 2e7, X_II = 1/S (an interface stiff against the step's mass, as
+    # in the static relaxation's long pseudo steps) and G = y − z + X f_c, where
+    # z ≈ 1.5e6 and X f_c = z + y* − 2y nearly cancel (root y* < 1): G is known to one
+    # unit in the last place of 1.5e6, 2.3e-10, and F to 0.005 — 5 × atol (1e-3), with
+    # the floor at atol (the relaxation's). The test compares the residual with
+    # ε ‖|S| (|y| + |z| + |X| |f_c|)‖ (InterfaceNewton._round_off): every one of 40
+    # such solves converges in one iteration; without the comparison, 9 of them iterate
+    # on round-off to max_it and fail (measured), others converge when round-off
+    # happens to give F = 0.
+    class Stiff(CubeRootLaw):
+        def __init__(self, a: float) -> None:
+            super().__init__()
+            self.a = a
+
+        def add_vector(self, y: np.ndarray, out: np.ndarray) -> None:
+            out[0] += self.a - 4e7 * y[0]
+
+        def matrix(self, y: np.ndarray) -> np.ndarray:
+            return np.array([[-4e7]])
+
+    options = NewtonOptions(floor_atol=NewtonOptions().atol)
+    fact = Factorisation(None, None, None, np.full((1, 1), 5e-8),  # type: ignore[arg-type]
+                         np.full((1, 1), 2e7))
+    rng = np.random.default_rng(0)
+    at_round_off = 0
+    for _ in range(40):
+        z, root = 1e6 * (1 + rng.random()), rng.random()
+        law = Stiff((z + root) / 5e-8)
+        timings = Timings()
+        newton = InterfaceNewton(1, ContactSum(1, [law], timings), "test", options,
+                                 FORCE_SCALE, timings)
+        y0 = root + 0.01
+        fc0 = law.a - 4e7 * y0  # the bulk rows balanced at the start: ‖F₀‖ = S |G(y0)|
+        its = newton.solve(fact, np.array([z]), np.array([y0]), np.array([-fc0]), fc0 * fc0,
+                           np.zeros(1), 1.0)
+        assert its == 1 and newton.floor_accepts == 0
+        assert abs(newton.y[0] - root) < 1e-9
+        at_round_off += abs(newton.F[0]) >= options.atol * FORCE_SCALE
+    assert at_round_off >= 5  # accepted above atol, at round-off
+
+
 def test_a_failed_rescue_reports_both_tries(monkeypatch: pytest.MonkeyPatch) -> None:
     newton = _newton(CubeRootLaw())
     monkeypatch.setattr(interfacenewton, "HALVINGS", 0)  # the rescue: the plain Newton again
