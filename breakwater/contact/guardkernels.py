@@ -38,7 +38,8 @@ none. Measured, Newton iterations before → after, every headline digit the sam
 separately meshed Goda case 4114 → 3815 (its longest solve 23 → 14), the hand-meshed one
 4070 → 3820, the storm sliding the caisson 1891 → 1836, the sliding block 622 → 622;
 with GROW from 10 to 1e4, 3800–3880 on both Goda cases; unbounded, 20 177 and 17 639
-(about 360 rescues each; before the rescue took none, the impact's first steps failed).
+(about 360 rescues each; while the rescue took crawl points too, the impact's first steps
+failed).
 
 :func:`land` is the compiled form of :func:`breakwater.contact.slipguard.land` (the
 same floating-point operations), used by the conforming pairs' compiled guard
@@ -144,7 +145,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         lin: The iterate's linearisation slips (NaN: the law at the slip itself).
         lin_next: Out: the next iterate's.
         banned: The nodes that take no crawl point (in/out: a node whose slip reverses
-            from a crawl point is added).
+            is added).
 
     Returns:
         The nodes whose step changed.
