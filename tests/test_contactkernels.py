@@ -310,8 +310,8 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
     # the force is the law's tangent line at h, −μλ (φ(h) + φ'(h)(c − h)) t₀.
     lin = none.copy()
     lin[k[::2]] = np.linspace(-5e-3, 5e-3, len(k[::2]))
-    _, _, force_lin, unit_lin = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m,
-                                                      p.v1, 0.5, 1e-3, lin)
+    _, v_T_lin, force_lin, unit_lin = forcekernels.friction(lam, facet, N0, t0, p.node_pos,
+                                                            p.pos_m, p.v1, 0.5, 1e-3, lin)
     h, c = lin[k], np.einsum("kd,kd->k", fr["v_T"], t0[k])
     ρ = np.sqrt(h**2 + 1e-6)
     line = np.where(np.isnan(h), np.nan, h / ρ + 1e-6 / ρ**3 * (c - h))[:, None] * t0[k]
@@ -319,6 +319,9 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
     np.testing.assert_allclose(force_lin, expected_lin, rtol=1e-14, atol=1e-14 * abs(force).max())
     np.testing.assert_allclose(unit_lin, expected_lin / lam[k][:, None], rtol=1e-14,
                                atol=1e-14 * abs(unit).max())
+    # v_T: the slip where the law's slope is taken, h t₀ at a crawl point (jacobian's ∂φ).
+    np.testing.assert_array_equal(
+        v_T_lin, np.where(np.isnan(h)[:, None], fr["v_T"], t0[k] * h[:, None]))
     total = expected.copy()
     _scatter(total, fr["pos_s"], -fr["force"])
     _scatter(total, fr["pos_m"], fr["N0"][:, :, None] * fr["force"][:, None, :])

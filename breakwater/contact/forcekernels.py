@@ -295,10 +295,13 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi, lin):  # type: i
     """The slave nodes' friction forces (``SurfaceForces._friction``).
 
     Per slave node k in contact (λ_k > 0, a start-of-step master point), the force
-    ``−μ λ_k φ(v_T)`` with ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``.
+    ``−μ λ_k φ(v_T)`` with ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))``; where ``lin`` holds a
+    crawl point h (:mod:`breakwater.contact.guardkernels`; NaN: none), the law's tangent
+    line at h t₀ instead.
 
     Returns:
-        The nodes ``k``, ``v_T``, the force and the force per unit λ (``unit``).
+        The nodes ``k``, ``v_T`` (h t₀ where a crawl point is: where the law's slope,
+        :func:`jacobian`'s ∂φ, is taken), the force and the force per unit λ (``unit``).
     """
     m = 0
     for j in range(len(lam)):
@@ -322,6 +325,7 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi, lin):  # type: i
             s = np.sqrt(h * h + chi ** 2)
             phi = h / s + (chi ** 2 / (s * s * s)) * (along - h)
             d0, d1 = t0[j, 0] * phi, t0[j, 1] * phi
+            v_T[i, 0], v_T[i, 1] = t0[j, 0] * h, t0[j, 1] * h
         else:
             s = np.sqrt((v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]) + chi ** 2)
             d0, d1 = v_T[i, 0] / s, v_T[i, 1] / s

@@ -214,7 +214,6 @@ class SurfaceForces(SurfaceSearch):
             facet, N0, t0 = self._frozen(u0)
             k, v_T, _, unit = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
                                                     self._pm, v1, mu, chi, self.crawl.at)
-            v_T = self.crawl.slopes(k, v_T, t0)
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
         return forcekernels.jacobian(

@@ -216,20 +216,6 @@ class CrawlPoints:
         self.any = not np.isnan(self.at).all()
         return fixed
 
-    def slopes(self, k: np.ndarray, v_T: np.ndarray, t0: np.ndarray) -> np.ndarray:
-        """The slips at which ∂φ is taken for nodes k: v_T, the crawl point's where one is.
-
-        Args:
-            k: The nodes in contact (:func:`~breakwater.contact.forcekernels.friction`).
-            v_T: Their slip velocities (changed in place where a crawl point is).
-            t0: The slave nodes' tangents.
-        """
-        if self.any:
-            h = self.at[k]
-            at = ~np.isnan(h)
-            v_T[at] = t0[k[at]] * h[at, None]
-        return v_T
-
     def drop(self, allowed: bool = True) -> bool:
         """No crawl points from now on; new ones allowed at every node or at none.
 
