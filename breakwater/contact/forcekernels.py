@@ -22,8 +22,8 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
-__all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "left_product", "point",
-           "point_tangents", "residual", "tangential_slip"]
+__all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "law_line",
+           "left_product", "point", "point_tangents", "residual", "tangential_slip"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -316,15 +316,16 @@ def friction(lam, facet0, N0, t0, node_pos, pos_m, v1, mu, chi, lin):  # type: i
     v_T = np.empty((m, 2))
     force = np.empty((m, 2))
     unit = np.empty((m, 2))
+    a, b, line = np.empty(1), np.empty(1), np.empty(1)
     for i in range(m):
         j = k[i]
         along = tangential_slip(v1, j, facet0[j], N0, t0, node_pos, pos_m)
         v_T[i, 0], v_T[i, 1] = t0[j, 0] * along, t0[j, 1] * along
         h = lin[j]
         if h == h:  # the law's tangent line at the slip h (Newton's linearisation point)
-            s = np.sqrt(h * h + chi ** 2)
-            phi = h / s + (chi ** 2 / (s * s * s)) * (along - h)
-            d0, d1 = t0[j, 0] * phi, t0[j, 1] * phi
+            a[0], b[0] = h, along
+            law_line(a, b, chi, line)
+            d0, d1 = t0[j, 0] * line[0], t0[j, 1] * line[0]
             v_T[i, 0], v_T[i, 1] = t0[j, 0] * h, t0[j, 1] * h
         else:
             s = np.sqrt((v_T[i, 0] * v_T[i, 0] + v_T[i, 1] * v_T[i, 1]) + chi ** 2)
@@ -348,6 +349,31 @@ def tangential_slip(v, j, f, N0, t0, node_pos, pos_m):  # type: ignore[no-untype
         a0 += N0[j, b] * v[pos_m[f, b, 0]]
         a1 += N0[j, b] * v[pos_m[f, b, 1]]
     return (v[node_pos[j, 0]] - a0) * t0[j, 0] + (v[node_pos[j, 1]] - a1) * t0[j, 1]
+
+
+@kernel
+def law_line(c0, c1, chi, out):  # type: ignore[no-untyped-def]
+    """The friction law's linear model at the slip c₀, at c₁, into ``out``; returns |f|².
+
+    ``f = φ(c₀) + φ'(c₀)(c₁ − c₀)``, φ(c) = c / sqrt(|c|² + χ²) (tangent-basis components):
+    the force a Newton step asks of the law, which the slip guard's landing inverts
+    (:func:`breakwater.contact.guardkernels.land`) and a crawl point's iterate applies
+    (:func:`friction`); the operations of :func:`breakwater.contact.slipguard.land`.
+    """
+    n = len(c0)
+    s = 0.0
+    for m in range(n):
+        s += c0[m] * c0[m]
+    r = np.sqrt(s + chi * chi)
+    p = 0.0
+    for m in range(n):
+        p += (c0[m] / r) * (c1[m] - c0[m])
+    f2 = 0.0
+    for m in range(n):
+        phi = c0[m] / r
+        out[m] = phi + ((c1[m] - c0[m]) - phi * p) / r
+        f2 += out[m] * out[m]
+    return f2
 
 
 @kernel

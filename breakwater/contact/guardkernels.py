@@ -35,8 +35,8 @@ are the law's. A node whose slip reverses takes no crawl point for the rest of t
 node's crawl point 100× out let it slide far, reverse, stick and crawl again, in a cycle
 of eight iterations, and the step was cut back. A Newton's rescue (its second try) takes
 none. Measured, Newton iterations before → after, every headline digit the same: the
-separately meshed Goda case 4114 → 3815 (its longest solve 23 → 14), the hand-meshed one
-4070 → 3820, the storm sliding the caisson 1891 → 1836, the sliding block 622 → 622;
+separately meshed Goda case 4114 → 3816 (its longest solve 23 → 14), the hand-meshed one
+4070 → 3817, the storm sliding the caisson 1891 → 1833, the sliding block 622 → 622;
 with GROW from 10 to 1e4, 3800–3880 on both Goda cases; unbounded, 20 177 and 17 639
 (about 360 rescues each; while the rescue took crawl points too, the impact's first steps
 failed).
@@ -54,7 +54,7 @@ import math
 import numpy as np
 
 from breakwater.common.jit import kernel
-from breakwater.contact.forcekernels import tangential_slip
+from breakwater.contact.forcekernels import law_line, tangential_slip
 
 __all__ = ["CRAWL", "CURVED", "F_MAX", "GROW", "crawl_point", "land", "slip_guard"]
 
@@ -79,25 +79,14 @@ def land(c0, c1, chi, out):  # type: ignore[no-untyped-def]
         out: Out: the slip where the law gives the linear model's force.
 
     Returns:
-        Whether the force is within the curved zone (else ``out`` is not the landing).
+        Whether the force is within the curved zone (else ``out`` is the linear model's
+        force f itself, :func:`~breakwater.contact.forcekernels.law_line`).
     """
-    n = len(c0)
-    s = 0.0
-    for m in range(n):
-        s += c0[m] * c0[m]
-    r = math.sqrt(s + chi * chi)
-    p = 0.0
-    for m in range(n):
-        p += (c0[m] / r) * (c1[m] - c0[m])
-    f2 = 0.0
-    for m in range(n):
-        phi = c0[m] / r
-        out[m] = phi + ((c1[m] - c0[m]) - phi * p) / r
-        f2 += out[m] * out[m]
+    f2 = law_line(c0, c1, chi, out)
     if not f2 < F_MAX * F_MAX:
         return False
     scale = chi / math.sqrt(1.0 - f2)
-    for m in range(n):
+    for m in range(len(c0)):
         out[m] = scale * out[m]
     return True
 
