@@ -286,6 +286,75 @@ def test_patch_test_uniform_pressure(folder: pathlib.Path, cells: str) -> None:
     assert np.abs(pressure / p - 1).max() < 1e-8
 
 
+def _trapezoid_pair(path: pathlib.Path, order: int) -> pathlib.Path:
+    """Block ``a`` on block ``b`` over a trapezoidal footprint in the x-z plane.
+
+    Transfinite quadrilaterals on the footprint (0, 0), (0.3, 0), (0.2, 0.2), (0, 0.2)
+    extruded 0.1 m up (a) and down (b), one layer of hexahedra each: every interface
+    facet is a trapezoid, none a parallelogram. Geometry of ``order`` (1 or 2).
+    """
+    import gmsh
+    from breakwater.meshes import gmsh_session
+
+    def build() -> None:
+        with gmsh_session():
+            geo = gmsh.model.geo
+            p = [geo.addPoint(x, 0.0, z) for x, z in ((0, 0), (0.3, 0), (0.2, 0.2), (0, 0.2))]
+            lines = [geo.addLine(p[k], p[(k + 1) % 4]) for k in range(4)]
+            foot = geo.addPlaneSurface([geo.addCurveLoop(lines)])
+            for c in lines:
+                geo.mesh.setTransfiniteCurve(c, 4)
+            geo.mesh.setTransfiniteSurface(foot)
+            geo.mesh.setRecombine(2, foot)
+            up = geo.extrude([(2, foot)], 0, 0.1, 0, numElements=[1], recombine=True)
+            down = geo.extrude([(2, foot)], 0, -0.1, 0, numElements=[1], recombine=True)
+            geo.synchronize()
+            gmsh.model.addPhysicalGroup(3, [up[1][1]], name="a")
+            gmsh.model.addPhysicalGroup(3, [down[1][1]], name="b")
+            gmsh.model.addPhysicalGroup(2, [foot], name="interface")
+            gmsh.model.addPhysicalGroup(2, [down[0][1]], name="b_bottom")
+            gmsh.model.mesh.generate(3)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+
+    if COMM.rank == 0:
+        build()
+    COMM.barrier()
+    return path
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_interface_of_trapezoidal_hexahedra(folder: pathlib.Path, order: int) -> None:
+    # Interface facets that are not parallelograms (a user's footprint): each facet's
+    # nodes are found as the displacement's nodes (on linear geometry the bilinear map
+    # of the P2 points), where they were once taken on the parallelogram of its first
+    # three vertices ("a node lies on no facet", on one rank or on two by the
+    # partition). Every node's normal is the footprint's (+y, the master's outward
+    # normal; 1e-12: round-off), and the static contact resultant carries the block's
+    # weight ρ g V (1e-9: Newton's tolerance) over the trapezoid's area.
+    from dolfinx import fem
+
+    from breakwater.contact.conforming import InterfaceNodes
+    from breakwater.contact.pairstate import conforming_pairs
+
+    path = _trapezoid_pair(folder / f"trapezoid{order}.msh", order)
+    mat = Material(ρ, ν, young_modulus=1e9)
+    model = ContactModel(read_mesh(path, COMM), [Body("a", mat), Body("b", mat)],
+                         [ContactPair("interface", "a", "b", penalty=1e12, friction=μ_F)],
+                         [Fixed("b_bottom")], [], gravity=(0.0, -g, 0.0))
+    nodes = InterfaceNodes(model, model.pairs[0])
+    assert len(nodes.x) == 7 * 7  # 3 × 3 quadratic facets: 7 × 7 nodes
+    assert np.abs(nodes.normal - [0.0, 1.0, 0.0]).max() < 1e-12
+    u, _ = solve_static(model)
+    area = 0.5 * (0.3 + 0.2) * 0.2
+    at_rest = [fem.Function(f.function_space) for f in u]
+    pair = conforming_pairs(model, [nodes], u, at_rest, fem.Constant(model.mesh, 1e-3))[0]
+    measured = pair.measure()
+    assert measured[f"{pair.name}_contact_length"] == pytest.approx(area, rel=1e-12)
+    assert measured[f"{pair.name}_normal_force"] == pytest.approx(ρ * g * area * 0.1,
+                                                                   rel=1e-9)
+
+
 def _pushed(comm: MPI.Comm, path: pathlib.Path) -> dict[str, np.ndarray]:
     """The diagonal push of the hexahedral block (20 steps): interface u and v, Newton."""
     mesh = block_pair(path, comm, W, (H, H), 0.05, thickness=W)

@@ -94,6 +94,7 @@ class InterfaceNodes:
         # A facet's vertices: an interval's 2, a triangle's 3, a quadrilateral's 4 (in
         # dolfinx's tensor order: v₃ is opposite v₀).
         corners = dolfinx.cpp.mesh.cell_num_vertices(facet_type(msh))
+        degree, gdegree = model.degree, msh.geometry.cmaps[0].degree
         local = []
         for f, c in zip(fx, cx, strict=True):
             v = X[f[:corners]]
@@ -105,32 +106,21 @@ class InterfaceNodes:
             n /= np.linalg.norm(n)
             if np.dot(X[c].mean(axis=0) - v.mean(axis=0), n) < 0:  # point into the slave
                 n = -n
-            local.append((v, n))
+            local.append((facet_nodes(X[f], corners, degree, gdegree), n))
         facet_list = [item for part in comm.allgather(local) for item in part]
         normal = np.zeros((self.size, gdim))
-        for v, n in facet_list:
-            normal[self._on_facet(v)] += n
+        scale = max(float(np.ptp(self.x, axis=0).max()), 1e-300)
+        for points, n in facet_list:
+            d = np.linalg.norm(self.x[None, :, :] - points[:, None, :], axis=2)
+            at = d.argmin(axis=1)
+            if d[np.arange(len(points)), at].max() > 1e-9 * scale:
+                raise MeshError(f"interface '{pair.spec.interface}' is not conforming: a "
+                                "facet's node is not an interface node")
+            normal[at] += n
         length = np.linalg.norm(normal, axis=1)
         if np.any(length == 0):
             raise MeshError(f"interface '{pair.spec.interface}': a node lies on no facet")
         return normal / length[:, None]
-
-    def _on_facet(self, v: np.ndarray) -> np.ndarray:
-        """Mask of the nodes lying on the facet with vertices ``v``.
-
-        A simplex (an interval, a triangle), or a quadrilateral taken as the
-        parallelogram of its first three vertices (dolfinx's order: v₁ − v₀ and
-        v₂ − v₀ are its sides).
-        """
-        quad = len(v) == 4
-        A = (v[1:3] - v[0]).T if quad else (v[1:] - v[0]).T
-        λ, *_ = np.linalg.lstsq(A, (self.x - v[0]).T, rcond=None)
-        dist = np.linalg.norm(A @ λ - (self.x - v[0]).T, axis=0)
-        h = np.linalg.norm(A, axis=0).max()
-        tol = 1e-9
-        inside = (λ >= -tol).all(axis=0) & ((λ <= 1 + tol).all(axis=0) if quad
-                                            else λ.sum(axis=0) <= 1 + tol)
-        return inside & (dist <= tol * h)
 
     def gather(self, slave: np.ndarray, master: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Nodal values of both sides on every rank.
@@ -195,6 +185,34 @@ class InterfaceNodes:
             v_T = self.tangential(vs - vm)
         return {"gap": gap, "pressure": pressure, "slip": self.tangential(us - um),
                 "slip_velocity": v_T, "friction_traction": law.friction.traction(pressure, v_T)}
+
+
+def facet_nodes(x: np.ndarray, corners: int, degree: int, gdegree: int) -> np.ndarray:
+    """The displacement nodes of a facet, from its geometry nodes ``x``.
+
+    The same points as the function space's DOF coordinates, for any facet shape
+    (trapezoids, warped or curved facets): the corners for degree 1; for degree 2 the
+    geometry nodes themselves where the geometry is quadratic, else the corners' map
+    (linear, bilinear in dolfinx's tensor order: v₃ opposite v₀) at the P2 points.
+
+    Args:
+        x: The facet's geometry nodes (dolfinx's order: the corners first).
+        corners: Its vertices: 2 (interval), 3 (triangle) or 4 (quadrilateral).
+        degree: The displacement's degree (1 or 2).
+        gdegree: The geometry's degree.
+    """
+    v = x[:corners]
+    if degree == 1:
+        return v
+    if gdegree == degree:
+        return x
+    if corners == 4:
+        s = np.array([0.0, 0.5, 1.0])
+        ξ, η = (a.ravel()[:, None] for a in np.meshgrid(s, s))
+        return (v[0] * (1 - ξ) * (1 - η) + v[1] * ξ * (1 - η) + v[2] * (1 - ξ) * η
+                + v[3] * ξ * η)
+    mid = [0.5 * (v[a] + v[b]) for a in range(corners) for b in range(a + 1, corners)]
+    return np.vstack([v, *mid])
 
 
 def _tangent_basis(normal: np.ndarray) -> np.ndarray:
