@@ -334,19 +334,23 @@ def test_interface_of_trapezoidal_hexahedra(folder: pathlib.Path, order: int) ->
     # weight ρ g V (1e-9: Newton's tolerance) over the trapezoid's area.
     from dolfinx import fem
 
+    from breakwater.casefile.meshloads import group_length
     from breakwater.contact.conforming import InterfaceNodes
     from breakwater.contact.pairstate import conforming_pairs
 
     path = _trapezoid_pair(folder / f"trapezoid{order}.msh", order)
     mat = Material(ρ, ν, young_modulus=1e9)
-    model = ContactModel(read_mesh(path, COMM), [Body("a", mat), Body("b", mat)],
+    data = read_mesh(path, COMM)
+    area = 0.5 * (0.3 + 0.2) * 0.2
+    # A load's measure of the interface group: its area (1e-12), once a sum of diameters.
+    assert group_length(data, "interface") == pytest.approx(area, rel=1e-12)
+    model = ContactModel(data, [Body("a", mat), Body("b", mat)],
                          [ContactPair("interface", "a", "b", penalty=1e12, friction=μ_F)],
                          [Fixed("b_bottom")], [], gravity=(0.0, -g, 0.0))
     nodes = InterfaceNodes(model, model.pairs[0])
     assert len(nodes.x) == 7 * 7  # 3 × 3 quadratic facets: 7 × 7 nodes
     assert np.abs(nodes.normal - [0.0, 1.0, 0.0]).max() < 1e-12
     u, _ = solve_static(model)
-    area = 0.5 * (0.3 + 0.2) * 0.2
     at_rest = [fem.Function(f.function_space) for f in u]
     pair = conforming_pairs(model, [nodes], u, at_rest, fem.Constant(model.mesh, 1e-3))[0]
     measured = pair.measure()

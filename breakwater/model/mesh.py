@@ -62,9 +62,70 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
             raise MeshError(f"{path}: cannot read the mesh ({e})") from e
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=dim, partitioner=partitioner)
+        sizes = on_rank_zero(comm, _group_sizes)
     if not data.physical_groups:
         raise MeshError(f"{path}: the mesh has no named physical groups")
-    return data
+    return _with_shared(data, sizes, comm)
+
+
+class GroupedMeshData(gmshio.MeshData):
+    """dolfinx's ``MeshData`` with the physical groups that lost entities to others.
+
+    gmsh lets an entity (a surface, a curve, a point) belong to several physical groups
+    of its dimension; dolfinx's tags keep one group per mesh entity, so the others
+    silently lose those facets, cells or vertices (a load on such a group acted on part
+    of its surface). :func:`group_tag` refuses a group in :attr:`shared`.
+
+    Attributes:
+        shared: By group name: how many of its gmsh elements dolfinx's tags give to
+            another group, its element count, and the groups it shares entities with.
+    """
+
+    shared: dict[str, tuple[int, int, list[str]]]
+
+
+def _group_sizes() -> dict[str, tuple[int, int, list[str]]]:
+    """Each physical group of the current gmsh model: dimension, elements, sharers.
+
+    Rank 0, within the model's gmsh session. The sharers are the groups of the same
+    dimension holding one of its entities.
+    """
+    groups = gmsh.model.getPhysicalGroups()
+    entities = {(d, t): {int(e) for e in gmsh.model.getEntitiesForPhysicalGroup(d, t)}
+                for d, t in groups}
+    out = {}
+    for d, t in groups:
+        count = sum(len(tags) for e in entities[d, t]
+                    for tags in gmsh.model.mesh.getElements(d, e)[1])
+        sharers = sorted(gmsh.model.getPhysicalName(d, o) for dd, o in groups
+                         if dd == d and o != t and entities[d, t] & entities[dd, o])
+        out[gmsh.model.getPhysicalName(d, t)] = (d, count, sharers)
+    return out
+
+
+def _with_shared(data: gmshio.MeshData, sizes: dict[str, tuple[int, int, list[str]]],
+                 comm: MPI.Comm) -> GroupedMeshData:
+    """``data`` with :attr:`GroupedMeshData.shared` (collective).
+
+    A group sharing entities with others lost some where dolfinx's tags hold fewer of
+    its (owned) cells, facets or vertices than gmsh's elements.
+    """
+    msh = data.mesh
+    tdim = msh.topology.dim
+    tags = {tdim: data.cell_tags, tdim - 1: data.facet_tags, 0: data.ridge_tags
+            if tdim == 2 else data.peak_tags}
+    out = GroupedMeshData(*data)
+    out.shared = {}
+    for name, (d, count, sharers) in sizes.items():
+        t = tags.get(d)
+        if not sharers or t is None or name not in data.physical_groups:
+            continue
+        found = t.find(data.physical_groups[name][1])
+        owned = comm.allreduce(int(np.count_nonzero(
+            found < msh.topology.index_map(d).size_local)))
+        if owned < count:
+            out.shared[name] = (count - owned, count, sharers)
+    return out
 
 
 def _merge(path: pathlib.Path, gdim: int | None) -> int:
@@ -330,6 +391,15 @@ def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:
     gdim, tag = groups[name]
     if dim is not None and gdim != dim:
         raise MeshError(f"physical group '{name}' has dimension {gdim}, expected {dim}")
+    shared = getattr(data, "shared", {}).get(name)
+    if shared is not None:
+        lost, count, sharers = shared
+        what = ("vertices" if gdim == 0 else "cells" if gdim == data.mesh.topology.dim
+                else "facets")
+        raise MeshError(f"physical group '{name}' shares {lost} of its {count} {what} with "
+                        f"group {', '.join(repr(s) for s in sharers)}: dolfinx keeps one "
+                        f"group per entity, so '{name}' would act on the rest only; make "
+                        "the groups disjoint in gmsh (a group may list several entities)")
     return int(tag)
 
 
