@@ -315,3 +315,24 @@ def test_compiled_update_is_the_kinematics() -> None:
     gn22_update(u, v, a, Δa, Δt, β1, β2)
     for got, want in zip((u, v, a), expected, strict=True):
         assert np.array_equal(got, want)
+
+
+def test_probe_a_hair_outside_its_body(shared_dir: pathlib.Path) -> None:
+    # A point typed to 7-10 digits on an interface lies 1e-11 to 1e-8 m off it, inside
+    # the other body: it is taken in the nearest cell of its own body when within
+    # pointprobe.TOUCH (1e-5) of that cell's size (here 2e-7 of h = 0.05), and a linear
+    # field's value there is its value at the point (1e-12: round-off); a point 1 mm
+    # off (2e-2 of h) is refused.
+    from breakwater.common.errors import MeshError
+
+    path = two_rectangles(shared_dir / "probe.msh", COMM, (0.2, 0.1), (0.4, 0.1), 0.05)
+    mat = Material(2000.0, 0.25, young_modulus=1e9)
+    model = ContactModel(read_mesh(path, COMM), [Body("a", mat), Body("b", mat)], [],
+                         [Fixed("b_bottom")], [], gravity=(0.0, 0.0))
+    field = fem.Function(model.body("b").V)
+    field.interpolate(lambda x: x[:2])
+    point = (0.0123, 0.1 + 1e-8)
+    value = PointProbe(model, "b", point).value(field)
+    assert np.allclose(value, point, rtol=0, atol=1e-12)
+    with pytest.raises(MeshError, match=r"is not in body 'b'$"):
+        PointProbe(model, "b", (0.0123, 0.101))

@@ -23,6 +23,7 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.errors import MeshError
 from breakwater.contact.conforming import InterfaceNodes, interface_nodes, mean_facet_length
 from breakwater.contact.pairkernels import NodalGather, NodalPairSums, nodal_sums_apply
 from breakwater.model.model import ContactModel, PairData
@@ -195,8 +196,16 @@ class ConformingProbe:
 
     def __init__(self, pair: ConformingPair, point: Sequence[float], name: str) -> None:
         m, p, nd = pair.model, pair.pair, pair.nodes
-        self.slave = PointProbe(m, m.bodies[p.slave].spec.name, point, f"{name}_slave")
-        self.master = PointProbe(m, m.bodies[p.master].spec.name, point, f"{name}_master")
+        sides = []
+        for side, k in (("slave", p.slave), ("master", p.master)):
+            body = m.bodies[k].spec.name
+            try:
+                sides.append(PointProbe(m, body, point, f"{name}_{side}"))
+            except MeshError:
+                raise MeshError(f"pair probe '{name}': point {tuple(point)} is not on the "
+                                f"interface '{p.spec.interface}' (not in body '{body}')"
+                                ) from None
+        self.slave, self.master = sides
         x = np.zeros(m.gdim)
         x[:] = np.asarray(point, dtype=float)[: m.gdim]
         self.normal = nd.normal[np.argmin(np.linalg.norm(nd.x - x, axis=1))]
