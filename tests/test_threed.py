@@ -240,7 +240,16 @@ def test_a_3d_case_file_runs(folder: pathlib.Path) -> None:
     assert push["patch_area"] == pytest.approx(W * W, rel=1e-12)
     assert push["applied"]["impulse_ratio"] == pytest.approx(1.0, rel=1e-12)
     assert not any("per_length" in k for k in push) and "per_length" not in str(push)
-    assert "/m" not in simulation.format_report(summary, folder)
+    report = simulation.format_report(summary, folder)
+    assert "/m" not in report
+    # u_z is reported (the push is along (1, 0, 1): the block moves in z as in x; the
+    # history and the summary had u_x and u_y only).
+    dynamic = summary["dynamic"]
+    assert abs(dynamic["residual_uz"]["corner"]) > 0 and "peak u_z" in report
+    assert dynamic["peak_uz"]["corner"]["time"] > 0
+    if COMM.rank == 0:
+        header = (folder / "case3d" / "history.csv").read_text().splitlines()[0].split(",")
+        assert {"corner_uz", "middle_slave_uz", "middle_master_uz"} <= set(header)
     # The energy ledger closes (its conforming-pair sums are the forms' in 3D; the 2D
     # compiled sums once taken here gave 2 %): 1e-9 of the external work (measured 2e-11).
     assert summary["energy"]["max_balance_error_over_external_work"] < 1e-9

@@ -28,11 +28,11 @@ from breakwater.contact.conforming import InterfaceNodes, interface_nodes, mean_
 from breakwater.contact.pairkernels import NodalGather, NodalPairSums, nodal_sums_apply
 from breakwater.model.model import ContactModel, PairData
 from breakwater.model.pairs import (
-    PROBE_KEYS,
     FieldNodes,
     StaticMeasures,
     max_penetration,
     pair_names,
+    probe_keys,
     settlement,
 )
 from breakwater.model.pointprobe import PointProbe
@@ -217,7 +217,7 @@ class ConformingProbe:
         return np.concatenate([self.slave.local_value(u), self.master.local_value(u)])
 
     def values(self, local: np.ndarray) -> dict[str, float]:
-        """Slip, opening and both sides' displacements (:data:`PROBE_KEYS`)."""
+        """Slip, opening and both sides' displacements (:func:`probe_keys`)."""
         us, um = local[: self.slave.size], local[self.slave.size:]
         jump = us - um
         opening = float(jump @ self.normal)
@@ -225,8 +225,10 @@ class ConformingProbe:
             slip = float(jump @ self._tangent)
         else:
             slip = float(np.linalg.norm(jump - opening * self.normal))
-        return dict(zip(PROBE_KEYS, (slip, opening, float(us[0]), float(us[1]),
-                                     float(um[0]), float(um[1])), strict=True))
+        sides = [float(us[0]), float(us[1]), float(um[0]), float(um[1])]
+        if self.gdim == 3:
+            sides += [float(us[2]), float(um[2])]
+        return dict(zip(probe_keys(self.gdim), (slip, opening, *sides), strict=True))
 
 
 class ConformingEnergy:

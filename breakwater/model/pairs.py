@@ -29,9 +29,10 @@ if TYPE_CHECKING:
 
     from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 
-__all__ = ["INTEGRATIONS", "PROBE_KEYS", "ContactPair", "EnergyTerms", "FieldNodes", "Pair",
-           "PairData", "PairProbe", "StaticMeasures", "SurfacePair", "check_pair_settings",
-           "max_penetration", "pair_names", "probed_pair", "settlement"]
+__all__ = ["INTEGRATIONS", "PROBE_KEYS", "PROBE_KEYS_3D", "ContactPair", "EnergyTerms",
+           "FieldNodes", "Pair", "PairData", "PairProbe", "StaticMeasures", "SurfacePair",
+           "check_pair_settings", "max_penetration", "pair_names", "probe_keys", "probed_pair",
+           "settlement"]
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
@@ -176,7 +177,15 @@ class PairData:
 
 
 PROBE_KEYS = ("slip", "opening", "slave_ux", "slave_uy", "master_ux", "master_uy")
-"""The values of a pair probe (its history columns ``<probe>_<key>``)."""
+"""The values of a pair probe (its history columns ``<probe>_<key>``); in 3D also
+:data:`PROBE_KEYS_3D`'s."""
+PROBE_KEYS_3D = (*PROBE_KEYS, "slave_uz", "master_uz")
+"""A 3D pair probe's values: the 2D ones and both sides' u_z."""
+
+
+def probe_keys(gdim: int) -> tuple[str, ...]:
+    """The values of a pair probe in ``gdim`` dimensions."""
+    return PROBE_KEYS_3D if gdim == 3 else PROBE_KEYS
 
 
 @dataclass(frozen=True)

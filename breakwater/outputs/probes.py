@@ -19,7 +19,7 @@ from mpi4py import MPI
 from breakwater.common.jit import kernel
 from breakwater.config.runspec import OutputSpec
 from breakwater.model.model import ContactModel
-from breakwater.model.pairs import PROBE_KEYS, Pair, PairProbe, probed_pair
+from breakwater.model.pairs import PROBE_KEYS, Pair, PairProbe, probe_keys, probed_pair
 from breakwater.model.pointprobe import PointProbe
 
 __all__ = ["PROBE_KEYS", "PointProbe", "Probes"]
@@ -54,8 +54,8 @@ def _point_terms(probes: Sequence[PointProbe]) -> list[np.ndarray]:
 class Probes:
     """The probes of a run: point probes and pair probes.
 
-    Columns: ``<probe>_ux``, ``<probe>_uy`` per point probe, then
-    ``<pair probe>_<key>`` per pair probe (keys of :data:`PROBE_KEYS`).
+    Columns: ``<probe>_ux``, ``<probe>_uy`` (3D: and ``_uz``) per point probe, then
+    ``<pair probe>_<key>`` per pair probe (keys of :func:`probe_keys`).
 
     Args:
         model: The contact model.
@@ -74,10 +74,11 @@ class Probes:
                 q.point, q.name))
             for q in output.pair_probes]
         self.columns: list[str] = []
+        self._axes = ("ux", "uy", "uz")[:model.gdim]
         for p in self.points:
-            self.columns += [f"{p.name}_ux", f"{p.name}_uy"]
+            self.columns += [f"{p.name}_{a}" for a in self._axes]
         for name, _ in self.pairs:
-            self.columns += [f"{name}_{k}" for k in PROBE_KEYS]
+            self.columns += [f"{name}_{k}" for k in probe_keys(model.gdim)]
         # The point probes, and the pair probes made of two (a conforming pair's: its
         # local values are its slave's then its master's), in one compiled sum.
         self._fused = [isinstance(getattr(pp, "slave", None), PointProbe)
@@ -141,7 +142,8 @@ class Probes:
             parts.append(values[k:k + len(x)])
             k += len(x)
         for p, value in zip(self.points, parts, strict=False):
-            r[f"{p.name}_ux"], r[f"{p.name}_uy"] = float(value[0]), float(value[1])
+            for a, x in zip(self._axes, value, strict=True):
+                r[f"{p.name}_{a}"] = float(x)
         for (name, pp), value in zip(self.pairs, parts[len(self.points):], strict=True):
             r.update({f"{name}_{key}": x for key, x in pp.values(value).items()})
         return r

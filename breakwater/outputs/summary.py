@@ -233,6 +233,13 @@ def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
         dynamic["peak_ux"][name] = {"value": float(ux[k]), "time": float(t[k])}
     dynamic["residual_ux"] = {name: end[f"{name}_ux"] for name in probes}
     dynamic["residual_uy"] = {name: end[f"{name}_uy"] for name in probes}
+    if probes and f"{probes[0]}_uz" in end:  # 3D
+        dynamic["peak_uz"] = {}
+        for name in probes:
+            uz = column(rows, f"{name}_uz")
+            k = int(np.argmax(np.abs(uz)))
+            dynamic["peak_uz"][name] = {"value": float(uz[k]), "time": float(t[k])}
+        dynamic["residual_uz"] = {name: end[f"{name}_uz"] for name in probes}
     dynamic["time_of_max_ux"] = dynamic["peak_ux"][probes[0]]["time"] if probes else None
     pairs: dict[str, Any] = {}
     for name in pair_probes:
@@ -460,9 +467,13 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"{num(s.get('mean_contact_pressure'))} Pa (edge "
                      f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
     for name, peak in d.get("peak_ux", {}).items():
-        lines.append(f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
-                     f"{num(peak.get('time'))} s, residual "
-                     f"{num(d.get('residual_ux', {}).get(name))} m")
+        line = (f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
+                f"{num(peak.get('time'))} s, residual {num(d.get('residual_ux', {}).get(name))} m")
+        z = d.get("peak_uz", {}).get(name)
+        if z is not None:
+            line += (f"; peak u_z {num(z.get('value'))} m at t = {num(z.get('time'))} s, "
+                     f"residual {num(d.get('residual_uz', {}).get(name))} m")
+        lines.append(line)
     if d.get("residual_slip") is not None:
         lines.append(f"  residual slip {num(d.get('residual_slip'))} m, max uplift "
                      f"{num(d.get('max_uplift'))} m")
