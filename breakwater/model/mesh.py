@@ -155,6 +155,11 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
     types, _, _ = gmsh.model.mesh.getElements(gdim)
     if len(types) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
+    if len(types) > 1:  # dolfinx raised a RuntimeError ("Multiple cell types")
+        names = " and ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
+        raise MeshError(f"{path}: the {gdim}D cells mix {names}; breakwater reads one cell "
+                        "type per mesh: mesh every body with the same kind (recombine every "
+                        "surface or none)")
     if gdim == 2:
         check_cells(path)
     return gdim
