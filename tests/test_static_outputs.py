@@ -243,3 +243,24 @@ def test_point_group_on_two_bodies_is_refused(shared_dir: pathlib.Path) -> None:
                        r"on several bodies \(a, b\)"):
         ContactModel(read_mesh(mesh, COMM), [Body("a", mat), Body("b", mat)],
                      fixed=[Fixed("a_corner", (0,))])
+
+
+@pytest.mark.parametrize("slave", ["a", "b"])
+def test_weight_is_the_upper_body_whichever_is_the_slave(shared_dir: pathlib.Path,
+                                                          slave: str) -> None:
+    # The static summary's weight is what the pair carries: the upper block's (a on b),
+    # with a as the slave or as the master (a foundation as the slave gave the
+    # foundation's own weight: 8x, found by a user-path test).
+    from breakwater.model.model import ContactPair
+    from breakwater.outputs.summary import _upper_body, resting_on
+
+    path = two_rectangles(shared_dir / "stack.msh", COMM, (0.2, 0.1), (0.4, 0.1), 0.05)
+    mat = Material(2000.0, 0.25, young_modulus=1e9)
+    master = "b" if slave == "a" else "a"
+    model = ContactModel(read_mesh(path, COMM), [Body("a", mat), Body("b", mat)],
+                         [ContactPair("interface", slave, master, penalty=1e12)],
+                         [Fixed("b_bottom")], [], gravity=(0.0, -9.81))
+    a, b = model.body("a").index, model.body("b").index
+    p = model.pairs[0]
+    assert _upper_body(model, p.slave, p.master) == a
+    assert resting_on(model, a) == {a} and resting_on(model, b) == {a, b}

@@ -49,18 +49,43 @@ __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_qualit
 # --- the static state -------------------------------------------------------------
 
 def resting_on(model: ContactModel, body: int) -> set[int]:
-    """A body and every body resting on it: the slaves of pairs whose master is one of them.
+    """A body and every body resting on it (collective).
 
-    Pairs of both kinds (conforming and general). Under gravity their weight is what
-    the body's contacts below it carry.
+    Pairs of both kinds (conforming and general); of a pair's two bodies the one whose
+    centroid lies higher against gravity rests on the other, whichever is the slave (a
+    foundation as the slave gave the foundation's weight); without gravity the slave
+    on the master. Under gravity their weight is what the body's contacts below it
+    carry.
     """
     links = [(p.slave, p.master) for p in model.pairs]
     links += [(model.body(p.slave).index, model.body(p.master).index)
               for p in model.surface_pairs]
+    height = _heights(model)
+    links = [(s, m) if height[s] >= height[m] else (m, s) for s, m in links]
     found = {body}
     while new := {s for s, m in links if m in found} - found:
         found |= new
     return found
+
+
+def _upper_body(model: ContactModel, slave: int, master: int) -> int:
+    """Of a pair's two bodies, the one resting on the other (:func:`resting_on`)."""
+    height = _heights(model)
+    return slave if height[slave] >= height[master] else master
+
+
+def _heights(model: ContactModel) -> list[float]:
+    """Each body's centroid of its geometry nodes along −g (0 without gravity; collective)."""
+    g = np.asarray(model.gravity.value, dtype=float)
+    norm = float(np.linalg.norm(g))
+    out = []
+    for b in model.bodies:
+        geometry = b.submesh.geometry
+        x = geometry.x[:geometry.index_map().size_local, :len(g)]
+        total = model.comm.allreduce(x.sum(axis=0))
+        count = model.comm.allreduce(len(x))
+        out.append(-float(total @ g) / (norm * max(count, 1)) if norm > 0 else 0.0)
+    return out
 
 
 def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
@@ -77,8 +102,8 @@ def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
 
 
 def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[Pair]
-                ) -> tuple[str, int, float] | None:
-    """The first contact pair's name, slave body and static normal resultant ∫ p dS.
+                ) -> tuple[str, int, int, float] | None:
+    """The first contact pair's name, slave and master bodies and normal resultant ∫ p dS.
 
     The first conforming pair (its ``<name>_normal_force``), else the first general pair:
     Σ w p over its integration points (w their reference lengths, p = ε_n⟨−g_n⟩₊:
@@ -87,7 +112,8 @@ def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[P
     """
     if model.pairs:
         name = pair_names([p.spec for p in model.pairs])[0]
-        return name, model.pairs[0].slave, row[f"{name}_normal_force"]
+        return (name, model.pairs[0].slave, model.pairs[0].master,
+                row[f"{name}_normal_force"])
     if not model.surface_pairs:
         return None
     spec = model.surface_pairs[0]
@@ -96,8 +122,8 @@ def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[P
     if contact is None:
         return None
     state = contact.state()
-    return spec.name, model.body(spec.slave).index, \
-        float(np.sum(state["weight"] * state["pressure"]))
+    return (spec.name, model.body(spec.slave).index, model.body(spec.master).index,
+            float(np.sum(state["weight"] * state["pressure"])))
 
 
 def static_summary(model: ContactModel, row: Mapping[str, float],
@@ -107,7 +133,7 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
 
     The first conforming pair's, or, in a model without one, the first general pair's
     (the same keys, the same meaning): the normal resultant ∫ p dS on the slave, the
-    weight of the slave and of every body resting on it (:func:`resting_on`), the mean
+    weight of the pair's upper body and of every body resting on it (:func:`resting_on`), the mean
     pressure over the contact length (the history's ``<name>_contact_length``), the
     pressures at the ends of the interface (a general pair's slave surface) and at its
     node nearest the centre (:func:`edge_centre`, on the snapshot's nodes).
@@ -124,9 +150,9 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     first = _first_pair(model, row, pairs)
     if first is None:
         return static
-    name, slave, resultant = first
+    name, slave, master, resultant = first
     weights = model.weight()
-    weight = sum(weights[i] for i in resting_on(model, slave))
+    weight = sum(weights[i] for i in resting_on(model, _upper_body(model, slave, master)))
     length = row[f"{name}_contact_length"]
     pressure = interface[f"contact_{name}_pressure"]
     first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
