@@ -315,6 +315,18 @@ def _mesh_summary(case: CaseSettings, data: gmshio.MeshData) -> dict[str, Any]:
         cells[b.name] = int(msh.comm.allreduce(int((found < nlocal).sum())))
     info: dict[str, Any] = {"source": case.mesh.source, "degree": case.mesh.degree,
                             "cells": cells}
+    # Cell groups that no body names are left out of the model: say so (a third body
+    # of a user's mesh was dropped silently).
+    left_out = {}
+    for name, (dim, tag) in data.physical_groups.items():
+        if dim == tdim and name not in cells:
+            found = data.cell_tags.find(int(tag))
+            left_out[name] = int(msh.comm.allreduce(int((found < nlocal).sum())))
+    if left_out:
+        info["left_out"] = left_out
+        info["warnings"] = [f"mesh: cell group '{name}' ({n} cells) is no body of the case "
+                            f"and is left out (add [bodies.{name}] to include it)"
+                            for name, n in left_out.items()]
     if case.mesh.generated:
         info["refinement"] = case.mesh.refinement
     return info

@@ -45,6 +45,8 @@ def start(r: Session) -> None:
     log.info("static equilibrium under gravity (%d cells, %d bodies, %d contact pairs)",
              m.comm.allreduce(m.mesh.topology.index_map(m.mesh.topology.dim).size_local),
              len(m.bodies), len(m.pairs) + len(m.surface_pairs))
+    for line in r.extra.get("mesh", {}).get("warnings", ()):
+        log.warning("%s", line)  # cell groups left out (breakwater.casefile.build)
     for info in r.extra.get("loads", {}).values():
         for line in info.get("warnings", ()):
             log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
