@@ -264,3 +264,19 @@ def test_weight_is_the_upper_body_whichever_is_the_slave(shared_dir: pathlib.Pat
     p = model.pairs[0]
     assert _upper_body(model, p.slave, p.master) == a
     assert resting_on(model, a) == {a} and resting_on(model, b) == {a, b}
+
+
+def test_centre_of_a_curved_interface() -> None:
+    # The centre node of a half-cylinder's lower arc (R = 0.1, nodes sorted by x then y)
+    # is its bottom, halfway along the arc; the middle of its ends is the circle's
+    # centre, as far from every node (the pick was arbitrary: a node at 39° of 90°).
+    # A straight, unevenly spaced interface keeps the node nearest its middle.
+    from breakwater.outputs.summary import edge_centre
+
+    θ = np.linspace(np.pi, 2 * np.pi, 25)
+    arc = 0.1 * np.column_stack([np.cos(θ), np.sin(θ)])
+    first, last, centre = edge_centre(arc[np.lexsort(arc.T[::-1])])
+    assert np.allclose(arc[np.lexsort(arc.T[::-1])][[first, last, centre]],
+                       [[-0.1, 0.0], [0.1, 0.0], [0.0, -0.1]], atol=1e-15)
+    line = np.column_stack([[0.0, 0.1, 0.15, 0.47, 0.56, 1.0], np.zeros(6)])
+    assert edge_centre(line) == (0, 5, 3)

@@ -89,15 +89,20 @@ def _heights(model: ContactModel) -> list[float]:
 
 
 def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
-    """Indices of the two end nodes of an interface and of the node nearest its centre.
+    """Indices of the two end nodes of an interface and of the node halfway along it.
 
-    The nodes are sorted lexicographically (x, then y), so for a straight interface
-    the first and last are its ends. In 3D the same along the row of nodes nearest the
+    The nodes are sorted lexicographically (x, then y), so for a straight interface (or
+    a curve that x runs along) the first and last are its ends, and the rows between
+    them follow it. In 3D the same along the row of nodes nearest the
     interface's mid z (:func:`~breakwater.outputs.section.mid_row`).
     """
     row = np.flatnonzero(mid_row(x))
     first, last = int(row[0]), int(row[-1])
-    centre = int(row[np.argmin(np.linalg.norm(x[row] - 0.5 * (x[first] + x[last]), axis=1))])
+    # Halfway along the row (on a straight interface the node nearest the middle of its
+    # ends; on a curved one, an arc, that middle is off the surface: every node of a
+    # half-cylinder's is as far from it, and the pick was arbitrary).
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x[row], axis=0), axis=1))])
+    centre = int(row[np.argmin(np.abs(along - 0.5 * along[-1]))])
     return first, last, centre
 
 
