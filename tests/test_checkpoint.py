@@ -592,3 +592,21 @@ def test_second_signal_kills_at_once() -> None:
         assert stop.received == signal.SIGINT
         assert all(signal.getsignal(s) == signal.SIG_DFL for s in StopSignal.SIGNALS)
     assert {s: signal.getsignal(s) for s in StopSignal.SIGNALS} == before
+
+
+def test_case_differences_name_the_keys(shared_dir: pathlib.Path) -> None:
+    # A refused resume names what differs from the checkpointed case (its folder's
+    # case.toml): dotted keys, floats to the fingerprint's 12 digits, the output folder
+    # left out; where no key differs, the input files' contents.
+    from breakwater.outputs.checkpoint import case_differences
+
+    saved = {"name": "a", "time": {"dt": 1e-4, "end_time": 0.01},
+             "output": {"directory": "x", "checkpoint_interval": 5},
+             "bodies": {"b": {"density": 2000.0}}}
+    run = {"name": "a", "time": {"dt": 1e-4 * (1 + 1e-14), "end_time": 0.05},
+           "output": {"directory": "y", "checkpoint_interval": 0},
+           "bodies": {"b": {"density": 2000.0}, "c": {"density": 1.0}}}
+    assert case_differences(saved, run) == ["bodies.c", "output.checkpoint_interval",
+                                            "time.end_time"]
+    assert case_differences(saved, saved) == [
+        "the contents of its input files (a mesh or a table edited since)"]

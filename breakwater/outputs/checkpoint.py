@@ -44,8 +44,8 @@ if TYPE_CHECKING:  # light at import: the command line catches CheckpointError e
     from dolfinx import fem
     from mpi4py import MPI
 
-__all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_fingerprint", "check",
-           "gather_nodal",
+__all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_differences", "case_fingerprint",
+           "check", "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
 FORMAT = 5
@@ -116,6 +116,33 @@ def case_fingerprint(resolved_case: Mapping[str, Any]) -> str:
     data.get("output", {}).pop("directory", None)
     data["file_contents"] = {path: _file_digest(path) for path in _input_files(data)}
     return _digest(data)
+
+
+def case_differences(saved: Mapping[str, Any], resolved_case: Mapping[str, Any]) -> list[str]:
+    """The keys (dotted) in which a resolved case differs from the checkpointed one.
+
+    As :func:`case_fingerprint` compares them (floats to 12 digits, ``output.directory``
+    left out); where no key differs, the fingerprint's other part: its input files'
+    contents.
+
+    Args:
+        saved: The checkpointed run's resolved case (its folder's ``case.toml``).
+        resolved_case: This run's.
+    """
+    old, new = _canonical(saved), _canonical(resolved_case)
+    for data in (old, new):
+        data.get("output", {}).pop("directory", None)
+    out: list[str] = []
+
+    def walk(a: Any, b: Any, key: str) -> None:
+        if isinstance(a, dict) and isinstance(b, dict):
+            for k in sorted(set(a) | set(b)):
+                walk(a.get(k), b.get(k), f"{key}.{k}" if key else k)
+        elif a != b:
+            out.append(key)
+
+    walk(old, new, "")
+    return out or ["the contents of its input files (a mesh or a table edited since)"]
 
 
 def _input_files(resolved_case: Mapping[str, Any]) -> list[str]:

@@ -58,6 +58,7 @@ import re
 import signal
 import sys
 import time as _time
+import tomllib
 from collections.abc import Mapping
 from typing import Any
 
@@ -196,6 +197,33 @@ class _LoopClock:
 
     def __exit__(self, *exc: object) -> None:
         self.fold()
+
+
+def _named_differences(error: ckpt.CheckpointError, r: Session,
+                       resolved_case: Mapping[str, Any] | None) -> ckpt.CheckpointError:
+    """A refused resume of another case, with the keys that differ (collective).
+
+    Read from the folder's ``case.toml`` (the checkpointed run's, untouched) on rank 0.
+    """
+    if resolved_case is None or "the case differs" not in str(error):
+        return error
+
+    def keys() -> list[str]:
+        try:
+            saved = tomllib.loads((r.directory / files.CASE).read_text(encoding="utf-8"))
+        except (OSError, tomllib.TOMLDecodeError):
+            return []
+        return ckpt.case_differences(saved, resolved_case)
+
+    changed = on_rank_zero(r.comm, keys)
+    if not changed:
+        return error
+    shown = ", ".join(changed[:5]) + (f" and {len(changed) - 5} more" if len(changed) > 5
+                                      else "")
+    text = str(error)
+    at = text.find(" (run it without --resume")
+    return ckpt.CheckpointError(f"{text[:at]}, in {shown}{text[at:]}" if at >= 0
+                                else f"{text}, in {shown}")
 
 
 def _loop(r: Session, stop: StopSignal) -> None:
@@ -347,7 +375,10 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
-            begin.restore(r)  # CheckpointError: nothing written yet
+            try:
+                begin.restore(r)  # CheckpointError: nothing written yet
+            except ckpt.CheckpointError as e:
+                raise _named_differences(e, r, resolved_case) from None
         if resolved_case is not None:
             on_rank_zero(r.comm, lambda: bool(
                 files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
