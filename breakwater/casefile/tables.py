@@ -167,7 +167,7 @@ class ContactCase:
     master_surface: str | tuple[str, ...] | None = setting(
         None, doc="general pair: facet group on the master's boundary, or an array of "
         "them (one surface, e.g. a shared interface and the crest beyond it)")
-    points: int = setting(3, doc="general pair: Gauss points per integration segment")
+    points: int = setting(3, doc="general pair: Gauss points per integration segment (>= 2)")
     integration: Literal["segments", "gauss", "nodes"] = setting(
         "segments", doc="general pair: the slave's integration points: segments "
         "(segment-to-segment, `points` Gauss points per segment), gauss (`points` per "
@@ -186,8 +186,9 @@ class ContactCase:
         if self.general and self.gap:
             raise InvalidField("gap", "a general pair takes its gap from the geometry "
                                "(remove gap)")
-        if self.points < 1:
-            raise InvalidField("points", f"must be >= 1 (got {self.points})")
+        if self.points < 2:  # at one point (a segment's middle) the P2 end nodes' N is 0
+            raise InvalidField("points", f"must be >= 2 (got {self.points}): one Gauss point "
+                               "per segment gives the facets' end nodes no contact force")
         if self.master_surface == ():
             raise InvalidField("master_surface", "needs at least one facet group")
         positive(self.penalty, "penalty")
