@@ -157,3 +157,23 @@ def test_friction_and_damping_balance(folder):
     # With it the balance closes to Newton's tolerance (measured 9e-13 W, 1.3e-12 W on
     # 2 ranks).
     assert np.abs(error).max() < 1e-8 * W_ext
+
+
+def test_report_measures_the_balance_by_the_energy_that_moved(folder) -> None:
+    # A block launched by its initial velocity and stopped by friction: the external
+    # work is ~0 and the energy the run moves is its initial kinetic energy (20 J/m),
+    # so the report quotes the balance error against that (it printed "1.7e+04 of the
+    # external work"); a pushed run keeps the external work.
+    from breakwater.outputs.summary import energy_summary, format_report
+
+    def rows(work: float, kinetic: float) -> list[dict[str, float]]:
+        return [{"t": float(k), "external_work": work * k, "kinetic": kinetic * (2 - k),
+                 "strain": 0.0, "penalty": 0.0, "balance_error": 2.8e-4 * k,
+                 "numerical_dissipation": 2e-5 * k} for k in (0, 1, 2)]
+
+    launched = {"energy": energy_summary(rows(8e-9, 10.0))}
+    line = next(x for x in format_report(launched, folder).splitlines() if "energy:" in x)
+    assert "(2.8e-05 of the run's largest energy, 20 J/m)" in line and "(0.0002%)" in line
+    pushed = {"energy": energy_summary(rows(1.0, 0.0))}
+    line = next(x for x in format_report(pushed, folder).splitlines() if "energy:" in x)
+    assert "(0.00028 of the external work)" in line and "largest energy" not in line
