@@ -39,7 +39,7 @@ import pathlib
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from breakwater.casefile.dimension import dimension, mesh_problem
+from breakwater.casefile.dimension import dimension, general_in_3d, mesh_problem
 from breakwater.casefile.loads import GodaCase, LoadCase, PendulumCase, ProfileCase, TableCase
 from breakwater.casefile.settings import CaseSettings
 from breakwater.casefile.tables import (
@@ -216,6 +216,7 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
     problem = mesh_problem(case, max(groups.values()))
     if problem is not None:
         raise InvalidField("mesh.source", problem)
+    general_in_3d(case)  # after the mesh's dimension: a 2D mesh with 3 components is that
     names = {0: "point", d - 1: "facet", d: "cell" if d == 2 else "volume"}
 
     def need(name: str, dim: int | tuple[int, ...], field_path: str) -> None:

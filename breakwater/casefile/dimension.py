@@ -27,7 +27,7 @@ from breakwater.casefile.tables import (
 )
 from breakwater.config.fields import InvalidField
 
-__all__ = ["dimension", "dimension_problem", "mesh_problem"]
+__all__ = ["dimension", "dimension_problem", "general_in_3d", "mesh_problem"]
 
 
 class _Case(Protocol):
@@ -92,12 +92,6 @@ def dimension_problem(case: _Case) -> None:
                                "case's vectors all have 2 components (plane strain) or all 3 "
                                f"(got {list(vector)})")
     if d == 3:
-        for c in case.contact:
-            if c.general:
-                raise InvalidField(f"contact.{c.name}.slave_surface", "general pairs "
-                                   "(non-matching surfaces) are plane strain only for now: in "
-                                   "3D the bodies must share their interface's nodes (a "
-                                   "conforming pair)")
         if case.out_of_plane_length != 1.0:
             raise InvalidField("out_of_plane_length", "a 3D case (3-component gravity) has "
                                "no out-of-plane length: forces and impulses are the bodies' "
@@ -108,11 +102,30 @@ def dimension_problem(case: _Case) -> None:
                                "gravity) calibrates the model's own stiffness: \"block\"")
 
 
+def general_in_3d(case: _Case) -> None:
+    """Refuse a general pair in a 3D case (once the mesh is known to be 3D).
+
+    Raises:
+        InvalidField: The first general pair's ``slave_surface``.
+    """
+    if dimension(case) == 3:
+        for c in case.contact:
+            if c.general:
+                raise InvalidField(f"contact.{c.name}.slave_surface", "general pairs "
+                                   "(non-matching surfaces) are plane strain only for now: in "
+                                   "3D the bodies must share their interface's nodes (a "
+                                   "conforming pair)")
+
+
 def mesh_problem(case: _Case, gdim: int) -> str | None:
     """Why a mesh of dimension ``gdim`` does not fit the case, or None."""
     d = dimension(case)
     if gdim == d:
         return None
+    if gdim < 2:  # cell groups without names (gmsh "Physical Surface(11)") are not read
+        return ("the mesh has no named surface (2D) or volume (3D) physical group: name "
+                "the bodies' cells in gmsh (Physical Surface(\"name\") or Physical "
+                "Volume(\"name\"))")
     if gdim == 3:
         return ("the mesh is 3D but the case is plane strain (2-component gravity): give "
                 "gravity, directions, points and velocities 3 components")

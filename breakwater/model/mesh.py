@@ -251,6 +251,11 @@ def check_cells(path: pathlib.Path) -> None:
             position.
     """
     tags, coords, _ = gmsh.model.mesh.getNodes()
+    span = np.ptp(coords.reshape(-1, 3), axis=0)
+    if span[2] > 0 and min(span[0], span[1]) <= 1e-12 * span.max():
+        plane = "y-z" if span[0] <= span[1] else "x-z"
+        raise MeshError(f"{path}: the 2D mesh lies in the {plane} plane; a plane-strain "
+                        "model lies in the x-y plane (y up): rotate it in gmsh")
     xy = np.zeros((int(tags.max()) + 1, 2))
     xy[tags.astype(np.int64)] = coords.reshape(-1, 3)[:, :2]
     cells, elements, sides = [], [], []
