@@ -623,3 +623,21 @@ def test_friction_round_off_is_the_numpy_estimate() -> None:
                                           dt, beta1 * dt, mu, chi, ε)
     assert expected > 0
     assert abs(got - expected) <= 1e-14 * expected
+
+
+def test_friction_normals_carry_the_pair_resultant() -> None:
+    # The friction's nodal normal forces sum to the pair's resultant Σλ where some
+    # λ_k < 0 (a facet cut by the contact's end) or a node has no master point, scaled
+    # over the nodes that carry friction; elsewhere λ itself (the same array: bit for bit).
+    from breakwater.contact.newtonaids import friction_normals
+
+    lam = np.array([3.0, 5.0, 0.0, 2.0])
+    facet = np.array([4, 5, -1, 6])
+    same, s = friction_normals(lam, facet)
+    assert same is lam and s == 1.0
+    cut = np.array([3.0, 5.0, -0.5, 2.0])
+    scaled, s = friction_normals(cut, facet)
+    assert s == pytest.approx(9.5 / 10.0) and scaled[[0, 1, 3]].sum() == pytest.approx(9.5)
+    orphan = np.array([3.0, 5.0, 1.0, 2.0])  # node 2 presses but has no master point
+    scaled, s = friction_normals(orphan, facet)
+    assert s == pytest.approx(11.0 / 10.0) and scaled[[0, 1, 3]].sum() == pytest.approx(11.0)

@@ -121,7 +121,8 @@ class SurfaceForces(SurfaceSearch):
 
         Per slave node k in contact (λ_k > 0, a projection at the start of the step),
         the force ``−μ λ_k φ(v_T)`` (:class:`forms.ContactLaw`'s friction with the
-        nodal normal force λ_k in place of the pressure), with
+        nodal normal force λ_k in place of the pressure; λ scaled where the contact
+        ends within a facet, :func:`~.newtonaids.friction_normals`), with
         ``v_T = t₀ ⊗ t₀ (v_k − v̄_m(ξ̄₀))`` (:func:`~breakwater.contact.forcekernels.friction`).
 
         Args:
@@ -141,11 +142,12 @@ class SurfaceForces(SurfaceSearch):
         else:
             facet, N0, t0 = self._frozen(u0)
         _, _, mu, chi = self._law
-        k, v_T, force, unit = forcekernels.friction(λ, facet, N0, t0, self._node_pos, self._pm,
-                                                    v1, mu, chi, self.crawl.none)
+        λ_f, _ = newtonaids.friction_normals(λ, facet)
+        k, v_T, force, unit = forcekernels.friction(λ_f, facet, N0, t0, self._node_pos,
+                                                    self._pm, v1, mu, chi, self.crawl.none)
         out = None if not len(k) else {
             "k": k, "pos_s": self.node_pos[k], "pos_m": self.pos_m[facet[k]], "N0": N0[k],
-            "t": t0[k], "v_T": v_T, "force": force, "unit": unit}
+            "t": t0[k], "v_T": v_T, "force": force, "unit": unit, "lam": λ_f}
         if accepted and self._accepted is not None:
             self._accepted_friction = (self._accepted, λ, out)
         return out
@@ -165,7 +167,8 @@ class SurfaceForces(SurfaceSearch):
             self._step_frozen = facet, N0, t0 = self._frozen(u0)
             _, _, mu, chi = self._law
             k, _, force, _ = forcekernels.friction(
-                p["lam"], facet, N0, t0, self._node_pos, self._pm, v1, mu, chi,
+                newtonaids.friction_normals(p["lam"], facet)[0], facet, N0, t0,
+                self._node_pos, self._pm, v1, mu, chi,
                 self.crawl.none if accepted else self.crawl.at)
             if len(k):
                 forcekernels.add_friction(out, k, force, facet, N0, self._node_pos, self._pm)
@@ -210,16 +213,20 @@ class SurfaceForces(SurfaceSearch):
         facet = N0 = t0 = None
         k = np.zeros(0, np.int64)
         v_T = unit = np.zeros((0, 2))
+        lam = p["lam"]
         if self.spec.friction and len(p["index"]):
             facet, N0, t0 = self._frozen(u0)
-            k, v_T, _, unit = forcekernels.friction(p["lam"], facet, N0, t0, self._node_pos,
+            lam, s = newtonaids.friction_normals(lam, facet)
+            k, v_T, _, unit = forcekernels.friction(lam, facet, N0, t0, self._node_pos,
                                                     self._pm, v1, mu, chi, self.crawl.at)
+            if s != 1.0:  # the friction's λ̂ = s λ, s taken as a constant: dλ̂ = s dλ
+                unit = unit * s
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
         return forcekernels.jacobian(
             self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
             p["xi"], p["weight"], p["gap"], self.small_rotations, eps, g0, self._node_of,
-            len(self._node_pos), cu, cv, bool(self.spec.friction), p["lam"], k, v_T, unit,
+            len(self._node_pos), cu, cv, bool(self.spec.friction), lam, k, v_T, unit,
             facet, N0, t0, self._node_pos, mu, chi)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
@@ -349,11 +356,10 @@ class SurfaceContact(SurfaceForces):
             return kept[2]
         eps, _, mu, chi = self._law
         fr = self._friction(u0, v1, p["lam"], accepted) if self.spec.friction else None
-        k, v_T, force = ((fr["k"], fr["v_T"], fr["force"]) if fr is not None
-                         else (_NO_NODES, _NO_PAIRS, _NO_PAIRS))
+        k, v_T, force, λ_f = ((fr["k"], fr["v_T"], fr["force"], fr["lam"]) if fr is not None
+                              else (_NO_NODES, _NO_PAIRS, _NO_PAIRS, p["lam"]))
         r = recordkernels.pair_record(p["index"], p["gap"], p["all_weight"], p["forces"],
-                                      self.slave.X.shape[1], eps, k, p["lam"], v_T, force,
-                                      mu, chi)
+                                      self.slave.X.shape[1], eps, k, λ_f, v_T, force, mu, chi)
         if accepted and self._accepted is not None:
             self._record_of = (self._accepted, p, r)
         return r
