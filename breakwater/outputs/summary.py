@@ -553,7 +553,8 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
             line += (f" ({num(e.get('max_balance_error_over_energy_scale'), '.2g')} of the "
                      f"run's largest energy, {num(scale, '.3g')} J{per}); numerical "
                      f"dissipation {num(numerical)} J{per}"
-                     + (f" ({pct(numerical / scale)})" if numerical is not None else ""))
+                     + (f" ({pct(numerical / scale)} of that energy)" if numerical is not None
+                        else ""))
         elif e.get("max_balance_error_over_external_work") is not None:
             line += (f" ({num(e['max_balance_error_over_external_work'], '.2g')} of the "
                      f"external work); numerical dissipation "

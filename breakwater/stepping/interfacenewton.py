@@ -152,9 +152,9 @@ class InterfaceNewton:
             failure = (f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
                        f"iterations, residual {norms[-1]:.3e})")
             if reason <= 0:  # again from y0, its overshooting steps halved
-                self.rescues += 1
                 reason, norms, state = self._iterate(fact, z_I, y0, w_I, w_norm2, v_pred,
                                                      dv_dx, damped=True)
+                self.rescues += reason > 0  # the solves that converged only so
                 its += len(norms) - 1
                 failure += (f"; again with its overshooting steps halved: {len(norms) - 1} "
                             f"iterations, residual {norms[-1]:.3e}")
