@@ -274,6 +274,11 @@ def check_goda_face(load: loadcase.LoadCase, data: gmshio.MeshData, warn: bool =
         log.warning(f"{key}: only {100 * applied.fraction:.1f}% of Goda's horizontal force "
                     f"is on the loaded face ({face}; the profile {profile}): the run applies "
                     f"{applies}, as summary.json reports")
+    if applied.fraction > 1.0 + APPLIED_TOLERANCE and applied.width is None:
+        log.warning(f"{key}: the loaded faces ({face}) receive {100 * applied.fraction:.1f}% "
+                    f"of Goda's horizontal force: some elevations are loaded more than once "
+                    f"(several faces at one height), P = {applied.force:.4g} N/m against the "
+                    f"formula's {g.force:.4g} N/m")
     # The face beyond the profile's ends, where Goda's formula stops only because h' or
     # h_c says the upright section does: the mesh's face there is left unloaded.
     swl, (lo, hi) = load.goda.still_water_level, applied.face

@@ -271,6 +271,11 @@ class LoadCase:
     table: TableCase | None = setting(None, doc="table: the tabulated factor")  # noqa: RUF009 (a field() with docs)
 
     def __post_init__(self) -> None:
+        listed = (self.group, *self.groups)
+        twice = next((g for k, g in enumerate(listed) if g in listed[:k]), None)
+        if twice is not None:  # its facets were loaded twice: Goda's force 1.9x, no word
+            raise InvalidField("groups", f"'{twice}' is listed twice in group and groups: "
+                               "its facets would be loaded twice")
         if len(self.direction) not in (2, 3) or not any(self.direction):
             raise InvalidField("direction", f"must be a non-zero 2- or 3-vector (got "
                                f"{list(self.direction)})")
