@@ -94,11 +94,43 @@ def base_triangle(uplift_group: str, data: gmshio.MeshData, front: tuple[str, ..
     ends = [extent(data, g) for g in front]
     front_x = 0.5 * (min(e[0][0] for e in ends) + max(e[1][0] for e in ends))
     width = float(hi[0] - lo[0])
+    _check_base(data, uplift_group, front[0], lo, hi)
     if abs(front_x - lo[0]) <= abs(front_x - hi[0]):
         origin, axis = (float(lo[0]), 0.0), (1.0, 0.0)
     else:
         origin, axis = (float(hi[0]), 0.0), (-1.0, 0.0)
     return PressureProfile(((0.0, pressure), (width, 0.0)), axis, origin), width
+
+
+def _check_base(data: gmshio.MeshData, group: str, front: str, lo: Any, hi: Any) -> None:
+    """Refuse an uplift group that is not the horizontal base of the loaded body.
+
+    The uplift pushes into the body: on its top it pushed down, adding to the friction
+    (the summary still called it uplift), and on a vertical face the triangle had no
+    width (a traceback). Collective.
+    """
+    import dolfinx
+    import numpy as np
+
+    from breakwater.common.errors import CaseError
+    from breakwater.model.mesh import group_tag
+
+    width = float(hi[0] - lo[0])
+    if not width > 0 or abs(float(hi[1] - lo[1])) > 1e-6 * width:
+        raise CaseError(f"uplift_group: '{group}' is not a horizontal base (x from "
+                        f"{lo[0]:.6g} to {hi[0]:.6g} m, y from {lo[1]:.6g} to {hi[1]:.6g} m)")
+    msh = data.mesh
+    tdim = msh.topology.dim
+    assert data.cell_tags is not None
+    body = owner(data, front)
+    cells = data.cell_tags.find(group_tag(data, body, tdim))
+    cells = cells[cells < msh.topology.index_map(tdim).size_local]
+    y = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, tdim, cells).ravel(), 1]
+    total, count = msh.comm.allreduce(float(np.sum(y))), msh.comm.allreduce(len(y))
+    if count and total / count < float(lo[1]):
+        raise CaseError(f"uplift_group: '{group}' is not the base of '{body}' (the body "
+                        f"lies below it, at mean y = {total / count:.4g} m against "
+                        f"{float(lo[1]):.4g} m): the uplift would push it down")
 
 
 def uplift_profile(goda: GodaCase, data: gmshio.MeshData, front: tuple[str, ...]
