@@ -216,6 +216,13 @@ point = [0.0, {H}, {W / 2}]
     return path
 
 
+def _static(folder: pathlib.Path, column: str) -> float:
+    """A 3D case file run's history value at t = 0 (the static state), every rank."""
+    from breakwater.common.files import read_history
+
+    return float(read_history(folder / "case3d" / "history.csv")[column][0])
+
+
 def test_a_3d_case_file_runs(folder: pathlib.Path) -> None:
     # The user path in 3D: a case file on a hexahedral mesh, 3-component vectors. The
     # static contact resultant is the block's weight ρ g V (1e-9: Newton's tolerance),
@@ -247,6 +254,12 @@ def test_a_3d_case_file_runs(folder: pathlib.Path) -> None:
     dynamic = summary["dynamic"]
     assert abs(dynamic["residual_uz"]["corner"]) > 0 and "peak u_z" in report
     assert dynamic["peak_uz"]["corner"]["time"] > 0
+    # The pair probe's slip change is the magnitude of the slide along (1, 0, 1), the
+    # block's corner's horizontal move (1 %: the elastic shear is 1e-3 of it; measured
+    # 0.2 %); it was the difference of the slip's magnitudes (a sign off, 2|s₀| off).
+    corner = math.hypot(dynamic["residual_ux"]["corner"] - _static(folder, "corner_ux"),
+                        dynamic["residual_uz"]["corner"] - _static(folder, "corner_uz"))
+    assert dynamic["pair_probes"]["middle"]["slip_change"] == pytest.approx(corner, rel=0.01)
     if COMM.rank == 0:
         header = (folder / "case3d" / "history.csv").read_text().splitlines()[0].split(",")
         assert {"corner_uz", "middle_slave_uz", "middle_master_uz"} <= set(header)

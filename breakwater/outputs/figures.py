@@ -154,7 +154,7 @@ def _contact(h: dict[str, np.ndarray], path: pathlib.Path, per: str) -> pathlib.
         axes[0].plot(h["t"], h[f"{name}_contact_length"], label=name)
         axes[1].plot(h["t"], h[f"{name}_normal_force"], label=name)
         axes[2].plot(h["t"], h[f"{name}_tangential_force"], label=name)
-    axes[0].set_ylabel("contact length (m)")
+    axes[0].set_ylabel("contact length (m)" if per else "contact area (m²)")  # per: 2D
     axes[1].set_ylabel(f"normal force (N{per})")
     axes[2].set_ylabel(f"tangential force (N{per})")
     axes[3].step(h["t"], h["newton_iterations"], where="pre", color="k", lw=0.8)

@@ -276,9 +276,18 @@ def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
     for name in pair_probes:
         slip, opening = column(rows, f"{name}_slip"), column(rows, f"{name}_opening")
         k = int(np.argmax(opening))
+        change = float(slip[-1] - slip[0])
+        if f"{name}_slave_uz" in end:
+            # 3D: the slip column is a magnitude, whose difference is no slip (it had the
+            # wrong sign, and 2|s₀| off where the slip turns): the magnitude of the
+            # tangential part of the jump's change, |Δ(u_s − u_m)|² − Δopening².
+            jump = [column(rows, f"{name}_slave_u{a}") - column(rows, f"{name}_master_u{a}")
+                    for a in "xyz"]
+            moved = sum((j[-1] - j[0]) ** 2 for j in jump)
+            change = float(np.sqrt(max(moved - (opening[-1] - opening[0]) ** 2, 0.0)))
         pairs[name] = {"residual_slip": float(slip[-1]), "residual_opening": float(opening[-1]),
                        # the static (frictionless) state may already slip a bit
-                       "static_slip": float(slip[0]), "slip_change": float(slip[-1] - slip[0]),
+                       "static_slip": float(slip[0]), "slip_change": change,
                        "max_abs_slip": float(np.abs(slip).max()),
                        "max_opening": float(opening[k]), "time_of_max_opening": float(t[k])}
     dynamic["pair_probes"] = pairs
