@@ -47,6 +47,26 @@ def test_monte_carlo_of_a_storm_study(tmp_path: pathlib.Path) -> None:
     assert monte_carlo(tmp_path, study, ["status"], [{"status": "finished"}]) is None
 
 
+def test_monte_carlo_needs_the_seed_alone(tmp_path: pathlib.Path) -> None:
+    # Storms of two frictions pooled as one sample, or deterministic storms (no seed
+    # varied) counted as draws: no statistics, the reason said (a user's study printed
+    # an expected sliding over friction 0.3 and 0.5, and "4 storms" of 2 wave files).
+    mixed = tmp_path / "mixed.toml"
+    mixed.write_text('base = "goda"\n[grid]\n"loads.storm.storm.sea.seed" = [0, 1]\n'
+                     '"contact.interface.friction" = [0.3, 0.5]\n')
+    header = ["loads.storm.storm.sea.seed", "contact.interface.friction", "status", COLUMN]
+    rows = [{"loads.storm.storm.sea.seed": str(i % 2), "contact.interface.friction": f,
+             "status": "finished", COLUMN: "0.001"} for i, f in enumerate(["0.3", "0.5"] * 2)]
+    out = monte_carlo(tmp_path, load_study(mixed), header, rows)
+    assert out == {"skipped": "the study varies contact.interface.friction besides the "
+                   "seed (one design per study: its storms' seeds alone)"}
+    fixed = tmp_path / "fixed.toml"
+    fixed.write_text('base = "goda"\n[grid]\n"time.dt" = [1e-4, 2e-4]\n')
+    out = monte_carlo(tmp_path, load_study(fixed), ["time.dt", "status", COLUMN], rows)
+    assert out == {"skipped": "the study varies no storm seed"}
+    assert not (tmp_path / "monte_carlo.json").exists()
+
+
 def test_limits_are_checked(tmp_path: pathlib.Path) -> None:
     study_file = tmp_path / "bad.toml"
     study_file.write_text('base = "goda"\n[grid]\n"time.dt" = [1e-4]\n'

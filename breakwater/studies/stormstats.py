@@ -47,14 +47,24 @@ def monte_carlo(folder: pathlib.Path, study: Study, header: list[str],
         rows: Its rows.
 
     Returns:
-        The ``monte_carlo.json`` content, or None (no storm column, or no finished case).
+        The ``monte_carlo.json`` content; ``{"skipped": reason}`` where the seed is not
+        the study's only varied key (nothing written); None (no storm column, or no
+        finished case).
     """
     if COLUMN not in header:
         return None
+    key = _seed_key(study)
+    others = [k for k in study.varied if k != key]
+    if key is None or others:
+        # Statistics of storms drawn with different seeds of one design: without a
+        # varied seed the storms are not random draws, and pooled over another varied
+        # key they mixed designs (friction 0.3 and 0.5 as one sample; found by a user).
+        return {"skipped": "the study varies no storm seed" if key is None else
+                f"the study varies {', '.join(others)} besides the seed (one design per "
+                "study: its storms' seeds alone)"}
     done = [r for r in rows if r.get("status") == "finished" and r.get(COLUMN)]
     if not done:
         return None
-    key = _seed_key(study)
     seeds = tuple(int(float(r[key])) if key and r.get(key) else i
                   for i, r in enumerate(done))
     totals = np.array([float(r[COLUMN]) for r in done])

@@ -465,7 +465,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                   f"{_one_line(e)}", file=sys.stderr, flush=True)
             drawn = []
         mc = stormstats.monte_carlo(folder, study, *sweepplots.read_table(folder / TABLE))
-        if mc is not None:
+        if mc is not None and "skipped" in mc:
+            say(f"study '{study.name}': no Monte Carlo statistics of the storms: "
+                f"{mc['skipped']}")
+        elif mc is not None:
             p = mc["percentiles"]
             say(f"study '{study.name}': expected sliding per storm {mc['mean']:.4g} m "
                 f"(± {mc['half_width_95']:.2g} m at 95 %, std {mc['std']:.3g} m, "
