@@ -271,3 +271,22 @@ def test_petsc_error_ends_the_run_as_failed(shared_dir, capsys, monkeypatch):
         assert err.splitlines()[-1] == f"breakwater: error: {reason}", err
         summary = _summary(out)
         assert summary["status"] == "failed" and summary["error"] == reason, summary
+
+
+@pytest.mark.serial
+def test_a_new_run_clears_the_earlier_runs_outputs(tmp_path: pathlib.Path) -> None:
+    # A run into a finished run's folder left the old ParaView fields, figures and a
+    # storm's waves.csv beside its own outputs (found by a user): the names a run
+    # writes go, the user's other files stay; a folder without a run's summary.json
+    # (not a run's folder) is left as it is.
+    for name in ("summary.json", "history.csv", "waves.csv", "checkpoint.npz", "notes.txt"):
+        (tmp_path / name).write_text("x")
+    for folder in ("fields_a.bp", "contact_b.bp", "figures", "mesh"):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "data").write_text("x")
+    (tmp_path / "figures" / "energy.png").write_text("x")
+    assert files.clear_previous_run(tmp_path) == 7
+    left = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*"))
+    assert left == ["figures", "figures/data", "mesh", "mesh/data", "notes.txt"]
+    (tmp_path / "history.csv").write_text("x")
+    assert files.clear_previous_run(tmp_path) == 0 and (tmp_path / "history.csv").exists()

@@ -44,6 +44,7 @@ __all__ = [
     "atomic_write_text",
     "atomic_write_toml",
     "check_writable",
+    "clear_previous_run",
     "make_directory",
     "name_problem",
     "outputs_entry",
@@ -261,6 +262,35 @@ def outputs_entry(directory: pathlib.Path, fields: Sequence[str], snapshot: bool
 def temporary_path(path: pathlib.Path) -> pathlib.Path:
     """A temporary name beside ``path`` that keeps its suffix (for savefig/np.savez)."""
     return path.with_name(f".{path.stem}.tmp{os.getpid()}{path.suffix}")
+
+
+def clear_previous_run(directory: pathlib.Path) -> int:
+    """Remove the outputs of an earlier run from its folder, before a new run (rank 0).
+
+    Only where the folder holds a run's ``summary.json``; only the names a run writes
+    (:data:`OUTPUT_PATTERNS`, of the figures folder its PNG files), which no input may
+    have (the command line refuses those). A run into a finished run's folder left the
+    old ParaView fields, figures and a storm's ``waves.csv`` beside the new outputs.
+
+    Returns:
+        The entries removed.
+    """
+    import shutil
+
+    if not (directory / SUMMARY).is_file():
+        return 0
+    removed = 0
+    for pattern in OUTPUT_PATTERNS:
+        found = (directory / FIGURES).glob("*.png") if pattern == FIGURES \
+            else directory.glob(pattern)
+        for path in found:
+            with contextlib.suppress(OSError):
+                if path.is_dir() and not path.is_symlink():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink()
+                removed += 1
+    return removed
 
 
 def remove_temporaries(directory: pathlib.Path) -> None:

@@ -379,6 +379,10 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
                 begin.restore(r)  # CheckpointError: nothing written yet
             except ckpt.CheckpointError as e:
                 raise _named_differences(e, r, resolved_case) from None
+        else:
+            cleared = on_rank_zero(r.comm, lambda: files.clear_previous_run(r.directory))
+            if cleared:
+                log.info("replaced the outputs of the earlier run in %s", r.directory)
         if resolved_case is not None:
             on_rank_zero(r.comm, lambda: bool(
                 files.atomic_write_toml(r.directory / files.CASE, resolved_case)))
