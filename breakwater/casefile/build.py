@@ -22,7 +22,7 @@ from mpi4py import MPI
 
 from breakwater.casefile.dimension import mesh_problem
 from breakwater.casefile.godaface import check_goda_face, goda_quadrature
-from breakwater.casefile.loadchecks import face_problems, pulse_warning
+from breakwater.casefile.loadchecks import face_problems, pulse_warning, table_warning
 from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.casefile.stormbuild import storm_outputs
 from breakwater.casefile.tables import GODA3D
@@ -248,6 +248,10 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         if t.adaptive and ld.kind == "pulse":
             dt = resolved_step(t.dt, t.levels, ld.pulse(1.0, 1.0).breakpoints)
         pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1)
+        if ld.kind == "table" and ld.table is not None:
+            steps = (resolved_step(t.dt, t.levels, ld.table.history(ld.start).breakpoints)
+                     if t.adaptive else t.dt)
+            pulse = table_warning(ld, steps, t.end_time)
         if sampled:
             extra["loads"][ld.name]["sampled"] = sampled
         quadrature = None

@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from breakwater.casefile.loads import RESOLVED_STEPS
@@ -89,6 +90,44 @@ def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: fl
             f"time.dt = {dt:g} s: the steps apply {100 * ratio:.3g}% of its impulse and "
             f"{100 * peak / pulse.maximum:.3g}% of its peak; time.dt <= {needed:.3g} s "
             f"samples it to {100 * SAMPLING_TOLERANCE:g}%"), sampled
+
+
+PEAK_TOLERANCE = 0.05
+"""A table's peak may be missed by this fraction by the steps' sampling unwarned."""
+
+
+def sampled_peak(f: Callable[[float], float], dt: float, end_time: float) -> float:
+    """The largest |f| at the step ends k Δt (k Δt ≤ end_time): what the steps apply."""
+    steps = max(1, math.ceil(end_time / dt - 1e-9))
+    return max(abs(f(min(k * dt, end_time))) for k in range(steps + 1))
+
+
+def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | None:
+    """A one-line warning where the steps miss a table's peak, or None.
+
+    The loads are evaluated at the step ends: a table whose peak is narrower than a step
+    (an impact's spike) is applied at whatever the step ends fall on. Measured on the
+    design-wave example at Δt = 0.015 s: 72 % of its peak applied, the residual slip a
+    third of the resolved run's, with no word (found by a user). The warning gives the
+    peak applied and a Δt that samples it to :data:`PEAK_TOLERANCE`.
+    """
+    if load.kind != "table" or load.table is None or not load.enabled:
+        return None
+    f = load.time_factor()
+    table = load.table.history(load.start)
+    inside = [t for t in table.breakpoints if 0.0 <= t <= end_time] or [0.0]
+    peak = max(abs(f(t)) for t in inside)
+    if peak == 0.0:
+        return None
+    got = sampled_peak(f, dt, end_time)
+    if got >= (1.0 - PEAK_TOLERANCE) * peak:
+        return None
+    needed = next((dt / k for k in range(2, 201)
+                   if sampled_peak(f, dt / k, end_time) >= (1.0 - PEAK_TOLERANCE) * peak),
+                  dt / 200)
+    return (f"loads.{load.name}.table: the steps of time.dt = {dt:g} s apply "
+            f"{100 * got / peak:.3g}% of its peak (|factor| {peak:.4g}); time.dt <= "
+            f"{needed:.3g} s samples it to {100 * PEAK_TOLERANCE:g}%")
 
 
 COVERAGE_TOLERANCE = 0.01
