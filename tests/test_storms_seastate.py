@@ -9,6 +9,7 @@ by quadrature of the exact distribution.
 from __future__ import annotations
 
 import math
+import pathlib
 
 import numpy as np
 import pytest
@@ -137,3 +138,22 @@ def test_read_wave_table_refuses_bad_rows(tmp_path, text, match):
     path.write_text(text, encoding="utf-8")
     with pytest.raises(ValueError, match=match):
         read_wave_table(path)
+
+
+def test_capped_waves_are_counted_for_the_warning(tmp_path) -> None:
+    # A sea state far above breaking at the site (H_1/3 = 5 m in 0.32 m of water): every
+    # wave is capped at H_b, which the run now says (nothing did); one far below: none.
+    from breakwater.casefile.case import load_case
+
+    example = pathlib.Path(__file__).parents[1] / "examples" / "goda_storm.toml"
+    text = example.read_text(encoding="utf-8")
+    listed = next(line for line in text.splitlines() if line.startswith("waves = [["))
+    for height, capped in ((5.0, 5), (0.01, 0)):
+        case_file = tmp_path / f"sea{height}.toml"
+        case_file.write_text(text.replace(listed, f"sea = {{ significant_height = {height}, "
+                                                 "period = 1.4, waves = 5, seed = 1 }"),
+                             encoding="utf-8")
+        storm = next(ld for ld in load_case(case_file).loads if ld.name == "wave").storm
+        count, waves, limit = storm.capped(0.205)
+        assert (count, waves) == (capped, 5)
+        assert limit == pytest.approx(0.2947, rel=1e-3)  # Goda's H_b here (the run's)

@@ -239,6 +239,11 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                       "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
                       "profile_fraction": spanned / whole})
     warnings += fraction_warnings(waves, forces, key)
+    capped = storm.capped(width)
+    if capped is not None and capped[0]:
+        warnings.append(f"{key}.sea: {capped[0]} of the {capped[1]} waves drawn exceed the "
+                        f"breaking height H_b = {capped[2]:.4g} m at the site and are "
+                        "capped to it (broken waves; Goda's H_b at 5 H_1/3 seaward)")
     record = {"lo": names[0], "hi": names[1], "mid": names[2], "sign": sign,
               "conforming": not pair.general,
               "landward": float(triangle.axis[0]), "length": width,
@@ -247,4 +252,6 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
               "penalty": pair.penalty, "caisson": caisson, "friction": pair.friction,
               "toe_depth": storm.toe_depth, "density": storm.density}
     return probes, {"waves": waves, "base_width": width, "duration": storm.waves_train.duration,
-                    "record": record, "warnings": warnings}
+                    "record": record, "warnings": warnings,
+                    **({"capped_waves": capped[0], "breaking_height": capped[2]}
+                       if capped is not None else {})}

@@ -31,7 +31,10 @@ from breakwater.storms.waves import Site, Wave, WaveTrain
 if TYPE_CHECKING:
     from breakwater.storms.waves import WaveLoad
 
-__all__ = ["SeaCase", "StormCase", "check_site"]
+__all__ = ["MAX_WAVES", "SeaCase", "StormCase", "check_site"]
+
+MAX_WAVES = 1_000_000
+"""The most waves a sea state may draw (a prototype storm is a few thousand)."""
 
 
 def check_site(factors: tuple[float, ...], impulsive: bool, berm_width: float | None
@@ -76,6 +79,13 @@ class SeaCase:
             raise InvalidField("waves", f"must be >= 1 (got {self.waves})")
         if self.duration is not None:
             positive(self.duration, "duration")
+        # Drawn before time.end_time is checked: 1e7 waves took 3 minutes and 1.9 GB to
+        # be refused, 1e9 a traceback (found by a user).
+        count = self.waves if self.waves is not None else (self.duration or 0) / self.period
+        if count > MAX_WAVES:
+            raise InvalidField("waves" if self.waves is not None else "duration",
+                               f"{count:.3g} waves: at most {MAX_WAVES:.0e} in one storm "
+                               "(a wave takes about 250 time steps)")
 
 
 @dataclass(frozen=True)
@@ -184,6 +194,21 @@ class StormCase:
                 raise InvalidField("waves", f"wave {k + 1}: {e}") from None
             start += t
         return WaveTrain(tuple(waves))
+
+    def capped(self, base_width: float) -> tuple[int, int, float] | None:
+        """A sea state's waves capped at the breaking height: (capped, waves, H_b) (m).
+
+        None for a storm of given waves. The same draws as :meth:`train` (the seed).
+        """
+        if self.sea is None:
+            return None
+        from breakwater.storms.seastate import SeaState, wave_heights
+
+        s = self.sea
+        state = SeaState(significant_height=s.significant_height, significant_period=s.period,
+                         waves=s.waves, duration=s.duration, seed=s.seed)
+        drawn = wave_heights(state, self.site(base_width))
+        return drawn.broken, len(drawn.heights), float(drawn.limit)
 
     def wave_loads(self, base_width: float) -> tuple[WaveLoad, ...]:
         """Each wave's load (:func:`breakwater.storms.waveforce.wave_load`) at B (m)."""
