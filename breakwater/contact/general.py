@@ -167,9 +167,8 @@ class SurfaceForces(SurfaceSearch):
             self._step_frozen = facet, N0, t0 = self._frozen(u0)
             _, _, mu, chi = self._law
             k, _, force, _ = forcekernels.friction(
-                newtonaids.friction_normals(p["lam"], facet)[0], facet, N0, t0,
-                self._node_pos, self._pm, v1, mu, chi,
-                self.crawl.none if accepted else self.crawl.at)
+                newtonaids.friction_normals(p["lam"], facet)[0], facet, N0, t0, self._node_pos,
+                self._pm, v1, mu, chi, self.crawl.none if accepted else self.crawl.at)
             if len(k):
                 forcekernels.add_friction(out, k, force, facet, N0, self._node_pos, self._pm)
         return out
@@ -219,8 +218,7 @@ class SurfaceForces(SurfaceSearch):
             lam, s = newtonaids.friction_normals(lam, facet)
             k, v_T, _, unit = forcekernels.friction(lam, facet, N0, t0, self._node_pos,
                                                     self._pm, v1, mu, chi, self.crawl.at)
-            if s != 1.0:  # the friction's λ̂ = s λ, s taken as a constant: dλ̂ = s dλ
-                unit = unit * s
+            unit = unit * s  # the friction's λ̂ = s λ, s taken as a constant: dλ̂ = s dλ
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))
         return forcekernels.jacobian(
