@@ -80,7 +80,7 @@ from breakwater.contact.conforming import (
 )
 from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
-from breakwater.statics.relaxation import relax
+from breakwater.statics.relaxation import no_state_advice, relax
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
@@ -239,9 +239,8 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
                                                ) from f
         except (ConvergenceError, PETSc.Error) as e:
             raise ConvergenceError(
-                f"initial state: no static equilibrium ({e}); set [initial] undeformed = "
-                "true to start from the undeformed state at rest", getattr(e, "reason", -1),
-                getattr(e, "iterations", 0)) from e
+                f"initial state: no static equilibrium ({e}); {no_state_advice(model)}",
+                getattr(e, "reason", -1), getattr(e, "iterations", 0)) from e
     return state
 
 

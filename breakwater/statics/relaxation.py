@@ -117,7 +117,7 @@ from breakwater.statics.pseudostep import GROWTH, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
 __all__ = ["GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
-           "STALL", "TOLERANCE", "Relaxed", "relax"]
+           "STALL", "TOLERANCE", "Relaxed", "no_state_advice", "relax"]
 
 log = logging.getLogger("breakwater.statics.relaxation")
 
@@ -385,6 +385,21 @@ class Relaxed:
     seconds: float
 
 
+def no_state_advice(model: ContactModel) -> str:
+    """What a case without a static state can set: its loads left out of it, or none.
+
+    The static state carries every load of the initial state at its value at t = 0: a
+    load that jumps there (a rectangular pulse, a push) is one that no friction or
+    contact may hold, and the advice was only to start undeformed (which drops the
+    gravity state too; found by a user).
+    """
+    loads = model.initial.loads
+    held = len(model.loads) if loads is None else len(loads)
+    return ((f"leave loads out of it (it carries {held} at t = 0: [initial] loads = [] "
+             "keeps none), or " if held else "")
+            + "set [initial] undeformed = true to start from the undeformed state at rest")
+
+
 def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
           options: NewtonOptions | None = None, tolerance: float = TOLERANCE,
           loading: str = "frictional") -> Relaxed:
@@ -441,8 +456,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                     raise ConvergenceError(
                         f"initial state: no static equilibrium, not even with the bodies "
                         f"held ({'; '.join([*failed, f'held: {e}'])}) at [initial] "
-                        f"tolerance = {tolerance:g} of the load; set [initial] undeformed = "
-                        f"true to start from the undeformed state at rest",
+                        f"tolerance = {tolerance:g} of the load; {no_state_advice(model)}",
                         e.reason, its + e.iterations) from e
             u = model.functions("u")
             for f, x in zip(u, res.u, strict=True):
