@@ -46,6 +46,8 @@ def test_lands_exactly_on_the_end() -> None:
     assert taken[:3] == [0.1, 0.1, 0.1]
     assert taken[3] == 0.35 - math.fsum([0.1, 0.1, 0.1])
     assert step.t == 0.35 and step.accepted == [0.0, *taken]
+    # The summary's smallest step is that last one (it reported Δt: found by a user).
+    assert step.min_dt == taken[3]
     # 0.3 - fsum(0.1, 0.1) is 0.1 less 2 ulp: within 1e-9 Δt of Δt, so the last step is
     # Δt itself (no sliver step), and t is the end time, not the sum 0.30000000000000004.
     step = StepSize(dt=0.1, end_time=0.3, max_cutbacks=3)

@@ -278,6 +278,7 @@ class StepSize:
         """
         trial, last = self._next()
         self.accepted.append(trial)
+        self.min_dt = min(self.min_dt, trial)  # the last step, shortened onto the end
         _add_exactly(self.partials, trial)
         self.t = self.end_time if last else math.fsum(self.partials)
         if self.adaptive:
