@@ -405,3 +405,17 @@ def test_durations_read_as_time() -> None:
     assert simulation._duration(185.0) == "3 min 05 s"
     assert simulation._duration(3725.0) == "1 h 02 min"
     assert simulation._duration(math.inf) == "?"
+
+
+def test_probes_of_one_name_are_refused(tmp_path: pathlib.Path) -> None:
+    # From Python two probes of one kind may share a name (a case file's tables cannot):
+    # their history columns were written twice under one name (found by a user).
+    a = ProbeSpec("top", "a", (0.0, 0.1))
+    with pytest.raises(ValueError, match=r"^output: two probes named 'top'"):
+        OutputSpec(tmp_path, probes=(a, ProbeSpec("top", "b", (0.0, 0.0))))
+    pair = PairProbeSpec("corner", 0, (0.0, 0.0))
+    with pytest.raises(ValueError, match=r"^output: two probes named 'corner'"):
+        OutputSpec(tmp_path, pair_probes=(pair, pair))
+    # A point probe and a pair probe may share a name: their columns differ.
+    assert OutputSpec(tmp_path, probes=(ProbeSpec("corner", "a", (0.0, 0.1)),),
+                      pair_probes=(pair,)).probes[0].name == "corner"

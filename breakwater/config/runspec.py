@@ -212,6 +212,15 @@ class OutputSpec:
     case_name: str = "case"
     checkpoint_interval: int = 0
 
+    def __post_init__(self) -> None:
+        # The history's columns are named by the probes: two of one name wrote the same
+        # columns twice (from Python; a case file's tables cannot; found by a user).
+        for names in ([p.name for p in self.probes], [q.name for q in self.pair_probes]):
+            twice = next((n for k, n in enumerate(names) if n in names[:k]), None)
+            if twice is not None:
+                raise ValueError(f"output: two probes named '{twice}' (their history "
+                                 "columns would be the same)")
+
 
 @dataclass(frozen=True)
 class InitialSpec:
