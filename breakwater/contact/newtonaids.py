@@ -155,14 +155,26 @@ def friction_normals(lam: np.ndarray, facet: np.ndarray) -> tuple[np.ndarray, fl
         lam: The slave nodes' normal forces λ_k = ∫ p N_k.
         facet: Their start-of-step master facets (−1: none).
     """
-    carried = (lam > 0) & (facet >= 0)
-    if not (lam < 0).any() and np.array_equal(carried, lam > 0):
+    if not uncarried(lam, facet):
         return lam, 1.0
+    carried = (lam > 0) & (facet >= 0)
     share = float(lam[carried].sum())
     if share <= 0:
         return lam, 1.0
     s = max(float(lam.sum()), 0.0) / share
     return lam * s, s
+
+
+@kernel
+def uncarried(lam, facet):  # type: ignore[no-untyped-def]
+    """Whether a node's normal force is negative or presses without a master point.
+
+    :func:`friction_normals`' test, compiled: one pass at every evaluation of the friction.
+    """
+    for j in range(len(lam)):
+        if lam[j] < 0.0 or (lam[j] > 0.0 and facet[j] < 0):
+            return True
+    return False
 
 
 def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
