@@ -44,7 +44,8 @@ if TYPE_CHECKING:  # light at import: the command line catches CheckpointError e
     from dolfinx import fem
     from mpi4py import MPI
 
-__all__ = ["CHECKPOINT", "FORMAT", "CheckpointError", "case_differences", "case_fingerprint",
+__all__ = ["CHECKPOINT", "FORMAT", "CaseMismatch", "CheckpointError", "case_differences",
+           "case_fingerprint",
            "check", "gather_nodal",
            "match_nodes", "model_fingerprint", "read", "scatter_nodal", "write"]
 
@@ -102,6 +103,18 @@ def _canonical(obj: Any) -> Any:
 def _digest(data: Any) -> str:
     text = json.dumps(_canonical(data), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class CaseMismatch(CheckpointError):
+    """A checkpoint of another case (:meth:`of`: the message, with the keys if known)."""
+
+    @classmethod
+    def of(cls, path: pathlib.Path, keys: Sequence[str] = ()) -> CaseMismatch:
+        """The refusal to resume ``path``, naming up to five of the ``keys`` that differ."""
+        shown = ", ".join(keys[:5]) + (f" and {len(keys) - 5} more" if len(keys) > 5 else "")
+        return cls(f"cannot resume: the case differs from the one of the checkpoint {path}"
+                   + (f", in {shown}" if keys else "")
+                   + " (run it without --resume, or into another --out folder)")
 
 
 def case_fingerprint(resolved_case: Mapping[str, Any]) -> str:
@@ -399,7 +412,5 @@ def _read(path: str | pathlib.Path, fingerprint: str | None, meta_only: bool
         raise CheckpointError(f"{path}: checkpoint format {meta.get('format')} is not "
                               f"this version's ({FORMAT})")
     if fingerprint is not None and meta.get("fingerprint") != fingerprint:
-        raise CheckpointError(f"cannot resume: the case differs from the one of the "
-                              f"checkpoint {path} (run it without --resume, or into "
-                              "another --out folder)")
+        raise CaseMismatch.of(path)
     return meta, arrays

@@ -199,31 +199,22 @@ class _LoopClock:
         self.fold()
 
 
-def _named_differences(error: ckpt.CheckpointError, r: Session,
-                       resolved_case: Mapping[str, Any] | None) -> ckpt.CheckpointError:
-    """A refused resume of another case, with the keys that differ (collective).
+def _named_differences(r: Session, resolved_case: Mapping[str, Any] | None
+                       ) -> ckpt.CaseMismatch:
+    """The refusal to resume another case, with the keys that differ (collective).
 
     Read from the folder's ``case.toml`` (the checkpointed run's, untouched) on rank 0.
     """
-    if resolved_case is None or "the case differs" not in str(error):
-        return error
-
     def keys() -> list[str]:
+        if resolved_case is None:
+            return []
         try:
             saved = tomllib.loads((r.directory / files.CASE).read_text(encoding="utf-8"))
         except (OSError, tomllib.TOMLDecodeError):
             return []
         return ckpt.case_differences(saved, resolved_case)
 
-    changed = on_rank_zero(r.comm, keys)
-    if not changed:
-        return error
-    shown = ", ".join(changed[:5]) + (f" and {len(changed) - 5} more" if len(changed) > 5
-                                      else "")
-    text = str(error)
-    at = text.find(" (run it without --resume")
-    return ckpt.CheckpointError(f"{text[:at]}, in {shown}{text[at:]}" if at >= 0
-                                else f"{text}, in {shown}")
+    return ckpt.CaseMismatch.of(r.directory / ckpt.CHECKPOINT, on_rank_zero(r.comm, keys))
 
 
 def _loop(r: Session, stop: StopSignal) -> None:
@@ -377,8 +368,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if resume:
             try:
                 begin.restore(r)  # CheckpointError: nothing written yet
-            except ckpt.CheckpointError as e:
-                raise _named_differences(e, r, resolved_case) from None
+            except ckpt.CaseMismatch:
+                raise _named_differences(r, resolved_case) from None
         else:
             cleared = on_rank_zero(r.comm, lambda: files.clear_previous_run(r.directory))
             if cleared:
