@@ -48,19 +48,20 @@ __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_qualit
 
 # --- the static state -------------------------------------------------------------
 
-def resting_on(model: ContactModel, body: int) -> set[int]:
+def resting_on(model: ContactModel, body: int, height: Sequence[float] | None = None
+               ) -> set[int]:
     """A body and every body resting on it (collective).
 
     Pairs of both kinds (conforming and general); of a pair's two bodies the one whose
     centroid lies higher against gravity rests on the other, whichever is the slave (a
     foundation as the slave gave the foundation's weight); without gravity the slave
     on the master. Under gravity their weight is what the body's contacts below it
-    carry.
+    carry. ``height``: the bodies' :func:`_heights`, if known.
     """
     links = [(p.slave, p.master) for p in model.pairs]
     links += [(model.body(p.slave).index, model.body(p.master).index)
               for p in model.surface_pairs]
-    height = _heights(model)
+    height = _heights(model) if height is None else height
     links = [(s, m) if height[s] >= height[m] else (m, s) for s, m in links]
     found = {body}
     while new := {s for s, m in links if m in found} - found:
@@ -68,9 +69,10 @@ def resting_on(model: ContactModel, body: int) -> set[int]:
     return found
 
 
-def _upper_body(model: ContactModel, slave: int, master: int) -> int:
+def _upper_body(model: ContactModel, slave: int, master: int,
+                height: Sequence[float] | None = None) -> int:
     """Of a pair's two bodies, the one resting on the other (:func:`resting_on`)."""
-    height = _heights(model)
+    height = _heights(model) if height is None else height
     return slave if height[slave] >= height[master] else master
 
 
@@ -157,7 +159,9 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
         return static
     name, slave, master, resultant = first
     weights = model.weight()
-    weight = sum(weights[i] for i in resting_on(model, _upper_body(model, slave, master)))
+    height = _heights(model)  # (collective: once)
+    upper = _upper_body(model, slave, master, height)
+    weight = sum(weights[i] for i in resting_on(model, upper, height))
     length = row[f"{name}_contact_length"]
     pressure = interface[f"contact_{name}_pressure"]
     first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
