@@ -113,9 +113,8 @@ def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | 
     """
     if load.kind != "table" or load.table is None or not load.enabled:
         return None
-    f = load.time_factor()
-    table = load.table.history(load.start)
-    inside = [t for t in table.breakpoints if 0.0 <= t <= end_time] or [0.0]
+    f = load.table.history(load.start)  # the load's time factor
+    inside = [t for t in f.breakpoints if 0.0 <= t <= end_time] or [0.0]
     peak = max(abs(f(t)) for t in inside)
     if peak == 0.0:
         return None

@@ -29,6 +29,7 @@ from breakwater.loads.wavepressure import GodaPressure, GodaRangeError, goda_pre
 from breakwater.storms.waves import Site, Wave, WaveTrain
 
 if TYPE_CHECKING:
+    from breakwater.storms.seastate import SeaState
     from breakwater.storms.waves import WaveLoad
 
 __all__ = ["MAX_WAVES", "SeaCase", "StormCase", "check_site"]
@@ -86,6 +87,14 @@ class SeaCase:
             raise InvalidField("waves" if self.waves is not None else "duration",
                                f"{count:.3g} waves: at most {MAX_WAVES:.0e} in one storm "
                                "(a wave takes about 250 time steps)")
+
+    def state(self) -> SeaState:
+        """The sea state these settings describe (its waves drawn with the seed)."""
+        from breakwater.storms.seastate import SeaState
+
+        return SeaState(significant_height=self.significant_height,
+                        significant_period=self.period, waves=self.waves,
+                        duration=self.duration, seed=self.seed)
 
 
 @dataclass(frozen=True)
@@ -166,14 +175,10 @@ class StormCase:
     def train(self, base_width: float) -> WaveTrain:
         """The storm's waves (a sea state's drawn with its seed), made anew."""
         if self.sea is not None:
-            from breakwater.storms.seastate import SeaState, wave_train
+            from breakwater.storms.seastate import wave_train
 
-            s = self.sea
             try:
-                state = SeaState(significant_height=s.significant_height,
-                                 significant_period=s.period, waves=s.waves,
-                                 duration=s.duration, seed=s.seed)
-                return wave_train(state, self.site(base_width))
+                return wave_train(self.sea.state(), self.site(base_width))
             except ValueError as e:
                 raise InvalidField("sea", str(e)) from None
         if isinstance(self.waves, str):
@@ -202,12 +207,9 @@ class StormCase:
         """
         if self.sea is None:
             return None
-        from breakwater.storms.seastate import SeaState, wave_heights
+        from breakwater.storms.seastate import wave_heights
 
-        s = self.sea
-        state = SeaState(significant_height=s.significant_height, significant_period=s.period,
-                         waves=s.waves, duration=s.duration, seed=s.seed)
-        drawn = wave_heights(state, self.site(base_width))
+        drawn = wave_heights(self.sea.state(), self.site(base_width))
         return drawn.broken, len(drawn.heights), float(drawn.limit)
 
     def wave_loads(self, base_width: float) -> tuple[WaveLoad, ...]:
