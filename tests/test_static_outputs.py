@@ -252,7 +252,7 @@ def test_weight_is_the_upper_body_whichever_is_the_slave(shared_dir: pathlib.Pat
     # with a as the slave or as the master (a foundation as the slave gave the
     # foundation's own weight: 8x, found by a user-path test).
     from breakwater.model.model import ContactPair
-    from breakwater.outputs.summary import _upper_body, resting_on
+    from breakwater.outputs.staticsummary import _upper_body, resting_on
 
     path = two_rectangles(shared_dir / "stack.msh", COMM, (0.2, 0.1), (0.4, 0.1), 0.05)
     mat = Material(2000.0, 0.25, young_modulus=1e9)
@@ -266,12 +266,73 @@ def test_weight_is_the_upper_body_whichever_is_the_slave(shared_dir: pathlib.Pat
     assert resting_on(model, a) == {a} and resting_on(model, b) == {a, b}
 
 
+INCLINE_GEO = """// a block on a long slope tilted by 30 degrees, meshed apart
+Point(1) = {0, -0.1, 0, 0.03}; Point(2) = {1, -0.1, 0, 0.03};
+Point(3) = {1, 0, 0, 0.03}; Point(4) = {0, 0, 0, 0.03};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Point(11) = {0.2, 0, 0, 0.02}; Point(12) = {0.3, 0, 0, 0.02};
+Point(13) = {0.3, 0.05, 0, 0.02}; Point(14) = {0.2, 0.05, 0, 0.02};
+Line(11) = {11, 12}; Line(12) = {12, 13}; Line(13) = {13, 14}; Line(14) = {14, 11};
+Curve Loop(2) = {11, 12, 13, 14}; Plane Surface(2) = {2};
+Rotate {{0, 0, 1}, {0, 0, 0}, Pi / 6} { Surface{1, 2}; }
+Physical Surface("slope") = {1}; Physical Surface("block") = {2};
+Physical Curve("slope_top") = {3}; Physical Curve("slope_bottom") = {1};
+Physical Curve("block_bottom") = {11};
+"""
+
+
+def test_weight_on_a_slope_is_the_blocks(shared_dir: pathlib.Path) -> None:
+    """A 0.1 x 0.05 m block on a 1 m slope tilted by 30 degrees (a general pair; the
+    slope's centroid lies above the block's): the static summary's weight is the block's,
+    ρ g a b, and the pair carries its normal component, resultant / weight = cos 30°
+    (the block's equilibrium normal to the slope, exact for the FE solution: the
+    virtual rigid translation along the normal is in the P2 space; held tangentially
+    where μ = 0.3 < tan 30°; 1e-6 covers the relaxation's tolerance). Comparing the
+    bodies' centroids took the slope as resting on the block: weight 20x the block's."""
+    if COMM.rank == 0:
+        (shared_dir / "incline.geo").write_text(INCLINE_GEO, encoding="utf-8")
+        (shared_dir / "incline.toml").write_text(f'''name = "incline"
+gravity = [0.0, -9.81]
+mesh.source = "incline.geo"
+[bodies.block]
+density = {ρ}
+poisson = {ν}
+young_modulus = {E}
+[bodies.slope]
+density = {ρ}
+poisson = {ν}
+young_modulus = {E}
+[calibration]
+enabled = false
+[fixed.slope_bottom]
+[contact.sliding]
+slave = "block"
+master = "slope"
+slave_surface = "block_bottom"
+master_surface = "slope_top"
+penalty = 1e12
+friction = 0.3
+[time]
+dt = 1e-3
+end_time = 2e-3
+[output]
+figures = false
+field_interval = 0
+''', encoding="utf-8")
+    COMM.barrier()
+    static = _run(shared_dir / "incline.toml", shared_dir / "out")["static"]
+    weight = ρ * G * 0.1 * 0.05
+    assert static["weight"] == pytest.approx(weight, rel=1e-12)
+    assert static["resultant_over_weight"] == pytest.approx(np.cos(np.pi / 6), rel=1e-6)
+
+
 def test_centre_of_a_curved_interface() -> None:
     # The centre node of a half-cylinder's lower arc (R = 0.1, nodes sorted by x then y)
     # is its bottom, halfway along the arc; the middle of its ends is the circle's
     # centre, as far from every node (the pick was arbitrary: a node at 39° of 90°).
     # A straight, unevenly spaced interface keeps the node nearest its middle.
-    from breakwater.outputs.summary import edge_centre
+    from breakwater.outputs.staticsummary import edge_centre
 
     θ = np.linspace(np.pi, 2 * np.pi, 25)
     arc = 0.1 * np.column_stack([np.cos(θ), np.sin(θ)])

@@ -4,9 +4,8 @@ Everything here reads what a run produced, the history rows and the nodal interf
 data of the static state, and steps or solves nothing (but :func:`quality_inputs`,
 which asks the pairs):
 
-- :func:`static_summary`: the first contact pair's static state (the paper's Fig. 17:
-  contact resultant against the weight it carries, mean, edge and centre pressure; a
-  general pair's when the model has no conforming one);
+- :func:`~breakwater.outputs.staticsummary.static_summary` (its own module): the first
+  contact pair's static state;
 - :func:`quality_inputs` and :func:`contact_quality`: the contact quality report of
   each pair (:mod:`breakwater.outputs.quality`);
 - :class:`PeakSnapshot`: the state at the largest |u_x| of the first probe (the
@@ -32,152 +31,16 @@ from mpi4py import MPI
 from breakwater import __version__  # type: ignore[attr-defined]
 from breakwater.common.files import per_metre
 from breakwater.config.runspec import TimeSpec
-from breakwater.contact.general import SurfaceContact
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
-from breakwater.model.pairs import Pair, pair_names
+from breakwater.model.pairs import Pair
 from breakwater.outputs import quality
 from breakwater.outputs.historyrows import column
 from breakwater.outputs.probes import Probes
-from breakwater.outputs.section import mid_row
 
 __all__ = ["BALANCE_WARNING", "PeakSnapshot", "balance_warning", "contact_quality",
            "dynamic_summary", "energy_summary", "format_report", "merge", "quality_inputs",
-           "run_summary", "solver_summary", "static_summary", "versions"]
-
-
-# --- the static state -------------------------------------------------------------
-
-def resting_on(model: ContactModel, body: int, height: Sequence[float] | None = None
-               ) -> set[int]:
-    """A body and every body resting on it (collective).
-
-    Pairs of both kinds (conforming and general); of a pair's two bodies the one whose
-    centroid lies higher against gravity rests on the other, whichever is the slave (a
-    foundation as the slave gave the foundation's weight); without gravity the slave
-    on the master. Under gravity their weight is what the body's contacts below it
-    carry. ``height``: the bodies' :func:`_heights`, if known.
-    """
-    links = [(p.slave, p.master) for p in model.pairs]
-    links += [(model.body(p.slave).index, model.body(p.master).index)
-              for p in model.surface_pairs]
-    height = _heights(model) if height is None else height
-    links = [(s, m) if height[s] >= height[m] else (m, s) for s, m in links]
-    found = {body}
-    while new := {s for s, m in links if m in found} - found:
-        found |= new
-    return found
-
-
-def _upper_body(model: ContactModel, slave: int, master: int,
-                height: Sequence[float] | None = None) -> int:
-    """Of a pair's two bodies, the one resting on the other (:func:`resting_on`)."""
-    height = _heights(model) if height is None else height
-    return slave if height[slave] >= height[master] else master
-
-
-def _heights(model: ContactModel) -> list[float]:
-    """Each body's centroid of its geometry nodes along −g (0 without gravity; collective)."""
-    g = np.asarray(model.gravity.value, dtype=float)
-    norm = float(np.linalg.norm(g))
-    out = []
-    for b in model.bodies:
-        geometry = b.submesh.geometry
-        x = geometry.x[:geometry.index_map().size_local, :len(g)]
-        total = model.comm.allreduce(x.sum(axis=0))
-        count = model.comm.allreduce(len(x))
-        out.append(-float(total @ g) / (norm * max(count, 1)) if norm > 0 else 0.0)
-    return out
-
-
-def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
-    """Indices of the two end nodes of an interface and of the node halfway along it.
-
-    The nodes are sorted lexicographically (x, then y), so for a straight interface (or
-    a curve that x runs along) the first and last are its ends, and the rows between
-    them follow it. In 3D the same along the row of nodes nearest the
-    interface's mid z (:func:`~breakwater.outputs.section.mid_row`).
-    """
-    row = np.flatnonzero(mid_row(x))
-    first, last = int(row[0]), int(row[-1])
-    # Halfway along the row (on a straight interface the node nearest the middle of its
-    # ends; on a curved one, an arc, that middle is off the surface: every node of a
-    # half-cylinder's is as far from it, and the pick was arbitrary).
-    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x[row], axis=0), axis=1))])
-    centre = int(row[np.argmin(np.abs(along - 0.5 * along[-1]))])
-    return first, last, centre
-
-
-def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[Pair]
-                ) -> tuple[str, int, int, float] | None:
-    """The first contact pair's name, slave and master bodies and normal resultant ∫ p dS.
-
-    The first conforming pair (its ``<name>_normal_force``), else the first general pair:
-    Σ w p over its integration points (w their reference lengths, p = ε_n⟨−g_n⟩₊:
-    :meth:`breakwater.contact.general.SurfaceContact.state`), the same integral.
-    None: no pair (or the general pair is not among ``pairs``).
-    """
-    if model.pairs:
-        name = pair_names([p.spec for p in model.pairs])[0]
-        return (name, model.pairs[0].slave, model.pairs[0].master,
-                row[f"{name}_normal_force"])
-    if not model.surface_pairs:
-        return None
-    spec = model.surface_pairs[0]
-    contact = next((p for p in pairs if isinstance(p, SurfaceContact) and p.name == spec.name),
-                   None)
-    if contact is None:
-        return None
-    state = contact.state()
-    return (spec.name, model.body(spec.slave).index, model.body(spec.master).index,
-            float(np.sum(state["weight"] * state["pressure"])))
-
-
-def static_summary(model: ContactModel, row: Mapping[str, float],
-                   interface: Mapping[str, np.ndarray], iterations: int,
-                   pairs: Sequence[Pair] = ()) -> dict[str, Any]:
-    """The ``static`` entry of the summary: the first contact pair's static state.
-
-    The first conforming pair's, or, in a model without one, the first general pair's
-    (the same keys, the same meaning): the normal resultant ∫ p dS on the slave, the
-    weight of the pair's upper body and of every body resting on it (:func:`resting_on`), the mean
-    pressure over the contact length (the history's ``<name>_contact_length``), the
-    pressures at the ends of the interface (a general pair's slave surface) and at its
-    node nearest the centre (:func:`edge_centre`, on the snapshot's nodes).
-
-    Args:
-        model: The contact model.
-        row: The history row of the static state.
-        interface: Its nodal interface data (:func:`~breakwater.outputs.monitor.interface_state`).
-        iterations: Newton iterations of the static solve.
-        pairs: The stepper's pairs (:attr:`~breakwater.stepping.gn22.GN22.contacts`;
-            a general pair's resultant is measured on its object).
-    """
-    static: dict[str, Any] = {"newton_iterations": iterations}
-    first = _first_pair(model, row, pairs)
-    if first is None:
-        return static
-    name, slave, master, resultant = first
-    weights = model.weight()
-    height = _heights(model)  # (collective: once)
-    upper = _upper_body(model, slave, master, height)
-    weight = sum(weights[i] for i in resting_on(model, upper, height))
-    length = row[f"{name}_contact_length"]
-    pressure = interface[f"contact_{name}_pressure"]
-    first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
-    static.update({
-        "slave": model.bodies[slave].spec.name,
-        "weight": weight,
-        "contact_resultant": resultant,
-        "contact_area" if model.gdim == 3 else "contact_length": length,
-        "mean_contact_pressure": resultant / length if length > 0 else None,
-        "edge_pressure": 0.5 * (pressure[first_node] + pressure[last]),
-        "edge_pressures": [pressure[first_node], pressure[last]],
-        "center_pressure": pressure[centre],
-        "max_pressure": float(pressure.max()),
-        "resultant_over_weight": resultant / weight if weight > 0 else None,
-    })
-    return static
+           "run_summary", "solver_summary", "versions"]
 
 
 # --- contact quality --------------------------------------------------------------
@@ -405,8 +268,9 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         status: ``running``, ``finished``, ``failed`` or ``interrupted``.
         error: Why the run stopped early.
         time: The time settings.
-        static: The ``static`` entry (:func:`static_summary`; empty before the static
-            state is solved).
+        static: The ``static`` entry
+            (:func:`~breakwater.outputs.staticsummary.static_summary`; empty before the
+            static state is solved).
         resumed_from: Where each earlier part of a resumed run ended (``t``, ``steps``,
             ``mpi_size``).
         rows: The history rows (the static state's first).

@@ -23,6 +23,7 @@ from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
 from breakwater.outputs.checkpoint import CheckpointError
 from breakwater.outputs.monitor import interface_state
+from breakwater.outputs.staticsummary import static_summary
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
@@ -64,7 +65,7 @@ def start(r: Session) -> None:
     out.open_fields()
     row = r.record(0.0, st.static_iterations)
     interface = interface_state(s.contacts, s.u)
-    st.static = sm.static_summary(m, row, interface, st.static_iterations, s.contacts)
+    st.static = static_summary(m, row, interface, st.static_iterations, s.contacts)
     st.static.update(init.summary())
     st.contact = sm.quality_inputs(s.contacts, s.u)
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)

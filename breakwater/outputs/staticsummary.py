@@ -1,0 +1,183 @@
+"""The ``static`` entry of the summary: the first contact pair's static state.
+
+The paper's Fig. 17: the contact resultant against the weight it carries (the pair's
+upper body and every body resting on it), the mean, edge and centre pressure; a general
+pair's when the model has no conforming one. Reads the history row and the nodal
+interface data of the static state; solves nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import dolfinx.mesh
+import numpy as np
+
+from breakwater.contact.general import SurfaceContact
+from breakwater.model.mesh import group_tag
+from breakwater.model.model import ContactModel
+from breakwater.model.pairs import Pair, pair_names
+from breakwater.outputs.section import mid_row
+
+__all__ = ["edge_centre", "resting_on", "static_summary"]
+
+
+def resting_on(model: ContactModel, body: int,
+               links: Sequence[tuple[int, int]] | None = None) -> set[int]:
+    """A body and every body resting on it (collective).
+
+    Pairs of both kinds (conforming and general), each oriented by :func:`_links`.
+    Under gravity their weight is what the body's contacts below it carry. ``links``:
+    :func:`_links`' result, if known.
+    """
+    links = _links(model) if links is None else links
+    found = {body}
+    while new := {s for s, m in links if m in found} - found:
+        found |= new
+    return found
+
+
+def _links(model: ContactModel) -> list[tuple[int, int]]:
+    """Each pair's bodies as (upper, lower): which rests on the other (collective).
+
+    Conforming pairs first, then general ones (the model's order). The upper body is
+    the one whose centroid lies above the pair's contact surface (its interface, or a
+    general pair's slave surface) against gravity: the body whose contact is below it.
+    Comparing the two bodies' centroids instead took a long slope as resting on the
+    block sliding down it (the slope's centroid is the higher: the summary gave the
+    slope's weight, 20x the block's). Without gravity the slave rests on the master.
+    """
+    height = _heights(model)
+    pairs = [(p.slave, p.master, p.spec.interface) for p in model.pairs]
+    pairs += [(model.body(p.slave).index, model.body(p.master).index, p.slave_surface)
+              for p in model.surface_pairs]
+    out = []
+    for s, m, group in pairs:
+        contact = _mean_height(model, _facet_midpoints(model, group))
+        out.append((s, m) if height[s] >= contact else (m, s))
+    return out
+
+
+def _upper_body(model: ContactModel, slave: int, master: int,
+                links: Sequence[tuple[int, int]] | None = None) -> int:
+    """Of a pair's two bodies, the one resting on the other (:func:`_links`)."""
+    links = _links(model) if links is None else links
+    return next(u for u, lo in links if {u, lo} == {slave, master})
+
+
+def _facet_midpoints(model: ContactModel, group: str) -> np.ndarray:
+    """The midpoints of a facet group's owned facets (this rank's)."""
+    data, dim = model.mesh_data, model.mesh.topology.dim - 1
+    assert data.facet_tags is not None
+    facets = data.facet_tags.find(group_tag(data, group, dim))
+    facets = facets[facets < model.mesh.topology.index_map(dim).size_local]
+    return dolfinx.mesh.compute_midpoints(model.mesh, dim, facets.astype(np.int32))
+
+
+def _mean_height(model: ContactModel, x: np.ndarray) -> float:
+    """The mean of the points' heights along −g over every rank (0 without gravity)."""
+    g = np.asarray(model.gravity.value, dtype=float)
+    norm = float(np.linalg.norm(g))
+    total = model.comm.allreduce(x[:, :len(g)].sum(axis=0))
+    count = model.comm.allreduce(len(x))
+    return -float(total @ g) / (norm * max(count, 1)) if norm > 0 else 0.0
+
+
+def _heights(model: ContactModel) -> list[float]:
+    """Each body's centroid of its geometry nodes along −g (0 without gravity; collective)."""
+    out = []
+    for b in model.bodies:
+        geometry = b.submesh.geometry
+        out.append(_mean_height(model, geometry.x[:geometry.index_map().size_local]))
+    return out
+
+
+def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
+    """Indices of the two end nodes of an interface and of the node halfway along it.
+
+    The nodes are sorted lexicographically (x, then y), so for a straight interface (or
+    a curve that x runs along) the first and last are its ends, and the rows between
+    them follow it. In 3D the same along the row of nodes nearest the
+    interface's mid z (:func:`~breakwater.outputs.section.mid_row`).
+    """
+    row = np.flatnonzero(mid_row(x))
+    first, last = int(row[0]), int(row[-1])
+    # Halfway along the row (on a straight interface the node nearest the middle of its
+    # ends; on a curved one, an arc, that middle is off the surface: every node of a
+    # half-cylinder's is as far from it, and the pick was arbitrary).
+    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x[row], axis=0), axis=1))])
+    centre = int(row[np.argmin(np.abs(along - 0.5 * along[-1]))])
+    return first, last, centre
+
+
+def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[Pair]
+                ) -> tuple[str, int, int, float] | None:
+    """The first contact pair's name, slave and master bodies and normal resultant ∫ p dS.
+
+    The first conforming pair (its ``<name>_normal_force``), else the first general pair:
+    Σ w p over its integration points (w their reference lengths, p = ε_n⟨−g_n⟩₊:
+    :meth:`breakwater.contact.general.SurfaceContact.state`), the same integral.
+    None: no pair (or the general pair is not among ``pairs``).
+    """
+    if model.pairs:
+        name = pair_names([p.spec for p in model.pairs])[0]
+        return (name, model.pairs[0].slave, model.pairs[0].master,
+                row[f"{name}_normal_force"])
+    if not model.surface_pairs:
+        return None
+    spec = model.surface_pairs[0]
+    contact = next((p for p in pairs if isinstance(p, SurfaceContact) and p.name == spec.name),
+                   None)
+    if contact is None:
+        return None
+    state = contact.state()
+    return (spec.name, model.body(spec.slave).index, model.body(spec.master).index,
+            float(np.sum(state["weight"] * state["pressure"])))
+
+
+def static_summary(model: ContactModel, row: Mapping[str, float],
+                   interface: Mapping[str, np.ndarray], iterations: int,
+                   pairs: Sequence[Pair] = ()) -> dict[str, Any]:
+    """The ``static`` entry of the summary: the first contact pair's static state.
+
+    The first conforming pair's, or, in a model without one, the first general pair's
+    (the same keys, the same meaning): the normal resultant ∫ p dS on the slave, the
+    weight of the pair's upper body and of every body resting on it (:func:`resting_on`), the mean
+    pressure over the contact length (the history's ``<name>_contact_length``), the
+    pressures at the ends of the interface (a general pair's slave surface) and at its
+    node nearest the centre (:func:`edge_centre`, on the snapshot's nodes).
+
+    Args:
+        model: The contact model.
+        row: The history row of the static state.
+        interface: Its nodal interface data (:func:`~breakwater.outputs.monitor.interface_state`).
+        iterations: Newton iterations of the static solve.
+        pairs: The stepper's pairs (:attr:`~breakwater.stepping.gn22.GN22.contacts`;
+            a general pair's resultant is measured on its object).
+    """
+    static: dict[str, Any] = {"newton_iterations": iterations}
+    first = _first_pair(model, row, pairs)
+    if first is None:
+        return static
+    name, slave, master, resultant = first
+    weights = model.weight()
+    links = _links(model)  # (collective: once)
+    upper = _upper_body(model, slave, master, links)
+    weight = sum(weights[i] for i in resting_on(model, upper, links))
+    length = row[f"{name}_contact_length"]
+    pressure = interface[f"contact_{name}_pressure"]
+    first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
+    static.update({
+        "slave": model.bodies[slave].spec.name,
+        "weight": weight,
+        "contact_resultant": resultant,
+        "contact_area" if model.gdim == 3 else "contact_length": length,
+        "mean_contact_pressure": resultant / length if length > 0 else None,
+        "edge_pressure": 0.5 * (pressure[first_node] + pressure[last]),
+        "edge_pressures": [pressure[first_node], pressure[last]],
+        "center_pressure": pressure[centre],
+        "max_pressure": float(pressure.max()),
+        "resultant_over_weight": resultant / weight if weight > 0 else None,
+    })
+    return static
