@@ -19,6 +19,7 @@ from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair
 from breakwater.model.pairs import pair_names as names_of
 from breakwater.outputs.probes import Probes
+from breakwater.outputs.rotation import Rotations
 from breakwater.stepping.gn22 import GN22
 
 __all__ = ["Monitor", "interface_state", "pair_names"]
@@ -42,7 +43,9 @@ class Monitor:
     - a general pair: ``<name>_force_x``, ``<name>_force_y`` (the resultant ∫ t_s on
       the slave);
 
-    then the ledger's :data:`~breakwater.energy.ledger.FIELDS`.
+    per body ``<body>_rotation`` (its mean rotation, rad:
+    :class:`~breakwater.outputs.rotation.Rotations`); then the ledger's
+    :data:`~breakwater.energy.ledger.FIELDS`.
 
     Args:
         model: The contact model.
@@ -52,6 +55,7 @@ class Monitor:
 
     Attributes:
         probes: The probes.
+        rotations: The bodies' rotations.
 
     """
 
@@ -61,7 +65,8 @@ class Monitor:
         self.columns = ["t", "dt", "newton_iterations", *self.probes.columns]
         for pair in stepper.contacts:
             self.columns += pair.columns
-        self.columns += list(FIELDS)
+        self.rotations = Rotations(model)
+        self.columns += [*self.rotations.columns, *FIELDS]
 
     def row(self, dt: float, iterations: int, energies: Mapping[str, float]) -> dict[str, float]:
         """The history row of the stepper's current state (collective)."""
@@ -71,6 +76,7 @@ class Monitor:
         r.update(self.probes.values(s.u))
         for pair in s.contacts:
             r.update(pair.measure())
+        r.update(self.rotations.values(s.u))
         r.update({k: float(energies[k]) for k in FIELDS})
         return r
 

@@ -34,7 +34,7 @@ from breakwater.config.runspec import TimeSpec
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair
-from breakwater.outputs import quality
+from breakwater.outputs import quality, rotation
 from breakwater.outputs.historyrows import column
 from breakwater.outputs.probes import Probes
 
@@ -112,13 +112,16 @@ class PeakSnapshot:
 # --- the time steps ---------------------------------------------------------------
 
 def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
-                    pair_probes: Sequence[str]) -> dict[str, Any]:
+                    pair_probes: Sequence[str], bodies: Sequence[str] = ()
+                    ) -> dict[str, Any]:
     """The ``dynamic`` entry of the summary, from the history rows (static row first).
 
     Args:
         rows: The history rows.
         probes: Names of the point probes.
         pair_probes: Names of the pair probes.
+        bodies: Names of the bodies whose ``<body>_rotation`` the rows have
+            (``max_rotation``: :func:`breakwater.outputs.rotation.largest`).
     """
     if not rows:
         return {}
@@ -160,6 +163,8 @@ def dynamic_summary(rows: Sequence[Mapping[str, float]], probes: Sequence[str],
     dynamic["pair_probes"] = pairs
     dynamic["residual_slip"] = pairs[pair_probes[0]]["residual_slip"] if pair_probes else None
     dynamic["max_uplift"] = max((p["max_opening"] for p in pairs.values()), default=None)
+    if bodies:
+        dynamic["max_rotation"] = rotation.largest(rows, bodies)
     return dynamic
 
 
@@ -259,7 +264,7 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
                 probes: Probes | None, contact_quality: Mapping[str, quality.ContactQuality],
                 solver: Mapping[str, Any], checkpoint: Mapping[str, Any] | None,
                 outputs: Mapping[str, Any], comm: MPI.Comm, extra: Mapping[str, Any],
-                dimension: int = 2) -> dict[str, Any]:
+                dimension: int = 2, bodies: Sequence[str] = ()) -> dict[str, Any]:
     """The summary of a run (``summary.json``), ``extra`` merged in.
 
     Args:
@@ -282,6 +287,7 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         comm: The communicator (its size is in ``versions``).
         extra: Merged into the summary (e.g. calibration results).
         dimension: The model's (2: plane strain, forces and energies per metre; 3).
+        bodies: The bodies whose rotation the rows have (:func:`dynamic_summary`).
     """
     summary: dict[str, Any] = {
         "case_name": case_name,
@@ -292,7 +298,7 @@ def run_summary(*, case_name: str, finished: bool, status: str, error: str | Non
         "time": {"end_time": time.end_time, "dt": time.dt,
                  "reached": rows[-1]["t"] if rows else None},
         "static": static,
-        "dynamic": (dynamic_summary(rows, probes.names, probes.pair_names)
+        "dynamic": (dynamic_summary(rows, probes.names, probes.pair_names, bodies)
                     if probes is not None else {}),
         "contact_quality": {name: q.as_dict() for name, q in contact_quality.items()},
         "solver": dict(solver),

@@ -283,7 +283,8 @@ class Session:
             probes=x.monitor.probes if x is not None else None,
             contact_quality=sm.contact_quality(st.contact, self.rows[1:]), solver=solver,
             checkpoint=self.checkpointed, outputs=outputs, comm=self.comm,
-            extra=self._extra(), dimension=self.model.gdim), "work": self.work}
+            extra=self._extra(), dimension=self.model.gdim,
+            bodies=x.monitor.rotations.names if x is not None else ()), "work": self.work}
 
     def _extra(self) -> dict[str, Any]:
         """``extra_summary`` with the loads applied so far (requested against applied)."""

@@ -83,6 +83,7 @@ from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
+from breakwater.outputs.rotation import rotation_warning
 from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
 from breakwater.run.session import Session
@@ -427,9 +428,10 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
     summary = r.finish(error is None, message, status)
     if error is None or not stopped:
         r.log_quality(dynamic=True)
-        warning = balance_warning(summary.get("energy", {}), files.per_metre(summary))
-        if warning is not None:
-            log.warning("%s", warning)
+        for warning in (balance_warning(summary.get("energy", {}), files.per_metre(summary)),
+                        rotation_warning(summary.get("dynamic", {}))):
+            if warning is not None:
+                log.warning("%s", warning)
 
     def write() -> dict[str, Any]:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
