@@ -341,3 +341,8 @@ def test_centre_of_a_curved_interface() -> None:
                        [[-0.1, 0.0], [0.1, 0.0], [0.0, -0.1]], atol=1e-15)
     line = np.column_stack([[0.0, 0.1, 0.15, 0.47, 0.56, 1.0], np.zeros(6)])
     assert edge_centre(line) == (0, 5, 3)
+    # A slave surface longer than the contact (a slope under a block): the ends and the
+    # middle of the nodes under pressure, 0.1 to 0.56 (its middle 0.33: the node 0.47
+    # is at 0.14, 0.15 at 0.18), not the surface's own, where the pressure was 0.
+    pressure = np.array([0.0, 1.0, 0.0, 2.0, 1.0, 0.0])
+    assert edge_centre(line, pressure) == (1, 4, 3)

@@ -93,15 +93,21 @@ def _heights(model: ContactModel) -> list[float]:
     return out
 
 
-def edge_centre(x: np.ndarray) -> tuple[int, int, int]:
-    """Indices of the two end nodes of an interface and of the node halfway along it.
+def edge_centre(x: np.ndarray, pressure: np.ndarray | None = None) -> tuple[int, int, int]:
+    """Indices of the two end nodes of an interface's contact and of the node halfway along.
 
     The nodes are sorted lexicographically (x, then y), so for a straight interface (or
     a curve that x runs along) the first and last are its ends, and the rows between
     them follow it. In 3D the same along the row of nodes nearest the
-    interface's mid z (:func:`~breakwater.outputs.section.mid_row`).
+    interface's mid z (:func:`~breakwater.outputs.section.mid_row`). With ``pressure``
+    (nodal), the row from its first to its last node under pressure: the contact's
+    ends (a slope as the slave, longer than the block on it, gave the pressure 0 at its
+    own ends and middle, where nothing touched it).
     """
     row = np.flatnonzero(mid_row(x))
+    if pressure is not None and np.any(pressure[row] > 0):
+        pressed = np.flatnonzero(pressure[row] > 0)
+        row = row[pressed[0]:pressed[-1] + 1]
     first, last = int(row[0]), int(row[-1])
     # Halfway along the row (on a straight interface the node nearest the middle of its
     # ends; on a curved one, an arc, that middle is off the surface: every node of a
@@ -145,8 +151,9 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     (the same keys, the same meaning): the normal resultant ∫ p dS on the slave, the
     weight of the pair's upper body and of every body resting on it (:func:`resting_on`), the mean
     pressure over the contact length (the history's ``<name>_contact_length``), the
-    pressures at the ends of the interface (a general pair's slave surface) and at its
-    node nearest the centre (:func:`edge_centre`, on the snapshot's nodes).
+    pressures at the ends of the interface's contact (a general pair's on its slave
+    surface) and at its node nearest the centre (:func:`edge_centre`, on the snapshot's
+    nodes).
 
     Args:
         model: The contact model.
@@ -167,7 +174,7 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     weight = sum(weights[i] for i in resting_on(model, upper, links))
     length = row[f"{name}_contact_length"]
     pressure = interface[f"contact_{name}_pressure"]
-    first_node, last, centre = edge_centre(interface[f"contact_{name}_x"])
+    first_node, last, centre = edge_centre(interface[f"contact_{name}_x"], pressure)
     static.update({
         "slave": model.bodies[slave].spec.name,
         "weight": weight,
