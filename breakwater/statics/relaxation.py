@@ -21,7 +21,11 @@ search radius per step and cannot fall through its support; c grows only while t
 increments stay below that. Converged when the static residual at the new iterate,
 ``‖M (u − u_k)‖/c``, is below the tolerance (``[initial] tolerance``, default
 :data:`TOLERANCE`: a time step's Newton tolerance) times the load norm ‖f‖; the steps'
-Newton converges to it too. Damping is switched off (a static state carries none).
+Newton converges to it too, or stalls at its round-off below :data:`FLOOR` times the
+load norm (accepted: the static residual, which each step measures, decides; a body
+held by contact between two others, a block on a block on a base meshed apart, stalled
+at 6.6e-9 of the load, above the 1e-9 asked, and had "no static equilibrium").
+Damping is switched off (a static state carries none).
 
 The pseudo steps are exact, so that the state is the equilibrium to that tolerance
 whatever the penalty: the bulk balances the interface Newton's iterate
@@ -116,7 +120,7 @@ from breakwater.model.model import ContactModel, Damping
 from breakwater.statics.pseudostep import GROWTH, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
-__all__ = ["GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
+__all__ = ["FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
            "STALL", "TOLERANCE", "Relaxed", "no_state_advice", "relax"]
 
 log = logging.getLogger("breakwater.statics.relaxation")
@@ -138,6 +142,10 @@ MAX_STEPS = 100
 
 STALL = 4
 """A stage fails when its increment has not halved over this many steps at one c."""
+
+FLOOR = 1e-7
+"""The pseudo steps' Newton accepts a stall below this fraction of the load norm as its
+round-off (the stall test of :func:`breakwater.stepping.solver.convergence_reason`)."""
 
 HELD_FRICTION = 100.0
 """Friction coefficient of every pair while the bodies are held (stage 3); the
@@ -415,7 +423,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
         stick_band: The frictional state's stick band χτ, as a fraction of the mean
             slave facet length (:data:`breakwater.statics.initial.STICK_BAND`).
         options: Newton settings of the pseudo steps (their ``atol`` and
-            ``floor_atol`` at most ``tolerance``).
+            ``floor_atol``: ``tolerance`` and :data:`FLOOR`).
         tolerance: The static residual, as a fraction of the load norm.
         loading: ``"frictional"``: with friction on some pair, the frictional stage
             only (then held); ``"frictionless"``: the frictionless stages first.
@@ -426,7 +434,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
     t0 = time.perf_counter()
     o = options or NewtonOptions()
     options = dataclasses.replace(o, atol=min(o.atol, tolerance),
-                                  floor_atol=min(o.floor_atol, tolerance))
+                                  floor_atol=max(FLOOR, tolerance))
     with _undamped(model):
         r = PseudoStepper(model, options, stick_band)
         r.tolerance = tolerance

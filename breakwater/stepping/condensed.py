@@ -265,9 +265,7 @@ class CondensedNewton(StepSolver):
         self.surfaces = [SurfaceContact(model, p, layout, self.I,
                                         (self.u, self.v, self.a, self.da), dt, beta1, beta2)
                          for p in model.surface_pairs]
-        # Every pair's guard, frictionless ones too (inert while μ = 0: precheck returns
-        # 0): the static relaxation's held stage gives every pair μ = 100, and without
-        # it a frictionless block held on a slope diverged at its first pseudo step.
+        # Frictionless pairs too (inert at μ = 0): the relaxation's held stage sets μ = 100.
         self.providers += [StateForces(sp, self.interface, self.da,
                                        _surface_guard(sp) if surface_guard else None)
                            for sp in self.surfaces]
