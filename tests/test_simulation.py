@@ -22,7 +22,7 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater.common.errors import BreakwaterError, ConvergenceError
+from breakwater.common.errors import BreakwaterError, CaseError, ConvergenceError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.mesh import read_mesh
@@ -419,3 +419,15 @@ def test_probes_of_one_name_are_refused(tmp_path: pathlib.Path) -> None:
     # A point probe and a pair probe may share a name: their columns differ.
     assert OutputSpec(tmp_path, probes=(ProbeSpec("corner", "a", (0.0, 0.1)),),
                       pair_probes=(pair,)).probes[0].name == "corner"
+
+
+def test_a_probe_of_an_unknown_body_is_refused(mesh_path: pathlib.Path,
+                                               shared_dir: pathlib.Path) -> None:
+    # From Python (a case file's probes are checked against its bodies): a KeyError
+    # whose message was quoted (found by a user). One line, on every rank.
+    time = TimeSpec(dt=DT, end_time=2 * DT)
+    output = OutputSpec(shared_dir, probes=(ProbeSpec("top", "aa", (0.0, 0.1)),),
+                        progress=False)
+    with pytest.raises(CaseError, match=r"^probe 'top': no body named 'aa' \(did you mean "
+                       r"'a'\?\) \(bodies: a, b\)$"):
+        simulation.run(_model(mesh_path), time, output)

@@ -36,6 +36,7 @@ from typing import Literal
 
 from breakwater.casefile.stormcase import StormCase, check_site
 from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.typecheck import check_fields
 from breakwater.loads.fields import PressureProfile
 from breakwater.loads.signals import (
     STANDARD_GRAVITY,
@@ -72,6 +73,7 @@ class PendulumCase:
     gravity: float = setting(STANDARD_GRAVITY, unit="m/s²", doc="g in ω = s₀ sqrt(g/l₀)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         for name in ("mass", "cord_length", "release_distance", "gravity"):
             positive(getattr(self, name), name)
         if not 0.0 <= self.restitution <= 1.0:
@@ -107,6 +109,7 @@ class TableCase:
                               "a run outlasting the table is an error)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if (self.file is None) == (self.points is None):
             raise InvalidField("file", "give either file or points (exactly one)")
         if self.file is not None:
@@ -146,6 +149,7 @@ class ProfileCase:
     origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if len(self.axis) not in (2, 3) or not any(self.axis):
             raise InvalidField("axis", f"must be a non-zero 2- or 3-vector (got "
                                f"{list(self.axis)})")
@@ -204,6 +208,7 @@ class GodaCase:
                                        "front of the upright section (impulsive only)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         check_site(self.factors, self.impulsive, self.berm_width)
         try:
             self.pressure()  # the formula's own range checks
@@ -271,6 +276,7 @@ class LoadCase:
     table: TableCase | None = setting(None, doc="table: the tabulated factor")  # noqa: RUF009 (a field() with docs)
 
     def __post_init__(self) -> None:
+        check_fields(self)
         listed = (self.group, *self.groups)
         twice = next((g for k, g in enumerate(listed) if g in listed[:k]), None)
         if twice is not None:  # its facets were loaded twice: Goda's force 1.9x, no word

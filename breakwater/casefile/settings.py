@@ -32,6 +32,7 @@ from breakwater.casefile.tables import (
 )
 from breakwater.common.files import name_problem
 from breakwater.config.fields import InvalidField, positive, setting, suggest, to_toml
+from breakwater.config.typecheck import check_fields
 
 __all__ = ["CaseSettings"]
 
@@ -74,6 +75,7 @@ class CaseSettings:
     output: OutputCase = setting(_DEFAULT_OUTPUT, doc="outputs")  # noqa: RUF009 (a field() with docs)
 
     def __post_init__(self) -> None:
+        check_fields(self)
         self._check()
 
     # --- validation ----------------------------------------------------------------

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.typecheck import check_fields
 from breakwater.loads.wavepressure import GodaPressure, GodaRangeError, goda_pressure
 from breakwater.storms.waves import Site, Wave, WaveTrain
 
@@ -72,6 +73,7 @@ class SeaCase:
     seed: int = setting(0, doc="seed of the random heights (the same seed, the same storm)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         positive(self.significant_height, "significant_height")
         positive(self.period, "period")
         if (self.waves is None) == (self.duration is None):
@@ -137,6 +139,7 @@ class StormCase:
         "...] (one after the other from t = 0); or [sea]")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         check_site(self.factors, self.impulsive, self.berm_width)
         if (self.sea is None) == (self.waves is None):
             raise InvalidField("waves", "give either waves (a file or [[H, T], ...]) or a "

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Literal, get_args
 
 from breakwater.config.fields import InvalidField, positive, setting
 from breakwater.config.runspec import TimeSpec
+from breakwater.config.typecheck import check_fields
 from breakwater.meshes.goda import GodaGeometry
 from breakwater.meshes.goda3d import Goda3DGeometry
 
@@ -63,6 +64,7 @@ class MeshCase:
                                 "triangles")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if not (self.refinement > 0 and math.isfinite(self.refinement)):
             raise InvalidField("refinement", f"must be > 0 (got {self.refinement:g})")
         if self.degree not in (1, 2):
@@ -111,6 +113,7 @@ class BodyCase:
                                                   "velocity of the body at t = 0")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         positive(self.density, "density")
         if len(self.initial_velocity) not in (2, 3) \
                 or not all(map(math.isfinite, self.initial_velocity)):
@@ -179,6 +182,7 @@ class ContactCase:
         "small rotations, as a conforming pair; finite sliding kept)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if (self.slave_surface is None) != (self.master_surface is None):
             raise InvalidField("master_surface" if self.master_surface is None
                                else "slave_surface", "a general pair needs both "
@@ -212,6 +216,7 @@ class FixedCase:
                                                  "(0: x, 1: y, 2: z in 3D); default all")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if self.components is None:
             return
         if not self.components:
@@ -247,6 +252,7 @@ class InitialCase:
                                "otherwise a static state that cannot be found is an error")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if not 0 < self.tolerance < 1:
             raise InvalidField("tolerance", f"must be in (0, 1) (got {self.tolerance:g})")
 
@@ -259,6 +265,7 @@ class DampingCase:
     beta: float = setting(0.0, unit="s", doc="stiffness-proportional coefficient β")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         positive(self.alpha, "alpha", strict=False)
         positive(self.beta, "beta", strict=False)
 
@@ -292,6 +299,7 @@ class CalibrationCase:
     max_iterations: int = setting(30, doc="largest number of stiffness solves")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if self.stiffness is not None:
             positive(self.stiffness, "stiffness")
         if self.stiffness_basis not in get_args(StiffnessBasis):
@@ -333,6 +341,7 @@ class ProbeCase:
                                               "(instead of group)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         _one_location(self)
 
 
@@ -348,6 +357,7 @@ class PairProbeCase:
                                               "(instead of group)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         _one_location(self)
 
 
@@ -365,5 +375,6 @@ class OutputCase:
     pair_probes: tuple[PairProbeCase, ...] = setting((), doc="interface slip/opening probes")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         positive(self.field_interval, "field_interval", strict=False)
         positive(self.checkpoint_interval, "checkpoint_interval", strict=False)

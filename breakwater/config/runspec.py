@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.typecheck import check_fields
 
 __all__ = ["MAX_CUTBACKS", "InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec",
            "TimeSpec"]
@@ -42,6 +43,9 @@ class ProbeSpec:
     body: str
     point: tuple[float, ...]
 
+    def __post_init__(self) -> None:
+        check_fields(self)
+
 
 @dataclass(frozen=True)
 class PairProbeSpec:
@@ -58,6 +62,9 @@ class PairProbeSpec:
     name: str
     pair: int | str
     point: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
 MAX_NEWTON_IT = 10_000
@@ -114,6 +121,7 @@ class TimeSpec:
                              "round-off, ≈10× slower)")
 
     def __post_init__(self) -> None:
+        check_fields(self)
         positive(self.dt, "dt")
         positive(self.end_time, "end_time")
         if self.dt >= self.end_time:
@@ -213,6 +221,9 @@ class OutputSpec:
     checkpoint_interval: int = 0
 
     def __post_init__(self) -> None:
+        check_fields(self)
+        positive(self.field_interval, "field_interval", strict=False)
+        positive(self.checkpoint_interval, "checkpoint_interval", strict=False)
         # The history's columns are named by the probes: two of one name wrote the same
         # columns twice (from Python; a case file's tables cannot; found by a user).
         for names in ([p.name for p in self.probes], [q.name for q in self.pair_probes]):
@@ -241,9 +252,14 @@ class InitialSpec:
 
     velocities: tuple[tuple[str, tuple[float, ...]], ...] = ()
     loads: tuple[int, ...] | None = None
-    loading: str = "frictional"
+    loading: Literal["frictional", "frictionless"] = "frictional"
     tolerance: float = 1e-9
     undeformed: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        if not 0 < self.tolerance < 1:
+            raise InvalidField("tolerance", f"must be in (0, 1) (got {self.tolerance:g})")
 
     def velocity(self, body: str) -> tuple[float, ...] | None:
         """The initial velocity of a body (None: at rest)."""

@@ -15,7 +15,8 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from breakwater.common.errors import MeshError
+from breakwater.common.errors import CaseError, MeshError
+from breakwater.config.fields import suggest
 from breakwater.model.model import ContactModel
 
 __all__ = ["TOUCH", "PointProbe"]
@@ -65,13 +66,22 @@ class PointProbe:
         body: Name of the body to evaluate.
         point: Coordinates (gdim or 3 values).
         name: Label for outputs.
+
+    Raises:
+        CaseError: No body of that name (one line naming the model's bodies; the same
+            on every rank).
+        MeshError: The point is not in the body.
     """
 
     def __init__(self, model: ContactModel, body: str, point: Sequence[float],
                  name: str | None = None) -> None:
         self.model = model
-        self.body = b = model.body(body)
         self.name = name or f"{body}@{tuple(point)}"
+        names = [b.spec.name for b in model.bodies]
+        if body not in names:  # model.body's KeyError quoted its message (from Python)
+            raise CaseError(f"probe '{self.name}': no body named '{body}'"
+                            f"{suggest(body, names)} (bodies: {', '.join(names)})")
+        self.body = b = model.body(body)
         x = np.zeros(3)
         x[: len(point)] = point
         self.point = x

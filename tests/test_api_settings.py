@@ -1,0 +1,143 @@
+"""The settings dataclasses built or changed from Python are checked as a case file's values.
+
+A notebook user builds :class:`~breakwater.config.runspec.TimeSpec`,
+:class:`~breakwater.config.runspec.OutputSpec` and the probes, or changes a loaded case's
+tables with :func:`dataclasses.replace`: the reader's type checks
+(:mod:`breakwater.config.convert`) are skipped there. Found by a user-path test:
+``adaptive="no"`` ran adaptive steps (a non-empty string is true), ``end_time="0.002"``
+failed deep in the run with a TypeError. Pure Python (no mesh, no solve).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import typing
+from typing import Any, Literal
+
+import pytest
+from breakwater.meshes import GodaGeometry
+
+from breakwater.casefile.case import CaseError, load_case
+from breakwater.casefile.loads import ProfileCase
+from breakwater.casefile.stormcase import SeaCase
+from breakwater.config.fields import InvalidField, alternatives, optional, type_hints
+from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+
+ROOT = pathlib.Path(__file__).parents[1]
+CASES = [ROOT / "breakwater/cases/goda.toml", ROOT / "examples/goda_design_wave.toml",
+         ROOT / "examples/goda_storm.toml", ROOT / "examples/goda_nonmatching.toml"]
+
+
+def _instances() -> dict[type, Any]:
+    """One instance of every dataclass in the loaded cases' trees, plus the run specs."""
+    found: dict[type, Any] = {}
+
+    def walk(obj: Any) -> None:
+        if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+            found.setdefault(type(obj), obj)
+            for f in dataclasses.fields(obj):
+                walk(getattr(obj, f.name))
+        elif isinstance(obj, tuple):
+            for item in obj:
+                walk(item)
+
+    for file in CASES:
+        walk(load_case(file))
+    walk(OutputSpec(pathlib.Path("out"), probes=(ProbeSpec("p", "caisson", (0.0, 0.1)),),
+                    pair_probes=(PairProbeSpec("q", 0, (0.0, 0.0)),)))
+    walk(InitialSpec(velocities=(("caisson", (1.0, 0.0)),), loads=(0,)))
+    walk(SeaCase(significant_height=8.0, period=14.0, waves=100))
+    walk(ProfileCase(points=((0.0, 1e3), (1.0, 0.0))))
+    return found
+
+
+INSTANCES = _instances()
+EXPECTED = {"Case", "MeshCase", "GodaGeometry", "Goda3DGeometry", "BodyCase", "ContactCase",
+            "FixedCase", "InitialCase", "DampingCase", "CalibrationCase", "TimeSpec",
+            "OutputCase", "ProbeCase", "LoadCase", "PendulumCase", "GodaCase", "StormCase",
+            "SeaCase", "TableCase", "ProfileCase", "PairProbeCase", "OutputSpec", "ProbeSpec",
+            "PairProbeSpec", "InitialSpec"}
+
+
+def _wrong(tp: Any) -> Any:
+    """A value of another type than the annotation ``tp`` allows."""
+    inner = optional(tp)
+    if inner is not None:
+        return _wrong(inner)
+    if tp is bool:
+        return "no"  # truthy: was taken as True
+    if tp is float:
+        return "0.002"  # was a TypeError deep in the run
+    if tp is int:
+        return 2.5
+    if tp is str:
+        return 3
+    if typing.get_origin(tp) is Literal:
+        return "none of them"
+    if typing.get_origin(tp) is tuple:
+        return 5.0
+    if alternatives(tp):
+        return b"bytes"  # neither member
+    if tp is pathlib.Path:
+        return 3
+    return "a string"  # a dataclass: not one
+
+
+def _cases() -> list[tuple[str, Any, str]]:
+    out = []
+    for cls, obj in INSTANCES.items():
+        for f in dataclasses.fields(obj):
+            if f.init:
+                out.append((f"{cls.__name__}.{f.name}", obj, f.name))
+    return out
+
+
+def test_every_settings_class_is_covered() -> None:
+    # A class missing here would have no field checked below.
+    assert {c.__name__ for c in INSTANCES} >= EXPECTED
+
+
+@pytest.mark.parametrize(("label", "obj", "name"), _cases(), ids=[c[0] for c in _cases()])
+def test_a_wrong_type_is_refused_naming_the_field(label: str, obj: Any, name: str) -> None:
+    bad = _wrong(type_hints(type(obj))[name])
+    if isinstance(obj, GodaGeometry):  # its own checks, a ValueError naming the field
+        with pytest.raises(ValueError, match=rf"^{name}\b"):
+            dataclasses.replace(obj, **{name: bad})
+        return
+    with pytest.raises(InvalidField, match=rf"^{name}(\[\d+\])?: ") as e:
+        dataclasses.replace(obj, **{name: bad})
+    assert "\n" not in str(e.value)
+
+
+def test_the_user_path_findings() -> None:
+    time = TimeSpec(dt=1e-4, end_time=2e-3)
+    with pytest.raises(InvalidField, match=r"^adaptive: expected true or false, got 'no'$"):
+        dataclasses.replace(time, adaptive="no")
+    with pytest.raises(InvalidField, match=r"^end_time: expected a number, got '0.002'$"):
+        dataclasses.replace(time, end_time="0.002")
+    with pytest.raises(InvalidField, match=r"^loading: must be one of .*did you mean "
+                       r"'frictionless'"):  # a str field before: a typo ran frictionless
+        InitialSpec(loading="frictionles")
+    with pytest.raises(InvalidField, match=r"^tolerance: must be in \(0, 1\)"):
+        InitialSpec(tolerance=2.0)
+    with pytest.raises(InvalidField, match=r"^field_interval: must be >= 0"):
+        OutputSpec(pathlib.Path("out"), field_interval=-1)
+
+
+def test_the_same_rule_as_the_reader() -> None:
+    # The case file's message, the path prefixed: the one rule from both sides.
+    with pytest.raises(CaseError, match=r"time\.adaptive: expected true or false, got 'no'$"):
+        load_case("goda", ["time.adaptive='no'"])
+    case = load_case("goda")
+    with pytest.raises(InvalidField, match=r"^friction: expected a number, got '0.6'$"):
+        dataclasses.replace(case.contact[0], friction="0.6")
+
+
+def test_python_forms_of_the_same_value_are_stored_as_the_reader_stores_them() -> None:
+    time = dataclasses.replace(TimeSpec(dt=1e-4, end_time=2e-3), end_time=1)
+    assert type(time.end_time) is float and time.end_time == 1.0
+    probe = ProbeSpec("p", "caisson", [0, 0.1])  # a list of an int and a float
+    assert probe.point == (0.0, 0.1) and all(type(x) is float for x in probe.point)
+    output = OutputSpec("out")  # type: ignore[arg-type]  (a str for a path)
+    assert output.directory == pathlib.Path("out")
