@@ -17,7 +17,8 @@ Output files of a run (in the output directory):
 - ``contact_<pair>.bp``: contact pressure, normal gap, slip, slip velocity and
   friction traction of each contact pair, as P2 fields on the interface (a general
   pair's on its slave surface): :class:`PairFields`.
-- ``static.npz``: the static state (P1 nodal values per body, ``<body>_<field>``, and
+- ``static.npz``: the static state (P1 nodal values per body, ``<body>_<field>``, the
+  stresses averaged over the cells at a vertex, and
   each pair's nodal state, ``contact_<pair>_<field>``:
   :func:`breakwater.outputs.monitor.interface_state`).
 - ``snapshot_max_ux.npz``: the same at the instant of the largest |u_x| of the first
@@ -55,6 +56,7 @@ from breakwater.model.pairs import Pair
 from breakwater.outputs.checkpoint import match_nodes
 from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.section import section
+from breakwater.outputs.vertexaverage import VertexAverage
 
 __all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
            "RunFiles", "read_history", "snapshot_arrays"]
@@ -231,7 +233,8 @@ class BodyFields:
         self._syy = fem.Expression(σ3[1, 1], X)
         self.functions = [self.displacement, self.velocity, self.stress, self.von_mises,
                           self.stress_yy]
-        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace, fem.FunctionSpace] | None = None
+        self._p1: tuple[fem.FunctionSpace, fem.FunctionSpace, fem.FunctionSpace,
+                        VertexAverage] | None = None
         # The fast path of update: the P_k nodes of a cell are the discontinuous
         # space's (the same element, the same points), so displacement and velocity are
         # copies of the nodal values, and von Mises and σ_yy follow from the stress at
@@ -285,8 +288,10 @@ class BodyFields:
     def nodal(self) -> dict[str, np.ndarray] | None:
         """P1 nodal values of the current fields, gathered on rank 0 (None elsewhere).
 
-        The stresses are discontinuous: at a vertex, the value of one of its cells
-        is taken (no averaging), which is enough for contour plots.
+        The stresses are discontinuous: at a vertex, the volume-weighted average of
+        its cells' values (:class:`~breakwater.outputs.vertexaverage.VertexAverage`,
+        each field averaged: von Mises of the cells, not of the averaged tensor), the
+        same on any number of ranks.
 
         Returns:
             On rank 0: ``x`` (n, 2) vertex coordinates, ``triangles`` (m, 3),
@@ -298,21 +303,15 @@ class BodyFields:
         """
         sub = self.u.function_space.mesh
         if self._p1 is None:
-            self._p1 = (fem.functionspace(sub, ("Lagrange", 1, (self.gdim,))),
-                        fem.functionspace(sub, ("Lagrange", 1)),
-                        fem.functionspace(sub, ("Lagrange", 1, (3, 3))))
-        V1, S1, T1 = self._p1
+            S1 = fem.functionspace(sub, ("Lagrange", 1))
+            self._p1 = (fem.functionspace(sub, ("Lagrange", 1, (self.gdim,))), S1,
+                        fem.functionspace(sub, ("Lagrange", 1, (3, 3))), VertexAverage(S1))
+        V1, S1, T1, average = self._p1
         u1 = fem.Function(V1)
-        u1.interpolate(self.u)
-        scalars = {}
-        for name, f in (("von_mises", self.von_mises), ("stress_yy", self.stress_yy)):
-            s1 = fem.Function(S1)
-            s1.interpolate(f)
-            scalars[name] = s1.x.array
-        # The tensor at the same vertices, from the same cells (T1 has S1's dof layout).
-        t1 = fem.Function(T1)
-        t1.interpolate(self.stress)
-        σ = t1.x.array.reshape(-1, 3, 3)
+        u1.interpolate(self.u)  # continuous: its vertex values
+        scalars = {name: average(f, S1) for name, f in (("von_mises", self.von_mises),
+                                                        ("stress_yy", self.stress_yy))}
+        σ = average(self.stress, T1).reshape(-1, 3, 3)  # T1 has S1's dof layout
         for name, (i, j) in COMPONENTS.items():
             scalars[name] = σ[:, i, j]
         imap = S1.dofmap.index_map
