@@ -117,6 +117,41 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
     stepper.destroy()
 
 
+def test_a_negative_dual_pressure_is_not_shown_as_a_pressure(shared_dir: pathlib.Path) -> None:
+    """The block tilted on matching meshes (4 facets of 0.25 on y = 0): u_y = −θ(X − X_e),
+    X_e = 0.625 the middle of the facet [0.5, 0.75], so the law's pressure ε_n θ (X − X_e)
+    is positive on its far half only, where the P2 shape function of its vertex X = 0.5,
+    (1 − s)(1 − 2s), is negative: λ = ∫ p N < 0 there and the dual-basis value p_k =
+    λ_k / D_k is negative (found as −850 Pa at the Goda caisson's edge by a user-path
+    test). That is a weight of the projection, not a tension (the law ε_n⟨−g_n⟩₊ has
+    none): ``pressure`` is 0 there (the law at the node, open), the raw value is
+    ``pressure_dual``, whose ∫ is still the residual's (round-off)."""
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10)
+    mesh = rectangles(shared_dir / "tilt.msh", COMM,
+                      [Rectangle("base", 0.0, -0.5, 1.0, 0.5, 4, 2),
+                       Rectangle("block", 0.0, 0.0, 1.0, 0.5, 4, 2)])
+    model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
+                                                 Body("block", MATERIAL)],
+                         fixed=[Fixed("base_bottom")], surface_pairs=[pair])
+    stepper = GN22(model, 1e-3)
+    contact = _provider(stepper)
+    θ, X_e = 1e-4, 0.625
+    stepper.u[1].interpolate(lambda x: np.stack([0 * x[0], -θ * (x[0] - X_e)]))
+    nodes = SlavePoints.nodes(contact)
+    state = nodes.evaluate(contact.interface_values(stepper.u))
+    vertex = np.isclose(nodes.X[:, 0], 0.5)
+    assert vertex.sum() == 1
+    assert state["pressure_dual"][vertex][0] < -1e-3 * state["pressure_dual"].max()
+    np.testing.assert_array_equal(state["pressure"], np.maximum(state["pressure_dual"], 0))
+    assert state["pressure"][vertex][0] == 0.0 == state["law_pressure"][vertex][0]
+    lam = contact.normal_forces(contact.interface_values(stepper.u))
+    assert nodes.weights is not None
+    assert nodes.weights @ state["pressure_dual"] == pytest.approx(lam.sum(), rel=1e-12)
+    snap = contact.snapshot(stepper.u)  # static.npz's contact_c_pressure(_dual)
+    assert snap["pressure"].min() == 0.0 > snap["pressure_dual"].min()
+    stepper.destroy()
+
+
 # --- a pushed block, through simulation.run ---------------------------------------
 
 MU, WIDTH, HEIGHT, PENALTY = 0.6, 0.1, 0.05, 1e9

@@ -18,8 +18,12 @@ interface unknowns (gathered on every rank, so every rank computes the same numb
   (:class:`forms.ContactLaw`) evaluated at the point.
 - ``pressure``: at the slave nodes, the nodal values of the pressure the residual
   integrates (:func:`nodal_pressure`: p_k = ∫ p N_k / ∫ N_k, the dual-basis
-  (biorthogonal) projection of the mortar methods); at another point (a probe's), the
-  law's. ``friction_traction`` −μ p v_T/sqrt(|v_T|² + χ²) on the slave, with that p.
+  (biorthogonal) projection of the mortar methods, ``pressure_dual``) where they are
+  positive, else 0: the law ε_n⟨−g_n⟩₊ is never a tension, and a negative p_k (a P2
+  vertex just past the contact's edge, whose N_k < 0 on the far half of its facet
+  where the pressure is) is a weight of the projection, not a traction; at another
+  point (a probe's), the law's. ``friction_traction`` −μ p v_T/sqrt(|v_T|² + χ²) on
+  the slave, with that p.
 - ``slip``: the tangential displacement of the slave point relative to the master
   material point X̄₀ under it in the reference configuration (its closest point on
   the master surface of the mesh), ``(I − n₀⊗n₀)(u_s − u_m(X̄₀))`` with n₀ the master's
@@ -118,7 +122,9 @@ def nodal_pressure(forces: np.ndarray, weights: np.ndarray) -> np.ndarray:
     first-order geometry's node-to-node oscillation (10 % against 4.6 %). A P2
     vertex function is negative over part of its facets, so a vertex just past the
     contact's edge may read a negative value (measured −1.0 % of p₀, −5 % with a
-    penalty overlap of 3e-5 of the contact half-width).
+    penalty overlap of 3e-5 of the contact half-width; −850 Pa against 12 kPa at the
+    edge of the Goda caisson): :meth:`SlavePoints.evaluate`'s ``pressure`` is it where
+    positive, else 0 (its ``pressure_dual`` is this, unclipped).
 
     Args:
         forces: λ_k, ``(n_nodes,)``.
@@ -198,8 +204,9 @@ class SlavePoints:
         Returns:
             ``x`` (current position), ``u_slave``, ``u_master`` (at X̄₀), ``normal``
             (the master's normal at the projection, the pair's), ``gap``,
-            ``law_pressure``, ``pressure`` (at the slave nodes :func:`nodal_pressure`,
-            else the law's),
+            ``law_pressure``, ``pressure`` (at the slave nodes :func:`nodal_pressure`
+            where positive, else 0; at other points the law's), ``pressure_dual``
+            (:func:`nodal_pressure` unclipped, at the slave nodes: Σ_k D_k p_k = ∫ p),
             ``slip`` (vector), ``slip_t`` (along t₀), ``slip_velocity`` and
             ``friction_traction``.
         """
@@ -231,11 +238,12 @@ class SlavePoints:
         law = c.law
         gap = law.gap(xs, x_bar, n)
         at_points = np.where(on, law.normal.pressure(gap), 0.0)
-        pressure = at_points if self.weights is None else \
+        dual = at_points if self.weights is None else \
             nodal_pressure(c.normal_forces(u), self.weights)
+        pressure = np.maximum(dual, 0.0)  # a negative p_k is a weight, not a tension
         v_T = forms.tangential_part(vs - v_bar, n)
         return {"x": xs, "u_slave": us, "u_master": um0, "normal": n, "gap": gap,
-                "law_pressure": at_points, "pressure": pressure,
+                "law_pressure": at_points, "pressure": pressure, "pressure_dual": dual,
                 "slip": forms.tangential_part(rel, n0),
                 "slip_t": np.sum(rel * t0, axis=1), "slip_velocity": v_T,
                 "friction_traction": law.friction.traction(pressure, v_T)}
@@ -279,15 +287,17 @@ def snapshot(contact: SurfaceSearch, u: Sequence[fem.Function]) -> dict[str, np.
 
     Returns:
         ``x`` (reference coordinates of the slave surface's nodes, sorted), ``normal``
-        (the master's current normal), ``gap``, ``slip`` (2-D: along t₀) and
-        ``pressure`` (:func:`nodal_pressure`).
+        (the master's current normal), ``gap``, ``slip`` (2-D: along t₀),
+        ``pressure`` (:func:`nodal_pressure` where positive, else 0) and
+        ``pressure_dual`` (:func:`nodal_pressure`, unclipped).
     """
     points = SlavePoints.nodes(contact)
     state = points.evaluate(contact.interface_values(u))
     order = np.lexsort(points.X.T[::-1])
     return {"x": points.X[order], "normal": state["normal"][order],
             "gap": state["gap"][order], "slip": state["slip_t"][order],
-            "pressure": state["pressure"][order]}
+            "pressure": state["pressure"][order],
+            "pressure_dual": state["pressure_dual"][order]}
 
 
 def static_measures(contact: SurfaceSearch, state: dict[str, np.ndarray],

@@ -310,7 +310,9 @@ class Pair(Protocol):
 
         ``x`` (reference coordinates of the nodes, sorted by x then y), ``normal``
         (the master's outward normal), ``gap`` (g_n), ``slip`` (2D: along
-        t = (n_y, −n_x)) and ``pressure`` (ε_n ⟨−g_n⟩₊).
+        t = (n_y, −n_x)) and ``pressure`` (ε_n ⟨−g_n⟩₊; a general pair's: its
+        dual-basis nodal pressure where positive, else 0, and ``pressure_dual``
+        unclipped, :func:`breakwater.contact.slavepoints.snapshot`).
         """
         ...
 

@@ -95,7 +95,8 @@ def interface_state(pairs: Sequence[Pair], u: Sequence[fem.Function]
         coordinates, sorted), ``normal``, ``gap`` (normal gap g_n), ``slip`` (2D: along
         the tangent) and ``pressure`` (ε_n ⟨−g_n⟩₊ at a conforming pair's interface
         nodes; at a general pair's slave nodes the projection of the pressure its
-        residual integrates, :func:`breakwater.contact.slavepoints.nodal_pressure`).
+        residual integrates, :func:`breakwater.contact.slavepoints.nodal_pressure`,
+        where positive, else 0; and ``pressure_dual``, unclipped).
     """
     data: dict[str, np.ndarray] = {"contacts": np.array([p.name for p in pairs], dtype=str)}
     for p in pairs:

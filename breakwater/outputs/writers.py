@@ -396,7 +396,8 @@ class PairFields:
     values are exact; a general pair's residual integrates the law at its own points,
     and its ``pressure`` is their dual-basis projection onto the slave nodes
     (:func:`breakwater.contact.slavepoints.nodal_pressure`), whose integral is the
-    residual's ∫p.
+    residual's ∫p, where positive, else 0 (a negative value is a weight of the
+    projection past the contact's edge, not a tension).
 
     Args:
         model: The contact model.
