@@ -122,10 +122,11 @@ def test_a_negative_dual_pressure_is_not_shown_as_a_pressure(shared_dir: pathlib
     X_e = 0.625 the middle of the facet [0.5, 0.75], so the law's pressure ε_n θ (X − X_e)
     is positive on its far half only, where the P2 shape function of its vertex X = 0.5,
     (1 − s)(1 − 2s), is negative: λ = ∫ p N < 0 there and the dual-basis value p_k =
-    λ_k / D_k is negative (found as −850 Pa at the Goda caisson's edge by a user-path
-    test). That is a weight of the projection, not a tension (the law ε_n⟨−g_n⟩₊ has
-    none): ``pressure`` is 0 there (the law at the node, open), the raw value is
-    ``pressure_dual``, whose ∫ is still the residual's (round-off)."""
+    λ_k / D_k is negative (−1.5 kPa at the caisson's edge of examples/goda_nonmatching.toml
+    with ε_n = 1.01e11 N/m³, found by a user-path test). That is a weight of the
+    projection, not a tension (the law ε_n⟨−g_n⟩₊ has none): ``pressure`` is 0 there
+    (the law at the node, open), the raw value is ``pressure_dual``, whose ∫ is still
+    the residual's (round-off)."""
     pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10)
     mesh = rectangles(shared_dir / "tilt.msh", COMM,
                       [Rectangle("base", 0.0, -0.5, 1.0, 0.5, 4, 2),

@@ -122,9 +122,10 @@ def nodal_pressure(forces: np.ndarray, weights: np.ndarray) -> np.ndarray:
     first-order geometry's node-to-node oscillation (10 % against 4.6 %). A P2
     vertex function is negative over part of its facets, so a vertex just past the
     contact's edge may read a negative value (measured −1.0 % of p₀, −5 % with a
-    penalty overlap of 3e-5 of the contact half-width; −850 Pa against 12 kPa at the
-    edge of the Goda caisson): :meth:`SlavePoints.evaluate`'s ``pressure`` is it where
-    positive, else 0 (its ``pressure_dual`` is this, unclipped).
+    penalty overlap of 3e-5 of the contact half-width; −1.5 kPa against 53 kPa at the
+    caisson's edge of ``examples/goda_nonmatching.toml`` with ε_n = 1.01e11 N/m³):
+    :meth:`SlavePoints.evaluate`'s ``pressure`` is it where positive, else 0 (its
+    ``pressure_dual`` is this, unclipped).
 
     Args:
         forces: λ_k, ``(n_nodes,)``.
