@@ -3,7 +3,9 @@
 A notebook user builds :class:`~breakwater.config.runspec.TimeSpec`,
 :class:`~breakwater.config.runspec.OutputSpec` and the probes, or changes a loaded case's
 tables with :func:`dataclasses.replace`: the reader's type checks
-(:mod:`breakwater.config.convert`) are skipped there. Found by a user-path test:
+(:mod:`breakwater.config.convert`) are skipped there; notebooks/04_storm.py builds a
+:class:`~breakwater.storms.waves.Site` and a :class:`~breakwater.storms.rigid.Caisson`.
+Found by a user-path test:
 ``adaptive="no"`` ran adaptive steps (a non-empty string is true), ``end_time="0.002"``
 failed deep in the run with a TypeError. Pure Python (no mesh, no solve).
 """
@@ -23,6 +25,8 @@ from breakwater.casefile.loads import ProfileCase
 from breakwater.casefile.stormcase import SeaCase
 from breakwater.config.fields import InvalidField, alternatives, optional, type_hints
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
+from breakwater.storms.rigid import Caisson
+from breakwater.storms.waves import Site
 
 ROOT = pathlib.Path(__file__).parents[1]
 CASES = [ROOT / "breakwater/cases/goda.toml", ROOT / "examples/goda_design_wave.toml",
@@ -49,6 +53,9 @@ def _instances() -> dict[type, Any]:
     walk(InitialSpec(velocities=(("caisson", (1.0, 0.0)),), loads=(0,)))
     walk(SeaCase(significant_height=8.0, period=14.0, waves=100))
     walk(ProfileCase(points=((0.0, 1e3), (1.0, 0.0))))
+    walk(Site(depth=20.0, toe_depth=14.5, berm_depth=11.0, crest_height=5.0,
+              base_width=30.0))  # notebooks/04_storm.py's
+    walk(Caisson(mass=2100.0 * 30.0 * 19.5, base_width=30.0, toe_depth=14.5, friction=0.6))
     return found
 
 
@@ -57,7 +64,8 @@ EXPECTED = {"Case", "MeshCase", "GodaGeometry", "Goda3DGeometry", "BodyCase", "C
             "FixedCase", "InitialCase", "DampingCase", "CalibrationCase", "TimeSpec",
             "OutputCase", "ProbeCase", "LoadCase", "PendulumCase", "GodaCase", "StormCase",
             "SeaCase", "TableCase", "ProfileCase", "PairProbeCase", "OutputSpec", "ProbeSpec",
-            "PairProbeSpec", "InitialSpec"}
+            "PairProbeSpec", "InitialSpec", "Site", "Caisson"}
+VALUE_ERRORS = (GodaGeometry, Site, Caisson)  # their own checks raise ValueError
 
 
 def _wrong(tp: Any) -> Any:
@@ -101,7 +109,7 @@ def test_every_settings_class_is_covered() -> None:
 @pytest.mark.parametrize(("label", "obj", "name"), _cases(), ids=[c[0] for c in _cases()])
 def test_a_wrong_type_is_refused_naming_the_field(label: str, obj: Any, name: str) -> None:
     bad = _wrong(type_hints(type(obj))[name])
-    if isinstance(obj, GodaGeometry):  # its own checks, a ValueError naming the field
+    if isinstance(obj, VALUE_ERRORS):  # a ValueError naming the field
         with pytest.raises(ValueError, match=rf"^{name}\b"):
             dataclasses.replace(obj, **{name: bad})
         return

@@ -42,11 +42,19 @@ def _hints(cls: Any) -> dict[str, Any]:
     return type_hints(cls)
 
 
-def check_fields(obj: Any) -> None:
+def check_fields(obj: Any, error: type[Exception] | None = None, finite: bool = True
+                 ) -> None:
     """Check every field of the dataclass ``obj`` against its annotation.
 
     Values of an equivalent Python form are stored in the annotated one (``1`` as
     ``1.0`` for a ``float``, a list as a tuple).
+
+    Args:
+        obj: The dataclass (in its ``__post_init__``).
+        error: Raise this instead of :class:`InvalidField`, with the same message (a
+            class whose own checks raise it, e.g. ``ValueError``).
+        finite: Refuse NaN and infinite numbers, as the reader does (False: the types
+            only, for a class that holds a NaN on purpose).
 
     Raises:
         InvalidField: A value of the wrong type, or a non-finite number (the field named
@@ -55,12 +63,17 @@ def check_fields(obj: Any) -> None:
     hints = _hints(obj.__class__)
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        checked = check_value(hints[f.name], value, f.name)
+        try:
+            checked = check_value(hints[f.name], value, f.name, finite)
+        except InvalidField as e:
+            if error is None:
+                raise
+            raise error(str(e)) from None
         if checked is not value:
             object.__setattr__(obj, f.name, checked)  # frozen: in __post_init__ only
 
 
-def check_value(tp: Any, value: Any, path: str) -> Any:
+def check_value(tp: Any, value: Any, path: str, finite: bool = True) -> Any:
     """The Python ``value`` checked against the annotation ``tp`` (normalised).
 
     Raises:
@@ -68,7 +81,7 @@ def check_value(tp: Any, value: Any, path: str) -> Any:
     """
     inner = optional(tp)
     if inner is not None:
-        return None if value is None else check_value(inner, value, path)
+        return None if value is None else check_value(inner, value, path, finite)
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise InvalidField(path, f"expected a number, got {describe(value)}")
@@ -76,7 +89,7 @@ def check_value(tp: Any, value: Any, path: str) -> Any:
             number = float(value)
         except OverflowError:  # an int beyond the floats
             raise InvalidField(path, f"must be finite (got {value})") from None
-        return convert(object, float, number, path)
+        return convert(object, float, number, path) if finite else number
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise InvalidField(path, f"expected an integer, got {describe(value)}")
@@ -87,11 +100,11 @@ def check_value(tp: Any, value: Any, path: str) -> Any:
                                f"{describe(value)}")
         return value
     if typing.get_origin(tp) is tuple:
-        return _tuple(tp, value, path)
+        return _tuple(tp, value, path, finite)
     if alternatives(tp):
         for member in alternatives(tp):
             try:
-                return check_value(member, value, path)
+                return check_value(member, value, path, finite)
             except InvalidField:
                 continue
         raise InvalidField(path, f"expected a {type_name(tp)}, got {describe(value)}")
@@ -102,7 +115,7 @@ def check_value(tp: Any, value: Any, path: str) -> Any:
     return convert(object, tp, value, path)  # bool, str, Literal: the reader's checks
 
 
-def _tuple(tp: Any, value: Any, path: str) -> tuple[Any, ...]:
+def _tuple(tp: Any, value: Any, path: str, finite: bool) -> tuple[Any, ...]:
     if hasattr(value, "__array__") and hasattr(value, "tolist"):  # a NumPy array
         value = value.tolist()
     if not isinstance(value, tuple | list):
@@ -114,7 +127,7 @@ def _tuple(tp: Any, value: Any, path: str) -> tuple[Any, ...]:
         raise InvalidField(path, f"expected {len(args)} items, got {len(value)}")
     else:
         items = args
-    out = tuple(check_value(t, v, f"{path}[{i}]")
+    out = tuple(check_value(t, v, f"{path}[{i}]", finite)
                 for i, (t, v) in enumerate(zip(items, value, strict=True)))
     if isinstance(value, tuple) and all(a is b for a, b in zip(out, value, strict=True)):
         return value  # unchanged: the same object

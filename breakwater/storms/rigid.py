@@ -55,6 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from breakwater.config.typecheck import check_fields
 from breakwater.storms.waveforce import ForceProfile, wave_load
 from breakwater.storms.waves import Site, WaveLoad, WaveTrain
 
@@ -101,6 +102,7 @@ class Caisson:
     weight: float | None = None
 
     def __post_init__(self) -> None:
+        check_fields(self, ValueError)  # added_mass="no" was true, mass="1" a TypeError
         for name in ("mass", "base_width", "friction", "density", "gravity"):
             value = getattr(self, name)
             if not (value > 0 and math.isfinite(value)):

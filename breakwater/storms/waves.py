@@ -22,6 +22,8 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from breakwater.config.typecheck import check_fields
+
 __all__ = ["Site", "Wave", "WaveLoad", "WaveTrain"]
 
 
@@ -113,6 +115,11 @@ class Site:
     density: float = 1025.0
     gravity: float = 9.81
     berm_width: float | None = None
+
+    def __post_init__(self) -> None:
+        # The types only (the ranges: the Goda formulas'; a case's storm reads its waves
+        # with base_width NaN, which only the uplift's force takes).
+        check_fields(self, ValueError, finite=False)
 
 
 @dataclass(frozen=True)
