@@ -23,7 +23,12 @@ from mpi4py import MPI
 
 from breakwater.casefile.dimension import mesh_problem
 from breakwater.casefile.godaface import check_goda_face, goda_quadrature
-from breakwater.casefile.loadchecks import face_problems, pulse_warning, table_warning
+from breakwater.casefile.loadchecks import (
+    face_problems,
+    pulse_warning,
+    start_warning,
+    table_warning,
+)
 from breakwater.casefile.meshloads import load_summary, surface_loads
 from breakwater.casefile.stormbuild import storm_outputs
 from breakwater.casefile.tables import GODA3D
@@ -251,7 +256,9 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         dt = t.dt  # the step inside a pulse: adaptive steps resolve its segments
         if t.adaptive and ld.kind == "pulse":
             dt = resolved_step(t.dt, t.levels, ld.pulse(1.0, 1.0).breakpoints)
-        pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1)
+        in_state = case.initial.loads is None or ld.name in case.initial.loads
+        pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1, in_state)
+        start = start_warning(ld, in_state, t.dt)
         if ld.kind == "table" and ld.table is not None:
             steps = (resolved_step(t.dt, t.levels, ld.table.history(ld.start).breakpoints)
                      if t.adaptive else t.dt)
@@ -263,7 +270,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             entries, quadrature = goda_quadrature(ld, model, exact[ld.name])
             extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
-        lines = [line for line in (warning, pulse, quadrature) if line is not None]
+        lines = [line for line in (warning, start, pulse, quadrature) if line is not None]
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 

@@ -4,6 +4,8 @@
   ending after the end time), from :func:`sampled_pulse`, what GN22 makes of a pulse
   at the step ends; a pulse not longer than Δt, and a load that starts after the end
   time, are refused by :meth:`LoadCase.check_time <breakwater.casefile.loads.LoadCase.check_time>`;
+- :func:`start_warning`: a load non-zero at t = 0 left out of the initial state (it
+  jumps at t = 0, applied over the first step);
 - :func:`face_problems`: a pressure profile (or Goda's pressure) that is zero on all of
   its loaded facets (refused), or a ``[profile]`` that only partly lies on them
   (warned), integrated on the mesh.
@@ -24,22 +26,23 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
 __all__ = ["SAMPLING_TOLERANCE", "face_problems", "profile_area",
-           "pulse_warning", "sampled_pulse"]
+           "pulse_warning", "sampled_pulse", "start_warning"]
 
 
 SAMPLING_TOLERANCE = 0.01
 """The impulse the steps sample may differ from the requested by this fraction."""
 
 
-def sampled_pulse(pulse: Pulse, dt: float, end_time: float, beta1: float
-                  ) -> tuple[float, float, int]:
+def sampled_pulse(pulse: Pulse, dt: float, end_time: float, beta1: float,
+                  in_state: bool = True) -> tuple[float, float, int]:
     """What the nominal steps (Δt, no cut-back) make of a pulse: impulse, peak, steps.
 
     GN22 evaluates the loads at the step ends t_n and its momentum update is
     M (v₁ − v₀) = Δt [(1 − β₁) M a₀ + β₁ M a₁], so the impulse a load gives is
     Σ Δt_n [(1 − β₁) f(t_n) + β₁ f(t_{n+1})] (the trapezoidal rule at β₁ = ½; Δt Σ f(t_n)
     at a constant step for a load zero at both ends). Only the steps near the pulse are
-    summed.
+    summed. A pulse left out of the initial state (``in_state`` False) is not in a₀: its
+    f(t₀) is 0 (:meth:`breakwater.stepping.gn22.GN22.initialise`).
 
     Returns:
         The impulse and the largest amplitude sampled (the pulse's own units), and the
@@ -49,15 +52,15 @@ def sampled_pulse(pulse: Pulse, dt: float, end_time: float, beta1: float
     first = max(0, math.floor(pulse.start / dt) - 1)
     last = min(steps, math.ceil(pulse.end / dt) + 1)
     times = [min(k * dt, end_time) for k in range(first, last + 1)]
-    values = [pulse(t) for t in times]
+    values = [pulse(t) if in_state or t > 0.0 else 0.0 for t in times]
     impulse = math.fsum((t1 - t0) * ((1.0 - beta1) * f0 + beta1 * f1) for t0, t1, f0, f1
                         in zip(times, times[1:], values, values[1:], strict=False))
     inside = sum(pulse.start < t < pulse.end for t in times)
     return impulse, max(values), inside
 
 
-def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: float
-                  ) -> tuple[str | None, dict[str, float]]:
+def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: float,
+                  in_state: bool = True) -> tuple[str | None, dict[str, float]]:
     """What the nominal steps make of a pulse, and a one-line warning if it is poor.
 
     A pulse ending after the end time is applied in part; one lasting fewer than
@@ -72,7 +75,7 @@ def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: fl
     if load.kind != "pulse" or not load.enabled:
         return None, {}
     pulse = load.pulse(1.0, 1.0)  # the impulse per unit length and area: ratios only
-    impulse, peak, inside = sampled_pulse(pulse, dt, end_time, beta1)
+    impulse, peak, inside = sampled_pulse(pulse, dt, end_time, beta1, in_state)
     ratio = impulse / pulse.impulse
     sampled = {"impulse_ratio": ratio, "peak_ratio": peak / pulse.maximum,
                "step_ends_inside": inside}
@@ -83,13 +86,40 @@ def pulse_warning(load: loadcase.LoadCase, dt: float, end_time: float, beta1: fl
     if load.duration >= RESOLVED_STEPS * dt and abs(ratio - 1.0) <= SAMPLING_TOLERANCE:
         return None, sampled
     needed = next((load.duration / k for k in range(RESOLVED_STEPS, 201)
-                   if abs(sampled_pulse(pulse, load.duration / k, end_time, beta1)[0]
+                   if abs(sampled_pulse(pulse, load.duration / k, end_time, beta1,
+                                        in_state)[0]
                           / pulse.impulse - 1.0) <= SAMPLING_TOLERANCE),
                   load.duration / 200)
     return (f"{where}: the pulse (duration {load.duration:g} s) spans {inside} step ends of "
             f"time.dt = {dt:g} s: the steps apply {100 * ratio:.3g}% of its impulse and "
             f"{100 * peak / pulse.maximum:.3g}% of its peak; time.dt <= {needed:.3g} s "
             f"samples it to {100 * SAMPLING_TOLERANCE:g}%"), sampled
+
+
+def start_warning(load: loadcase.LoadCase, in_state: bool, dt: float) -> str | None:
+    """A one-line warning for a load non-zero at t = 0 and left out of the initial state.
+
+    Such a load jumps at t = 0: the stepper's a₀ is that of the initial state (without
+    it), the first step's end has it, so it is applied over the first step (as any jump
+    between two step ends; :meth:`breakwater.stepping.gn22.GN22.initialise`). Meant as a
+    step load, that is what it does; a record or a push the user meant to start from
+    (its value at t = 0) belongs in the state. The warning says what is applied.
+    """
+    if not load.enabled or in_state or load.storm is not None:
+        return None
+    if load.kind == "pulse":
+        pulse = load.pulse(1.0, 1.0)
+        value = pulse(0.0) / pulse.maximum
+        what = f"its value at t = 0 is {100 * value:.3g}% of its peak"
+    else:
+        value = load.time_factor()(0.0)
+        what = f"its factor at t = 0 is {value:.4g}"
+    if value == 0.0:
+        return None
+    return (f"loads.{load.name}: {what}, and it is left out "
+            f"of [initial] loads: it jumps at t = 0, applied over the first step (time.dt = "
+            f"{dt:g} s); to start from it at rest, put it in [initial] loads, or give it a "
+            "start > 0 or a rise")
 
 
 PEAK_TOLERANCE = 0.05

@@ -147,8 +147,12 @@ class EnergyLedger:
                            - r.external_work)
         for a, b in self._copies:
             a[:] = b
-        for a0, ld in zip(self._amp0, m.loads, strict=True):
-            a0.value = ld.amplitude.value
+        # The start of the next step: the loads a₀ took at the start of the run (a load
+        # left out of the initial state is applied over the first step), else now.
+        start = s.start_amplitudes if first and t == s.start_time else \
+            [float(ld.amplitude.value) for ld in m.loads]
+        for a0, value in zip(self._amp0, start, strict=True):
+            a0.value = value
         self._t0 = t
         self._power0 = power
         return replace(r)

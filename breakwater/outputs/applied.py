@@ -20,7 +20,7 @@ The cost per step is a few multiplications per load. The sums live in the run st
 
 from __future__ import annotations
 
-from collections.abc import Mapping, MutableMapping
+from collections.abc import Mapping, MutableMapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -73,23 +73,34 @@ class AppliedLoads:
                           "peak": [0.0] * len(self.names),
                           "time_of_peak": [None] * len(self.names)})
 
-    def forces(self) -> np.ndarray:
+    def forces(self, amplitudes: Sequence[float] | None = None) -> np.ndarray:
         """The resultant force (N/m) of each case load at the loads' current amplitudes.
 
         A staged load's unit resultant is assembled again when its stage changed
         (collective: every rank sets the stages from the same time).
+
+        Args:
+            amplitudes: The model loads' amplitudes instead of their current ones.
         """
         for k in self._watch.changed():
             self.unit[k] = [self.model.assemble(f) for f in self._forms[k]]
-        amplitudes = np.array([float(ld.amplitude.value) for ld in self.model.loads])
-        return self.owner @ (amplitudes[:, None] * self.unit)
+        if amplitudes is None:
+            amplitudes = [float(ld.amplitude.value) for ld in self.model.loads]
+        return self.owner @ (np.asarray(amplitudes, dtype=float)[:, None] * self.unit)
 
-    def record(self, t: float) -> None:
-        """Add the step ending at ``t`` (the loads at their amplitudes there)."""
+    def record(self, t: float, amplitudes: Sequence[float] | None = None) -> None:
+        """Add the step ending at ``t`` (the loads at their amplitudes there).
+
+        Args:
+            t: The step's end.
+            amplitudes: The amplitudes the stepper took there, where not the loads'
+                current ones (the start of a run: a load left out of the initial state
+                is not in a₀, :meth:`breakwater.stepping.gn22.GN22.initialise`).
+        """
         st = self.state
         if not self.names:
             return
-        force = self.forces()
+        force = self.forces(amplitudes)
         if st["t"] is not None:
             dt = t - st["t"]
             f0 = np.array(st["force"])

@@ -58,7 +58,7 @@ def start(r: Session) -> None:
     r.stepped = x = Stepped(m, r.time, r.output, r.directory)
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
-    s.initialise(init.u, init.v)
+    s.initialise(init.u, init.v, m.initial.loads)  # a₀: the state's loads (f at 0⁻)
     if st.step.adaptive:
         adaptive_start(st.step, m, s.u)
     r.rows = out.open_history(x.monitor.columns)

@@ -176,7 +176,9 @@ class Session:
         row = self.stepped.record(dt, iterations)
         self.rows.append(row)
         if self.applied is not None:
-            self.applied.record(float(self.stepped.stepper.t.value))
+            s = self.stepped.stepper
+            t = float(s.t.value)
+            self.applied.record(t, s.start_amplitudes if t == s.start_time else None)
         return row
 
     def checkpoint(self) -> None:
