@@ -665,3 +665,32 @@ def test_a_waves_peak_from_its_history():
         return max(0.0, 1.0 - abs(τ - 1.5) / 1.5) * 4.0e4
 
     assert _peak(WaveLoad(Wave(1.0, 6.0), WAVE_1, triangle, triangle, 3.0)) == 4.0e4
+
+
+def test_storm_warning_names_an_under_resolved_impulse():
+    # The highest wave of examples/goda_storm.toml: Takahashi's triangular peak of
+    # τ₁ = 0.1 · T/2 = 0.07 s with its apex at T/4 = 0.35 s. At Δt = 0.05 s the apex is
+    # a step end and its neighbours 0.30 and 0.40 s lie outside the triangle (0.315 to
+    # 0.385 s): GN22's momentum rule applies Δt [(1 − β₁) + β₁] b = Δt b of the peak's
+    # ½ b τ₁, 2Δt/τ₁ = 143 % (closed form), and 1.4 steps span it. Δt = τ₁/10 = 0.007 s
+    # (RESOLVED_STEPS) is quiet (sampled to 1 %); Δt = 0.01 s, 7 steps, is not.
+    from breakwater.casefile.loadchecks import storm_warning
+    from breakwater.casefile.stormcase import StormCase
+
+    sc = StormCase(depth=0.32, toe_depth=0.13, berm_depth=0.13, crest_height=0.072,
+                   still_water_level=0.32, uplift_group="interface", impulsive=True,
+                   berm_width=0.1, waves=((0.18, 1.4),))
+    waves = sc.wave_loads(0.205)
+    line = storm_warning("wave", waves, 0.05, 1.4, 0.6)
+    assert line is not None and "\n" not in line
+    τ1 = 0.1 * 0.5 * 1.4
+    assert f"{100 * 2 * 0.05 / τ1:.3g}% of the impulse of wave 1's impulsive peak" in line
+    assert "spans 1.4 steps of time.dt = 0.05 s" in line and "time.dt <= 0.007 s" in line
+    assert storm_warning("wave", waves, 0.007, 1.4, 0.6) is None
+    assert "spans 7 steps" in (storm_warning("wave", waves, 0.01, 1.4, 0.6) or "")
+    # Without the peak (no berm: Goda's hump alone, τ₀ = 0.7 s) 0.05 s spans 14 steps.
+    plain = StormCase(depth=0.32, toe_depth=0.13, berm_depth=0.13, crest_height=0.072,
+                      still_water_level=0.32, uplift_group="interface", waves=((0.18, 1.4),))
+    assert storm_warning("wave", plain.wave_loads(0.205), 0.05, 1.4, 0.6) is None
+    coarse = storm_warning("wave", plain.wave_loads(0.205), 0.1, 1.4, 0.6)
+    assert "wave 1's force, 0.7 s" in (coarse or "")

@@ -6,6 +6,7 @@
   time, are refused by :meth:`LoadCase.check_time <breakwater.casefile.loads.LoadCase.check_time>`;
 - :func:`start_warning`: a load non-zero at t = 0 left out of the initial state (it
   jumps at t = 0, applied over the first step);
+- :func:`storm_warning`: a storm whose shortest impulse the steps do not resolve;
 - :func:`face_problems`: a pressure profile (or Goda's pressure) that is zero on all of
   its loaded facets (refused), or a ``[profile]`` that only partly lies on them
   (warned), integrated on the mesh.
@@ -14,19 +15,21 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from breakwater.casefile.loads import RESOLVED_STEPS
 from breakwater.loads.fields import PressureProfile
 from breakwater.loads.signals import Pulse
+from breakwater.storms.waveforce import PulseHistory
 
 if TYPE_CHECKING:
     from breakwater.casefile import loads as loadcase
     from breakwater.model.model import ContactModel
+    from breakwater.storms.waves import WaveLoad
 
 __all__ = ["SAMPLING_TOLERANCE", "face_problems", "profile_area",
-           "pulse_warning", "sampled_pulse", "start_warning"]
+           "pulse_warning", "sampled_pulse", "start_warning", "storm_warning"]
 
 
 SAMPLING_TOLERANCE = 0.01
@@ -157,6 +160,69 @@ def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | 
     return (f"loads.{load.name}.table: the steps of time.dt = {dt:g} s apply "
             f"{100 * got / peak:.3g}% of its peak (|factor| {peak:.4g}); time.dt <= "
             f"{needed:.3g} s samples it to {100 * PEAK_TOLERANCE:g}%")
+
+
+def storm_warning(name: str, waves: Sequence[WaveLoad], dt: float, end_time: float,
+                  beta1: float) -> str | None:
+    """A one-line warning where the steps do not resolve a storm's shortest impulse.
+
+    Each wave's p₁(t) is a sine hump of τ₀ with, under Takahashi's α_I, a triangular
+    impulsive peak of τ₁ = 0.1 τ₀ on top (:mod:`breakwater.storms.waveforce`), whose
+    impulse drives the sliding; the loads are evaluated at the step ends. Measured (found
+    by a user): the 70 ms peak of ``examples/goda_storm.toml`` at Δt = 0.05 s, its apex on
+    a step end, applied 143 % of the peak's impulse (the step ends either side of it
+    spread it over 2Δt = 100 ms) and twice the sliding of the resolved run, with no word.
+    The shortest impulse (a wave's τ₁, or τ₀ without a peak) must span
+    :data:`~breakwater.casefile.loads.RESOLVED_STEPS` steps and every wave's peak (or
+    hump) be applied to :data:`SAMPLING_TOLERANCE` of its impulse by GN22's momentum rule
+    (:func:`sampled_pulse`), as for pulses; the warning names the shortest impulse, the
+    worst-applied one, the step and the step that resolves the shortest.
+
+    Args:
+        name: The load's name.
+        waves: The storm's wave loads, in order.
+        dt: The step inside the waves (adaptive steps: the resolved one).
+        end_time: The run's end (s).
+        beta1: GN22's β₁ (the momentum rule).
+    """
+    if not waves:
+        return None
+    shortest, k = min((_impulse(w)[0], i) for i, w in enumerate(waves))
+    worst, ratio = 0, 1.0  # the wave whose impulse the steps apply worst
+    for i, w in enumerate(waves):
+        part = _impulse(w)[1]
+        if w.wave.start + w.duration > end_time:
+            continue
+        got = sampled_pulse(part, dt, end_time, beta1)[0] / part.impulse
+        if abs(got - 1.0) > abs(ratio - 1.0):
+            worst, ratio = i, got
+    if shortest >= RESOLVED_STEPS * dt * (1.0 - 1e-9) \
+            and abs(ratio - 1.0) <= SAMPLING_TOLERANCE:
+        return None
+    def what(w: WaveLoad) -> str:
+        return "impulsive peak" if _impulse(w)[0] < w.duration else "force"
+
+    return (f"loads.{name}.storm: the shortest impulse (wave {k + 1}'s {what(waves[k])}, "
+            f"{shortest:.3g} s, at t = {waves[k].wave.start:g} s) spans "
+            f"{shortest / dt:.3g} steps of time.dt = {dt:g} s, and the steps apply "
+            f"{100 * ratio:.3g}% of the impulse of wave {worst + 1}'s {what(waves[worst])}; "
+            f"time.dt <= {shortest / RESOLVED_STEPS:.3g} s resolves it "
+            f"({RESOLVED_STEPS} steps)")
+
+
+def _impulse(w: WaveLoad) -> tuple[float, Pulse]:
+    """A wave's shortest impulse: its peak's triangle (τ₁), else its hump (τ₀), as a Pulse.
+
+    The triangle (of Takahashi's excess, on the run's clock) or the hump as a
+    :class:`~breakwater.loads.signals.Pulse` of unit impulse, for :func:`sampled_pulse`
+    (a history other than :func:`~breakwater.storms.waveforce.wave_load`'s is taken as
+    a half-sine of the wave's duration).
+    """
+    p1 = w.p1
+    if isinstance(p1, PulseHistory) and p1.impulsive > 0.0:
+        start = w.wave.start + 0.5 * (p1.duration - p1.impulse_duration)
+        return p1.impulse_duration, Pulse(1.0, p1.impulse_duration, "triangular", start)
+    return w.duration, Pulse(1.0, w.duration, "half-sine", w.wave.start)
 
 
 COVERAGE_TOLERANCE = 0.01

@@ -13,9 +13,12 @@ import itertools
 from typing import TYPE_CHECKING, Any
 
 from breakwater.casefile.godaface import FRACTION_WARNING
+from breakwater.casefile.loadchecks import storm_warning
 from breakwater.common.errors import CaseError
 from breakwater.config.runspec import PairProbeSpec
 from breakwater.loads.fields import StagedField
+from breakwater.stepping.stepsize import resolved_step
+from breakwater.storms.stormload import WaveHistory
 
 if TYPE_CHECKING:
     from dolfinx.io import gmsh as gmshio
@@ -239,6 +242,12 @@ def storm_outputs(case: CaseSettings, data: gmshio.MeshData, load: LoadCase,
                       "front_force_per_p1": applied[k], "face_fraction": applied[k] / force,
                       "profile_fraction": spanned / whole})
     warnings += fraction_warnings(waves, forces, key)
+    t = case.time  # the step inside the waves (adaptive: the one that resolves them)
+    dt = resolved_step(t.dt, t.levels, WaveHistory(wave_loads, "p1").breakpoints) \
+        if t.adaptive else t.dt
+    unresolved = storm_warning(load.name, wave_loads, dt, t.end_time, t.beta1)
+    if unresolved is not None:
+        warnings.append(unresolved)
     capped = storm.capped(width)
     if capped is not None and capped[0]:
         warnings.append(f"{key}.sea: {capped[0]} of the {capped[1]} waves drawn exceed the "
