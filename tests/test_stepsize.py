@@ -243,3 +243,23 @@ def test_time_is_the_exact_sum_in_constant_time() -> None:
     data = dataclasses.asdict(step)
     del data["partials"]
     assert StepSize(**data).partials == step.partials
+
+
+def test_adaptive_steps_land_on_the_breakpoints() -> None:
+    # Breakpoints off the grid of the steps dt/2^k (a storm's impulsive peak at
+    # t_k + τ₀/2 of a drawn period): each is a step end, to round-off, as the end time
+    # is; the steps then go on from it. Without the landing, steps of 1/2^k from 0
+    # never meet 2.0123 (measured: the nearest step ends 2.0117 and 2.0156).
+    bp = [2.0, 2.0123, 2.0577, 2.1]
+    step = StepSize(dt=1.0, end_time=3.0, max_cutbacks=0, levels=8, tolerance=1e-2,
+                    breakpoints=bp)
+    times = []
+    while not step.finished:
+        step.propose()
+        step.judge(error=0.0, increment=1.0)
+        step.accept()
+        times.append(step.t)
+    for b in bp:
+        assert min(abs(t - b) for t in times) <= 1e-15 * b, b
+    assert step.t == 3.0
+    assert max(h for h in step.accepted) == 1.0  # large steps away from the loads
