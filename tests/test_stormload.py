@@ -249,6 +249,11 @@ def test_one_wave_equals_the_goda_load_with_its_table(stacked, folder, hand_wave
     for c in common:
         kind = "ledger" if c in FIELDS else "state"
         scale = energy if kind == "ledger" else max(np.abs(h2[c]).max(), 1e-300)
+        if c.endswith("_rotation"):
+            # The bodies' mean rotations here are 4e-9 rad (a block pushed, not turned):
+            # a column of Newton-tolerance noise; compared on 1e-6 rad, so 1e-12 rad
+            # (measured 5e-15 rad, 1.4e-6 of the column's own largest value).
+            scale = max(scale, 1e-6)
         worst[kind] = max(worst[kind], np.abs(h1[c] - h2[c]).max() / scale)
     if COMM.rank == 0:
         print(f"\nlargest relative differences of the history columns: {worst}")

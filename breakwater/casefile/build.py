@@ -38,7 +38,7 @@ from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
-from breakwater.statics.initial import velocity_conflict
+from breakwater.statics.initial import unsupported, velocity_conflict
 from breakwater.stepping.stepsize import resolved_step
 
 if TYPE_CHECKING:
@@ -176,6 +176,9 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
                 if any(b.initial_velocity) else None
             if why is not None:
                 raise CaseError(f"bodies.{b.name}.initial_velocity: {why}")
+        why = unsupported(model)
+        if why is not None:
+            raise CaseError(why)
     return model
 
 

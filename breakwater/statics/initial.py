@@ -85,7 +85,7 @@ from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiff
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
 __all__ = ["STICK_BAND", "InitialState", "initial_state", "initial_velocities",
-           "velocity_conflict"]
+           "unsupported", "velocity_conflict"]
 
 log = logging.getLogger("breakwater.statics.initial")
 
@@ -148,6 +148,44 @@ def _initial_loads(model: ContactModel) -> Iterator[None]:
 
 
 _AXES = "xyz"
+
+
+def unsupported(model: ContactModel) -> str | None:
+    """Why the static state cannot exist: a body held by nothing (None: every body is).
+
+    The bodies that contact pairs join form groups; a group none of whose bodies has a
+    ``[fixed]`` group is free to move as a whole, and has no static state under gravity
+    or the initial state's loads (its static Newton failed after 40 iterations, and the
+    run advised starting undeformed without saying why). With ``[initial] undeformed``
+    or nothing loading it, it starts at rest (a free body may then fall or be struck).
+    """
+    spec = model.initial
+    loaded = (spec.loads is None and bool(model.loads)) or bool(spec.loads)
+    if spec.undeformed or not (np.any(model.gravity.value) or loaded):
+        return None
+    group = list(range(len(model.bodies)))
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    links = [(p.slave, p.master) for p in model.pairs]
+    links += [(model.body(p.slave).index, model.body(p.master).index)
+              for p in model.surface_pairs]
+    for s, m in links:
+        group[root(s)] = root(m)
+    held = {root(b.index) for b in model.bodies if model.fixed_on(b.spec.name)}
+    for b in model.bodies:
+        if root(b.index) not in held:
+            touching = [o.spec.name for o in model.bodies
+                        if o is not b and root(o.index) == root(b.index)]
+            on = f" or on the bodies it touches ({', '.join(touching)})" if touching else ""
+            return (f"bodies.{b.spec.name}: the body is held by nothing: no [fixed] group on "
+                    f"it{on}, so it has no static state under gravity and the initial "
+                    "loads (add its contact pair or a [fixed] group, or start it at rest "
+                    "undeformed: [initial] undeformed = true)")
+    return None
 
 
 def velocity_conflict(model: ContactModel, body: str, velocity: Sequence[float]) -> str | None:
