@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,7 +60,14 @@ class InterfaceValues:
         dt: The step size constant.
         beta1: GN22 β₁.
         beta2: GN22 β₂.
+
+    Attributes:
+        slip_origin: A map of v₁ at the interface unknowns to the velocity the slip is
+            measured from (None: v₁ itself): the static relaxation's frictional stage
+            (:class:`breakwater.statics.pseudostep.SlipOrigin`); the dynamics never sets it.
     """
+
+    slip_origin: Callable[[np.ndarray], np.ndarray] | None = None
 
     def __init__(self, comm: MPI.Comm, layout: MonolithicLayout, interface: np.ndarray,
                  state: tuple[Sequence[fem.Function], Sequence[fem.Function],
@@ -158,10 +165,19 @@ class InterfaceValues:
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """u₀, u₁ and v₁ of the step at the interface unknowns (every rank; a trailing 0).
 
+        v₁ through :attr:`slip_origin` where it is set (a general pair's every use of
+        v₁ is its slip: the friction, the slip guard and memory, the round-off).
+
         Args:
             y: Δa at the interface unknowns; None: read from the Δa Functions.
             accepted: The accepted state instead: u₀ = u₁ = u, v₁ = v.
         """
+        u0, u1, v1 = self._kinematics(y, accepted)
+        return (u0, u1, v1) if self.slip_origin is None else (u0, u1, self.slip_origin(v1))
+
+    def _kinematics(self, y: np.ndarray | None, accepted: bool
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_state` without :attr:`slip_origin`."""
         if accepted:
             if self._accepted is not None:
                 return self._accepted

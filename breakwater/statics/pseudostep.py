@@ -16,24 +16,33 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 from collections.abc import Iterator, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
 
-__all__ = ["GROWTH", "RATIO", "PseudoStepper"]
+if TYPE_CHECKING:
+    from breakwater.contact.surfacesearch import SurfaceSearch
+
+__all__ = ["GROWTH", "LANDING", "RATIO", "PseudoStepper", "SlipOrigin"]
 
 RATIO = 1e4
 """c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
 
 GROWTH = 100.0
 """Growth of c per step (while the increments stay below a tenth of the search radius)."""
+
+LANDING = 10.0
+"""Search radii within which :meth:`SlipOrigin.reference_gaps` finds a landing point: the
+farthest a relaxation's stage lets a body fall (``MAX_STEPS`` steps of a tenth of one)."""
 
 
 class PseudoStepper:
@@ -77,6 +86,7 @@ class PseudoStepper:
         self.solver = solver
         solver.consistent = True
         self.providers = self.stepper.surfaces
+        self._origins = [SlipOrigin(p) for p in self.providers]
         self._vecs = (solver.layout.vec.duplicate(), solver.layout.vec.duplicate())
         # The step in defect form (:meth:`start`): f_c at the step's start taken out of
         # the contact forces and put into the load.
@@ -143,6 +153,9 @@ class PseudoStepper:
             v.x.array[:] = kv * u.x.array
             a.x.array[:] = ka * u.x.array
             d.x.array[:] = 0.0
+        for p, origin in zip(self.providers, self._origins, strict=True):
+            # The slip v = u/τ from the landing point, not from the meshed position.
+            p.slip_origin = origin.at(τ) if frictional else None
         self._defect()
 
     def _defect(self) -> None:
@@ -203,6 +216,65 @@ class PseudoStepper:
     def add_slave_velocities(self, v: list[fem.Function], y: np.ndarray) -> None:
         """V += y, y given at the interface unknowns (every entry this rank holds)."""
         self.solver.interface.add(v, y)
+
+
+class SlipOrigin:
+    """The frictional stage's slip measured from the landing point (a pair's ``slip_origin``).
+
+    The stage's law acts on the total slip over the pseudo time τ, v = u/τ: at a slave
+    node, ``(u_k − ū_m)/τ`` along the master's tangent. A body meshed a gap g₀ n̄ above
+    its support closes it as it lands, u_k − ū_m = −g₀ n̄ + the slip: where the load
+    turns the support's tangent t by θ, the fall counted as a slip g₀θ (found by a user:
+    a block meshed 1 cm above a base with E = 1e9 Pa, θ up to 2e-6 rad at its corners,
+    fell 70 χτ "along" the tangent: the state carried a net friction of 5.5e-3 of its
+    weight, measured on it unbalanced). The slip is measured from the landing point:
+    ``v₁ + d_k/τ``, d_k the node's separation from the master as meshed along its
+    normal there (:meth:`reference_gaps`). Nil (round-off) for bodies meshed in contact
+    along a flat interface.
+
+    Args:
+        pair: The general pair.
+    """
+
+    def __init__(self, pair: SurfaceSearch) -> None:
+        self.pair = pair
+        self._gaps: np.ndarray | None = None
+        self._offset = np.zeros(pair.n + 1)
+        self._τ: float | None = None
+        self._kept: tuple[np.ndarray, np.ndarray] | None = None  # (v₁, v₁ + offset)
+
+    def reference_gaps(self) -> np.ndarray:
+        """Per slave node, ``((X_k − X̄)·n̄) n̄``, ``(nodes, 2)``.
+
+        X̄ the closest point of the master surface as meshed (a node beyond its end:
+        the nearest end), n̄ its normal there, within :data:`LANDING` search radii
+        (farther: 0, no landing point).
+        """
+        if self._gaps is None:
+            p = self.pair
+            X, mX = p.node_X, np.ascontiguousarray(p.master.X, dtype=float)
+            facet, N0, t0, _ = searchkernels.frozen(X, mX, mX, LANDING * p.radius)
+            d = X - np.einsum("kn,knd->kd", N0, mX[np.maximum(facet, 0)])
+            n = np.stack([t0[:, 1], -t0[:, 0]], axis=1)
+            self._gaps = np.where((facet >= 0)[:, None], np.sum(d * n, axis=1)[:, None] * n,
+                                  0.0)
+        return self._gaps
+
+    def at(self, τ: float) -> SlipOrigin:
+        """Set for the pseudo time τ (of the step being started); self returned."""
+        if τ != self._τ:
+            pos = self.pair.node_pos
+            keep = pos >= 0
+            self._offset[pos[keep]] = self.reference_gaps()[keep] / τ
+            self._τ, self._kept = τ, None
+        return self
+
+    def __call__(self, v1: np.ndarray) -> np.ndarray:
+        """v₁ + d/τ at the slave nodes' unknowns (the same array for the same v₁)."""
+        kept = self._kept
+        if kept is None or kept[0] is not v1:
+            self._kept = kept = (v1, v1 + self._offset)
+        return kept[1]
 
 
 class _Offset:

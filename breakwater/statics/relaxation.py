@@ -70,6 +70,9 @@ stages 1 and 1b first:
    at c_max; smaller c give a smaller τ, a narrower stick band, until c settles). The
    slave nodes in contact then start with that slip velocity (the law's creep, a
    fraction of χ), so that the friction of the static state is carried at t = 0.
+   The slip is measured from the landing point, not from the meshed position
+   (:class:`~breakwater.statics.pseudostep.SlipOrigin`): a body meshed above its
+   support does not count its fall as slip.
 3. **Held** (stage 2 fails, or no friction): every pair's friction coefficient is
    raised to :data:`HELD_FRICTION` for the relaxation (the bodies are held in place up
    to t = 0); a warning names each body whose pair carries a tangential resultant
