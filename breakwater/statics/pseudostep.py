@@ -32,13 +32,16 @@ from breakwater.stepping.solver import NewtonOptions
 if TYPE_CHECKING:
     from breakwater.contact.surfacesearch import SurfaceSearch
 
-__all__ = ["GROWTH", "LANDING", "RATIO", "PseudoStepper", "SlipOrigin"]
+__all__ = ["FALL", "GROWTH", "LANDING", "RATIO", "PseudoStepper", "SlipOrigin"]
 
 RATIO = 1e4
 """c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
 
 GROWTH = 100.0
 """Growth of c per step (while the increments stay below a tenth of the search radius)."""
+
+FALL = 0.1
+"""A body that starts apart moves this fraction of the search radius per step at c₀."""
 
 LANDING = 10.0
 """Search radii within which :meth:`SlipOrigin.reference_gaps` finds a landing point: the
@@ -72,7 +75,7 @@ class PseudoStepper:
         self.c_max = RATIO / _lowest_frequency_squared(m)
         g = float(np.linalg.norm(m.gravity.value))
         self.reach = _reach(m)
-        self.c0 = min(self.c_max, 0.1 * self.reach / g) if g > 0 else self.c_max / GROWTH**2
+        self.c0 = min(self.c_max, FALL * self.reach / g) if g > 0 else self.c_max / GROWTH**2
         self.β2 = GN22Parameters().beta2
         friction = _pair_friction(m)
         self.has_friction = any(μ > 0 for μ, _, _ in friction)
@@ -134,10 +137,17 @@ class PseudoStepper:
                 law.μ.value, law.χ.value = μ0, χ0
 
     def start(self, c: float, frictional: bool) -> None:
-        """The GN22 start of a step from u_k (in ``u``): v₀, a₀ and Δa = 0.
+        """The GN22 start of a step from u_k (in ``u``): v₀, a₀ and Newton's start Δa₀.
 
         Frictionless: at rest. Frictional: ``c a₁ = u₁ − u_k`` and ``v₁ = u₁/τ_c``
         with τ_c = ½β₂Δτ/β₁ (the derivatives of u₁ and v₁ in Δa are c and β₁Δτ).
+        Newton starts at u₁ = u_k (Δa₀ = −a₀), whose residual is the static residual
+        there (in defect form, :meth:`_defect`). It started at GN22's predictor Δa₀ = 0:
+        u₁ = u_k + c a₀, a move of the size of u_k itself (for a body meshed apart, its
+        fall), whose residual (1e8–1e10 N/m after a fall of 0.01–0.4 m) let the Newton's
+        relative test accept iterates 0.2 N/m off balance: a block landed from 0.39 m
+        kept 2e-5 of its weight in net friction, and from 5 cm its state differed from
+        the one meshed in contact by 2e-5 of its displacements (now 1e-9).
         """
         s = self.stepper
         Δτ = np.sqrt(2 * c / self.β2)
@@ -152,14 +162,14 @@ class PseudoStepper:
         for u, v, a, d in zip(s.u, s.v, s.a, s.da, strict=True):
             v.x.array[:] = kv * u.x.array
             a.x.array[:] = ka * u.x.array
-            d.x.array[:] = 0.0
+            d.x.array[:] = -a.x.array
         for p, origin in zip(self.providers, self._origins, strict=True):
             # The slip v = u/τ from the landing point, not from the meshed position.
             p.slip_origin = origin.at(τ) if frictional else None
         self._defect()
 
     def _defect(self) -> None:
-        """The staged step in defect form: f_c(Δa = 0) moved from f_c into the load.
+        """The staged step in defect form: f_c at Newton's start moved into the load.
 
         The step's residual is unchanged, but its parts are not: the predictor's residual
         becomes the static residual at the start, f − K u − f_c(u) (small near the
@@ -174,9 +184,12 @@ class PseudoStepper:
         offset = solver.bulk.offset
         assert offset is not None
         self._offset.f0[:] = 0.0
+        x, _ = self._vecs
+        solver.layout.assign(self.stepper.da, x)
+        (y0,) = solver.interface.gather(x.array)  # Newton's start
         solver.contact.begin()
         try:
-            f0 = solver.contact.vector(np.zeros(solver.n))
+            f0 = solver.contact.vector(y0)
         finally:
             solver.contact.end()
         self._offset.f0[:] = f0
@@ -203,15 +216,33 @@ class PseudoStepper:
         self.steps += 1
         return self._max(x.array), y.norm() / c
 
+    def gaps(self) -> list[float]:
+        """Per general pair, the smallest normal gap of its slave nodes now (collective).
+
+        Along the master's normal at each node's closest point within :data:`LANDING`
+        search radii (a node beyond the master's end is left out); inf: none there. The
+        same on every rank (the pair's gathered state).
+        """
+        out = []
+        for p in self.providers:
+            u = p.interface_values(self.stepper.u)
+            x = p.node_X + u[p.node_pos]
+            xm = np.ascontiguousarray(p.master.X + u[p.pos_m], dtype=float)
+            facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius)
+            d = x - np.einsum("kn,knd->kd", N0, xm[np.maximum(facet, 0)])
+            gap = d[:, 0] * t[:, 1] - d[:, 1] * t[:, 0]
+            out.append(float(gap[on & (facet >= 0)].min(initial=np.inf)))
+        return out
+
     def _max(self, x: np.ndarray) -> float:
         return float(self.model.comm.allreduce(np.abs(x).max(initial=0.0), op=MPI.MAX))
 
     def rest(self) -> None:
-        """The state of the last step at its solution: a₁ = 0, u₁ = u_k, v₁ = u_k/τ."""
-        s = self.stepper
+        """The state of the last step at its solution: a₁ = 0, u₁ = u_k, v₁ = u_k/τ.
+
+        (A frictional step's start, :meth:`start`.)
+        """
         self.start(self.c, True)
-        for a, d in zip(s.a, s.da, strict=True):
-            d.x.array[:] = -a.x.array
 
     def add_slave_velocities(self, v: list[fem.Function], y: np.ndarray) -> None:
         """V += y, y given at the interface unknowns (every entry this rank holds)."""

@@ -18,7 +18,12 @@ contracts by 1/(1 + cω²) per step. c grows ×:data:`GROWTH` per step, up to
 lowest frequencies), from ``c₀ = 0.1 r/|g|`` (r the contact search radius, or the
 interface facet length), so that a body that starts apart moves at most a tenth of the
 search radius per step and cannot fall through its support; c grows only while the
-increments stay below that. Converged when the static residual at the new iterate,
+increments stay below half that. A step in which a pair's gap closes by more than half
+the increment (a body falling onto its support) is progress: neither a stalled step nor
+one of :data:`MAX_STEPS`, so that a body lands from up to
+:data:`~breakwater.statics.pseudostep.LANDING` search radii (before, a stage failed
+after :data:`STALL` steps of free fall: a block meshed more than half a facet above its
+support had "no static equilibrium"). Converged when the static residual at the new iterate,
 ``‖M (u − u_k)‖/c``, is below the tolerance (``[initial] tolerance``, default
 :data:`TOLERANCE`: a time step's Newton tolerance) times the load norm ‖f‖; the steps'
 Newton converges to it too, or stalls at its round-off below :data:`FLOOR` times the
@@ -33,7 +38,9 @@ whatever the penalty: the bulk balances the interface Newton's iterate
 state of the non-matching patch test was off by 4.3e-8 p in σ at ε_n = 1e10 and 4.8e-5 p
 at 1e12, in the block held by contact: the Newton's residual G, measured in force by
 the Schur complement, which is only the mass along the block's rigid modes, left
-A_BI G in its bulk rows), and each step starts in defect form (the contact forces at
+A_BI G in its bulk rows), each step's Newton starts at u₁ = u_k (not at GN22's
+predictor, a move of the size of u_k: :meth:`~breakwater.statics.pseudostep.PseudoStepper.
+start`), and each step starts in defect form (the contact forces at
 its start moved into the load, :meth:`~breakwater.statics.pseudostep.PseudoStepper.
 start`: the predictor's residual is then the static residual itself).
 
@@ -90,9 +97,9 @@ stages 1 and 1b first:
    would keep (1 − β₁)Δt times the difference as a velocity error).
 
 If even the held state does not relax (a body that starts too far from its support to
-land within the relaxation: it falls by at most a tenth of the search radius per step
-and a stage stops after :data:`STALL` steps without progress; a body pulled off its
-support), there is no static state: an error (:class:`~breakwater.common.errors.
+land within the relaxation, more than :data:`~breakwater.statics.pseudostep.LANDING`
+search radii: the error says so and how far; a body pulled off its support), there is
+no static state: an error (:class:`~breakwater.common.errors.
 ConvergenceError`) that names ``[initial] undeformed``, the key that starts the run from
 the undeformed state at rest (:func:`breakwater.statics.initial.initial_state`). Before,
 the run went on from the undeformed state with one warning.
@@ -120,7 +127,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common.errors import ConvergenceError
 from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.model.model import ContactModel, Damping
-from breakwater.statics.pseudostep import GROWTH, RATIO, PseudoStepper
+from breakwater.statics.pseudostep import FALL, GROWTH, LANDING, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
 __all__ = ["FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
@@ -168,8 +175,12 @@ class _Result:
 def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
     """Relax from the undeformed state (a 1e-9 m penetration along gravity).
 
-    c grows ×:data:`GROWTH` per step up to c_max while the increments stay below a tenth
-    of the search radius; a failed step after a grown one is retried at a tenth of it.
+    c grows ×:data:`GROWTH` per step up to c_max while the increments stay below half
+    the free fall's at c₀ (:data:`~breakwater.statics.pseudostep.FALL` search radius); a
+    failed step after a grown one is retried at a tenth of it. A step in which some
+    pair's gap closes by more than half the increment (a body falling onto its support)
+    is progress: it is not counted as a stalled step nor in :data:`MAX_STEPS`; a body
+    lands from at most :data:`~breakwater.statics.pseudostep.LANDING` search radii.
 
     Raises:
         ConvergenceError: A step's Newton failed, or the increments do not vanish.
@@ -183,9 +194,13 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
         slaves |= {p.slave for p in m.pairs}
         for i in slaves:
             s.u[i].x.array.reshape(-1, m.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
-    c, its, history = ps.c0, 0, []
+    c, its = ps.c0, 0
+    history: list[tuple[float, float]] = []  # (c, max|Δu|) of the steps since progress
     solved = 0.0  # c of the last solved step
-    for k in range(1, MAX_STEPS + 1):
+    gaps = ps.gaps()
+    k = falls = 0  # steps, and those of a fall (not counted in MAX_STEPS)
+    while k - falls < MAX_STEPS and falls < LANDING / FALL:
+        k += 1
         ps.start(c, frictional)
         try:
             its += s.solve()
@@ -207,17 +222,39 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
         if residual <= ps.tolerance * ps.scale:
             ps.c = c
             return _Result([u.x.array.copy() for u in s.u], k, its)
+        before, gaps = gaps, ps.gaps()
+        if any(0 < g0 and g0 - g1 > 0.5 * inc for g0, g1 in zip(before, gaps, strict=True)):
+            # A body falling onto its support (its gap closes by the increment): progress.
+            falls += 1
+            history.clear()
+            continue
         history.append((c, inc))
         same = history[-STALL - 1:]
         if len(same) > STALL and all(h[0] == c for h in same) and inc > 0.5 * same[0][1]:
             break
-        if inc < 0.1 * ps.reach:
+        if inc < 0.5 * FALL * ps.reach:
+            # Not at c₀'s free fall (FALL r per step: whether it is below FALL r is
+            # round-off, which differed between serial and 2 ranks).
             c = min(c * GROWTH, ps.c_max)
     left = residual / ps.scale
     why = (f"; its residual stalled at {left:.1e} of the load, above [initial] tolerance = "
            f"{ps.tolerance:g}: raise it if that is round-off" if left < 1e-6 else "")
     raise ConvergenceError(f"relaxation: no static state (max|Δu| = {inc:.3e} m after "
-                           f"{k} steps{why})", -1, its)
+                           f"{k} steps{why}{_open(ps, gaps)})", -1, its)
+
+
+def _open(ps: PseudoStepper, gaps: list[float]) -> str:
+    """The pairs still open at a failed stage's end, and how far (for its message)."""
+    out = []
+    for p, gap in zip(ps.providers, gaps, strict=True):
+        if gap > 0:
+            reach = LANDING * p.radius
+            where = (f"{gap:.3g} m from" if np.isfinite(gap) else
+                     f"farther than {reach:.3g} m ({LANDING:g} search radii) from")
+            out.append(f"'{p.spec.slave}' still {where} its master surface on "
+                       f"'{p.spec.name}' (the relaxation lands a body from at most "
+                       f"{reach:.3g} m: mesh it closer to its support)")
+    return "; " + "; ".join(out) if out else ""
 
 
 def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
