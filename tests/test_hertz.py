@@ -105,7 +105,7 @@ def hertz_run(path: pathlib.Path, fine: float, comm: MPI.Comm = COMM) -> dict[st
     assert nodal.weights is not None
     return {"b": float(b), "p_max": float(p.max()), "force": float(force[1]),
             "h": fine * B, "nodes_x": nodal.X[:, 0], "nodes_p": field["pressure"],
-            "field_integral": float(nodal.weights @ field["pressure"]),
+            "field_integral": float(nodal.weights @ field["pressure_dual"]),
             "integral": float(state["pressure"] @ state["weight"])}
 
 
@@ -151,7 +151,8 @@ def _nodal_pressure(r: dict[str, Any]) -> None:
     """The slave nodes' pressure field (static.npz, contact_<name>.bp) against Johnson's
     p(x) = p₀ sqrt(1 − x²/b²) (§4.2; x the nodes' reference abscissa, as the linear
     theory's, b and p₀ the reference's): within 3 % of p₀ over |x| < 0.9 b, the node
-    on the axis within 2 % of p₀; its integral Σ_k p_k ∫N_k is the residual's ∫p to
+    on the axis within 2 % of p₀; the unclipped projection's integral Σ_k p_k ∫N_k
+    (``pressure_dual``: ``pressure`` is it where positive) is the residual's ∫p to
     round-off. In the current abscissa the slave surface's tangential displacement
     (1.25 % of b inward at the edge) shortens the contact by as much: that is the
     −1.6 % of the b measured on the integration points' current positions."""
