@@ -52,6 +52,12 @@ WEIGHT = ρ * G * W * H      # N/m
 P = 1e3                     # Pa: the uniform pressure
 
 
+def _bodies(*names: str) -> str:
+    """The case file's [bodies.<name>] tables, each of the tests' material."""
+    return "".join(f"[bodies.{b}]\ndensity = {ρ}\npoisson = {ν}\nyoung_modulus = {E}\n"
+                   for b in names)
+
+
 def _run(case: pathlib.Path, out: pathlib.Path) -> dict:
     assert cli.main(["run", str(case), "--out", str(out), "--quiet", "--no-progress"]) == 0
     with open(out / "summary.json", encoding="utf-8") as f:
@@ -69,15 +75,7 @@ def pinned(folder: pathlib.Path) -> pathlib.Path:
     if COMM.rank == 0:
         case.write_text(f'''name = "pinned"
 mesh.source = "{mesh}"
-[bodies.base]
-density = {ρ}
-poisson = {ν}
-young_modulus = {E}
-[bodies.block]
-density = {ρ}
-poisson = {ν}
-young_modulus = {E}
-[contact.c]
+{_bodies("base", "block")}[contact.c]
 slave = "block"
 master = "base"
 slave_surface = "block_bottom"
@@ -298,15 +296,7 @@ def test_weight_on_a_slope_is_the_blocks(shared_dir: pathlib.Path, friction: flo
         (shared_dir / "incline.toml").write_text(f'''name = "incline"
 gravity = [0.0, -9.81]
 mesh.source = "incline.geo"
-[bodies.block]
-density = {ρ}
-poisson = {ν}
-young_modulus = {E}
-[bodies.slope]
-density = {ρ}
-poisson = {ν}
-young_modulus = {E}
-[calibration]
+{_bodies("block", "slope")}[calibration]
 enabled = false
 [fixed.slope_bottom]
 [contact.sliding]
@@ -344,15 +334,10 @@ def test_a_stack_of_three_bodies_meshed_apart(shared_dir: pathlib.Path) -> None:
                        Rectangle("lower", -0.1, 0.0, 0.2, 0.08, 10, 4),
                        Rectangle("upper", -0.05, 0.08, 0.14, 0.06, 10, 4)], order=2)
     if COMM.rank == 0:
-        bodies = "".join(f"""[bodies.{b}]
-density = {ρ}
-poisson = {ν}
-young_modulus = {E}
-""" for b in ("base", "lower", "upper"))
         (shared_dir / "stack.toml").write_text(f'''name = "stack"
 gravity = [0.0, -9.81]
 mesh.source = "{mesh}"
-{bodies}[calibration]
+{_bodies("base", "lower", "upper")}[calibration]
 enabled = false
 [fixed.base_bottom]
 [contact.c1]

@@ -46,6 +46,18 @@ G = 9.81
 MATERIAL = Material(density=2000.0, poisson=0.25, young_modulus=1e9)
 
 
+def _two_blocks(path: pathlib.Path) -> GN22:
+    """A GN22 stepper of a 1 x 0.5 block on a base of its size, meshed apart (4 x 2 cells
+    each, a general pair of ε_n = 1e10), the base fixed at its bottom."""
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10)
+    mesh = rectangles(path, COMM, [Rectangle("base", 0.0, -0.5, 1.0, 0.5, 4, 2),
+                                   Rectangle("block", 0.0, 0.0, 1.0, 0.5, 4, 2)])
+    model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
+                                                 Body("block", MATERIAL)],
+                         fixed=[Fixed("base_bottom")], surface_pairs=[pair])
+    return GN22(model, 1e-3)
+
+
 def _provider(stepper: GN22) -> SurfaceContact:
     provider = stepper.surfaces[-1]
     assert isinstance(provider, SurfaceContact)
@@ -59,15 +71,8 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
     measured along the current normal of the master line y = θx, (−θ(X + d) − δ)/
     sqrt(1 + θ²), which differs from the conforming (u_s − u_m)·n = −δ − θX by θd
     (second order: a rotation times a slip)."""
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10)
-    mesh = rectangles(shared_dir / "match.msh", COMM,
-                      [Rectangle("base", 0.0, -0.5, 1.0, 0.5, 4, 2),
-                       Rectangle("block", 0.0, 0.0, 1.0, 0.5, 4, 2)])
-    model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
-                                                 Body("block", MATERIAL)],
-                         fixed=[Fixed("base_bottom")], surface_pairs=[pair])
-    stepper = GN22(model, 1e-3)
-    contact = _provider(stepper)
+    stepper = _two_blocks(shared_dir / "match.msh")
+    contact, model = _provider(stepper), stepper.model
     base, block = stepper.u
     θ, d, δ = 1e-3, 2e-3, 1e-5
     base.interpolate(lambda x: np.stack([-θ * x[1], θ * x[0]]))
@@ -96,8 +101,8 @@ def test_matching_meshes_give_the_conforming_definitions(shared_dir: pathlib.Pat
     # no pressure; its gap is measured to X̄₀ = (1, 0), on the same line.
     past = nodes.X[:, 0] + d > 1.0
     assert past.sum() == 1
-    np.testing.assert_allclose(state["law_pressure"],
-                               np.where(past, 0.0, pair.penalty * -state["gap"]), rtol=1e-12)
+    np.testing.assert_allclose(state["law_pressure"], np.where(
+        past, 0.0, contact.spec.penalty * -state["gap"]), rtol=1e-12)
     # The nodal pressure field: ∫ p_h = Σ_k p_k ∫N_k is the residual's ∫ p (round-off),
     # and where p is linear over a node's facets of equal length (every node but the
     # two ends and the one past the master's end, whose facet the pressure leaves)
@@ -127,14 +132,7 @@ def test_a_negative_dual_pressure_is_not_shown_as_a_pressure(shared_dir: pathlib
     projection, not a tension (the law ε_n⟨−g_n⟩₊ has none): ``pressure`` is 0 there
     (the law at the node, open), the raw value is ``pressure_dual``, whose ∫ is still
     the residual's (round-off)."""
-    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10)
-    mesh = rectangles(shared_dir / "tilt.msh", COMM,
-                      [Rectangle("base", 0.0, -0.5, 1.0, 0.5, 4, 2),
-                       Rectangle("block", 0.0, 0.0, 1.0, 0.5, 4, 2)])
-    model = ContactModel(read_mesh(mesh, COMM), [Body("base", MATERIAL),
-                                                 Body("block", MATERIAL)],
-                         fixed=[Fixed("base_bottom")], surface_pairs=[pair])
-    stepper = GN22(model, 1e-3)
+    stepper = _two_blocks(shared_dir / "tilt.msh")
     contact = _provider(stepper)
     θ, X_e = 1e-4, 0.625
     stepper.u[1].interpolate(lambda x: np.stack([0 * x[0], -θ * (x[0] - X_e)]))
