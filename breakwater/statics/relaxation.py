@@ -127,6 +127,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common.errors import ConvergenceError
 from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.model.model import ContactModel, Damping
+from breakwater.model.pairs import SurfacePair
 from breakwater.statics.pseudostep import FALL, GROWTH, LANDING, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
@@ -292,12 +293,15 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
                 force += forms.surface_traction(ld.traction, dc, ld.ds)
         ext = m.assemble(m.form(force))
         mass = m.assemble(m.form(b.ρ * b.dx))
-        slaves = [p for p in ps.providers if m.body(p.spec.slave).index == i]
-        # At first the held state's pressure with the friction of sliding against d.
+        # Its pairs (a master that slides on a fixed slave counts the pair's force
+        # with the sign reversed), at first the held state's pressure with the
+        # friction of sliding against d.
+        slaves = [(p, 1.0 if m.body(p.spec.slave).index == i else -1.0)
+                  for p in ps.providers if m.body(_moving(m, p.spec)).index == i]
         contact = 0.0
-        for p in slaves:
+        for p, sign in slaves:
             normal, _ = p.resultants(accepted=True)
-            contact += float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
+            contact += sign * float(normal @ d) - p.spec.friction * float(np.linalg.norm(normal))
         bodies.append([i, d, ext, mass, slaves, (ext + contact) / mass])
     with ps.friction(None):
         for k in range(1, MAX_STEPS + 1):
@@ -309,7 +313,8 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
             its += s.solve()
             for body in bodies:
                 i, d, ext, mass, slaves, _ = body
-                contact = sum(float(p.resultant(accepted=False) @ d) for p in slaves)
+                contact = sum(sign * float(p.resultant(accepted=False) @ d)
+                              for p, sign in slaves)
                 body[5] = (ext + contact) / mass
             inc, residual = ps.advance(c)
             log.debug("sliding step %d: max|Δu| = %.3e m, residual %.3e, α = %s", k, inc,
@@ -355,15 +360,17 @@ def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
         N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
         μ = p.spec.friction
         if T - μ * N > 1e-6 * max(N, T):
+            body = _moving(ps.model, p.spec)
             if ps.model.comm.rank == 0:
                 log.warning("initial state: body '%s' cannot be held by friction on '%s' "
                             "(tangential force %.4g N/m, μN = %.4g N/m): held in place up "
-                            "to t = 0 and released at t = 0", p.spec.slave, p.spec.name,
-                            T, μ * N)
-            index = ps.model.body(p.spec.slave).index
-            sliding[index] = sliding.get(index, 0.0) - friction
-            if p.spec.slave not in out:
-                out.append(p.spec.slave)
+                            "to t = 0 and released at t = 0", body, p.spec.name, T, μ * N)
+            index = ps.model.body(body).index
+            # Against the friction on it (the master's is the slave's, reversed).
+            sign = 1.0 if body == p.spec.slave else -1.0
+            sliding[index] = sliding.get(index, 0.0) - sign * friction
+            if body not in out:
+                out.append(body)
     if not out:  # the conforming pairs' bodies (not checked one by one)
         for pair in ps.model.pairs:
             body = ps.model.bodies[pair.slave].spec.name
@@ -373,6 +380,19 @@ def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
                             body, pair.spec.interface)
             out.append(body)
     return out, sliding
+
+
+def _moving(model: ContactModel, spec: SurfacePair) -> str:
+    """The body of a pair that slides when released (:func:`_held`).
+
+    Its slave, or its master when the slave is fixed and the master is not (roles
+    swapped: a block as the master surface of a fixed base's slave surface; before, the
+    base was released and the block kept the held state's shear: a block on a 30°
+    slope slid 2.9 % too far).
+    """
+    if model.fixed_on(spec.slave) and not model.fixed_on(spec.master):
+        return spec.master
+    return spec.slave
 
 
 def _release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Function]
@@ -387,9 +407,12 @@ def _release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Func
     ps.rest()
     y = np.zeros(ps.solver.n)
     for p in ps.providers:
-        d = sliding.get(ps.model.body(p.spec.slave).index)
+        body = _moving(ps.model, p.spec)
+        d = sliding.get(ps.model.body(body).index)
         if d is None:
             continue
+        if body != p.spec.slave:  # the slave's slip relative to a sliding master
+            d = -d
         pos, v_T = p.slip_velocities()
         size = np.linalg.norm(v_T, axis=1)[:, None]
         keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
