@@ -14,6 +14,7 @@ its warning named 'base') and left the block in the held state's shear: the bloc
 from __future__ import annotations
 
 import csv
+import json
 import math
 import pathlib
 
@@ -111,3 +112,24 @@ def test_swapped_roles_block_slides_as_rigid(folder: pathlib.Path,
     assert slide == pytest.approx(reference, rel=1e-4)
     if COMM.rank == 0:
         assert "body 'block' cannot be held by friction on 'sliding'" in printed.err + printed.out
+
+
+
+def test_swapped_roles_static_state_of_the_example(folder: pathlib.Path) -> None:
+    """The sliding block example (examples/sliding_block) with the pair's roles swapped
+    (the fixed base's top the slave surface): the static state exists and the pair
+    carries the block's weight ρ g A (vertical equilibrium, exact for the FE solution;
+    1e-6 covers the relaxation's tolerance). The relaxation gave its first 1e-9 m along
+    g to the pair's slave, here the fixed base (its Dirichlet entries too), and the
+    steps drifted by 4.9e-11 m growing 4 % a step: "no static equilibrium"."""
+    example = pathlib.Path(__file__).parents[1] / "examples" / "sliding_block"
+    out = folder / "example_swapped"
+    swap = {"slave": "base", "master": "block", "slave_surface": "base_top",
+            "master_surface": "block_bottom"}
+    sets = [a for k, v in swap.items() for a in ("--set", f'contact.sliding.{k}="{v}"')]
+    assert cli.main(["run", str(example / "sliding_block.toml"), "--out", str(out), "--quiet",
+                     "--no-progress", "--set", "time.end_time=0.002", *sets]) == 0
+    static = json.loads((out / "summary.json").read_text())["static"]
+    weight = 2314.0 * g * 0.2 * 0.1
+    assert static["weight"] == pytest.approx(weight, rel=1e-12)
+    assert static["contact_resultant"] == pytest.approx(weight, rel=1e-6)

@@ -100,13 +100,15 @@ def edge_centre(x: np.ndarray, pressure: np.ndarray | None = None) -> tuple[int,
     a curve that x runs along) the first and last are its ends, and the rows between
     them follow it. In 3D the same along the row of nodes nearest the
     interface's mid z (:func:`~breakwater.outputs.section.mid_row`). With ``pressure``
-    (nodal), the row from its first to its last node under pressure: the contact's
+    (nodal), the row from its first to its last node under pressure (above 1e-6 of the
+    largest): the contact's
     ends (a slope as the slave, longer than the block on it, gave the pressure 0 at its
     own ends and middle, where nothing touched it).
     """
     row = np.flatnonzero(mid_row(x))
     if pressure is not None and np.any(pressure[row] > 0):
-        pressed = np.flatnonzero(pressure[row] > 0)
+        # (above 1e-6 of the largest: a slave node past the contact's end read 3e-11 Pa)
+        pressed = np.flatnonzero(pressure[row] > 1e-6 * pressure[row].max())
         row = row[pressed[0]:pressed[-1] + 1]
     first, last = int(row[0]), int(row[-1])
     # Halfway along the row (on a straight interface the node nearest the middle of its
