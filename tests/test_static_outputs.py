@@ -387,3 +387,24 @@ def test_centre_of_a_curved_interface() -> None:
     # is at 0.14, 0.15 at 0.18), not the surface's own, where the pressure was 0.
     pressure = np.array([0.0, 1.0, 0.0, 2.0, 1.0, 0.0])
     assert edge_centre(line, pressure) == (1, 4, 3)
+
+
+def test_an_unresolved_static_contact_is_warned() -> None:
+    """A static contact shorter than 3 interface facets is warned about in one line (a
+    block on a cylinder of R = 0.5 m: 5.6 mm of contact on 10 mm facets, measured); the
+    Goda caisson's base (205 mm on 29 mm facets, 7 of them) is not; in 3D the contact's
+    size is the square root of its area."""
+    from breakwater.outputs.quality import PairInputs
+    from breakwater.outputs.staticsummary import resolution_warnings
+
+    def inputs(h: float) -> list[PairInputs]:
+        return [PairInputs("sliding", 5e10, h, (4.8e9, 4.8e9), 1.6e-6, 2.2e-6)]
+
+    lines = resolution_warnings({"sliding_contact_length": 0.00556}, inputs(0.01), 2)
+    assert len(lines) == 1 and "\n" not in lines[0]
+    assert lines[0].startswith("contact 'sliding': the static contact is 0.00556 m long, "
+                               "0.56 of its mean interface facet (h = 0.01 m)")
+    assert resolution_warnings({"sliding_contact_length": 0.205}, inputs(0.029), 2) == []
+    assert resolution_warnings({"sliding_contact_length": 0.0}, inputs(0.029), 2) == []
+    assert resolution_warnings({"sliding_contact_length": 0.041}, inputs(0.01), 3) == []
+    assert len(resolution_warnings({"sliding_contact_length": 4e-4}, inputs(0.01), 3)) == 1

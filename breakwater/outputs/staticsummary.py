@@ -18,9 +18,16 @@ from breakwater.contact.general import SurfaceContact
 from breakwater.model.mesh import group_tag
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair, pair_names
+from breakwater.outputs.quality import PairInputs
 from breakwater.outputs.section import mid_row
 
-__all__ = ["edge_centre", "resting_on", "static_summary"]
+__all__ = ["RESOLVED_FACETS", "edge_centre", "resolution_warnings", "resting_on",
+           "static_summary"]
+
+RESOLVED_FACETS = 3
+"""A static contact shorter than this many interface facets is warned about: its
+pressure is not resolved (a block on a cylinder, its contact 5.6 mm long on 10 mm
+facets, gave a centre pressure from one or two integration points)."""
 
 
 def resting_on(model: ContactModel, body: int,
@@ -190,3 +197,27 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
         "resultant_over_weight": resultant / weight if weight > 0 else None,
     })
     return static
+
+
+def resolution_warnings(row: Mapping[str, float], inputs: Sequence[PairInputs], gdim: int
+                        ) -> list[str]:
+    """One line per pair whose static contact spans fewer than :data:`RESOLVED_FACETS` facets.
+
+    Args:
+        row: The static state's history row (``<pair>_contact_length``: m, m² in 3D).
+        inputs: The pairs' quality inputs (their mean interface facet length h).
+        gdim: The model's dimension (3D: the contact's size is the square root of its
+            area).
+    """
+    out = []
+    for q in inputs:
+        measured = row.get(f"{q.name}_contact_length", 0.0)
+        size = measured if gdim == 2 else float(np.sqrt(measured))
+        h = q.element_size
+        if 0 < size < RESOLVED_FACETS * h:
+            what = f"{size:.3g} m long" if gdim == 2 else f"{measured:.3g} m² ({size:.3g} m across)"
+            out.append(f"contact '{q.name}': the static contact is {what}, {size / h:.2g} of "
+                       f"its mean interface facet (h = {h:.3g} m): its pressure (edge, centre, "
+                       f"maximum) is not resolved; refine the surfaces there (h ≤ "
+                       f"{size / (2 * RESOLVED_FACETS):.2g} m)")
+    return out

@@ -23,7 +23,7 @@ from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
 from breakwater.outputs.checkpoint import CheckpointError
 from breakwater.outputs.monitor import interface_state
-from breakwater.outputs.staticsummary import static_summary
+from breakwater.outputs.staticsummary import resolution_warnings, static_summary
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
@@ -70,6 +70,8 @@ def start(r: Session) -> None:
     st.contact = sm.quality_inputs(s.contacts, s.u)
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)
     r.log_quality()
+    for line in resolution_warnings(row, st.contact, m.gdim):
+        log.warning("%s", line)
     out.write_fields(0.0, s.u, s.v)
 
 
