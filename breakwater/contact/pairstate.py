@@ -139,6 +139,11 @@ class ConformingPair:
         out["pressure"] = state["pressure"]
         return out
 
+    def largest_slip(self, u: Sequence[fem.Function]) -> float:
+        """The largest |slip| (I − n⊗n)(u_s − u_m) over the interface nodes (collective)."""
+        slip = self.nodes.contact_state(*self._sides(u))["slip"]
+        return float(np.linalg.norm(slip, axis=1).max(initial=0.0))
+
     def field_nodes(self) -> FieldNodes:
         """The interface group, the slave's degree and the interface nodes."""
         return FieldNodes(self.pair.spec.interface, self.pair.slave, self.nodes.x)

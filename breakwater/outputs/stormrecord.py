@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from breakwater.outputs.historyrows import column
+from breakwater.outputs.sliding import SMALL_SLIDING
 
 __all__ = ["COLUMNS", "SMALL_SLIDING", "read_waves", "rigid_record", "small_sliding_warning",
            "storm_figures", "storm_record",
@@ -257,10 +258,6 @@ def _save(fig: Any, path: Any) -> Any:
         fig.savefig(tmp, dpi=150, bbox_inches="tight")
         tmp.replace(path)
     return path
-
-
-SMALL_SLIDING = 0.1
-"""A conforming pair's slip is small against its element size h below this fraction."""
 
 
 def small_sliding_warning(rows: Sequence[Mapping[str, float]], r: Mapping[str, Any],

@@ -84,6 +84,7 @@ from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.monitor import Monitor, interface_state, pair_names
 from breakwater.outputs.rotation import rotation_warning
+from breakwater.outputs.sliding import sliding_warnings
 from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
 from breakwater.run.session import Session
@@ -432,6 +433,11 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
                         rotation_warning(summary.get("dynamic", {}))):
             if warning is not None:
                 log.warning("%s", warning)
+        if r.stepped is not None and not summary.get("storm", {}).get("warning"):
+            # (a storm's record warns of its pair's sliding itself: the report's line)
+            s = r.stepped.stepper
+            for line in sliding_warnings(s.contacts, s.u, r.state.contact):
+                log.warning("%s", line)
 
     def write() -> dict[str, Any]:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
