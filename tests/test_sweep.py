@@ -25,6 +25,7 @@ import breakwater  # noqa: F401  (imports the PETSc of the dolfinx wheel first)
 # isort: split
 from breakwater import cli
 from breakwater.common.errors import CaseError
+from breakwater.studies.columns import TABLE_COLUMNS, headline_columns
 from breakwater.studies.studyfile import check_points, load_study, toml_literal
 from breakwater.studies.sweep import RECORD, TABLE, run_study
 
@@ -253,6 +254,11 @@ def test_groups_give_the_same_table(shared_dir):
         assert [float(r["contact.interface.friction"]) for r in tables[k]] == \
             [0.5, 0.5, 0.8, 0.8]
         assert all(float(r["steps"]) == 30 for r in tables[k])
+    # every column is one that a study's [figures] may name (headline_columns in step
+    # with headline: a column it missed would refuse a valid study)
+    known = {*study.keys, *TABLE_COLUMNS,
+             *headline_columns(check_points(study, shared_dir)[1][0].resolved())}
+    assert set(tables[1][0]) <= known, set(tables[1][0]) - known
     a, b = numbers(tables[1]), numbers(tables[COMM.size])
     assert a.keys() == b.keys() and "residual_slip" in a and "peak_ux.gauge_top" in a
     lengths = [c for c in a if c.split(".")[0] in DISPLACEMENTS]

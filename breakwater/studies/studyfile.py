@@ -513,7 +513,29 @@ def check_points(study: Study, out: pathlib.Path) -> tuple[list[Point], list[Cas
                  for message, labels in bad.items()]
         raise CaseError(printable(f"{study.path.name}: {n} of {len(study.points)} points "
                                   f"make an invalid case: " + "; ".join(parts)))
+    _check_figure_columns(study, cases)
     return points, cases
+
+
+def _check_figure_columns(study: Study, cases: Sequence[Case]) -> None:
+    """Refuse a ``[figures]`` column that ``sweep.csv`` will not have (CaseError).
+
+    The columns: the study's keys, ``wall_time`` and the headline columns its cases
+    can give (:func:`breakwater.studies.columns.headline_columns`).
+    """
+    from breakwater.studies.columns import headline_columns
+
+    known: dict[str, None] = dict.fromkeys([*study.keys, "wall_time"])
+    for case in cases:
+        known.update(dict.fromkeys(headline_columns(case.resolved())))
+    spec = study.figures
+    named = [*((f"figures.{axis}", c) for axis in ("x", "y") for c in spec.get(axis, ())),
+             *((f"figures.reference.{c}", c) for c in spec.get("reference", {}))]
+    for where, column in named:
+        if column not in known:
+            raise _Reader(study.path).error(
+                where, f"'{column}' is not a column of the study's sweep.csv"
+                f"{suggest(column, list(known))}")
 
 
 def _names(labels: Sequence[str]) -> str:

@@ -46,7 +46,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -59,6 +59,7 @@ from breakwater.common.gmshtools import settle_signal_handlers
 from breakwater.common.parallel import on_rank_zero
 from breakwater.outputs import checkpoint  # importing PETSc is collective: at import
 from breakwater.run import simulation
+from breakwater.studies.columns import headline
 from breakwater.studies.studyfile import Point, Study, check_points, toml_literal
 
 if TYPE_CHECKING:
@@ -91,57 +92,6 @@ class StudyOutcome:
     def complete(self) -> bool:
         """Whether every point's case finished."""
         return self.finished == self.total
-
-
-# --- headline numbers ------------------------------------------------------------------
-
-def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = None
-             ) -> dict[str, float]:
-    """The headline numbers of a run's summary (and moduli of its ``case.toml``).
-
-    Columns: ``time_reached``; per probe ``peak_ux.<p>``, ``time_peak_ux.<p>``,
-    ``residual_ux.<p>``; ``time_of_max_ux``, ``residual_slip``, ``max_uplift``;
-    ``static_mean_pressure``; ``energy_balance_error`` (the largest over the run) and
-    ``external_work`` (at the end), per metre out of plane; ``steps``,
-    ``newton_iterations``, ``cutbacks``; ``loop_time`` (s); a storm's
-    ``storm.total_sliding``, ``storm.waves_finished`` and the rigid-block model's
-    ``storm.rigid_total_sliding`` (m); per body
-    ``shear_modulus.<body>`` of the case as run (the calibrated G included).
-    """
-    out: dict[str, float] = {}
-
-    def put(name: str, value: Any) -> None:
-        if isinstance(value, int | float) and not isinstance(value, bool):
-            out[name] = float(value)
-
-    put("time_reached", summary.get("time", {}).get("reached"))
-    dyn = summary.get("dynamic") or {}
-    for p, v in (dyn.get("peak_ux") or {}).items():
-        put(f"peak_ux.{p}", v.get("value"))
-        put(f"time_peak_ux.{p}", v.get("time"))
-    for p, v in (dyn.get("residual_ux") or {}).items():
-        put(f"residual_ux.{p}", v)
-    for key in ("time_of_max_ux", "residual_slip", "max_uplift"):
-        put(key, dyn.get(key))
-    put("static_mean_pressure", (summary.get("static") or {}).get("mean_contact_pressure"))
-    energy = summary.get("energy") or {}
-    put("energy_balance_error", energy.get("max_balance_error"))
-    put("external_work", (energy.get("final") or {}).get("external_work"))
-    solver = summary.get("solver") or {}
-    put("steps", solver.get("steps"))
-    put("newton_iterations", solver.get("newton_iterations"))
-    put("cutbacks", solver.get("cutbacks"))
-    put("loop_time", solver.get("wall_time"))
-    storm = summary.get("storm") or {}
-    put("storm.total_sliding", storm.get("total_sliding"))
-    put("storm.waves_finished", storm.get("waves_finished"))
-    put("storm.rigid_total_sliding", (storm.get("rigid") or {}).get("total_sliding"))
-    for name, body in ((case_toml or {}).get("bodies") or {}).items():
-        g = body.get("shear_modulus")
-        if g is None and body.get("young_modulus") is not None:
-            g = body["young_modulus"] / (2.0 * (1.0 + body["poisson"]))
-        put(f"shear_modulus.{name}", g)
-    return out
 
 
 # --- the records and the table -------------------------------------------------------------
