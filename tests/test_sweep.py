@@ -371,6 +371,46 @@ def test_resume_after_a_kill(tmp_path, how):
     assert [r["status"] for r in rows] == ["finished"] * 4
 
 
+@pytest.mark.serial
+def test_resumed_case_counts_its_wall_time(tmp_path):
+    """A case interrupted (SIGTERM) and resumed from its checkpoint: its ``wall_time`` is
+    that of both runs, as its ``loop_time`` (the summary's, summed over the runs).
+
+    Before, the resumed run's own time only: measured 3.2 s against a loop time of
+    4.5 s (the interrupted run had taken 1.9 s). The first run's time is in its
+    record; the total must be at least that plus the loop time of the second run (the
+    mesh and the static state come on top: bounded by 300 s).
+    """
+    if COMM.size > 1:
+        pytest.skip("subprocess sweeps run serially")
+    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
+                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=0.2)
+    out = tmp_path / "out"
+    process = _sweep(path, out)
+    start = time.monotonic()
+    while not any(out.glob("case-*/checkpoint.npz")):
+        assert process.poll() is None and time.monotonic() - start < 120, \
+            process.communicate()
+        time.sleep(0.02)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 1, err
+    (first,) = read_table(out / TABLE)
+    assert first["status"] == "interrupted", first
+    # The first run as if it had lasted 1000 s (its record is what the rerun reads):
+    # the total is then 1000 s plus the second run's, which holds the rest of the loop.
+    record = out / first["folder"] / RECORD
+    record.write_text(json.dumps({**json.loads(record.read_text()), "wall_time": 1000.0}))
+    rerun = _sweep(path, out)
+    _, err = rerun.communicate(timeout=300)
+    assert rerun.returncode == 0, err
+    (row,) = read_table(out / TABLE)
+    summary = json.loads((out / row["folder"] / "summary.json").read_text())
+    assert summary["resumed_from"] and row["status"] == "finished"
+    second_loop = float(row["loop_time"]) - float(first["loop_time"])
+    assert 1000.0 + second_loop <= float(row["wall_time"]) < 1300.0
+
+
 # --- the calibration's reading of K_x (the paper-calibration study) -----------------------
 
 def test_stiffness_basis(shared_dir):

@@ -187,24 +187,30 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
     """Run one case on ``comm`` (collective); its record, written last in its folder."""
     from breakwater.outputs.checkpoint import CheckpointError
 
-    def prepare() -> bool:
-        """Resume a killed run of this case from its checkpoint, or start afresh."""
+    def prepare() -> tuple[bool, float]:
+        """Resume a killed run of this case from its checkpoint, or start afresh.
+
+        Returns:
+            Whether to resume, and the wall time the case took before (its record's:
+            an interrupted run's; 0 when it starts afresh or its run was killed).
+        """
         record = _read_json(folder / RECORD)
         if (folder / files.CHECKPOINT).is_file() and record is not None \
                 and record.get("fingerprint") == fingerprint:
             with contextlib.suppress(CheckpointError):
                 checkpoint.check(folder)
-                return True
+                before = record.get("wall_time")
+                return True, float(before) if isinstance(before, int | float) else 0.0
         if folder.exists():
             shutil.rmtree(folder)
         folder.mkdir(parents=True)
         # The record says which case the folder holds (a checkpoint is resumed only for
         # it); its status says it did not finish, until the run ends.
         files.atomic_write_json(folder / RECORD, _record(point, fingerprint, "running"))
-        return False
+        return False, 0.0
 
     start = time.perf_counter()
-    resume = on_rank_zero(comm, prepare)
+    resume, before = on_rank_zero(comm, prepare)
     status, error, summary = "finished", None, None
     try:
         built = case.build(comm)
@@ -219,7 +225,9 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
     except Exception as e:  # the study goes on: the case's one-line error is recorded
         status, error = "failed", _one_line(e)
         summary = getattr(e, "summary", None)
-    wall = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+    # The case's wall time over its runs (as the summary's loop time: a resumed run's
+    # counts the interrupted one's).
+    wall = before + comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
 
     def write() -> dict[str, Any]:
         record = _record(point, fingerprint, status, error, wall, comm.size)
