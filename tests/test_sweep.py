@@ -397,6 +397,9 @@ def test_resumed_case_counts_its_wall_time(tmp_path):
     assert process.returncode == 1, err
     (first,) = read_table(out / TABLE)
     assert first["status"] == "interrupted", first
+    # the way on is to rerun the study (a sweep has no --resume: it said so)
+    assert first["error"].endswith("(run the study again to go on)"), first["error"]
+    assert "--resume" not in first["error"]
     # The first run as if it had lasted 1000 s (its record is what the rerun reads):
     # the total is then 1000 s plus the second run's, which holds the rest of the loop.
     record = out / first["folder"] / RECORD

@@ -92,8 +92,11 @@ from breakwater.stepping.gn22 import local_error
 from breakwater.stepping.stepsize import GROW_AFTER
 from breakwater.stepping.stepsolver import StepSolver
 
-__all__ = ["GROW_AFTER", "Monitor", "RunInterrupted", "SimulationFailed", "interface_state",
-           "pair_names", "run"]
+__all__ = ["GROW_AFTER", "RESUME_HINT", "Monitor", "RunInterrupted", "SimulationFailed",
+           "interface_state", "pair_names", "run"]
+
+RESUME_HINT = " (continue with --resume)"
+"""The end of an interrupted run's error when it saved a checkpoint."""
 
 log = logging.getLogger("breakwater.run.simulation")
 
@@ -164,7 +167,7 @@ def _check_stop(r: Session, stop: StopSignal) -> None:
     if saved and (r.checkpointed is None or r.checkpointed["steps"] != r.state.steps):
         r.checkpoint()
     raise _Stop(f"interrupted by {signal.Signals(signum).name} at t = {r.state.step.t:.6g} s"
-                + (" (continue with --resume)" if saved else ""))
+                + (RESUME_HINT if saved else ""))
 
 
 class _LoopClock:

@@ -219,7 +219,10 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
                                  resolved_case=built.case.resolved(),
                                  extra_summary=built.extra, report=False, resume=resume)
     except simulation.RunInterrupted as e:
-        status, error, summary = "interrupted", _one_line(e), e.summary
+        # A study goes on when it is run again (sweep has no --resume)
+        error = _one_line(e).replace(simulation.RESUME_HINT.strip(),
+                                     "(run the study again to go on)")
+        status, summary = "interrupted", e.summary
     except KeyboardInterrupt:
         raise
     except Exception as e:  # the study goes on: the case's one-line error is recorded
