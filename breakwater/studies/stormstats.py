@@ -10,7 +10,9 @@ statistics (:class:`~breakwater.storms.montecarlo.MonteCarlo`: mean, standard de
 percentiles, the probability of exceeding each tolerable sliding of ``[figures] limits``,
 the 95 % half-width of the mean and the storms needed for ±10 %) over the finished
 cases, and writes ``monte_carlo.json``, ``monte_carlo.csv`` and
-``figures/monte_carlo.png``.
+``figures/monte_carlo.png``. The cases left out (failed, interrupted, not run) are
+counted there (``planned``, ``left_out``) and in the study's line: a storm that failed
+may be one that slid most, and the statistics without it are low.
 """
 
 from __future__ import annotations
@@ -65,6 +67,14 @@ def monte_carlo(folder: pathlib.Path, study: Study, header: list[str],
     done = [r for r in rows if r.get("status") == "finished" and r.get(COLUMN)]
     if not done:
         return None
+    # The storms left out (failed, interrupted, not run): the statistics are of the
+    # finished ones only, and a storm that failed may be one that slid most.
+    left_out: dict[str, int] = {}
+    kept = {id(r) for r in done}
+    for r in rows:
+        if id(r) not in kept:
+            status = r.get("status") or "pending"
+            left_out[status] = left_out.get(status, 0) + 1
     seeds = tuple(int(float(r[key])) if key and r.get(key) else i
                   for i, r in enumerate(done))
     totals = np.array([float(r[COLUMN]) for r in done])
@@ -72,7 +82,8 @@ def monte_carlo(folder: pathlib.Path, study: Study, header: list[str],
     result = MonteCarlo(seeds, totals, limits)
     p = result.percentiles
     out: dict[str, Any] = {
-        "storms": len(totals), "seed_key": key, "mean": result.mean, "std": result.std,
+        "storms": len(totals), "planned": len(rows), "left_out": left_out,
+        "seed_key": key, "mean": result.mean, "std": result.std,
         "percentiles": {f"{k:g}": v for k, v in p.items()},
         "exceedance": {f"{k:g}": v for k, v in result.exceedance.items()},
         "half_width_95": result.half_width() if len(totals) > 1 else math.nan,

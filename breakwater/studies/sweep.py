@@ -431,9 +431,12 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                 f"{mc['skipped']}")
         elif mc is not None:
             p = mc["percentiles"]
+            left = ", ".join(f"{n} {s}" for s, n in mc["left_out"].items())
+            count = (f"{mc['storms']} storms" if not left else f"{mc['storms']} of "
+                     f"{mc['planned']} storms: {left} left out")
             say(f"study '{study.name}': expected sliding per storm {mc['mean']:.4g} m "
                 f"(± {mc['half_width_95']:.2g} m at 95 %, std {mc['std']:.3g} m, "
-                f"{mc['storms']} storms); percentiles 5/50/95 {p['5']:.3g} / {p['50']:.3g} "
+                f"{count}); percentiles 5/50/95 {p['5']:.3g} / {p['50']:.3g} "
                 f"/ {p['95']:.3g} m"
                 + "".join(f"; P(> {k} m) = {v:.3g}" for k, v in mc["exceedance"].items())
                 + f" -> {folder / 'monte_carlo.json'}")
