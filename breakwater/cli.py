@@ -141,7 +141,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         on_rank_zero(comm, lambda: checkpoint.check(folder))
     _say(f"breakwater {__version__}: case '{case.name}' -> {folder}"
          + (" (resuming)" if args.resume else ""), args.quiet)
-    built = case.build(comm)
+    if args.resume:  # the killed run's calibrated modulus (the same model, any ranks)
+        from breakwater.run.resumecase import build_to_resume
+
+        built = build_to_resume(case, comm)
+    else:
+        built = case.build(comm)
     if "calibration" in built.extra:
         c = built.extra["calibration"]
         per = " per m" if len(case.gravity) == 2 else ""  # plane strain: per metre

@@ -59,6 +59,7 @@ from breakwater.common.gmshtools import settle_signal_handlers
 from breakwater.common.parallel import on_rank_zero
 from breakwater.outputs import checkpoint  # importing PETSc is collective: at import
 from breakwater.run import simulation
+from breakwater.run.resumecase import build_to_resume
 from breakwater.studies.columns import headline
 from breakwater.studies.studyfile import Point, Study, check_points, toml_literal
 
@@ -213,7 +214,7 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
     resume, before = on_rank_zero(comm, prepare)
     status, error, summary = "finished", None, None
     try:
-        built = case.build(comm)
+        built = build_to_resume(case, comm) if resume else case.build(comm)
         output = replace(built.output, progress=False)
         summary = simulation.run(built.model, built.time, output,
                                  resolved_case=built.case.resolved(),
