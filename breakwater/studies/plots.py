@@ -36,10 +36,16 @@ STYLES = ("-", "--", ":", "-.")
 
 
 def _scale(column: str) -> tuple[float, str]:
-    """Display factor and unit of a column."""
+    """Display factor and unit of a column.
+
+    Times in ms: the headline times (``time_of_max_ux``, ``time_peak_ux.<p>``,
+    ``time_reached``) and the case keys that are times (``time.dt``,
+    ``time.end_time``, a load's ``duration`` and ``start``); not the other keys of
+    ``[time]`` (``time.beta1``, ``time.newton_max_it``: they were drawn × 1000 as ms).
+    """
     last = column.rsplit(".", 1)[-1]
     name = column.split(".", 1)[0]
-    if name.startswith("time") or last in ("duration", "start", "dt", "end_time"):
+    if name.startswith("time_") or last in ("duration", "start", "dt", "end_time"):
         return 1e3, "ms"
     if name in ("peak_ux", "residual_ux", "residual_slip", "max_uplift") \
             or last in ("bolt_height",):
