@@ -21,7 +21,7 @@ PROBE = ("peak_ux", "time_peak_ux", "residual_ux")
 """The headline columns of each point probe, ``<column>.<probe>``."""
 STORM = ("storm.total_sliding", "storm.waves_finished", "storm.rigid_total_sliding")
 """The headline columns of a run with a storm."""
-TABLE_COLUMNS = ("case", "folder", "status", "wall_time", "error")
+TABLE_COLUMNS = ("case", "folder", "status", "wall_time", "warnings", "error")
 """The columns of ``sweep.csv`` besides the varied keys and the headline numbers."""
 
 

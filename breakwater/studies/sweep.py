@@ -139,7 +139,8 @@ def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str]
             columns.update(dict.fromkeys(r.get("headline", {})))
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["case", "folder", *keys, "status", "wall_time", *columns, "error"])
+    writer.writerow(["case", "folder", *keys, "status", "wall_time", *columns, "warnings",
+                     "error"])
     for p, r, fp in zip(points, records, fingerprints, strict=True):
         current = r is not None and r.get("fingerprint") == fp
         rec = r if current else {}
@@ -148,7 +149,7 @@ def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str]
         head = rec.get("headline", {})
         writer.writerow([p.index, p.folder, *values, rec.get("status", "pending"),
                          _cell(rec.get("wall_time")), *(_cell(head.get(c)) for c in columns),
-                         rec.get("error") or ""])
+                         " | ".join(rec.get("warnings") or ()), rec.get("error") or ""])
     return files.atomic_write_text(out / TABLE, buffer.getvalue())
 
 
@@ -183,6 +184,45 @@ def _one_line(error: BaseException) -> str:
     return " ".join(str(error).split()) or type(error).__name__
 
 
+class _CaseWarnings(logging.Handler):
+    """The warnings a case's run logs, one line each."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.lines: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append(" ".join(record.getMessage().split()))
+
+
+@contextlib.contextmanager
+def _case_warnings() -> Iterator[list[str]]:
+    """Collect the warnings of a case's run (the ``breakwater`` logger's).
+
+    When the logger is quieter than its warnings (``sweep`` without ``--verbose``: the
+    cases' messages are not printed), its handlers are set aside for the case: the
+    warnings are collected only, and the study reports them with the case (the run's
+    own rank-0 filter keeps one copy per group).
+    """
+    logger = logging.getLogger("breakwater")
+    collect = _CaseWarnings()
+    level, handlers = logger.level, list(logger.handlers)
+    silent = logger.getEffectiveLevel() > logging.WARNING
+    if silent:
+        for h in handlers:
+            logger.removeHandler(h)
+        logger.setLevel(logging.WARNING)
+    logger.addHandler(collect)
+    try:
+        yield collect.lines
+    finally:
+        logger.removeHandler(collect)
+        if silent:
+            logger.setLevel(level)
+            for h in handlers:
+                logger.addHandler(h)
+
+
 def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
               comm: MPI.Comm) -> dict[str, Any]:
     """Run one case on ``comm`` (collective); its record, written last in its folder."""
@@ -213,12 +253,15 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
     start = time.perf_counter()
     resume, before = on_rank_zero(comm, prepare)
     status, error, summary = "finished", None, None
+    warnings: list[str] = []
     try:
-        built = build_to_resume(case, comm) if resume else case.build(comm)
-        output = replace(built.output, progress=False)
-        summary = simulation.run(built.model, built.time, output,
-                                 resolved_case=built.case.resolved(),
-                                 extra_summary=built.extra, report=False, resume=resume)
+        with _case_warnings() as warnings:
+            built = build_to_resume(case, comm) if resume else case.build(comm)
+            output = replace(built.output, progress=False)
+            summary = simulation.run(built.model, built.time, output,
+                                     resolved_case=built.case.resolved(),
+                                     extra_summary=built.extra, report=False,
+                                     resume=resume)
     except simulation.RunInterrupted as e:
         # A study goes on when it is run again (sweep has no --resume)
         error = _one_line(e).replace(simulation.RESUME_HINT.strip(),
@@ -241,6 +284,7 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
 
             case_toml = tomllib.loads((folder / files.CASE).read_text(encoding="utf-8"))
         record["headline"] = headline(summary or {}, case_toml)
+        record["warnings"] = warnings
         files.atomic_write_json(folder / RECORD, record)
         return record
 
@@ -395,6 +439,9 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                     tail = f": {record['error']}" if record["error"] else ""
                     say(f"  {p.folder}: {record['status']} in {record['wall_time']:.1f} s"
                         f"{tail}")
+                    for line in record["warnings"]:  # also with --quiet, as a run's
+                        print(f"breakwater: warning: {p.folder}: {line}", file=sys.stderr,
+                              flush=True)
                 if record["status"] == "interrupted":
                     break
             # A signal caught by a rank stops the others (``post``, when the rank finds
