@@ -130,6 +130,9 @@ def test_bad_study_message(path, tmp_path):
     message = str(info.value)
     assert expected(path) in message
     assert "\n" not in message
+    # a line to read: at most SHOWN_ERRORS of the bad points' errors (18: 200 sampled
+    # points, each its own error, made a line of 26 kB)
+    assert len(message) < 2000, len(message)
     assert message.startswith(path.name)  # the study file is named first
 
 

@@ -81,6 +81,8 @@ FIGURE_KEYS = ("x", "y", "reference", "reference_label", "limits")
 DISTRIBUTIONS = ("uniform", "log_uniform", "choice")
 MAX_POINTS = 1000
 """Default limit on the points of a study (``sweep --max-points``)."""
+SHOWN_ERRORS = 5
+"""The distinct errors of bad points a study's refusal shows (then their count)."""
 RESERVED = ("output.directory", "name")
 """Case keys a study may not set: the sweep names each case's folder."""
 
@@ -511,6 +513,10 @@ def check_points(study: Study, out: pathlib.Path) -> tuple[list[Point], list[Cas
         n = sum(map(len, bad.values()))
         parts = [f"{labels[0] if len(labels) == 1 else _names(labels)}: {message}"
                  for message, labels in bad.items()]
+        if len(parts) > SHOWN_ERRORS:  # a line of every sampled point's error: 30 kB
+            rest = sum(len(labels) for labels in list(bad.values())[SHOWN_ERRORS:])
+            parts = [*parts[:SHOWN_ERRORS], f"and {rest} more point{'s' * (rest > 1)} "
+                     "with other errors"]
         raise CaseError(printable(f"{study.path.name}: {n} of {len(study.points)} points "
                                   f"make an invalid case: " + "; ".join(parts)))
     _check_figure_columns(study, cases)
