@@ -69,6 +69,22 @@ def test_monte_carlo_needs_the_seed_alone(tmp_path: pathlib.Path) -> None:
     assert not (tmp_path / "monte_carlo.json").exists()
 
 
+def test_a_seed_counts_once(tmp_path: pathlib.Path) -> None:
+    # Seeds 0, 1, 1: storm 1 twice is one storm, not two draws. Its statistics would
+    # weigh it double (mean (0 + 2 + 2)/3 = 1.33 against 1.0 of the two storms) and
+    # narrow the half-width by sqrt(3/2): none are given, the reason said.
+    study_file = tmp_path / "storms.toml"
+    study_file.write_text('base = "goda"\n[samples]\ncount = 3\n'
+                          '"loads.storm.storm.sea.seed" = {choice = [0, 1]}\n')
+    key = "loads.storm.storm.sea.seed"
+    rows = [{key: str(seed), "status": "finished", COLUMN: repr(total)}
+            for seed, total in ((0, 0.0), (1, 0.002), (1, 0.002))]
+    out = monte_carlo(tmp_path, load_study(study_file), [key, "status", COLUMN], rows)
+    assert out == {"skipped": "seed 1 repeats: the same storm would count as several "
+                   "(give each seed once)"}
+    assert not (tmp_path / "monte_carlo.json").exists()
+
+
 def test_limits_are_checked(tmp_path: pathlib.Path) -> None:
     study_file = tmp_path / "bad.toml"
     study_file.write_text('base = "goda"\n[grid]\n"time.dt" = [1e-4]\n'

@@ -77,6 +77,13 @@ def monte_carlo(folder: pathlib.Path, study: Study, header: list[str],
             left_out[status] = left_out.get(status, 0) + 1
     seeds = tuple(int(float(r[key])) if key and r.get(key) else i
                   for i, r in enumerate(done))
+    repeated = sorted({x for x in seeds if seeds.count(x) > 1})
+    if repeated:
+        # One storm counted as several draws (a seed twice in [grid], or {choice} of
+        # seeds): its weight doubled and the half-width too narrow by sqrt(n/unique).
+        return {"skipped": f"seed{'s' * (len(repeated) > 1)} "
+                f"{', '.join(map(str, repeated))} repeat{'s' * (len(repeated) == 1)}: "
+                "the same storm would count as several (give each seed once)"}
     totals = np.array([float(r[COLUMN]) for r in done])
     limits = tuple(float(x) for x in study.figures.get("limits", ()))
     result = MonteCarlo(seeds, totals, limits)
