@@ -397,6 +397,11 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
             raise CaseError(f"{OVERRIDE} {spec}: expected key=value")
         fixed[key.strip()] = _Literal(text.strip())
     grid = r.values(data.get("grid", {}), "grid")
+    for key, listed in grid.items():  # two identical cases (a storm counted twice)
+        texts = [toml_literal(v) for v in listed]
+        twice = next((t for j, t in enumerate(texts) if t in texts[:j]), None)
+        if twice is not None:
+            raise r.error(f"grid.{key}", f"{twice} is given twice (each value once)")
     zipped = r.values(data.get("zip", {}), "zip")
     lengths = {len(v) for v in zipped.values()}
     if len(lengths) > 1:
