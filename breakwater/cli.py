@@ -127,6 +127,8 @@ def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Pat
 def _cmd_run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
+    from breakwater.common.console import StopSignal
+    from breakwater.common.gmshtools import settle_signal_handlers
     from breakwater.outputs import checkpoint
     from breakwater.run import simulation
 
@@ -141,21 +143,26 @@ def _cmd_run(args: argparse.Namespace) -> int:
         on_rank_zero(comm, lambda: checkpoint.check(folder))
     _say(f"breakwater {__version__}: case '{case.name}' -> {folder}"
          + (" (resuming)" if args.resume else ""), args.quiet)
-    if args.resume:  # the killed run's calibrated modulus (the same model, any ranks)
-        from breakwater.run.resumecase import build_to_resume
+    # SIGTERM or SIGINT while the case is meshed and calibrated: caught (it killed the
+    # process, exit 143, leaving a half-made folder); the run then stops after its
+    # static state, with a checkpoint, as at any step (the run's StopSignal nests).
+    settle_signal_handlers()
+    with StopSignal():
+        if args.resume:  # the killed run's calibrated modulus (the same model, any ranks)
+            from breakwater.run.resumecase import build_to_resume
 
-        built = build_to_resume(case, comm)
-    else:
-        built = case.build(comm)
-    if "calibration" in built.extra:
-        c = built.extra["calibration"]
-        per = " per m" if len(case.gravity) == 2 else ""  # plane strain: per metre
-        _say(f"  calibrated {c['body']} shear modulus G = {c['shear_modulus']:.6g} Pa "
-             f"(K_x = {c['stiffness']:.6g} N/m{per}, error {c['relative_error']:.1e})",
-             args.quiet)
-    output = replace(built.output, progress=args.progress)
-    simulation.run(built.model, built.time, output, resolved_case=built.case.resolved(),
-                   extra_summary=built.extra, report=not args.quiet, resume=args.resume)
+            built = build_to_resume(case, comm)
+        else:
+            built = case.build(comm)
+        if "calibration" in built.extra:
+            c = built.extra["calibration"]
+            per = " per m" if len(case.gravity) == 2 else ""  # plane strain: per metre
+            _say(f"  calibrated {c['body']} shear modulus G = {c['shear_modulus']:.6g} Pa "
+                 f"(K_x = {c['stiffness']:.6g} N/m{per}, error {c['relative_error']:.1e})",
+                 args.quiet)
+        output = replace(built.output, progress=args.progress)
+        simulation.run(built.model, built.time, output, resolved_case=built.case.resolved(),
+                       extra_summary=built.extra, report=not args.quiet, resume=args.resume)
     return EXIT_OK
 
 

@@ -190,3 +190,31 @@ def test_study_stops_every_group_under_mpiexec(tmp_path):
     assert 1 <= len(interrupted) <= 2 and pending, (statuses, done)
     for case in pending:  # never started
         assert not any(out.glob(f"case-{int(case):04d}*")), statuses
+
+
+@pytest.mark.serial
+def test_run_stops_on_sigterm_while_its_case_is_built(tmp_path):
+    """``run``: SIGTERM while the case is meshed or calibrated stops it after its static
+    state, with a checkpoint (exit 1, ``interrupted``), as a study's case does.
+
+    Before: nothing caught the signal before the time loop; the process died (exit
+    -15 here, 143 in a shell), leaving a folder with its mesh only, nothing to resume.
+    """
+    if COMM.size > 1:
+        pytest.skip("subprocess test")
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "breakwater", "run", "--out", str(out), "--quiet",
+               "--set", "time.end_time=0.003", "--set", "output.field_interval=0",
+               "--set", "output.figures=false", "--set", "output.checkpoint_interval=1"]
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=ROOT)
+    start = time.monotonic()
+    while not (out / "mesh").exists() and proc.poll() is None:  # meshing has begun
+        assert time.monotonic() - start < 120
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGTERM)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1, (proc.returncode, stderr)
+    assert "interrupted by SIGTERM at t = 0 s" in stderr and "Traceback" not in stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+    assert (out / "checkpoint.npz").exists()
