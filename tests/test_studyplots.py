@@ -66,3 +66,24 @@ def test_axes_show_the_table_in_their_unit(tmp_path: pathlib.Path,
     assert x == pytest.approx([v * factor for v, _ in pairs], rel=1e-15)
     assert y == pytest.approx([t * 1e3 for _, t in pairs], rel=1e-15)
     assert labels == [f"{key} ({unit})" if unit else key]
+
+
+def test_redraw_checks_the_study(tmp_path: pathlib.Path,
+                                 capsys: pytest.CaptureFixture[str]) -> None:
+    # ``python -m breakwater.studies.plots``: a [figures] column misspelt after the study
+    # ran drew nothing and exited 0; a missing study file was a traceback. Now both are
+    # one line, exit 2, as sweep's refusals.
+    from breakwater.studies.plots import main
+
+    study_file = tmp_path / "study.toml"
+    study_file.write_text('base = "goda"\n[grid]\n"time.dt" = [1e-4, 5e-5]\n'
+                          '[figures]\ny = ["residual_slp"]\n')
+    (tmp_path / "sweep.csv").write_text("case,folder,time.dt,status,residual_slip\n"
+                                        "0,case-0000,0.0001,finished,0.001\n")
+    assert main([str(study_file), str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "figures.y: 'residual_slp'" in err, err
+    assert main([str(tmp_path / "none.toml"), str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "study file not found" in err, err
+    assert not (tmp_path / "figures").exists()

@@ -26,8 +26,9 @@ from typing import Any
 
 from matplotlib.figure import Figure
 
+from breakwater.common.errors import CaseError
 from breakwater.common.files import temporary_path
-from breakwater.studies.studyfile import Study, load_study
+from breakwater.studies.studyfile import Study, check_points, load_study
 
 __all__ = ["make_figures", "read_table"]
 
@@ -182,12 +183,24 @@ def _sort(value: str) -> tuple[int, float, str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m breakwater.studies.plots STUDY.toml DIR``."""
+    """``python -m breakwater.studies.plots STUDY.toml DIR``.
+
+    The study is checked as ``sweep`` checks it (its ``[figures]`` columns included:
+    a misspelt one drew nothing); a problem is one line on stderr, exit 2.
+    """
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 2:
         print("usage: python -m breakwater.studies.plots STUDY.toml DIR", file=sys.stderr)
         return 2
-    for p in make_figures(args[1], load_study(args[0])):
+    try:
+        study = load_study(args[0])
+        check_points(study, pathlib.Path(args[1]))
+        if not (pathlib.Path(args[1]) / "sweep.csv").is_file():
+            raise CaseError(f"{args[1]}: no sweep.csv (the study's --out folder?)")
+    except CaseError as e:
+        print(f"breakwater: error: {e}", file=sys.stderr)
+        return 2
+    for p in make_figures(args[1], study):
         print(p)
     return 0
 
