@@ -63,3 +63,20 @@ def test_old_folders_draw_the_same_contact_figures(tmp_path: pathlib.Path) -> No
     for name in ("contact.png", "static_pressure.png"):
         # The same numbers under the old and the new names: the same picture.
         assert (old / "figures" / name).read_bytes() == (new / "figures" / name).read_bytes()
+
+
+def test_redraw_needs_a_run_folder(tmp_path: pathlib.Path,
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    # python -m breakwater.outputs.figures DIR: a folder that does not exist was a
+    # traceback (FileNotFoundError from mkdir); a study's folder (sweep.csv, case-*
+    # folders) drew nothing and exited 0. Both: one line naming the folder, exit 2.
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    study = tmp_path / "study"
+    (study / "case-0000").mkdir(parents=True)
+    (study / "sweep.csv").write_text("case,folder,status\n")
+    for folder in (tmp_path / "none", study):
+        assert figures.main([str(folder)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and str(folder) in err and "no run outputs" in err
+    assert not (study / "figures").exists()

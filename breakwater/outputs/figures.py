@@ -321,8 +321,27 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
     return [p for p in drawn if p is not None]
 
 
-if __name__ == "__main__":  # pragma: no cover
-    if len(sys.argv) != 2:
-        sys.exit("usage: python -m breakwater.outputs.figures <output directory>")
-    for p in make_figures(sys.argv[1]):
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m breakwater.outputs.figures DIR``: redraw a run's figures.
+
+    A folder without a run's outputs (none, or a study's folder) is one line on
+    stderr, exit 2 (it was a traceback, or nothing drawn and exit 0).
+    """
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 1:
+        print("usage: python -m breakwater.outputs.figures <output directory>",
+              file=sys.stderr)
+        return 2
+    directory = pathlib.Path(args[0])
+    if not any((directory / name).is_file() for name in (SUMMARY, HISTORY, SNAPSHOT)):
+        print(f"breakwater: error: {directory}: no run outputs ({SUMMARY}, {HISTORY}): "
+              "give a run's --out folder (a study's: one of its case-* folders)",
+              file=sys.stderr)
+        return 2
+    for p in make_figures(directory):
         print(p)
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
