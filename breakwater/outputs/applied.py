@@ -157,6 +157,11 @@ def applied_warnings(loads: Mapping[str, Mapping[str, Any]]) -> list[str]:
     Only those the warning before the run did not announce: the applied impulse differs
     from the requested by more than :data:`TOLERANCE` and from what the nominal steps
     sample (``sampled``, predicted before the run) by more than that too.
+
+    Args:
+        loads: The summary's ``loads`` entry: plane strain's keys (``impulse_per_length``,
+            N s/m) or a 3D run's (``impulse``, N s: the whole body's,
+            :func:`breakwater.outputs.summary.whole_body_keys`).
     """
     lines = []
     for name, info in loads.items():
@@ -167,8 +172,10 @@ def applied_warnings(loads: Mapping[str, Mapping[str, Any]]) -> list[str]:
         sampled = info.get("sampled", {}).get("impulse_ratio")
         if sampled is not None and abs(ratio - sampled) <= TOLERANCE:
             continue
+        key, unit = (("impulse_per_length", "N s/m") if "impulse_per_length" in info
+                     else ("impulse", "N s"))
         lines.append(f"loads.{name}: the steps applied an impulse of "
-                     f"{applied['impulse_along_direction']:.4g} N s/m, {100 * ratio:.3g}% of "
-                     f"the requested {info['impulse_per_length']:.4g} N s/m (cut-backs moved "
+                     f"{applied['impulse_along_direction']:.4g} {unit}, {100 * ratio:.3g}% of "
+                     f"the requested {info[key]:.4g} {unit} (cut-backs moved "
                      "the step ends; summary.json loads.{name}.applied)".replace("{name}", name))
     return lines
