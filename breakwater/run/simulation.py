@@ -251,7 +251,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
                     f"time.max_steps; cut-backs made the steps smaller) before end_time = "
                     f"{time.end_time:g} s (raise time.max_steps to go on)")
             try:
-                s.stage(trial)
+                s.stage(trial, step.landing())
                 its = s.solve()
                 if not _finite(r.comm, *s.da):
                     raise ConvergenceError("non-finite acceleration increment", 0, its)

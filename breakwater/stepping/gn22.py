@@ -378,8 +378,12 @@ class GN22:
 
     # --- one step -----------------------------------------------------------------
 
-    def stage(self, dt: float | None = None) -> None:
+    def stage(self, dt: float | None = None, t1: float | None = None) -> None:
         """Prepare the step to t + Δt: step size, loads at t + Δt, Newton's start.
+
+        ``t1``: the step's end where it is not ``t + Δt`` rounded (the run's exactly
+        summed time, :meth:`breakwater.stepping.stepsize.StepSize.landing`, which
+        :meth:`update`'s caller then sets ``t`` to): the loads are evaluated there.
 
         Newton starts from the constant-velocity predictor ``Δa = −a/β₁``
         (``v₁ = v₀``) rather than ``Δa = 0`` (``a₁ = a₀``): the friction law is a
@@ -390,7 +394,7 @@ class GN22:
         """
         if dt is not None:
             self.dt.value = dt
-        self.model.set_time(float(self.t.value + self.dt.value))
+        self.model.set_time(float(self.t.value + self.dt.value) if t1 is None else t1)
         for d, a in zip(self.da, self.a, strict=True):
             d.x.array[:] = -a.x.array / self.params.beta1
 
