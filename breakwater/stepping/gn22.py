@@ -379,11 +379,7 @@ class GN22:
     # --- one step -----------------------------------------------------------------
 
     def stage(self, dt: float | None = None, t1: float | None = None) -> None:
-        """Prepare the step to t + Δt: step size, loads at t + Δt, Newton's start.
-
-        ``t1``: the step's end where it is not ``t + Δt`` rounded (the run's exactly
-        summed time, :meth:`breakwater.stepping.stepsize.StepSize.landing`, which
-        :meth:`update`'s caller then sets ``t`` to): the loads are evaluated there.
+        """Prepare the step to t + Δt (or ``t1``, StepSize.landing): Δt, loads, Newton's start.
 
         Newton starts from the constant-velocity predictor ``Δa = −a/β₁``
         (``v₁ = v₀``) rather than ``Δa = 0`` (``a₁ = a₀``): the friction law is a

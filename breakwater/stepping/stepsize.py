@@ -231,19 +231,11 @@ class StepSize:
         return self._next()[0]
 
     def landing(self) -> float:
-        """Where the proposed step ends: the ``t`` that :meth:`accept` will set.
-
-        The exactly rounded sum of the steps (or the end time), not ``t + h`` rounded:
-        the loads of the step are evaluated there, so that they are the ones of the
-        step's recorded time (a rectangular pulse ending on a step end had its end
-        evaluated an ulp after it, at 0: 10 % of its impulse lost, measured).
-        """
+        """Where the proposed step ends, the ``t`` :meth:`accept` sets (not t + h rounded)."""
         trial, last = self._next()
-        if last:
-            return self.end_time
         partials = list(self.partials)
         _add_exactly(partials, trial)
-        return math.fsum(partials)
+        return self.end_time if last else math.fsum(partials)
 
     def _coarse(self, t: float, h: float) -> bool:
         """Whether a step (t, t + h) is longer than 1/resolve of a load segment it meets."""
