@@ -175,6 +175,8 @@ def _triangulations(data: Any, scale: float = 0.0
                     ) -> list[tuple[str, Triangulation, dict[str, np.ndarray]]]:
     out = []
     for name in (str(b) for b in data["bodies"]):
+        if len(data[f"{name}_triangles"]) == 0:  # a 3D body the section misses
+            continue
         x = data[f"{name}_x"]
         dx = scale * np.column_stack([data[f"{name}_ux"], data[f"{name}_uy"]])
         xy = x + dx
@@ -186,8 +188,10 @@ def _triangulations(data: Any, scale: float = 0.0
 
 def _contours(data: Any, field: str, factor: float, label: str, title: str,
               path: pathlib.Path, scale: float = 0.0, outline: bool = False,
-              cmap: str = "viridis") -> pathlib.Path:
+              cmap: str = "viridis") -> pathlib.Path | None:
     bodies = _triangulations(data, scale)
+    if not bodies:  # a 3D section that misses every body: no figure
+        return None
     values = np.concatenate([f[field] for _, _, f in bodies]) * factor
     lo, hi = float(values.min()), float(values.max())
     if hi <= lo:

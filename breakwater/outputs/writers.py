@@ -55,7 +55,7 @@ from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair
 from breakwater.outputs.checkpoint import match_nodes
 from breakwater.outputs.historyrows import HistoryRows
-from breakwater.outputs.section import section
+from breakwater.outputs.section import section, section_plane
 from breakwater.outputs.vertexaverage import VertexAverage
 
 __all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
@@ -207,11 +207,8 @@ class BodyFields:
         gdim = model.gdim
         degree = body.V.ufl_element().embedded_superdegree
         self.gdim = gdim
-        # 3D: the figures' section, the model's mid-plane across z (the same for every body).
-        z = model.mesh.geometry.x[:, 2]
-        lo = model.comm.allreduce(float(z.min()) if len(z) else np.inf, op=MPI.MIN)
-        hi = model.comm.allreduce(float(z.max()) if len(z) else -np.inf, op=MPI.MAX)
-        self.section_z = 0.5 * (lo + hi)
+        # 3D: the figures' section across z, the same for every body (section_plane).
+        self.section_z = section_plane(model) if gdim == 3 else 0.0
         self.u = fem.Function(body.V, name="u_out")
         self.v = fem.Function(body.V, name="v_out")
         Vd = fem.functionspace(sub, ("Discontinuous Lagrange", degree, (gdim,)))
