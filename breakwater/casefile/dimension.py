@@ -78,7 +78,7 @@ def dimension_problem(case: _Case) -> None:
 
     Raises:
         InvalidField: The first key with the wrong number of components, or a 3D case
-            with ``out_of_plane_length`` or a per-metre calibration.
+            with gravity along z, ``out_of_plane_length`` or a per-metre calibration.
     """
     d = dimension(case)
     for f in case.fixed:
@@ -92,6 +92,12 @@ def dimension_problem(case: _Case) -> None:
                                "case's vectors all have 2 components (plane strain) or all 3 "
                                f"(got {list(vector)})")
     if d == 3:
+        if case.gravity[2] != 0.0:
+            raise InvalidField("gravity", "a 3D model is y-up, z across the structure (the "
+                               "elevation of Goda's loads, the summary's edge pressures, "
+                               "the figures' section): gravity's z component must be 0; "
+                               "rotate a z-up mesh (e.g. gmsh's affineTransform (x, y, z) "
+                               f"-> (x, z, -y)) (got {list(case.gravity)})")
         if case.out_of_plane_length != 1.0:
             raise InvalidField("out_of_plane_length", "a 3D case (3-component gravity) has "
                                "no out-of-plane length: forces and impulses are the bodies' "
