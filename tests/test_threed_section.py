@@ -6,7 +6,9 @@ interface nodes nearest the interface's mid z (the static pressure figure's row)
 Before: hexahedra were split into six tetrahedra around a diagonal (not exact for Q1,
 not mirror-symmetric: 20 % of the largest σ_yy off the mirror image on a centred
 block), and the plane was the model's mid-plane, which missed a block standing off the
-middle of its base (the run's figures ended in a traceback).
+middle of its base (the run's figures ended in a traceback). The summary's static edge
+and centre pressures on a tetrahedral interface are read on the facets cut by that
+line (before: at the few nodes at the z nearest it, which did not reach the ends).
 """
 
 from __future__ import annotations
@@ -94,3 +96,65 @@ def test_section_cuts_a_block_off_the_middle_of_its_base(folder: pathlib.Path) -
             a = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
                              - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
             assert a.sum() == pytest.approx(area, rel=1e-12)
+
+
+def _tet_block(path: pathlib.Path) -> pathlib.Path:
+    """Linear tetrahedra (unstructured): a 0.4 x 0.3 x 0.2 block centred on a
+    1 x 0.2 x 0.4 base; groups block, base, interface."""
+    import gmsh
+    from breakwater.meshes import gmsh_session
+
+    from breakwater.common.parallel import on_rank_zero
+
+    def build() -> None:
+        with gmsh_session():
+            occ = gmsh.model.occ
+            occ.addBox(0.0, 0.0, 0.0, 1.0, 0.2, 0.4)
+            occ.addBox(0.3, 0.2, 0.1, 0.4, 0.3, 0.2)
+            occ.fragment([(3, 1)], [(3, 2)])
+            occ.synchronize()
+            gmsh.model.addPhysicalGroup(3, [2], name="block")
+            gmsh.model.addPhysicalGroup(3, [1], name="base")
+            face = [t for _, t in gmsh.model.getEntities(2)  # (not the base's top)
+                    if np.allclose(gmsh.model.getBoundingBox(2, t),
+                                   (0.3, 0.2, 0.1, 0.7, 0.2, 0.3), atol=1e-7)]
+            gmsh.model.addPhysicalGroup(2, face, name="interface")
+            gmsh.option.setNumber("Mesh.MeshSizeMax", 0.07)
+            gmsh.model.mesh.generate(3)
+            gmsh.write(str(path))
+
+    on_rank_zero(COMM, build)
+    return pathlib.Path(COMM.bcast(str(path), root=0))
+
+
+def test_static_pressure_row_of_a_tetrahedral_interface(folder: pathlib.Path) -> None:
+    # The summary's edge and centre pressures are read along z = the interface's mid z
+    # (0.2). Unstructured triangles have no node row there: the nodes at the z nearest
+    # it did not reach the block's ends x = 0.3, 0.7. The facets cut by the plane give
+    # the whole line, and a P1 pressure p = 1000 + 100 x + 10 z exactly on it.
+    from breakwater.contact.conforming import interface_nodes
+    from breakwater.outputs.staticsummary import static_summary, triangle_row
+
+    mat = Material(2400.0, 0.2, young_modulus=3e10)
+    model = ContactModel(read_mesh(_tet_block(folder / "tets.msh"), COMM),
+                         [Body("block", mat), Body("base", mat)],
+                         [ContactPair("interface", "block", "base", penalty=1e12)],
+                         degree=1)
+    x = interface_nodes(model)[0].x
+
+    def f(p: np.ndarray) -> np.ndarray:
+        return 1000.0 + 100.0 * p[..., 0] + 10.0 * p[..., 2]
+
+    cut = triangle_row(model, "interface", x, f(x))
+    assert cut is not None
+    points, p = cut
+    assert np.allclose(points[:, 1:], [0.2, 0.2], atol=1e-12)
+    assert points[0, 0] == pytest.approx(0.3, abs=1e-12)
+    assert points[-1, 0] == pytest.approx(0.7, abs=1e-12)
+    assert np.allclose(p, f(points), rtol=1e-12)
+    # The summary's values: f at (0.3, 0.2), (0.7, 0.2), (0.5, 0.2) (x, z).
+    static = static_summary(model, {"interface_contact_length": 0.08,
+                                    "interface_normal_force": 80.0},
+                            {"contact_interface_x": x, "contact_interface_pressure": f(x)}, 0)
+    assert np.allclose(static["edge_pressures"], [1032.0, 1072.0], rtol=1e-12)
+    assert static["center_pressure"] == pytest.approx(1052.0, rel=1e-12)
