@@ -119,6 +119,9 @@ def _tet_block(path: pathlib.Path) -> pathlib.Path:
                     if np.allclose(gmsh.model.getBoundingBox(2, t),
                                    (0.3, 0.2, 0.1, 0.7, 0.2, 0.3), atol=1e-7)]
             gmsh.model.addPhysicalGroup(2, face, name="interface")
+            bottom = [t for _, t in gmsh.model.getEntities(2)
+                      if abs(gmsh.model.getBoundingBox(2, t)[4]) < 1e-6]
+            gmsh.model.addPhysicalGroup(2, bottom, name="base_bottom")
             gmsh.option.setNumber("Mesh.MeshSizeMax", 0.07)
             gmsh.model.mesh.generate(3)
             gmsh.write(str(path))
@@ -158,3 +161,48 @@ def test_static_pressure_row_of_a_tetrahedral_interface(folder: pathlib.Path) ->
                             {"contact_interface_x": x, "contact_interface_pressure": f(x)}, 0)
     assert np.allclose(static["edge_pressures"], [1032.0, 1072.0], rtol=1e-12)
     assert static["center_pressure"] == pytest.approx(1052.0, rel=1e-12)
+
+
+def test_static_npz_holds_the_tetrahedral_row(folder: pathlib.Path) -> None:
+    # A run's static.npz holds that cut (contact_<pair>_row_*), the pressure figure's
+    # line: from the block's front to its rear, its ends the summary's edge pressures.
+    from breakwater.config.runspec import OutputSpec, TimeSpec
+    from breakwater.model.model import Fixed
+    from breakwater.run import simulation
+
+    mat = Material(2400.0, 0.2, young_modulus=3e10)
+    model = ContactModel(read_mesh(_tet_block(folder / "tets_run.msh"), COMM),
+                         [Body("block", mat), Body("base", mat)],
+                         [ContactPair("interface", "block", "base", penalty=1e12)],
+                         [Fixed("base_bottom")], gravity=(0.0, -9.81, 0.0), degree=1)
+    out = folder / "tets_run"
+    summary = simulation.run(model, TimeSpec(dt=1e-3, end_time=2e-3),
+                             OutputSpec(out, field_interval=0, figures=False,
+                                        progress=False), report=False)
+    if COMM.rank == 0:
+        with np.load(out / "static.npz") as data:
+            x, p = data["contact_interface_row_x"], data["contact_interface_row_pressure"]
+        assert x[0, 0] == pytest.approx(0.3, abs=1e-12)
+        assert x[-1, 0] == pytest.approx(0.7, abs=1e-12)
+        assert np.allclose(summary["static"]["edge_pressures"], [p[0], p[-1]], rtol=1e-12)
+
+
+def test_pressure_figure_draws_the_tetrahedral_row(tmp_path: pathlib.Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    # static.npz of a tetrahedral interface holds the facets' cut (contact_<pair>_row_*,
+    # written by breakwater.run.begin): the figure draws it, from end to end, not the
+    # nodes at the z nearest the middle (here two, at x = 0.3 and 0.64).
+    from breakwater.outputs import figures
+
+    drawn = {}
+    monkeypatch.setattr(figures, "_save", lambda fig, path: drawn.setdefault("fig", fig))
+    nodes = np.array([[0.3, 0.2, 0.2], [0.64, 0.2, 0.2], [0.5, 0.2, 0.1]])
+    row = np.array([[0.3, 0.2, 0.2], [0.5, 0.2, 0.2], [0.7, 0.2, 0.2]])
+    np.savez(tmp_path / "static.npz", contacts=np.array(["interface"]),
+             contact_interface_x=nodes, contact_interface_pressure=np.array([9.0, 6.0, 5.0]),
+             contact_interface_row_x=row, contact_interface_row_pressure=np.array([9.0, 5.5, 9.1]))
+    with np.load(tmp_path / "static.npz") as data:
+        figures._static_pressure(data, {}, tmp_path / "p.png")
+    line = drawn["fig"].axes[0].lines[0]
+    assert np.allclose(line.get_xdata(), [0.3, 0.5, 0.7])
+    assert np.allclose(line.get_ydata(), [9.0, 5.5, 9.1])

@@ -254,7 +254,10 @@ def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
     section = ""
     for name, arrays in pairs.items():
         x, pressure = arrays["x"], arrays["pressure"]
-        if x.shape[1] == 3:  # 3D: the nodes of the row nearest the interface's mid z
+        if f"contact_{name}_row_x" in data.files:  # 3D triangles: the facets' cut
+            x, pressure = data[f"contact_{name}_row_x"], data[f"contact_{name}_row_pressure"]
+            section = f" at z = {float(x[:, 2].mean()):.4g} m"
+        elif x.shape[1] == 3:  # 3D: the nodes of the row nearest the interface's mid z
             row = mid_row(x)
             section = f" at z = {float(x[row, 2].mean()):.4g} m"
             x, pressure = x[row], pressure[row]

@@ -23,7 +23,7 @@ from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
 from breakwater.outputs.checkpoint import CheckpointError
 from breakwater.outputs.monitor import interface_state
-from breakwater.outputs.staticsummary import resolution_warnings, static_summary
+from breakwater.outputs.staticsummary import resolution_warnings, static_summary, triangle_row
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
@@ -68,6 +68,12 @@ def start(r: Session) -> None:
     st.static = static_summary(m, row, interface, st.static_iterations, s.contacts)
     st.static.update(init.summary())
     st.contact = sm.quality_inputs(s.contacts, s.u)
+    if m.pairs:  # a tetrahedral interface's pressure along its mid z, for the figure
+        key = f"contact_{s.contacts[0].name}"
+        cut = triangle_row(m, m.pairs[0].spec.interface, interface[f"{key}_x"],
+                           interface[f"{key}_pressure"])
+        if cut is not None:
+            interface = {**interface, f"{key}_row_x": cut[0], f"{key}_row_pressure": cut[1]}
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)
     r.log_quality()
     for line in resolution_warnings(row, st.contact, m.gdim):
