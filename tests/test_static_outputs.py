@@ -52,6 +52,16 @@ WEIGHT = ρ * G * W * H      # N/m
 P = 1e3                     # Pa: the uniform pressure
 
 
+SHORT_RUN = """[time]
+dt = 1e-3
+end_time = 2e-3
+[output]
+figures = false
+field_interval = 0
+"""
+"""Two steps after the static state, no figures or fields: the runs that check it."""
+
+
 def _bodies(*names: str) -> str:
     """The case file's [bodies.<name>] tables, each of the tests' material."""
     return "".join(f"[bodies.{b}]\ndensity = {ρ}\npoisson = {ν}\nyoung_modulus = {E}\n"
@@ -306,13 +316,7 @@ slave_surface = "block_bottom"
 master_surface = "slope_top"
 penalty = 5e10
 friction = {friction}
-[time]
-dt = 1e-3
-end_time = 2e-3
-[output]
-figures = false
-field_interval = 0
-''', encoding="utf-8")
+{SHORT_RUN}''', encoding="utf-8")
     COMM.barrier()
     static = _run(shared_dir / "incline.toml", shared_dir / "out")["static"]
     weight = ρ * G * 0.1 * 0.05
@@ -354,13 +358,7 @@ slave_surface = "upper_bottom"
 master_surface = "lower_top"
 penalty = 1e12
 friction = 0.3
-[time]
-dt = 1e-3
-end_time = 2e-3
-[output]
-figures = false
-field_interval = 0
-''', encoding="utf-8")
+{SHORT_RUN}''', encoding="utf-8")
     COMM.barrier()
     static = _run(shared_dir / "stack.toml", shared_dir / "out")["static"]
     weight = ρ * G * (0.2 * 0.08 + 0.14 * 0.06)
