@@ -174,6 +174,15 @@ class ContactModel(ModelGroups):
         self._solvers = 0  # solvers built on this model (see options_prefix)
         self.initial = InitialSpec()
 
+    def pair_bodies(self) -> list[tuple[int, int, str]]:
+        """Each pair's slave and master body indices and its contact surface group.
+
+        Conforming pairs first (their interface), then general ones (their slave surface).
+        """
+        out = [(p.slave, p.master, p.spec.interface) for p in self.pairs]
+        return out + [(self.body(p.slave).index, self.body(p.master).index, p.slave_surface)
+                      for p in self.surface_pairs]
+
     # --- set-up -------------------------------------------------------------------
 
     def _build_pair(self, k: int, pair: ContactPair) -> PairData:

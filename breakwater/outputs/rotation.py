@@ -73,7 +73,8 @@ class Rotations:
         """The columns at the state ``u`` (one Function per body; collective)."""
         local = [float(b @ f.x.array[:n]) for f, bs, n in zip(u, self._b, self._owned,
                                                                strict=True) for b in bs]
-        total = np.array(self.comm.allreduce(np.array(local), op=MPI.SUM))
+        total = np.array(local)
+        self.comm.Allreduce(MPI.IN_PLACE, total, op=MPI.SUM)
         out, k = {}, 0
         for column, bs in zip(self.columns, self._b, strict=True):
             ω = total[k:k + len(bs)]

@@ -56,11 +56,8 @@ def _links(model: ContactModel) -> list[tuple[int, int]]:
     slope's weight, 20x the block's). Without gravity the slave rests on the master.
     """
     height = _heights(model)
-    pairs = [(p.slave, p.master, p.spec.interface) for p in model.pairs]
-    pairs += [(model.body(p.slave).index, model.body(p.master).index, p.slave_surface)
-              for p in model.surface_pairs]
     out = []
-    for s, m, group in pairs:
+    for s, m, group in model.pair_bodies():
         contact = _mean_height(model, _facet_midpoints(model, group))
         out.append((s, m) if height[s] >= contact else (m, s))
     return out

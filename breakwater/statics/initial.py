@@ -170,10 +170,7 @@ def unsupported(model: ContactModel) -> str | None:
             i = group[i]
         return i
 
-    links = [(p.slave, p.master) for p in model.pairs]
-    links += [(model.body(p.slave).index, model.body(p.master).index)
-              for p in model.surface_pairs]
-    for s, m in links:
+    for s, m, _ in model.pair_bodies():
         group[root(s)] = root(m)
     held = {root(b.index) for b in model.bodies if model.fixed_on(b.spec.name)}
     for b in model.bodies:
