@@ -9,12 +9,15 @@ import json
 import pathlib
 import sys
 
+import gmsh
 import pytest
 from mpi4py import MPI
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
+from breakwater.meshes import gmsh_session
+
 from breakwater import cli
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import OutputSpec, TimeSpec
@@ -94,3 +97,68 @@ def test_failed_static_state_report_and_summary(mesh_path, shared_dir, capsys):
     if COMM.rank == 0:
         assert "solver: no time step taken" in report
         assert "None" not in report and "mean n/a" not in report
+
+
+def _rectangle_mesh(path: pathlib.Path, name: str, y0: float, first_tag: int,
+                    entity: int) -> None:
+    """A 0.2 × 0.05 rectangle at height y0, meshed alone (cells ``name``, gmsh Surface
+    ``entity``), its node and element tags from ``first_tag`` (rank 0)."""
+    with gmsh_session():
+        occ = gmsh.model.occ
+        surface = occ.addRectangle(-0.1, y0, 0.0, 0.2, 0.05, tag=entity)
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(2, [surface], first_tag, name)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.025)
+        gmsh.model.mesh.generate(2)
+        gmsh.option.setNumber("Mesh.FirstNodeTag", first_tag)
+        gmsh.option.setNumber("Mesh.FirstElementTag", first_tag)
+        gmsh.model.mesh.renumberNodes()
+        gmsh.model.mesh.renumberElements()
+        gmsh.write(str(path))
+
+
+def _merged(folder: pathlib.Path, name: str, second_tag: int, second_entity: int
+            ) -> pathlib.Path:
+    """Two rectangles meshed apart (``a`` on ``b``) and merged into one ``.msh`` by gmsh:
+    ``a``'s node and element tags from ``second_tag``, its surface ``second_entity``
+    (``b``'s: 1 and 1)."""
+    path = folder / f"{name}.msh"
+    if COMM.rank == 0:
+        _rectangle_mesh(folder / f"{name}_b.msh", "b", 0.0, 1, 1)
+        _rectangle_mesh(folder / f"{name}_a.msh", "a", 0.05, second_tag, second_entity)
+        with gmsh_session():
+            gmsh.merge(str(folder / f"{name}_b.msh"))
+            gmsh.merge(str(folder / f"{name}_a.msh"))
+            gmsh.write(str(path))
+    COMM.barrier()
+    return path
+
+
+def test_meshes_merged_with_repeated_node_tags_are_refused(folder):
+    # Each body meshed alone numbers its nodes from 1; gmsh merges the two files keeping
+    # both sets, so tags repeat and dolfinx joined cells to the other body's nodes (the
+    # run refused "cells overlap" or "curved cell folds", blaming the mesh's shape).
+    with pytest.raises(MeshError, match=r"node tags appear twice .*Mesh\.FirstNodeTag"):
+        read_mesh(_merged(folder, "merged_repeated", 1, 2), COMM)
+
+
+def test_meshes_merged_with_repeated_entity_tags_are_refused(folder):
+    # Both files' rectangles are gmsh Surface 1: the merge joins them into one entity in
+    # both cell groups (dolfinx: "All cells are expected to be tagged once", a traceback).
+    with pytest.raises(MeshError, match=r"Surface 1 are in both 'b' and 'a'"):
+        read_mesh(_merged(folder, "merged_entities", 100000, 1), COMM)
+
+
+def test_meshes_merged_with_distinct_tags_read(folder):
+    # The same merge with the second body's tags from 100000 (gmsh's Mesh.FirstNodeTag):
+    # legal, but tags with a gap made dolfinx's reader fail (AssertionError). Read, each
+    # body's area is its rectangle's, 0.2 × 0.05 = 0.01 m² (to round-off).
+    import dolfinx
+    import ufl
+
+    data = read_mesh(_merged(folder, "merged_apart", 100000, 2), COMM)
+    for name in ("a", "b"):
+        dx = ufl.Measure("dx", domain=data.mesh, subdomain_data=data.cell_tags)
+        area = dolfinx.fem.assemble_scalar(dolfinx.fem.form(
+            1.0 * dx(data.physical_groups[name].tag)))
+        assert COMM.allreduce(area) == pytest.approx(0.01, rel=1e-12)

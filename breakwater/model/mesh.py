@@ -139,7 +139,8 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
         groups (2 or 3).
 
     Raises:
-        MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups.
+        MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups; node
+            tags that repeat (two meshes numbered apart and merged into one file).
     """
     gmsh.merge(str(path))
     groups = gmsh.model.getPhysicalGroups()
@@ -150,8 +151,20 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
         if gdim not in (2, 3):
             raise MeshError(f"{path}: no surface (2D) or volume (3D) physical group: "
                             "name the bodies' cells in gmsh (Physical Surface/Volume)")
-    if len(gmsh.model.mesh.getNodes()[0]) == 0:
+    _single_body_cells(path, gdim)
+    tags = gmsh.model.mesh.getNodes()[0]
+    if len(tags) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
+    repeated = len(tags) - len(np.unique(tags))
+    if repeated:  # cells would join nodes of both meshes: folded or overlapping cells
+        raise MeshError(f"{path}: {repeated} node tags appear twice (meshes numbered apart "
+                        "and merged?): mesh the bodies in one gmsh model (Merge their .geo "
+                        "files, not their .msh), or write the second with "
+                        "Mesh.FirstNodeTag and Mesh.FirstElementTag above the first's")
+    if tags.min() != 1 or tags.max() != len(tags):
+        # Gaps in the tags (legal, e.g. two meshes merged with distinct first tags):
+        # dolfinx's reader asserts 1..n (AssertionError). Renumbered in their order.
+        gmsh.model.mesh.renumberNodes()
     types, _, _ = gmsh.model.mesh.getElements(gdim)
     if len(types) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
@@ -163,6 +176,30 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
     if gdim == 2:
         check_cells(path)
     return gdim
+
+
+def _single_body_cells(path: pathlib.Path, gdim: int) -> None:
+    """Refuse cells in two physical groups of dimension ``gdim`` (rank 0).
+
+    A gmsh entity in two cell groups puts its cells in two bodies (dolfinx's reader
+    raised "All cells are expected to be tagged once"). Two meshes merged into one file
+    do it silently where their entity tags repeat (each file's first surface is
+    Surface 1: gmsh joins them into one entity holding both bodies' cells).
+
+    Raises:
+        MeshError: Naming the entity and both groups.
+    """
+    owner: dict[int, str] = {}
+    for dim, tag in gmsh.model.getPhysicalGroups(gdim):
+        name = gmsh.model.getPhysicalName(dim, tag) or str(tag)
+        for entity in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+            other = owner.setdefault(int(entity), name)
+            if other != name:
+                kind = "Surface" if gdim == 2 else "Volume"
+                raise MeshError(f"{path}: the cells of gmsh {kind} {entity} are in both "
+                                f"'{other}' and '{name}' (a cell belongs to one body; "
+                                "meshes merged whose entity tags repeat? give each file's "
+                                "entities distinct tags, or mesh the bodies in one model)")
 
 
 DEGENERATE = 1e-6
