@@ -28,6 +28,7 @@ from breakwater.common.files import read_history
 from breakwater.contact.penetration import (
     _motion_bound,
     allowed_depth,
+    meshed_overlap,
     screen_bound,
     step_penetration,
 )
@@ -159,6 +160,17 @@ def test_initial_overlap(sunk: float, shared_dir: pathlib.Path) -> None:
         stepper = GN22(model, 1e-3)
         assert [p.static_check() for p in stepper.contacts] == [None]
         stepper.destroy()
+        # Touching: nothing to say. 1 mm in (a tenth of the 10 mm facets, above OVERLAP):
+        # the run warns, naming the depth and the block's bottom nodes inside the base
+        # (its 7 quadratic facets: 2·7 + 1 = 15 nodes); before, the static state pushed
+        # the block out in silence, its displacements and settlement holding the 1 mm.
+        warning = meshed_overlap(model, pair)
+        if sunk == 0.0:
+            assert warning is None
+        else:
+            assert warning is not None and warning.startswith(
+                "contact 'sliding': the meshes overlap: 15 slave node(s) start inside the "
+                "master 'base', the deepest 0.001 m at (")
         return
     with pytest.raises(MeshError, match=message):  # any stepper built on the model
         GN22(model, 1e-3)

@@ -55,7 +55,8 @@ from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["StepCheck", "allowed_depth", "initial_overlap", "search_radius", "step_penetration"]
+__all__ = ["OVERLAP", "StepCheck", "allowed_depth", "initial_overlap", "meshed_overlap",
+           "search_radius", "step_penetration"]
 
 
 def search_radius(spec: SurfacePair, master: Surface) -> float:
@@ -87,13 +88,20 @@ def _point(x: np.ndarray) -> str:
     return "(" + ", ".join(f"{c:.4g}" for c in x) + ") m"
 
 
-def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
-    """Why the pair's bodies overlap beyond what its search sees at t = 0 (collective).
+OVERLAP = 1e-3
+"""A slave node that starts deeper inside the master than this fraction of the master
+facet under it is an overlap of the meshes (:func:`meshed_overlap`), not round-off."""
+
+
+def _depths(model: ContactModel, spec: SurfacePair
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] | None:
+    """The slave nodes inside the master body at t = 0 and their depths (collective).
 
     Returns:
-        The reason (the deepest slave node: its position, its depth and the depth the
-        pair sees), the same on every rank; None when no slave node lies inside the
-        master body deeper than :func:`allowed_depth` (or beyond the search radius).
+        Those nodes, their depths below the master surface (inf: no master surface point
+        within the search radius), the depth each may have (:func:`allowed_depth` of
+        the facet under it, 0 without one), the length of that facet (chord, 0 without
+        one) and the search radius; None when no slave node lies inside a master cell.
     """
     slave = gather_surface(model, None, spec.slave, (spec.slave_surface,))
     master = gather_surface(model, None, spec.master, spec.master_groups)
@@ -132,14 +140,31 @@ def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
         n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
         depth[on] = -np.sum((nodes[k][on] - x_bar) * n, axis=1)
     limit = np.where(on, allowed[np.maximum(facet, 0)], 0.0)
+    length = np.where(on, np.linalg.norm(chord, axis=1)[np.maximum(facet, 0)], 0.0)
+    return nodes[k], depth, limit, length, radius
+
+
+def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
+    """Why the pair's bodies overlap beyond what its search sees at t = 0 (collective).
+
+    Returns:
+        The reason (the deepest slave node: its position, its depth and the depth the
+        pair sees), the same on every rank; None when no slave node lies inside the
+        master body deeper than :func:`allowed_depth` (or beyond the search radius).
+    """
+    found = _depths(model, spec)
+    if found is None:
+        return None
+    nodes, depth, limit, _, radius = found
     bad = np.flatnonzero(depth > limit)
     if not len(bad):
         return None
     worst = bad[np.argmax(np.where(np.isinf(depth[bad]), np.inf, depth[bad] / limit[bad]))]
-    where = _point(nodes[k][worst])
+    where = _point(nodes[worst])
     if np.isinf(depth[worst]):
         # No master surface point within the radius: measure the distance to it.
-        far = _distance(nodes[k][worst], X)
+        master = gather_surface(model, None, spec.master, spec.master_groups)
+        far = _distance(nodes[worst], master.X)
         return (f"contact '{spec.name}': slave node at {where} starts inside the master "
                 f"'{spec.master}', {far:.3g} m from its contact surface, beyond the "
                 f"contact search radius {radius:.3g} m: the meshes of the two bodies "
@@ -148,6 +173,35 @@ def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
             f"inside the master '{spec.master}', deeper than the contact sees "
             f"({limit[worst]:.3g} m: the search radius or the master's element under it): "
             "the meshes of the two bodies overlap (move the slave body out of the master)")
+
+
+def meshed_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
+    """A warning where the meshes overlap within what the pair sees (collective).
+
+    A slave node inside the master deeper than :data:`OVERLAP` of the master facet
+    under it (0.3 mm on 12 mm facets: a caisson drawn into its mound): the static state
+    pushes the bodies apart by it, silently before, so that its displacements, its
+    settlement and the penalty's quality check (which then advised refining the mesh)
+    include the overlap.
+
+    Returns:
+        One line (the deepest node, its depth, how many nodes), the same on every rank;
+        None without such a node.
+    """
+    found = _depths(model, spec)
+    if found is None:
+        return None
+    nodes, depth, _, length, _ = found
+    over = np.flatnonzero(np.isfinite(depth) & (depth > OVERLAP * length))
+    if not len(over):
+        return None
+    worst = over[np.argmax(depth[over])]
+    return (f"contact '{spec.name}': the meshes overlap: {len(over)} slave node(s) start "
+            f"inside the master '{spec.master}', the deepest {depth[worst]:.3g} m at "
+            f"{_point(nodes[worst])} ({depth[worst] / length[worst]:.1%} of the facet "
+            "under it); the static state pushes the bodies apart by it, and its "
+            "displacements and settlement include it: move the slave body out of the "
+            "master in the mesh")
 
 
 def _distance(point: np.ndarray, X: np.ndarray) -> float:

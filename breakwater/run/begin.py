@@ -18,6 +18,7 @@ from mpi4py import MPI
 
 from breakwater.common import files
 from breakwater.common.errors import CaseError
+from breakwater.contact.penetration import meshed_overlap
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
@@ -51,6 +52,10 @@ def start(r: Session) -> None:
     for info in r.extra.get("loads", {}).values():
         for line in info.get("warnings", ()):
             log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
+    for spec in m.surface_pairs:  # meshed into each other (within the search's reach)
+        line = meshed_overlap(m, spec)
+        if line is not None:
+            log.warning("%s", line)
     m.set_time(0.0)
     init = initial_state(m)
     st.static_iterations = init.iterations
