@@ -385,6 +385,11 @@ def test_centre_of_a_curved_interface() -> None:
     # is at 0.14, 0.15 at 0.18), not the surface's own, where the pressure was 0.
     pressure = np.array([0.0, 1.0, 0.0, 2.0, 1.0, 0.0])
     assert edge_centre(line, pressure) == (1, 4, 3)
+    # The nodal pressure leaks past the contact's end: the Goda mound crest as the slave
+    # read 0.04 Pa (6e-6 of the largest, 6533 Pa at the caisson's corner) at its node
+    # 10 mm past the corner, which the summary took as the edge (edge pressure 0.04 Pa).
+    pressure = np.array([0.0, 0.04, 6533.0, 4200.0, 6533.0, 0.04])
+    assert edge_centre(line, pressure) == (2, 4, 3)
 
 
 def test_an_unresolved_static_contact_is_warned() -> None:
