@@ -286,8 +286,10 @@ def _parser() -> argparse.ArgumentParser:
     flags = argparse.ArgumentParser(add_help=False)
     flags.add_argument("--set", action="append", metavar="KEY=VALUE",
                        help="override a case field by its dotted path, e.g. "
-                            "time.dt=5e-5 or bodies.mound.density=1800 (repeatable; "
-                            "sweep: for every case)")
+                            "time.dt=5e-5 or bodies.mound.density=1800; a table value "
+                            "merges into the case's table (damping={alpha=0.1} keeps "
+                            "beta) or adds a new entry (fixed.caisson_rear={components=[0]})"
+                            " (repeatable; sweep: for every case)")
     noise = flags.add_mutually_exclusive_group()
     noise.add_argument("-q", "--quiet", action="store_true", help="print only warnings "
                        "and errors")

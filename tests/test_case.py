@@ -123,12 +123,6 @@ def test_overrides_by_name_index_and_table():
     assert case.gravity == (0.0, -10.0)
 
 
-def test_override_replaces_a_load_by_an_impulse():
-    case = load_case(None, ['loads.impact={group="impact", impulse=2.81, duration=1e-3}'])
-    (load,) = case.loads
-    assert load.pendulum is None and load.total_impulse == 2.81 and load.duration == 1e-3
-
-
 def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monkeypatch):
     generate(tmp_path / "m.msh", comm=MPI.COMM_SELF)
     monkeypatch.chdir(tmp_path)

@@ -26,7 +26,8 @@ table by table. ``--set key=value`` overrides (:func:`load_case`'s ``overrides``
 change any field by its dotted path, e.g. ``time.dt=5e-5``,
 ``bodies.mound.density=1800``, ``contact.interface.friction=0.5`` (an entry of a
 named collection may also be given by its index: ``contact.0.friction=0.5``); values
-are TOML values (a bare word is taken as a string).
+are TOML values (a bare word is taken as a string); a table value merges into the
+case's table, or makes a new entry of a named collection (``fixed.rear={components=[0]}``).
 
 Every problem with a case is a :class:`CaseError` with one line naming the file (or
 ``--set``), the field and the problem; :func:`case_reference` lists every key with its

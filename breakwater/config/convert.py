@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 import typing
 from dataclasses import MISSING, fields
 from typing import Any, Literal
@@ -79,21 +80,25 @@ def convert(root: type, tp: Any, value: Any, path: str) -> Any:
     want = type_name(tp)
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise InvalidField(path, f"expected a number, got {describe(value)}")
+            raise InvalidField(path, f"expected a number, got {describe(value)}"
+                               f"{_spelling(float, value)}")
         if not math.isfinite(value):
             raise InvalidField(path, f"must be finite (got {value})")
         return float(value)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise InvalidField(path, f"expected an integer, got {describe(value)}")
+            raise InvalidField(path, f"expected an integer, got {describe(value)}"
+                               f"{_spelling(int, value)}")
         return value
     if tp is bool:
         if not isinstance(value, bool):
-            raise InvalidField(path, f"expected true or false, got {describe(value)}")
+            raise InvalidField(path, f"expected true or false, got {describe(value)}"
+                               f"{_spelling(bool, value)}")
         return value
     if tp is str:
         if not isinstance(value, str):
-            raise InvalidField(path, f"expected a string, got {describe(value)}")
+            raise InvalidField(path, f"expected a string, got {describe(value)}"
+                               f"{_spelling(str, value)}")
         return value
     if typing.get_origin(tp) is Literal:
         choices = [str(a) for a in typing.get_args(tp)]
@@ -125,3 +130,38 @@ def convert(root: type, tp: Any, value: Any, path: str) -> Any:
                 continue
         raise InvalidField(path, f"expected a {want}, got {describe(value)}")
     raise TypeError(f"unsupported field type {tp!r}")  # pragma: no cover
+
+
+def _spelling(tp: type, value: Any) -> str:
+    """How to write ``value`` as a TOML ``tp``, when it reads as one: a hint, or ``""``.
+
+    A number or a boolean quoted (a spreadsheet's ``"1e10"``), written as Python or a
+    spreadsheet does (``.5``, ``5.``, ``True``, ``1`` for true), a whole float for an
+    integer (``1e6``), or a number or boolean for a string (a name ``1e3``).
+    """
+    if tp is str:
+        return " (quote it to give text)" if not isinstance(value, dict | list) else ""
+    if tp is bool:
+        if isinstance(value, str) and value.strip().lower() in ("true", "false"):
+            return f" (write {value.strip().lower()}: lowercase, unquoted)"
+        if isinstance(value, int | float) and value in (0, 1):
+            return f" (write {'true' if value else 'false'})"
+        return ""
+    if isinstance(value, str):
+        try:
+            number = float(value.replace("_", ""))
+        except ValueError:
+            return ""
+        if tp is int and number.is_integer() and abs(number) < 2**63:
+            return f" (write {int(number)}, unquoted)"
+        if tp is not float or not math.isfinite(number):
+            return ""
+        try:  # the text itself when TOML reads it (1e-4), else Python's spelling (.5)
+            text = value.strip() if isinstance(tomllib.loads(f"v = {value}")["v"], float) \
+                else repr(number)
+        except tomllib.TOMLDecodeError:
+            text = repr(number)
+        return f" (write {text}, unquoted)"
+    if tp is int and isinstance(value, float) and value.is_integer() and abs(value) < 2**63:
+        return f" (write {int(value)}: an integer has no point or exponent)"
+    return ""

@@ -152,6 +152,8 @@ def describe(value: Any) -> str:
         return "a table"
     if isinstance(value, list):
         return "an array"
+    if isinstance(value, bool):
+        return "true" if value else "false"  # as TOML writes it (Python's True misleads)
     return repr(value)
 
 

@@ -2,8 +2,9 @@
 
 :func:`apply_override` changes the raw data of a file before it is built: the key is
 checked table by table (unknown keys refused with the closest valid one), an entry of
-a named collection is given by its name or its index, a whole entry may be given (or
-created) as an inline table, a path value is resolved against the working directory;
+a named collection is given by its name or its index, a table value is merged into the
+case's table key by key (as ``extends`` merges files; a new entry of a named collection
+is given whole, as a table), a path value is resolved against the working directory;
 the value is a TOML value, a bare word a string (:func:`parse_value`).
 """
 
@@ -56,8 +57,16 @@ def path_key(paths: Mapping[str, Collection[str]], here: str) -> Collection[str]
 
 
 def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[str, Any],
-                   spec: str, origins: dict[str, str]) -> None:
+                   spec: str, origins: dict[str, str],
+                   merged: list[str] | None = None) -> None:
     """Apply one ``key=value`` override to the raw data, checking the key path.
+
+    A table value is merged into the case's table of that key, key by key, as
+    ``extends`` merges files: ``damping={alpha=0.1}`` is ``damping.alpha=0.1``, the
+    table's other keys stay (replacing the table would set them back to their defaults,
+    silently). A table value for an entry of a named collection that the case does not
+    have creates it (``fixed.sides={components=[0]}``); a dotted key into such an
+    entry is refused, naming the entries (a typo of a name is more likely).
 
     Args:
         root: The dataclass of a whole file.
@@ -66,6 +75,8 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
         raw: The data of the file(s), changed in place.
         spec: The override, ``key=value``.
         origins: Where each key came from; the key's entries become ``--set``.
+        merged: When given, the dotted keys of the tables a table value was merged into
+            are appended (for the messages).
 
     Raises:
         CaseError: A malformed override, or a key path the schema does not have.
@@ -79,14 +90,61 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
     value = parse_value(text)
     if out_of_range(value) is not None:
         raise CaseError(f"{OVERRIDE} {key}: {OUT_OF_RANGE}")
+    _set(root, paths, raw, parts, value, origins, merged)
+
+
+def _set(root: type, paths: Mapping[str, Collection[str]], raw: dict[str, Any],
+         parts: list[str], value: Any, origins: dict[str, str],
+         merged: list[str] | None) -> None:
+    """Set the value of the key path ``parts`` (a table value: key by key)."""
+    node, part, here, table = _walk(root, raw, parts, origins)
+    if table and isinstance(value, dict):
+        if isinstance(node.get(part), dict):
+            if merged is not None and node[part]:
+                merged.append(here)
+        else:  # a table the override creates (or a value it replaces): its own keys
+            node[part] = {}
+            _forget(here, origins)
+            origins[here] = OVERRIDE
+        for k, v in value.items():
+            _set(root, paths, raw, [*parts, k], v, origins, merged)
+        return
+    not_paths = path_key(paths, here)
+    if not_paths is not None and isinstance(value, str) and value not in not_paths:
+        value = resolved(pathlib.Path(), value, f"{OVERRIDE} {'.'.join(parts)}")
+    node[part] = value
+    _forget(here, origins)
+    origins[here] = OVERRIDE
+    record(value, OVERRIDE, here, origins)
+
+
+def _forget(here: str, origins: dict[str, str]) -> None:
+    """Drop the origins of the key ``here`` and of the keys under it."""
+    for p in [p for p in origins if p == here or p.startswith(here + ".")]:
+        del origins[p]
+
+
+def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, str]
+          ) -> tuple[dict[str, Any], str, str, bool]:
+    """Where the key path ``parts`` goes: its table, last key and dotted path.
+
+    Also whether the schema's value there is a table (a dataclass, a named collection
+    or an entry of one). The tables on the way that the case does not have are made
+    (their origin ``--set``).
+
+    Raises:
+        CaseError: A key path the schema does not have, or a dotted key into an entry
+            of a named collection that the case does not have.
+    """
+    key = ".".join(parts)
     cls: Any = root
     node = raw
     done: list[str] = []
     i = 0
-    while i < len(parts):
+    while True:
         part = parts[i]
         here = ".".join([*done, part])
-        if not (dataclasses.is_dataclass(cls)):
+        if not dataclasses.is_dataclass(cls):
             raise CaseError(f"{OVERRIDE} {key}: '{'.'.join(done)}' is not a table")
         key_name = key_field(cls)
         valid = [f.name for f in fields(cls) if f.init and f.name != key_name]
@@ -97,9 +155,12 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
         tp = type_hints(cls)[part]
         item = keyed_item(tp)
         last = i == len(parts) - 1
+        target = optional(tp) or tp
+        if last:
+            return node, part, here, item is not None or dataclasses.is_dataclass(target)
         if part not in node:  # a table the override creates: its keys are its own
             origins[here] = OVERRIDE
-        if item is not None and not last:
+        if item is not None:
             table = node.setdefault(part, {})
             if not isinstance(table, dict):
                 raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
@@ -107,35 +168,23 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
             entry = parts[i + 1]
             if entry not in table and entry.isdigit() and int(entry) < len(names):
                 entry = names[int(entry)]
-            whole = i + 1 == len(parts) - 1  # the whole entry is set (or created)
-            if entry not in table and not (whole and isinstance(value, dict)):
+            if i + 1 == len(parts) - 1:  # the whole entry is set (or created)
+                return table, entry, f"{here}.{entry}", True
+            if entry not in table:
                 raise CaseError(f"{OVERRIDE} {key}: no entry '{parts[i + 1]}' in "
                                 f"{here}{suggest(parts[i + 1], names)} "
-                                f"(entries: {', '.join(names) or 'none'})")
+                                f"(entries: {', '.join(names) or 'none'}; a new entry is "
+                                f"given whole: {OVERRIDE} '{here}.{parts[i + 1]}="
+                                "{key = value, ...}')")
             done += [part, entry]
-            if whole:
-                node, part, here = table, entry, ".".join(done)
-                break
             node, cls = table[entry], item
             i += 2
             continue
-        target = optional(tp) or tp
-        if not last:
-            if not dataclasses.is_dataclass(target):
-                raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
-            sub = node.setdefault(part, {})
-            if not isinstance(sub, dict):
-                raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
-            done.append(part)
-            node, cls = sub, target
-            i += 1
-            continue
-        break
-    not_paths = path_key(paths, here)
-    if not_paths is not None and isinstance(value, str) and value not in not_paths:
-        value = resolved(pathlib.Path(), value, f"{OVERRIDE} {key}")
-    node[part] = value
-    for p in [p for p in origins if p == here or p.startswith(here + ".")]:
-        del origins[p]
-    origins[here] = OVERRIDE
-    record(value, OVERRIDE, here, origins)
+        if not dataclasses.is_dataclass(target):
+            raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
+        sub = node.setdefault(part, {})
+        if not isinstance(sub, dict):
+            raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
+        done.append(part)
+        node, cls = sub, target
+        i += 1

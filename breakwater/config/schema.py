@@ -90,8 +90,9 @@ class Schema:
               check: Callable[[Any], None] | None) -> Any:
         origins: dict[str, str] = {}
         raw = self._load_raw(file, (), origins)
+        merged: list[str] = []
         for spec in overrides:
-            apply_override(self.root, self.paths, raw, spec, origins)
+            apply_override(self.root, self.paths, raw, spec, origins, merged)
         label = display(file)
         try:
             obj = convert.build(self.root, self.root, raw, "")
@@ -101,7 +102,11 @@ class Schema:
             where = origin(e.field, origins, label)
             if where not in (label, OVERRIDE):  # a key of a file this one extends
                 where = f"{label} (extends {where})"
-            raise CaseError(f"{where}: {e}") from None
+            table = next((t for t in merged if e.field == t or e.field.startswith(t + ".")),
+                         None)
+            hint = "" if table is None else \
+                f" ({OVERRIDE} merged a table into the case's {table}, whose other keys stay)"
+            raise CaseError(f"{where}: {e}{hint}") from None
         return obj
 
     # --- files and extends -----------------------------------------------------------------

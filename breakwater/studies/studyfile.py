@@ -29,9 +29,10 @@ A study file (TOML) names a base case and how to vary it::
 
 Keys are any case key in the ``--set key=value`` dotted syntax; every case is read by
 :func:`breakwater.casefile.case.load_case` with the study's values as overrides, so it is
-validated exactly as a case file with ``--set``. The points are the product of the
-``[grid]`` lists, the ``[zip]`` rows and the ``[samples]`` rows (any of them may be
-absent, not all); samples draw each key in file order, point after point, from
+validated exactly as a case file with ``--set`` (a table merges into the case's, or is a
+new entry of a named collection: ``"fixed.rear" = {components = [0]}``). The points
+are the product of the ``[grid]`` lists, the ``[zip]`` rows and the ``[samples]`` rows
+(any of them may be absent, not all); samples draw each key in file order, point after point, from
 ``numpy.random.default_rng(seed)`` (``uniform``: in [a, b); ``log_uniform``: its
 logarithm uniform; ``choice``: one of a list). Derived keys are set after the varied
 ones (a table lookup matches a number to 1e-9 relative).
@@ -387,15 +388,17 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
         base = str(candidate.resolve())
     elif pathlib.Path(base).suffix or "/" in base:
         raise r.error("base", f"case file not found: {candidate}")
-    fixed = _flatten(data.get("set", {})) if isinstance(data.get("set", {}), Mapping) \
-        else None
-    if fixed is None:
+    if not isinstance(data.get("set", {}), Mapping):
         raise r.error("set", "expected a table of key = value")
+    # As given: a table is merged into the case's, or is a new entry of a named
+    # collection ("fixed.rear" = {components = [0]}), which its dotted keys could not make.
+    fixed = dict(data.get("set", {}))
     for spec in overrides:
         key, sep, text = spec.partition("=")
         if not sep:
             raise CaseError(f"{OVERRIDE} {spec}: expected key=value")
         fixed[key.strip()] = _Literal(text.strip())
+    fixed_keys = _flatten(fixed)
     grid = r.values(data.get("grid", {}), "grid")
     for key, listed in grid.items():  # two identical cases (a storm counted twice)
         texts = [toml_literal(v) for v in listed]
@@ -420,12 +423,12 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
         raise r.error("", "empty study: nothing to vary (give [grid], [zip] or [samples])")
     seen: dict[str, str] = {}
     for key in [*varied, *(d.key for d in derived)]:
-        if key in seen or key in fixed:
+        if key in seen or key in fixed_keys:
             raise r.error(key, "set twice (a key is varied, derived or set only once)")
         seen[key] = key
         if key in RESERVED:
             raise r.error(key, "is set by the sweep (one folder per case)")
-    for key in fixed:
+    for key in fixed_keys:
         if key in RESERVED:
             raise r.error(f"set.{key}", "is set by the sweep (one folder per case)")
     for d in derived:
@@ -477,9 +480,16 @@ def _relative_to_study(study: Study, values: Mapping[str, Any]) -> dict[str, Any
     from breakwater.casefile.case import is_file_value
 
     folder = study.path.parent
-    return {k: str((folder / v).resolve()) if not isinstance(v, _Literal)
-            and is_file_value(k, v) and path_problem(v) is None else v  # else the case's
-            for k, v in values.items()}  # error names the path (tomlfiles.resolved)
+
+    def relative(key: str, value: Any) -> Any:
+        if isinstance(value, Mapping):  # a table: its keys' paths
+            return {k: relative(f"{key}.{k}", v) for k, v in value.items()}
+        if not isinstance(value, _Literal) and is_file_value(key, value) \
+                and path_problem(value) is None:  # else the case's error names the path
+            return str((folder / value).resolve())  # (tomlfiles.resolved)
+        return value
+
+    return {k: relative(k, v) for k, v in values.items()}
 
 
 def case_of(study: Study, point: Point, folder: pathlib.Path) -> Case:
