@@ -26,7 +26,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from breakwater import __version__
-from breakwater.common import files
+from breakwater.common import files, liveness
 from breakwater.common.errors import BreakwaterError, CaseError, MeshError
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
 from breakwater.studies.studyfile import MAX_POINTS
@@ -135,8 +135,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     comm = MPI.COMM_WORLD
     case = _load(args)
     folder = case.output_directory
-    _check_output(folder, "--out" if args.out is not None else "output.directory",
-                  _inputs(args, case), comm)
+    where = "--out" if args.out is not None else "output.directory"
+    _check_output(folder, where, _inputs(args, case), comm)
+    on_rank_zero(comm, lambda: liveness.check_not_running(folder, where))
     if args.resume:
         # Fail early, before meshing and calibrating, when there is nothing to resume;
         # run() then checks that the case (case.toml) is the checkpoint's.

@@ -25,6 +25,7 @@ import breakwater  # noqa: F401  (imports the PETSc of the dolfinx wheel first)
 # isort: split
 from breakwater import cli
 from breakwater.common.errors import CaseError
+from breakwater.outputs import checkpoint
 from breakwater.studies.columns import TABLE_COLUMNS, headline_columns
 from breakwater.studies.studyfile import check_points, load_study, toml_literal
 from breakwater.studies.sweep import RECORD, TABLE, run_study
@@ -419,6 +420,56 @@ def test_resumed_case_counts_its_wall_time(tmp_path):
     assert summary["resumed_from"] and row["status"] == "finished"
     second_loop = float(row["loop_time"]) - float(first["loop_time"])
     assert 1000.0 + second_loop <= float(row["wall_time"]) < 1300.0
+
+
+@pytest.mark.serial
+def test_a_case_killed_by_sigkill_reads_stopped_and_keeps_its_wall_time(tmp_path):
+    """SIGKILL of a study in a case's time loop, after a checkpoint.
+
+    Before: the case's record and ``summary.json`` said ``running`` for good (sweep.csv
+    too, when read after the kill), and the rerun's ``wall_time`` counted the rerun
+    only (the record of a killed case has none). Now both record the process: the
+    table reads ``stopped``, and the rerun adds the killed run's wall time to its last
+    checkpoint (its summary's): made 1000 s here, so the total is at least 1000 s plus
+    the rerun's part of the loop (mesh and static state on top: below 1300 s).
+    """
+    from breakwater.common import liveness
+    from breakwater.studies.sweep import write_table
+
+    if COMM.size > 1:
+        pytest.skip("subprocess sweeps run serially")
+    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
+                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=0.2)
+    out = tmp_path / "out"
+    process = _sweep(path, out)
+    start = time.monotonic()
+    while not any(out.glob("case-*/checkpoint.npz")):
+        assert process.poll() is None and time.monotonic() - start < 120, \
+            process.communicate()
+        time.sleep(0.02)
+    process.send_signal(signal.SIGKILL)
+    process.communicate(timeout=120)
+    (folder,) = out.glob("case-*")
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "running" and summary["process"]["pid"] == process.pid
+    assert liveness.process_state(summary["process"]) == "gone"
+    study = load_study(path)
+    points, cases = check_points(study, out)
+    fingerprints = [checkpoint.case_fingerprint(c.resolved()) for c in cases]
+    write_table(out, points, study.keys, fingerprints)  # as any reader of the folder
+    (row,) = read_table(out / TABLE)
+    assert row["status"] == "stopped" and row["wall_time"] == "", row
+    killed = summary["solver"]["wall_time"]
+    (folder / "summary.json").write_text(json.dumps(
+        {**summary, "solver": {**summary["solver"], "wall_time": 1000.0}}))
+    rerun = _sweep(path, out)
+    _, err = rerun.communicate(timeout=300)
+    assert rerun.returncode == 0, err
+    (row,) = read_table(out / TABLE)
+    resumed = json.loads((folder / "summary.json").read_text())
+    assert resumed["resumed_from"] and row["status"] == "finished"
+    second_loop = float(row["loop_time"]) - killed  # (the checkpoint's wall time is
+    assert 1000.0 + second_loop <= float(row["wall_time"]) < 1300.0  # at most `killed`)
 
 
 # --- the calibration's reading of K_x (the paper-calibration study) -----------------------

@@ -30,7 +30,8 @@ Output files of a run (in the output directory):
 ``summary.json`` is written when the run starts (``finished: false``, ``status:
 "running"``), again at every checkpoint, and at the end (``status`` ``finished``,
 ``failed`` or ``interrupted``), so a folder whose run was killed still says that it
-did not finish.
+did not finish; while running it names its process (:mod:`breakwater.common.liveness`),
+so that a reader can tell a run killed by SIGKILL from one going on.
 """
 
 from __future__ import annotations

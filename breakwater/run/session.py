@@ -23,7 +23,7 @@ from typing import Any
 
 from dolfinx import fem
 
-from breakwater.common import files
+from breakwater.common import files, liveness
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.energy.ledger import EnergyLedger
@@ -156,6 +156,7 @@ class Session:
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
+        self.process = liveness.this_process()  # rank 0's is written: who runs the folder
         self.state = RunState.start(time)
         self.rows = HistoryRows(())  # (the run's columns once its history is opened)
         self.stepped: Stepped | None = None
@@ -234,8 +235,8 @@ class Session:
 
     def write_summary(self, summary: Mapping[str, Any]) -> None:
         """Write ``summary.json`` (rank 0; collective: an OutputError on every rank)."""
-        on_rank_zero(self.comm, lambda: bool(
-            files.atomic_write_json(self.directory / files.SUMMARY, summary)))
+        on_rank_zero(self.comm, lambda: bool(files.atomic_write_json(
+            self.directory / files.SUMMARY, {**summary, "process": self.process})))
 
     def log_quality(self, dynamic: bool = False) -> None:
         """Log (rank 0) the warnings of the contact quality not logged yet.

@@ -14,7 +14,9 @@
   outputs); when it ends, its group writes ``sweep_case.json`` there, atomically and
   last: the point, the case's fingerprint, the status (``finished``, ``failed`` with
   its one-line error, ``interrupted``), the wall time and the headline numbers of its
-  ``summary.json``;
+  ``summary.json``; while the case runs, ``running`` and the process that runs it
+  (:mod:`breakwater.common.liveness`): ``sweep.csv`` says ``stopped`` for a case whose
+  process is gone (a study killed by SIGKILL);
 - ``sweep.csv`` (one row per point: the values, status, wall time, error and headline
   numbers) is rewritten atomically after every case and by rank 0 at the end, with
   the figures of :mod:`breakwater.studies.plots`.
@@ -52,7 +54,7 @@ from typing import TYPE_CHECKING, Any
 
 from mpi4py import MPI
 
-from breakwater.common import files
+from breakwater.common import files, liveness
 from breakwater.common.console import StopSignal
 from breakwater.common.errors import CaseError
 from breakwater.common.gmshtools import settle_signal_handlers
@@ -147,7 +149,10 @@ def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str]
         assert rec is not None
         values = [_cell(p.values.get(k)) for k in keys]
         head = rec.get("headline", {})
-        writer.writerow([p.index, p.folder, *values, rec.get("status", "pending"),
+        status = rec.get("status", "pending")
+        if status == "running" and liveness.process_state(rec.get("process")) == "gone":
+            status = liveness.STOPPED  # killed (SIGKILL, a node lost): not running
+        writer.writerow([p.index, p.folder, *values, status,
                          _cell(rec.get("wall_time")), *(_cell(head.get(c)) for c in columns),
                          " | ".join(rec.get("warnings") or ()), rec.get("error") or ""])
     return files.atomic_write_text(out / TABLE, buffer.getvalue())
@@ -233,7 +238,8 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
 
         Returns:
             Whether to resume, and the wall time the case took before (its record's:
-            an interrupted run's; 0 when it starts afresh or its run was killed).
+            an interrupted run's; a killed run's summary's, to its last checkpoint; 0
+            when it starts afresh).
         """
         record = _read_json(folder / RECORD)
         if (folder / files.CHECKPOINT).is_file() and record is not None \
@@ -241,7 +247,12 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
             with contextlib.suppress(CheckpointError):
                 checkpoint.check(folder)
                 before = record.get("wall_time")
-                return True, float(before) if isinstance(before, int | float) else 0.0
+                if not isinstance(before, int | float):  # killed: its summary's, at the
+                    before = _wall_time(folder)  # last checkpoint (what was lost after
+                    # it is not counted)
+                files.atomic_write_json(folder / RECORD,  # running again, by this process
+                                        _record(point, fingerprint, "running"))
+                return True, float(before)
         if folder.exists():
             shutil.rmtree(folder)
         folder.mkdir(parents=True)
@@ -293,9 +304,20 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
 
 def _record(point: Point, fingerprint: str, status: str, error: str | None = None,
             wall: float | None = None, ranks: int | None = None) -> dict[str, Any]:
-    return {"case": point.index, "folder": point.folder, "values": point.values,
-            "fingerprint": fingerprint, "status": status, "error": error,
-            "wall_time": wall, "ranks": ranks, "headline": {}}
+    record = {"case": point.index, "folder": point.folder, "values": point.values,
+              "fingerprint": fingerprint, "status": status, "error": error,
+              "wall_time": wall, "ranks": ranks, "headline": {}}
+    if status == "running":  # who runs it: a killed case reads as stopped (liveness)
+        record["process"] = liveness.this_process()
+    return record
+
+
+def _wall_time(folder: pathlib.Path) -> float:
+    """The wall time in a killed run's ``summary.json`` (to its last checkpoint), or 0."""
+    summary = _read_json(folder / files.SUMMARY) or {}
+    wall = summary.get("solver", {}).get("wall_time") \
+        if isinstance(summary.get("solver"), dict) else None
+    return float(wall) if isinstance(wall, int | float) and math.isfinite(wall) else 0.0
 
 
 # --- the study ---------------------------------------------------------------------------
