@@ -144,6 +144,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
         on_rank_zero(comm, lambda: checkpoint.check(folder))
     _say(f"breakwater {__version__}: case '{case.name}' -> {folder}"
          + (" (resuming)" if args.resume else ""), args.quiet)
+    if comm.size > 1:  # ranks that wait for each other on shared cores crawl
+        from breakwater.common.cores import core_warning, host_usage
+
+        warning = core_warning(host_usage(comm), comm.size)
+        if warning is not None:
+            logging.getLogger("breakwater").warning("%s", warning)
     # SIGTERM or SIGINT while the case is meshed and calibrated: caught (it killed the
     # process, exit 143, leaving a half-made folder); the run then stops after its
     # static state, with a checkpoint, as at any step (the run's StopSignal nests).
@@ -351,7 +357,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="the study's folder (default: results/<study name>)")
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="ranks of each group running a case (must divide the number of "
-                        "ranks; default 1)")
+                        "ranks; default 1; a warning when the ranks exceed the cores, or "
+                        "the host is busy: such cases crawl)")
     p.add_argument("--max-points", type=int, default=MAX_POINTS, metavar="N",
                    help=f"refuse a study of more points (default {MAX_POINTS}): every "
                         "point's case is read before the study starts, and each runs")

@@ -56,6 +56,7 @@ from mpi4py import MPI
 
 from breakwater.common import files, liveness
 from breakwater.common.console import StopSignal
+from breakwater.common.cores import core_warning, host_usage
 from breakwater.common.errors import CaseError
 from breakwater.common.gmshtools import settle_signal_handlers
 from breakwater.common.parallel import on_rank_zero
@@ -441,6 +442,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         say(f"study '{study.name}': {len(points)} cases, {len(points) - len(todo)} finished "
             f"before, {len(todo)} to run by {groups} group(s) of {ranks_per_case} rank(s) "
             f"-> {folder}")
+    warning = core_warning(host_usage(comm), ranks_per_case,  # (collective)
+                           "--ranks-per-case 1")
+    if warning is not None and comm.rank == 0:  # also with --quiet, as the cases'
+        print(f"breakwater: warning: {warning}", file=sys.stderr, flush=True)
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
     signum = 0
