@@ -55,7 +55,23 @@ def test_a_merge_that_conflicts_is_refused_naming_the_merge():
         load_case(None, ['loads.impact={group="impact", impulse=2.81, duration=1e-3}'])
     message = str(info.value)
     assert "give either impulse or a [pendulum] table" in message and "\n" not in message
-    assert "merged a table into the case's loads.impact, whose other keys stay" in message
+    assert "merged a table into the case's loads.impact, whose other keys stay: --set " \
+        "'loads.impact={}' first empties it" in message
+
+
+def test_an_empty_table_empties_the_case_table():
+    """``{}`` empties (a merge of nothing would leave the case's table, silently), and
+    then a table replaces the case's: the load becomes an impulse, the defaults back."""
+    case = load_case(None, ["output.probes={}", "damping={}", "damping.alpha=0.1"])
+    assert case.output.probes == () and case.damping == DampingCase(alpha=0.1)
+    case = load_case(None, ["loads.impact={}",
+                            'loads.impact={group="impact", impulse=2.81, duration=1e-3}'])
+    (load,) = case.loads
+    assert load.pendulum is None and load.total_impulse == 2.81 and load.duration == 1e-3
+    # the table alone, as a new load would be (nothing of the pendulum load left)
+    new = load_case(None, ["loads.impact.enabled=false",
+                           'loads.pulse={group="impact", impulse=2.81, duration=1e-3}'])
+    assert load == dataclasses.replace(new.loads[1], name="impact")
 
 
 def test_a_load_changed_to_an_impulse_by_a_new_entry():

@@ -64,9 +64,11 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
     A table value is merged into the case's table of that key, key by key, as
     ``extends`` merges files: ``damping={alpha=0.1}`` is ``damping.alpha=0.1``, the
     table's other keys stay (replacing the table would set them back to their defaults,
-    silently). A table value for an entry of a named collection that the case does not
-    have creates it (``fixed.sides={components=[0]}``); a dotted key into such an
-    entry is refused, naming the entries (a typo of a name is more likely).
+    silently). An empty table empties it (``output.probes={}``: no probes;
+    ``damping={}``: the defaults), so that ``X={}`` then ``X={...}`` replaces it. A
+    table value for an entry of a named collection that the case does not have creates
+    it (``fixed.sides={components=[0]}``); a dotted key into such an entry is refused,
+    naming the entries (a typo of a name is more likely).
 
     Args:
         root: The dataclass of a whole file.
@@ -99,11 +101,11 @@ def _set(root: type, paths: Mapping[str, Collection[str]], raw: dict[str, Any],
     """Set the value of the key path ``parts`` (a table value: key by key)."""
     node, part, here, table = _walk(root, raw, parts, origins)
     if table and isinstance(value, dict):
-        if isinstance(node.get(part), dict):
+        if isinstance(node.get(part), dict) and value:
             if merged is not None and node[part]:
                 merged.append(here)
-        else:  # a table the override creates (or a value it replaces): its own keys
-            node[part] = {}
+        else:  # a table the override creates, or empties ({}: back to the defaults,
+            node[part] = {}  # no entries), or a value it replaces: its keys are its own
             _forget(here, origins)
             origins[here] = OVERRIDE
         for k, v in value.items():

@@ -105,7 +105,8 @@ class Schema:
             table = next((t for t in merged if e.field == t or e.field.startswith(t + ".")),
                          None)
             hint = "" if table is None else \
-                f" ({OVERRIDE} merged a table into the case's {table}, whose other keys stay)"
+                f" ({OVERRIDE} merged a table into the case's {table}, whose other keys " \
+                f"stay: {OVERRIDE} '{table}={{}}' first empties it)"
             raise CaseError(f"{where}: {e}{hint}") from None
         return obj
 
