@@ -431,3 +431,45 @@ def test_a_probe_of_an_unknown_body_is_refused(mesh_path: pathlib.Path,
     with pytest.raises(CaseError, match=r"^probe 'top': no body named 'aa' \(did you mean "
                        r"'a'\?\) \(bodies: a, b\)$"):
         simulation.run(_model(mesh_path), time, output)
+
+
+def test_case_toml_holds_the_time_and_output_settings_run(
+        mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        caplog: pytest.LogCaptureFixture) -> None:
+    # A notebook runs a built model again with dataclasses.replace(time, dt=...) and the
+    # same built.case.resolved(): the run took the new Δt while case.toml (what
+    # `python -m breakwater run case.toml` and --resume go by) said the old one.
+    from dataclasses import replace
+
+    from breakwater.config.fields import to_toml
+
+    folder = shared_dir / "as_run"
+    given = TimeSpec(dt=DT, end_time=2 * DT)
+    resolved = {"name": "blocks", "time": to_toml(given),
+                "output": {"directory": str(shared_dir / "elsewhere"), "field_interval": 10,
+                           "figures": True, "checkpoint_interval": 0}}
+    time = replace(given, dt=DT / 2, min_dt=DT / 8)
+    with caplog.at_level(logging.WARNING, logger="breakwater.run.simulation"):
+        summary = simulation.run(_model(mesh_path), time,
+                                 _output(folder, figures=False, field_interval=0),
+                                 resolved_case=resolved, report=False)
+    assert summary["solver"]["steps"] == 4
+    written = on_rank_zero_read(folder / "case.toml")
+    assert written["time"] == {**to_toml(given), "dt": DT / 2, "min_dt": DT / 8}
+    assert written["output"] == {"directory": str(folder), "field_interval": 0,
+                                 "figures": False, "checkpoint_interval": 0}
+    assert resolved["time"]["dt"] == DT  # the caller's mapping is left as it was
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("case.toml")]
+    assert lines == ([] if COMM.rank else [
+        "case.toml: written with the settings given to run(), which differ from "
+        f"resolved_case's: time.dt = {DT / 2:g} (resolved_case: {DT:g}), time.min_dt = "
+        f"{DT / 8:g} (resolved_case: unset), output.directory = '{folder}' (resolved_case: "
+        f"'{shared_dir / 'elsewhere'}'), output.field_interval = 0 (resolved_case: 10), "
+        "output.figures = False (resolved_case: True) (dataclasses.replace the case and "
+        "build it again to keep them in step)"])
+
+
+def on_rank_zero_read(path: pathlib.Path) -> dict:
+    """A TOML file written by rank 0, read on every rank once it is there."""
+    COMM.barrier()
+    return tomllib.loads(path.read_text(encoding="utf-8"))

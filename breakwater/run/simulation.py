@@ -87,6 +87,7 @@ from breakwater.outputs.rotation import rotation_warning
 from breakwater.outputs.sliding import sliding_warnings
 from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
+from breakwater.run.asrun import case_as_run, changed_line
 from breakwater.run.session import Session
 from breakwater.stepping.gn22 import local_error
 from breakwater.stepping.stepsize import GROW_AFTER
@@ -342,7 +343,10 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         model: The contact model (loads, damping, gravity included).
         time: Time step, end time, GN22 and Newton settings.
         output: Output directory, probes, output switches, checkpoint interval.
-        resolved_case: The resolved case, written as ``case.toml`` when given.
+        resolved_case: The resolved case, written as ``case.toml`` when given, with
+            the ``[time]`` table and the output's folder, intervals and figures of
+            ``time`` and ``output`` (:func:`~breakwater.run.asrun.case_as_run`: a
+            warning names the keys that differed).
         extra_summary: Merged into the summary (e.g. calibration results).
         report: Print a short report of the results at the end (rank 0).
         resume: Continue the run of ``output.directory`` from its checkpoint.
@@ -361,6 +365,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM or SIGINT.
         CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
+    as_run: list[tuple[str, Any, Any]] = []
+    if resolved_case is not None:  # case.toml says what runs (the specs given here)
+        resolved_case, as_run = case_as_run(resolved_case, time, output)
     if fingerprint is None and resolved_case is not None:
         # Rank 0's: every rank then resumes or refuses the same checkpoint, even when
         # an input file changes while the ranks read it.
@@ -369,6 +376,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     elif fingerprint is None:
         fingerprint = ckpt.model_fingerprint(model, time, output)
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
+        if as_run:
+            log.warning("%s", changed_line(as_run))
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
             try:

@@ -1,0 +1,78 @@
+"""The case a run writes: the resolved case with the settings the run was given.
+
+:func:`breakwater.run.simulation.run` takes the time and output settings
+(:class:`~breakwater.config.runspec.TimeSpec`, :class:`~breakwater.config.runspec.OutputSpec`)
+and, apart, the resolved case it writes as ``case.toml`` and fingerprints for
+``--resume``. From Python the two can differ: a notebook runs a built model again with
+``dataclasses.replace(time, dt=5e-5)`` and the same ``built.case.resolved()``. The run
+used the spec's Δt while ``case.toml`` said the old one (``python -m breakwater run
+case.toml`` then ran another case) and a checkpoint of the one resumed under the other.
+:func:`case_as_run` writes the specs' values into the resolved case's ``[time]`` and
+``[output]`` tables, and says which keys it changed.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from typing import Any
+
+from breakwater.config.fields import to_toml
+from breakwater.config.runspec import OutputSpec, TimeSpec
+
+__all__ = ["case_as_run", "changed_line"]
+
+
+def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec
+                ) -> tuple[dict[str, Any], list[tuple[str, Any, Any]]]:
+    """The resolved case with the run's time and output settings written in.
+
+    Only tables that ``resolved_case`` has are touched. The output's probes are left
+    (the case names them by group or point, the spec by coordinates), as is the case's
+    name (a spec's ``case_name`` is only the reports' label).
+
+    Args:
+        resolved_case: The resolved case given to the run (not modified).
+        time: The time settings the run uses.
+        output: The output settings the run uses.
+
+    Returns:
+        The case as run, and the keys changed as ``(dotted key, value run, value
+        given)``.
+    """
+    case = copy.deepcopy(dict(resolved_case))
+    changed: list[tuple[str, Any, Any]] = []
+
+    def put(table: dict[str, Any], prefix: str, key: str, value: Any) -> None:
+        if table.get(key) != value:
+            changed.append((f"{prefix}{key}", value, table.get(key)))
+            table[key] = value
+
+    if isinstance(case.get("time"), dict):
+        table = case["time"]
+        run = to_toml(time)
+        for key in sorted(set(table) | set(run)):
+            if key not in run:  # a None field (min_dt): left out of a resolved case
+                changed.append((f"time.{key}", None, table.pop(key)))
+            else:
+                put(table, "time.", key, run[key])
+    if isinstance(case.get("output"), dict):
+        table = case["output"]
+        put(table, "output.", "directory", str(output.directory))
+        for key in ("field_interval", "figures", "checkpoint_interval"):
+            put(table, "output.", key, getattr(output, key))
+    return case, changed
+
+
+def changed_line(changed: list[tuple[str, Any, Any]]) -> str:
+    """The one-line warning of :func:`case_as_run`'s changes."""
+    keys = ", ".join(f"{key} = {_value(run)} (resolved_case: {_value(given)})"
+                     for key, run, given in changed)
+    return (f"case.toml: written with the settings given to run(), which differ from "
+            f"resolved_case's: {keys} (dataclasses.replace the case and build it again to "
+            f"keep them in step)")
+
+
+def _value(value: Any) -> str:
+    return "unset" if value is None else f"{value:g}" if isinstance(value, float) \
+        else repr(value) if isinstance(value, str) else str(value)
