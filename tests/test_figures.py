@@ -65,6 +65,32 @@ def test_old_folders_draw_the_same_contact_figures(tmp_path: pathlib.Path) -> No
         assert (old / "figures" / name).read_bytes() == (new / "figures" / name).read_bytes()
 
 
+def test_the_figures_do_not_take_the_sessions_matplotlib_settings(
+        tmp_path: pathlib.Path) -> None:
+    # A notebook's plt.style.use("dark_background") drew a run's figures black on black
+    # (its lines' colours are set, the background was the style's), and rcParams
+    # "text.usetex" without LaTeX ended a finished run in a RuntimeError. The figures are
+    # now drawn with matplotlib's defaults, as from the command line: the same bytes.
+    import matplotlib
+
+    columns = {"length": "0_contact_length", "normal": "0_normal_force",
+               "tangential": "0_tangential_force"}
+    keys = {"x": "contact_0_x", "pressure": "contact_0_pressure",
+            "extra": {"contacts": np.array(["0"])}}
+    plain, styled = _folder(tmp_path / "plain", columns, keys), _folder(tmp_path / "styled",
+                                                                         columns, keys)
+    drawn = [f.name for f in figures.make_figures(plain)]
+    session = {"axes.facecolor": "black", "figure.facecolor": "black", "font.size": 20.0,
+               "lines.linewidth": 0.2, "text.usetex": True}
+    with matplotlib.rc_context(session):
+        assert [f.name for f in figures.make_figures(styled)] == drawn
+        # ... and the session's settings are left as they were
+        assert {k: matplotlib.rcParams[k] for k in session} == session
+    assert len(drawn) >= 4
+    for name in drawn:
+        assert (plain / "figures" / name).read_bytes() == (styled / "figures" / name).read_bytes()
+
+
 def test_redraw_needs_a_run_folder(tmp_path: pathlib.Path,
                                    capsys: pytest.CaptureFixture[str]) -> None:
     # python -m breakwater.outputs.figures DIR: a folder that does not exist was a

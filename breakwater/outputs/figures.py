@@ -47,6 +47,7 @@ from breakwater.common.files import (
     temporary_path,
     writing,
 )
+from breakwater.common.plotstyle import default_style
 from breakwater.outputs.section import mid_row
 from breakwater.outputs.stormrecord import storm_figures
 
@@ -278,6 +279,7 @@ def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
     return _save(fig, path)
 
 
+@default_style
 def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pathlib.Path]:
     """Draw every figure of a run whose outputs are in ``directory``.
 

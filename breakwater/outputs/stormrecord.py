@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from breakwater.common.plotstyle import default_style
 from breakwater.outputs.historyrows import column
 from breakwater.outputs.sliding import SMALL_SLIDING
 
@@ -206,6 +207,7 @@ def read_waves(path: Any) -> dict[str, Any]:
     return {n: values[:, k] if len(values) else np.zeros(0) for k, n in enumerate(names)}
 
 
+@default_style
 def storm_figures(directory: Any, folder: Any) -> list[Any]:
     """The storm's figures from ``waves.csv`` (none without it or a finished wave).
 

@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from breakwater.common.files import atomic_write_text, temporary_path
+from breakwater.common.plotstyle import default_style
 from breakwater.storms.rigid import Caisson, storm_sliding
 from breakwater.storms.seastate import SeaState, wave_train
 from breakwater.storms.waveforce import ForceProfile
@@ -142,6 +143,7 @@ def write_csv(result: MonteCarlo, path: str | pathlib.Path) -> pathlib.Path:
     return atomic_write_text(path, "\n".join(lines) + "\n")
 
 
+@default_style
 def plot(result: MonteCarlo, path: str | pathlib.Path, title: str = "") -> pathlib.Path:
     """The histogram of the storms' total sliding, with the mean and the limits (PNG)."""
     from matplotlib.figure import Figure

@@ -28,6 +28,7 @@ from matplotlib.figure import Figure
 
 from breakwater.common.errors import CaseError
 from breakwater.common.files import temporary_path
+from breakwater.common.plotstyle import default_style
 from breakwater.studies.studyfile import Study, check_points, load_study
 
 __all__ = ["make_figures", "read_table"]
@@ -82,6 +83,7 @@ def read_table(path: pathlib.Path) -> tuple[list[str], list[dict[str, str]]]:
         return list(reader.fieldnames or []), rows
 
 
+@default_style
 def make_figures(directory: str | pathlib.Path, study: Study, table: str = "sweep.csv"
                  ) -> list[pathlib.Path]:
     """Draw the study's figures from ``directory/sweep.csv``; the files written."""
