@@ -89,7 +89,8 @@ class _Killed(Exception):
 def _flaky(monkeypatch: pytest.MonkeyPatch, kill_at: float | None = None,
            action: str = "raise") -> None:
     """Steps from t in [4Δt, 5Δt) fail unless Δt ≤ Δt/2; the step from ``kill_at``
-    raises _Killed (``action="raise"``) or sends this process SIGTERM (and goes on)."""
+    raises _Killed (``action="raise"``) or KeyboardInterrupt (``"keyboard"``), or sends
+    this process SIGTERM (and goes on)."""
     solve = GN22.solve
     fired = []
 
@@ -101,6 +102,8 @@ def _flaky(monkeypatch: pytest.MonkeyPatch, kill_at: float | None = None,
             fired.append(t)
             if action == "raise":
                 raise _Killed(f"killed at t = {t}")
+            if action == "keyboard":  # (every rank at the same step)
+                raise KeyboardInterrupt
             os.kill(os.getpid(), signal.SIGTERM)
         return solve(self)
 
@@ -318,6 +321,11 @@ def test_sigterm_stops_checkpoints_and_resumes(mesh_path: pathlib.Path,
     assert written["finished"] is False and written["status"] == "interrupted"
     assert "SIGTERM" in written["error"]
     assert written["checkpoint"]["steps"] == written["solver"]["steps"] == 13
+    # From Python (a notebook's traceback) the error says what was left and how to go on.
+    assert info.value.__notes__ == [
+        f"breakwater: the run stopped at t = {written['time']['reached']:.6g} s; its "
+        f"outputs up to there are in {shared_dir} (summary.json: \"interrupted\"); "
+        "run(..., resume=True) with the same settings continues from its checkpoint"]
     assert len(read_history(shared_dir / "history.csv")["t"]) == 14
 
     with monkeypatch.context() as mp:
@@ -335,6 +343,28 @@ def test_sigterm_stops_checkpoints_and_resumes(mesh_path: pathlib.Path,
         for k in ("a_ux", "a_uy", "b_ux", "contact_interface_gap"):
             np.testing.assert_allclose(b[k], a[k], rtol=0,
                                        atol=_tolerance(k) * np.abs(a[k]).max(), err_msg=k)
+
+
+def test_keyboard_interrupt_says_what_it_left_and_resumes(
+        mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        reference: tuple[pathlib.Path, dict], monkeypatch: pytest.MonkeyPatch) -> None:
+    # A KeyboardInterrupt in a step (a second interrupt in a notebook, the caller's own
+    # alarm) came out bare: the summary said "interrupted", the traceback nothing of the
+    # outputs kept. It now carries a note; the folder resumes to the uninterrupted run.
+    with monkeypatch.context() as mp:
+        _flaky(mp, KILL_AT, action="keyboard")
+        with pytest.raises(KeyboardInterrupt) as info:
+            _run(mesh_path, shared_dir)
+    written = _summary(shared_dir)
+    assert written["status"] == "interrupted" and written["checkpoint"]["steps"] == 6
+    assert info.value.__notes__ == [
+        f"breakwater: the run stopped at t = {written['time']['reached']:.6g} s; its "
+        f"outputs up to there are in {shared_dir} (summary.json: \"interrupted\"); "
+        "run(..., resume=True) with the same settings continues from its checkpoint"]
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        summary = _run(mesh_path, shared_dir, resume=True)
+    assert _same_run(reference, shared_dir, summary) == 0.0 or COMM.size > 1
 
 
 def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,

@@ -68,6 +68,37 @@ def test_nested_stop_signals_share_the_signal():
     assert signal.getsignal(signal.SIGINT) == before
 
 
+def test_a_second_sigint_in_an_interactive_session_raises(monkeypatch: pytest.MonkeyPatch):
+    """Jupyter's interrupt button is SIGINT: a second press killed the kernel.
+
+    Measured in a Jupyter kernel: interrupts 0.2 s and 0.5 s into a run of the Goda case
+    (its static state) killed the kernel, and the notebook's state with it. In an
+    interactive serial session the second SIGINT now raises KeyboardInterrupt (the run
+    writes its outputs as interrupted); elsewhere (the command line, MPI) it still kills.
+    """
+    before = signal.getsignal(signal.SIGINT)
+    assert before is signal.default_int_handler  # pytest's main thread
+    monkeypatch.setattr(sys, "ps1", ">>> ", raising=False)  # python -i, IPython alike
+    serial = COMM.size == 1
+    with StopSignal() as outer, StopSignal() as inner:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+        assert inner.received == outer.received == signal.SIGINT
+        second = signal.getsignal(signal.SIGINT)
+        assert second is (signal.default_int_handler if serial else signal.SIG_DFL)
+        if serial:
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)
+    assert signal.getsignal(signal.SIGINT) is before
+    monkeypatch.delattr(sys, "ps1")
+    with StopSignal():  # not interactive: a second SIGINT kills, as it did
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_DFL
+    assert signal.getsignal(signal.SIGINT) is before
+
+
 def test_stop_signal_polls_the_other_groups():
     """``poll`` (the study's shared counter) stops a StopSignal and the runs inside it."""
     asked = []

@@ -21,7 +21,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-__all__ = ["Progress", "SlowPhase", "StopSignal", "rank_zero_logging"]
+__all__ = ["Progress", "SlowPhase", "StopSignal", "rank_zero_logging", "second_sigint_raises"]
 
 
 class _RankZero(logging.Filter):
@@ -108,7 +108,11 @@ class StopSignal:
     rank stops at the same step) and restores the default action of both signals, so a
     second SIGTERM or SIGINT kills the process at once (for SIGINT the operating
     system's default, not Python's KeyboardInterrupt). Installed only from the main
-    thread.
+    thread. In an interactive serial session (a Jupyter kernel, IPython, ``python -i``)
+    whose SIGINT raised KeyboardInterrupt, a second SIGINT raises it again instead
+    (:func:`second_sigint_raises`): Jupyter's interrupt button is SIGINT, and a second
+    press, while the run reached its next step, killed the kernel and the notebook's
+    state with it.
 
     StopSignals nest (a study's around each of its runs): a signal sets the flag of
     every StopSignal in effect, and one entered after a signal starts with the flag set
@@ -163,7 +167,16 @@ class StopSignal:
         for active in self._active:
             active._received = active._received or signum
         for sig in self.SIGNALS:
-            signal.signal(sig, signal.SIG_DFL)
+            signal.signal(sig, self._second(sig))
+
+    def _second(self, sig: int) -> Any:
+        """The action of a second ``sig``: the default one, or KeyboardInterrupt."""
+        first = next((s._previous[sig] for s in self._active if sig in s._previous),
+                     self._previous.get(sig))
+        if sig == signal.SIGINT and first is signal.default_int_handler \
+                and second_sigint_raises():
+            return signal.default_int_handler
+        return signal.SIG_DFL
 
     def __enter__(self) -> StopSignal:
         self._outer = self._active[-1] if self._active else None
@@ -181,11 +194,26 @@ class StopSignal:
         outer = self._active[-1] if self._active else None
         for sig, previous in self._previous.items():
             # After a signal, the outer StopSignal's handler stays off: a second kills.
-            signal.signal(sig, signal.SIG_DFL if self._received and outer is not None
+            signal.signal(sig, self._second(sig) if self._received and outer is not None
                           else previous)
         self._previous.clear()
         if outer is not None and self._received:
             outer._received = outer._received or self._received
+
+
+def second_sigint_raises() -> bool:
+    """Whether a second SIGINT during a run raises KeyboardInterrupt rather than kill.
+
+    In an interactive session of one process: an IPython shell or Jupyter kernel, or
+    Python's own prompt (``python -i``). The run then ends where it is, writing its
+    outputs as interrupted, and the session lives on. Under MPI a second SIGINT still
+    kills (a KeyboardInterrupt on one rank would leave the others in a collective), as
+    it does for the command line.
+    """
+    ipython = sys.modules.get("IPython")
+    shell = getattr(ipython, "get_ipython", lambda: None)() if ipython is not None else None
+    interactive = shell is not None or hasattr(sys, "ps1") or bool(sys.flags.interactive)
+    return interactive and MPI.COMM_WORLD.size == 1
 
 
 class SlowPhase:

@@ -414,16 +414,33 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         if error is None:
             return summary
         if isinstance(error, KeyboardInterrupt):
+            # (a second Ctrl-C or interrupt in a notebook, or the caller's own)
+            error.add_note(_interrupted_note(r, summary))
             raise error
         stopped = isinstance(error, _Stop)
         # The exception carries the reason (the command line prints it as its one error
         # line; the report and summary.json say it too): not logged a second time.
         log.debug("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
         if stopped:
-            raise RunInterrupted(summary["error"], summary) from error
+            interrupted = RunInterrupted(summary["error"], summary)
+            interrupted.add_note(_interrupted_note(r, summary))
+            raise interrupted from error
         if isinstance(error, CaseError | MeshError):  # an input found bad once built
             raise error  # (a pair probe off its slave surface): exit 2, as before a run
         raise SimulationFailed(summary["error"], summary) from error
+
+
+def _interrupted_note(r: Session, summary: Mapping[str, Any]) -> str:
+    """What an interrupted run left, for a traceback (a notebook's): where, and how to go on.
+
+    The command line prints its error's one line only, without the note.
+    """
+    reached = summary.get("time", {}).get("reached")
+    at = "before its static state" if reached is None else f"at t = {reached:.6g} s"
+    go_on = ("; run(..., resume=True) with the same settings continues from its checkpoint"
+             if (r.directory / ckpt.CHECKPOINT).is_file() else "")
+    return (f"breakwater: the run stopped {at}; its outputs up to there are in "
+            f"{r.directory} (summary.json: \"interrupted\"){go_on}")
 
 
 def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bool
