@@ -157,6 +157,15 @@ class Damping:
     alpha: float = 0.0
     beta: float = 0.0
 
+    def __post_init__(self) -> None:
+        # As the case's [damping] (a negative coefficient feeds energy in): from Python,
+        # model.damping = Damping(-1.0) ran.
+        for name in ("alpha", "beta"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not math.isfinite(value) or value < 0:
+                raise ValueError(f"damping {name} must be a number >= 0 (got {value!r})")
+
 
 @dataclass
 class BodyData:

@@ -8,24 +8,29 @@ and, apart, the resolved case it writes as ``case.toml`` and fingerprints for
 used the spec's Δt while ``case.toml`` said the old one (``python -m breakwater run
 case.toml`` then ran another case) and a checkpoint of the one resumed under the other.
 :func:`case_as_run` writes the specs' values into the resolved case's ``[time]`` and
-``[output]`` tables, and says which keys it changed.
+``[output]`` tables, and the model's damping (``model.damping`` may be set on a built
+model) into ``[damping]``, and says which keys it changed.
 """
 
 from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from breakwater.config.fields import to_toml
 from breakwater.config.runspec import OutputSpec, TimeSpec
 
+if TYPE_CHECKING:
+    from breakwater.model.parts import Damping
+
 __all__ = ["case_as_run", "changed_line"]
 
 
-def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec
+def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec,
+                damping: Damping | None = None
                 ) -> tuple[dict[str, Any], list[tuple[str, Any, Any]]]:
-    """The resolved case with the run's time and output settings written in.
+    """The resolved case with the run's time, output and damping settings written in.
 
     Only tables that ``resolved_case`` has are touched. The output's probes are left
     (the case names them by group or point, the spec by coordinates), as is the case's
@@ -35,6 +40,8 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
         resolved_case: The resolved case given to the run (not modified).
         time: The time settings the run uses.
         output: The output settings the run uses.
+        damping: The model's Rayleigh damping (``model.damping``, which a notebook may
+            set on a built model).
 
     Returns:
         The case as run, and the keys changed as ``(dotted key, value run, value
@@ -61,6 +68,9 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
         put(table, "output.", "directory", str(output.directory))
         for key in ("field_interval", "figures", "checkpoint_interval"):
             put(table, "output.", key, getattr(output, key))
+    if damping is not None and isinstance(case.get("damping"), dict):
+        put(case["damping"], "damping.", "alpha", damping.alpha)
+        put(case["damping"], "damping.", "beta", damping.beta)
     return case, changed
 
 
