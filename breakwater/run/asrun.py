@@ -74,13 +74,20 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
     return case, changed
 
 
-def changed_line(changed: list[tuple[str, Any, Any]]) -> str:
-    """The one-line warning of :func:`case_as_run`'s changes."""
+def changed_line(changed: list[tuple[str, Any, Any]]) -> str | None:
+    """The one-line warning of :func:`case_as_run`'s changes, None if none is worth one.
+
+    Only the keys that change the numbers (``time.*``, ``damping.*``) are named: another
+    output folder, field interval or figures switch is an ordinary change of a run
+    again, written in without a word.
+    """
     keys = ", ".join(f"{key} = {_value(run)} (resolved_case: {_value(given)})"
-                     for key, run, given in changed)
-    return (f"case.toml: written with the settings given to run(), which differ from "
-            f"resolved_case's: {keys} (dataclasses.replace the case and build it again to "
-            f"keep them in step)")
+                     for key, run, given in changed if not key.startswith("output."))
+    if not keys:
+        return None
+    return (f"case.toml: written with the settings run() was given, not resolved_case's: "
+            f"{keys} (to keep them in step, pass dataclasses.replace(built.case, "
+            f"time=time, damping=...).resolved())")
 
 
 def _value(value: Any) -> str:

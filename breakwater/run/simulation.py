@@ -346,8 +346,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         resolved_case: The resolved case, written as ``case.toml`` when given, with
             the ``[time]`` table and the output's folder, intervals and figures of
             ``time`` and ``output``, and the model's damping
-            (:func:`~breakwater.run.asrun.case_as_run`: a warning names the keys that
-            differed).
+            (:func:`~breakwater.run.asrun.case_as_run`: a warning names the time and
+            damping keys that differed).
         extra_summary: Merged into the summary (e.g. calibration results).
         report: Print a short report of the results at the end (rank 0).
         resume: Continue the run of ``output.directory`` from its checkpoint.
@@ -377,8 +377,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     elif fingerprint is None:
         fingerprint = ckpt.model_fingerprint(model, time, output)
     with rank_zero_logging(log, model.comm), StopSignal() as stop:
-        if as_run:
-            log.warning("%s", changed_line(as_run))
+        if (line := changed_line(as_run)) is not None:
+            log.warning("%s", line)
         r = Session(model, time, output, fingerprint, extra_summary)
         if resume:
             try:
