@@ -491,7 +491,7 @@ def test_damping_set_on_a_built_model_is_the_damping_run(
     built = _model(mesh_path)
     built.damping = damping
     assert (float(built.α.value), float(built.β.value)) == (20.0, 1e-3)
-    given = {"damping": {"alpha": 0.0, "beta": 0.0}}
+    given = {"damping": {"alpha": 0.0, "beta": 0.0}, "gravity": [0.0, -1.0]}
     simulation.run(built, time, _output(shared_dir / "set", figures=False, field_interval=0),
                    resolved_case=given, report=False)
     simulation.run(_model(mesh_path, damping=damping), time,
@@ -505,8 +505,9 @@ def test_damping_set_on_a_built_model_is_the_damping_run(
     for key in ("top_ux", "corner_slip", "rayleigh_dissipation", "kinetic"):
         tol = 0.0 if COMM.size == 1 else 1e-10 * float(np.abs(b[key]).max())
         np.testing.assert_allclose(a[key], b[key], rtol=0, atol=tol, err_msg=key)
-    assert on_rank_zero_read(shared_dir / "set" / "case.toml")["damping"] == {
-        "alpha": 20.0, "beta": 1e-3}
+    written = on_rank_zero_read(shared_dir / "set" / "case.toml")
+    assert written["damping"] == {"alpha": 20.0, "beta": 1e-3}
+    assert written["gravity"] == [0.0, -G]  # (model.gravity.value, settable alike)
 
 
 def on_rank_zero_read(path: pathlib.Path) -> dict:

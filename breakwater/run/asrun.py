@@ -8,14 +8,14 @@ and, apart, the resolved case it writes as ``case.toml`` and fingerprints for
 used the spec's Δt while ``case.toml`` said the old one (``python -m breakwater run
 case.toml`` then ran another case) and a checkpoint of the one resumed under the other.
 :func:`case_as_run` writes the specs' values into the resolved case's ``[time]`` and
-``[output]`` tables, and the model's damping (``model.damping`` may be set on a built
-model) into ``[damping]``, and says which keys it changed.
+``[output]`` tables, and the model's damping and gravity (``model.damping`` and
+``model.gravity.value`` may be set on a built model), and says which keys it changed.
 """
 
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from breakwater.config.fields import to_toml
@@ -28,7 +28,7 @@ __all__ = ["case_as_run", "changed_line"]
 
 
 def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec,
-                damping: Damping | None = None
+                damping: Damping | None = None, gravity: Sequence[float] | None = None
                 ) -> tuple[dict[str, Any], list[tuple[str, Any, Any]]]:
     """The resolved case with the run's time, output and damping settings written in.
 
@@ -42,6 +42,8 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
         output: The output settings the run uses.
         damping: The model's Rayleigh damping (``model.damping``, which a notebook may
             set on a built model).
+        gravity: The model's gravity (``model.gravity.value``, a constant a notebook
+            may set alike).
 
     Returns:
         The case as run, and the keys changed as ``(dotted key, value run, value
@@ -71,15 +73,17 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
     if damping is not None and isinstance(case.get("damping"), dict):
         put(case["damping"], "damping.", "alpha", damping.alpha)
         put(case["damping"], "damping.", "beta", damping.beta)
+    if gravity is not None and "gravity" in case:
+        put(case, "", "gravity", [float(g) for g in gravity])
     return case, changed
 
 
 def changed_line(changed: list[tuple[str, Any, Any]]) -> str | None:
     """The one-line warning of :func:`case_as_run`'s changes, None if none is worth one.
 
-    Only the keys that change the numbers (``time.*``, ``damping.*``) are named: another
-    output folder, field interval or figures switch is an ordinary change of a run
-    again, written in without a word.
+    Only the keys that change the numbers (``time.*``, ``damping.*``, ``gravity``) are
+    named: another output folder, field interval or figures switch is an ordinary
+    change of a run again, written in without a word.
     """
     keys = ", ".join(f"{key} = {_value(run)} (resolved_case: {_value(given)})"
                      for key, run, given in changed if not key.startswith("output."))

@@ -345,9 +345,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         output: Output directory, probes, output switches, checkpoint interval.
         resolved_case: The resolved case, written as ``case.toml`` when given, with
             the ``[time]`` table and the output's folder, intervals and figures of
-            ``time`` and ``output``, and the model's damping
-            (:func:`~breakwater.run.asrun.case_as_run`: a warning names the time and
-            damping keys that differed).
+            ``time`` and ``output``, and the model's damping and gravity
+            (:func:`~breakwater.run.asrun.case_as_run`: a warning names the time,
+            damping and gravity keys that differed).
         extra_summary: Merged into the summary (e.g. calibration results).
         report: Print a short report of the results at the end (rank 0).
         resume: Continue the run of ``output.directory`` from its checkpoint.
@@ -368,7 +368,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
     """
     as_run: list[tuple[str, Any, Any]] = []
     if resolved_case is not None:  # case.toml says what runs (the specs given here)
-        resolved_case, as_run = case_as_run(resolved_case, time, output, model.damping)
+        resolved_case, as_run = case_as_run(resolved_case, time, output, model.damping,
+                                            model.gravity.value)
     if fingerprint is None and resolved_case is not None:
         # Rank 0's: every rank then resumes or refuses the same checkpoint, even when
         # an input file changes while the ranks read it.
