@@ -15,7 +15,9 @@ case.toml`` then ran another case) and a checkpoint of the one resumed under the
 from __future__ import annotations
 
 import copy
+import dataclasses
 from collections.abc import Mapping, Sequence
+from dataclasses import MISSING
 from typing import TYPE_CHECKING, Any
 
 from breakwater.config.fields import to_toml
@@ -32,9 +34,11 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
                 ) -> tuple[dict[str, Any], list[tuple[str, Any, Any]]]:
     """The resolved case with the run's time, output and damping settings written in.
 
-    Only tables that ``resolved_case`` has are touched. The output's probes are left
-    (the case names them by group or point, the spec by coordinates), as is the case's
-    name (a spec's ``case_name`` is only the reports' label).
+    Only tables that ``resolved_case`` has are touched; a key a table leaves out (a
+    partial case from Python) stands for its default, and is written only when the
+    run's value is another (a required key left out stays out). The output's probes
+    are left (the case names them by group or point, the spec by coordinates), as is
+    the case's name (a spec's ``case_name`` is only the reports' label).
 
     Args:
         resolved_case: The resolved case given to the run (not modified).
@@ -60,11 +64,13 @@ def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: Output
     if isinstance(case.get("time"), dict):
         table = case["time"]
         run = to_toml(time)
+        defaults = {f.name: f.default for f in dataclasses.fields(TimeSpec)}
         for key in sorted(set(table) | set(run)):
-            if key not in run:  # a None field (min_dt): left out of a resolved case
+            if key in table and key not in run:  # a None field (min_dt): left out
                 changed.append((f"time.{key}", None, table.pop(key)))
-            else:
-                put(table, "time.", key, run[key])
+            elif key in table or (defaults.get(key, MISSING) is not MISSING
+                                  and run[key] != to_toml(defaults[key])):
+                put(table, "time.", key, run[key])  # a key left out is its default
     if isinstance(case.get("output"), dict):
         table = case["output"]
         put(table, "output.", "directory", str(output.directory))
