@@ -14,6 +14,7 @@ see :func:`_tolerance` for MPI, where runs are not reproducible bit for bit).
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import pathlib
@@ -29,6 +30,7 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
+from breakwater.common import files
 from breakwater.common.errors import ConvergenceError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.model.mesh import read_mesh
@@ -37,6 +39,7 @@ from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.checkpoint import CHECKPOINT, CheckpointError, match_nodes
 from breakwater.outputs.writers import read_history
 from breakwater.run import simulation
+from breakwater.run.session import Session
 from breakwater.stepping.gn22 import GN22
 
 COMM = MPI.COMM_WORLD
@@ -301,6 +304,52 @@ def test_resume_after_a_crash(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
     if COMM.size == 1:
         assert worst == 0.0  # the same operations in the same order: bit for bit
     assert _summary(shared_dir)["finished"] is True
+
+
+@pytest.mark.parametrize("fault", ["kill", "full disk"])
+def test_run_cut_short_after_its_last_step_resumes(
+        fault: str, mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        reference: tuple[pathlib.Path, dict], monkeypatch: pytest.MonkeyPatch) -> None:
+    # After the last step the run writes its last outputs (fields, snapshot, storm
+    # record), then the summary that says "finished". The checkpoint was removed before
+    # them: a kill there (a batch job's time limit) or a full disk at the summary left a
+    # folder that says "running" or "failed" with nothing to resume, and the whole run
+    # had to be done again. It must be removed only once the summary says "finished".
+    finish, write_json = Session.finish, files.atomic_write_json
+
+    def killed(self: Session, finished: bool, *args: Any) -> dict[str, Any]:
+        if finished:
+            raise _Killed("killed while the last outputs are written")
+        return finish(self, finished, *args)
+
+    def full(path: Any, data: Any) -> pathlib.Path:
+        if data.get("status") == "finished":
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return write_json(path, data)
+
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        if fault == "kill":
+            mp.setattr(Session, "finish", killed)
+            with pytest.raises(_Killed):
+                _run(mesh_path, shared_dir)
+        else:
+            mp.setattr(files, "atomic_write_json", full)
+            with pytest.raises(simulation.SimulationFailed, match="No space left"):
+                _run(mesh_path, shared_dir)
+    written = _summary(shared_dir)
+    assert written["status"] == ("running" if fault == "kill" else "failed")
+    assert written["checkpoint"]["steps"] == 15  # the last of every INTERVAL = 3 steps
+    assert (shared_dir / CHECKPOINT).is_file()
+
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        summary = _run(mesh_path, shared_dir, resume=True)
+    assert summary["status"] == "finished" and summary["resumed_from"][0]["steps"] == 15
+    worst = _same_run(reference, shared_dir, summary)
+    if COMM.size == 1:
+        assert worst == 0.0
+    assert not (shared_dir / CHECKPOINT).exists() and _summary(shared_dir)["finished"]
 
 
 def test_sigterm_stops_checkpoints_and_resumes(mesh_path: pathlib.Path,

@@ -197,12 +197,6 @@ class Session:
         self.write_summary(self.summary(False, None, "running"))
         log.debug("checkpoint at t = %.6g s (step %d)", t, steps)
 
-    def discard_checkpoint(self) -> None:
-        """Remove the checkpoint of a finished run (nothing is left to resume)."""
-        if self.comm.rank == 0:
-            (self.directory / files.CHECKPOINT).unlink(missing_ok=True)
-        self.checkpointed = None
-
     def finish(self, finished: bool, error: str | None, status: str) -> dict[str, Any]:
         """Write the remaining outputs and return the summary (collective)."""
         x = self.stepped

@@ -20,7 +20,7 @@ settings of :mod:`breakwater.config.runspec`; it never reads TOML. The run
 
 Checkpoints (:mod:`breakwater.outputs.checkpoint`): with ``output.checkpoint_interval`` = N >
 0 the state is saved every N steps (``checkpoint.npz``, atomically, the latest only;
-removed when the run finishes), and ``run(..., resume=True)`` continues from it:
+removed once ``summary.json`` says finished), and ``run(..., resume=True)`` continues from it:
 ``history.csv`` is cut back to the rows of the checkpoint and the run goes on, giving
 the same history as an uninterrupted run (bit for bit serially). ``summary.json`` exists
 from the start of a run (``status: "running"``) and is rewritten at every checkpoint,
@@ -405,11 +405,13 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         except CRASHES as e:  # not foreseen by a check: the run fails, in one line
             error = SimulationFailed(crash_reason(e))
             error.__cause__ = e  # (--debug shows it)
+        checkpointed = r.checkpointed  # (a finished run's summary names none)
         try:
             summary = _end(r, error, output, report)
         except (OutputError, OSError) as e:  # e.g. a full disk: the first error is
             if error is None:  # the reason
                 error = e if isinstance(e, OutputError) else cannot_write(e.filename, e)
+            r.checkpointed = checkpointed  # still there: run --resume goes on from it
             summary = _failed_end(r, error)
         finally:
             r.close()
@@ -456,7 +458,7 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
     stopped = isinstance(error, _Stop | KeyboardInterrupt)
     status = "finished" if error is None else "interrupted" if stopped else "failed"
     if error is None:
-        r.discard_checkpoint()
+        r.checkpointed = None  # (the summary names no checkpoint)
     summary = r.finish(error is None, message, status)
     if error is None or not stopped:
         r.log_quality(dynamic=True)
@@ -472,6 +474,10 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
 
     def write() -> dict[str, Any]:
         files.atomic_write_json(r.directory / files.SUMMARY, summary)
+        if error is None:
+            # Removed once the summary says finished, not before the last outputs: a
+            # kill (the time limit) or a full disk between the two lost the whole run.
+            (r.directory / files.CHECKPOINT).unlink(missing_ok=True)
         if output.figures and not stopped:
             from breakwater.outputs import figures
 
