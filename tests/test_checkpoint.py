@@ -493,6 +493,29 @@ def test_resume_on_another_number_of_ranks(mesh_path: pathlib.Path, shared_dir: 
     assert result is None, result
 
 
+def test_damaged_checkpoint_is_refused_in_one_line(tmp_path: pathlib.Path) -> None:
+    # A checkpoint cut short (a node that died while a file system without ordered
+    # writes held it, a copy cut short) or with a damaged byte raised EOFError or
+    # zipfile.BadZipFile through `run --resume` (a traceback), and through `sweep`'s
+    # check of a case to resume: the whole study stopped, at every rerun. check() must
+    # also find damage in the state arrays, which the metadata alone does not show.
+    path = tmp_path / CHECKPOINT
+    arrays = {"x0": np.linspace(0.0, 1.0, 3000).reshape(-1, 2),
+              "state0": np.ones((2, 1500, 2))}
+    ckpt.write(path, {"fingerprint": "f"}, arrays)
+    whole = path.read_bytes()
+    meta, read = ckpt.read(path)
+    assert meta["fingerprint"] == "f" and np.array_equal(read["state0"], arrays["state0"])
+    damaged = bytearray(whole)
+    damaged[whole.index(b"state0.npy") + 200] ^= 0xFF  # in the state's data, not the meta
+    for data in (whole[:0], whole[:10], whole[:len(whole) // 2], whole[:-1],
+                 bytes(damaged)):
+        path.write_bytes(data)
+        for read_it in (lambda: ckpt.check(tmp_path), lambda: ckpt.read(path)):
+            with pytest.raises(CheckpointError, match="cannot read the checkpoint"):
+                read_it()
+
+
 def test_match_nodes() -> None:
     # Coordinates equal up to round-off match, in any order, including points on the
     # boundary of a grid cell; a point off by more than the tolerance does not.

@@ -31,6 +31,7 @@ import io
 import itertools
 import json
 import pathlib
+import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, is_dataclass
 from typing import TYPE_CHECKING, Any
@@ -362,7 +363,9 @@ def write(path: str | pathlib.Path, meta: Mapping[str, Any],
 def check(directory: str | pathlib.Path, fingerprint: str | None = None) -> dict[str, Any]:
     """Whether the run of a folder can be resumed; its checkpoint's ``meta``.
 
-    Reads only the checkpoint's metadata and the folder's ``summary.json``.
+    Reads the checkpoint's metadata, checks the CRC-32 of its every entry (a damaged
+    file is refused here, not half-way through a resume), and reads the folder's
+    ``summary.json``.
 
     Args:
         directory: The output folder.
@@ -403,11 +406,17 @@ def _read(path: str | pathlib.Path, fingerprint: str | None, meta_only: bool
                               "started with output.checkpoint_interval > 0?)")
     try:
         with np.load(path, allow_pickle=False) as data:
+            bad = data.zip.testzip() if meta_only else None  # every entry's CRC-32
+            if bad is not None:
+                raise zipfile.BadZipFile(f"bad CRC-32 for '{bad}'")
             names = ["meta"] if meta_only else data.files
             arrays = {k: data[k] for k in names}
         meta = json.loads(str(arrays.pop("meta")))
-    except (OSError, ValueError, KeyError) as e:
-        raise CheckpointError(f"cannot read the checkpoint {path}: {e}") from e
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as e:
+        # A torn or damaged file (a node that died while a file system without ordered
+        # writes held it, a copy cut short) is an unreadable checkpoint, not a traceback.
+        raise CheckpointError(f"cannot read the checkpoint {path}: "
+                              f"{e or type(e).__name__} (run it without --resume)") from e
     if meta.get("format") != FORMAT:
         raise CheckpointError(f"{path}: checkpoint format {meta.get('format')} is not "
                               f"this version's ({FORMAT})")
