@@ -17,9 +17,11 @@ read-only folder by monkeypatching ``open`` in :mod:`breakwater.common.files` to
 from __future__ import annotations
 
 import errno
+import io
 import json
 import os
 import pathlib
+from typing import Any
 
 import pytest
 from blocks import two_block_case, two_rectangles
@@ -100,6 +102,52 @@ def test_full_disk_during_the_run(shared_dir, capsys, monkeypatch):
         summary = _summary(out)
         assert summary["status"] == "failed" and summary["error"] == reason, summary
         assert len((out / files.HISTORY).read_text().splitlines()) == 4
+
+
+def test_full_disk_in_the_file_system(shared_dir, capsys, monkeypatch):
+    """history.csv meets a full disk in the file system, below Python's buffer: one line.
+
+    The kernel writes what fits (part of a row) and then refuses (ENOSPC); Python's
+    buffer keeps the rest, and closing the file tries it again. The close logged a
+    warning ``cannot write .../history.csv: No space left on device`` above the run's
+    error, the same words twice (measured on a 700 kB tmpfs). The file is made to fail
+    at its own bytes: those of the whole run's history less 100 (the last row cut).
+    """
+    from breakwater.outputs import writers
+
+    case = _case(shared_dir)
+    code, err = _main(["run", str(case), "--out", str(shared_dir / "whole"),
+                       "--no-progress"], capsys)
+    assert code == 0, err
+    size = COMM.bcast((shared_dir / "whole" / files.HISTORY).stat().st_size
+                      if COMM.rank == 0 else None)
+    out = shared_dir / "out"
+
+    class Full(io.FileIO):
+        """A file on a disk with ``size - 100`` bytes free (a real partial write)."""
+
+        left = size - 100
+
+        def write(self, data: Any) -> int:
+            if Full.left <= 0:
+                raise OSError(errno.ENOSPC, FULL)
+            n = min(len(data), Full.left)
+            Full.left -= n
+            return super().write(bytes(data)[:n])
+
+    def full_open(path: Any, mode: str = "r", **kwargs: Any) -> Any:
+        if pathlib.Path(path) == out / files.HISTORY and mode == "w":
+            return io.TextIOWrapper(io.BufferedWriter(Full(path, "w")), **kwargs)
+        return open(path, mode, **kwargs)
+
+    monkeypatch.setattr(writers, "open", full_open, raising=False)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = f"cannot write {out / files.HISTORY}: {FULL}"
+        assert err == f"breakwater: error: {reason}\n", err
+        assert _summary(out)["status"] == "failed"
+        assert not (out / files.HISTORY).read_text().endswith("\n")  # the row cut
 
 
 def test_full_disk_at_the_end(shared_dir, capsys, monkeypatch):

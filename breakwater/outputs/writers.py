@@ -91,6 +91,7 @@ class HistoryWriter:
         self.rows = 0
         self.kept = HistoryRows(self.columns)
         self._file: IO[str] | None = None
+        self._failed = False  # a write raised (a full disk)
         if keep_rows is None:
             def start() -> None:
                 with writing(self.path):
@@ -137,8 +138,12 @@ class HistoryWriter:
 
     def _write(self, line: str) -> None:
         assert self._file is not None
-        self._file.write(line + "\n")  # one call per whole row
-        self._file.flush()
+        try:
+            self._file.write(line + "\n")  # one call per whole row
+            self._file.flush()
+        except OSError:
+            self._failed = True  # raised (the run's error): close() does not say it again
+            raise
 
     def append(self, row: Mapping[str, float]) -> None:
         """Write one row (every column must be present); collective.
@@ -162,8 +167,12 @@ class HistoryWriter:
         def sync() -> None:
             if self._file is not None:
                 with writing(self.path):
-                    self._file.flush()
-                    os.fsync(self._file.fileno())
+                    try:
+                        self._file.flush()
+                        os.fsync(self._file.fileno())
+                    except OSError:
+                        self._failed = True
+                        raise
 
         on_rank_zero(self.comm, sync)
 
@@ -174,6 +183,8 @@ class HistoryWriter:
             try:
                 file.close()
             except OSError as e:  # the rows were flushed one by one: the last one lost
+                if self._failed:  # (the error raised by a write already says so)
+                    return
                 import logging
 
                 logging.getLogger("breakwater.run.simulation").warning(
