@@ -32,6 +32,7 @@ from dolfinx import fem, la
 from mpi4py import MPI
 
 from breakwater.model.model import ContactModel
+from breakwater.outputs import historyrows
 
 __all__ = ["LIMIT", "Rotations", "rotation_warning"]
 
@@ -85,11 +86,16 @@ class Rotations:
 
 def largest(rows: Sequence[Mapping[str, float]], bodies: Sequence[str]
             ) -> dict[str, dict[str, float]]:
-    """Each body's largest |ω| over the history rows, and when (the first)."""
+    """Each body's largest |ω| over the history rows, and when (the first).
+
+    The columns are read whole (:func:`~breakwater.outputs.historyrows.column`): a loop
+    over the rows, at every checkpoint's summary, took half of a run's time with a
+    checkpoint every step (69 s of 139 s over 3000 steps).
+    """
     out = {}
-    t = np.array([r["t"] for r in rows])
+    t = historyrows.column(rows, "t")
     for name in bodies:
-        ω = np.abs([r[f"{name}_rotation"] for r in rows])
+        ω = np.abs(historyrows.column(rows, f"{name}_rotation"))
         k = int(np.argmax(ω))
         out[name] = {"value": float(ω[k]), "time": float(t[k])}
     return out
