@@ -238,22 +238,22 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
         """Resume a killed run of this case from its checkpoint, or start afresh.
 
         Returns:
-            Whether to resume, and the wall time the case took before (its record's:
-            an interrupted run's; a killed run's summary's, to its last checkpoint; 0
-            when it starts afresh).
+            Whether to resume, and the wall time the case took before: the largest of
+            its record's (an interrupted run's), its summary's (a killed run's, to its
+            last checkpoint) and its checkpoint's (the runs' own time up to it, from
+            which the summary's ``loop_time`` goes on); 0 when it starts afresh.
         """
         record = _read_json(folder / RECORD)
         if (folder / files.CHECKPOINT).is_file() and record is not None \
                 and record.get("fingerprint") == fingerprint:
             with contextlib.suppress(CheckpointError):
-                checkpoint.check(folder)
-                before = record.get("wall_time")
-                if not isinstance(before, int | float):  # killed: its summary's, at the
-                    before = _wall_time(folder)  # last checkpoint (what was lost after
-                    # it is not counted)
+                saved = checkpoint.check(folder).get("state", {}).get("wall_before")
+                times = [t for t in (record.get("wall_time"), _wall_time(folder), saved)
+                         if isinstance(t, int | float) and not isinstance(t, bool)]
                 files.atomic_write_json(folder / RECORD,  # running again, by this process
                                         _record(point, fingerprint, "running"))
-                return True, float(before)
+                return True, float(max(times, default=0.0))  # what was lost after the
+                # last checkpoint is not counted
         if folder.exists():
             shutil.rmtree(folder)
         folder.mkdir(parents=True)
