@@ -16,6 +16,7 @@ finished.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import pathlib
@@ -23,7 +24,7 @@ import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from breakwater import __version__
 from breakwater.common import files, liveness
@@ -122,6 +123,26 @@ def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Pat
     on_rank_zero(comm, check)
 
 
+def _resumable(folder: pathlib.Path) -> bool:
+    """``--auto-resume``: whether the folder holds a run to resume (rank 0).
+
+    A run killed in it (by a batch scheduler's time limit, a lost node) is resumed, as
+    with ``--resume`` (which refuses a checkpoint of another case, naming the keys that
+    differ); a folder with no checkpoint or a finished run starts afresh, as ``run``
+    without ``--resume``.
+    """
+    from breakwater.outputs import checkpoint
+
+    summary: Any = None
+    with contextlib.suppress(OSError, ValueError):
+        summary = json.loads((folder / files.SUMMARY).read_text(encoding="utf-8"))
+    finished = isinstance(summary, dict) and summary.get("status") == "finished"
+    if finished or not (folder / files.CHECKPOINT).is_file():
+        return False
+    checkpoint.check(folder)  # a damaged one: refused in one line, as --resume (kept)
+    return True
+
+
 # --- commands ---------------------------------------------------------------------
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -138,6 +159,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     where = "--out" if args.out is not None else "output.directory"
     _check_output(folder, where, _inputs(args, case), comm)
     on_rank_zero(comm, lambda: liveness.check_not_running(folder, where))
+    if args.auto_resume:
+        args.resume = bool(on_rank_zero(comm, lambda: _resumable(folder)))
     if args.resume:
         # Fail early, before meshing and calibrating, when there is nothing to resume;
         # run() then checks that the case (case.toml) is the checkpoint's.
@@ -326,6 +349,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="continue the interrupted run of the output folder from its "
                         "checkpoint (the case must be the same; see "
                         "output.checkpoint_interval)")
+    p.add_argument("--auto-resume", action="store_true",
+                   help="resume when the output folder holds a checkpoint of this case, "
+                        "else start afresh: one batch script for a job's first "
+                        "submission and its requeues (a plain run clears the folder)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("mesh", parents=[common], help="write the case's mesh",

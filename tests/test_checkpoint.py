@@ -696,6 +696,42 @@ def test_kill_and_resume_a_process(mesh_path: pathlib.Path, shared_dir: pathlib.
 
 
 @pytest.mark.serial
+def test_auto_resume_is_one_job_script(mesh_path: pathlib.Path, shared_dir: pathlib.Path
+                                       ) -> None:
+    """``run --auto-resume``: the same command for a batch job's first submission and its
+    requeues. Before, a requeued job without ``--resume`` cleared the killed run's folder
+    (its checkpoint with it), and one with ``--resume`` failed on its first submission
+    (exit 2, no checkpoint): no one script served both."""
+    if COMM.size > 1:
+        pytest.skip("subprocess runs are serial")
+    case = shared_dir / "blocks.toml"
+    case.write_text(CASE.format(mesh=mesh_path))
+    ref, out = shared_dir / "auto_reference", shared_dir / "auto"
+
+    def run(folder: pathlib.Path) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "breakwater", "run", str(case), "--out",
+                               str(folder), "--quiet", "--auto-resume"], cwd=shared_dir,
+                              capture_output=True, text=True, timeout=120)
+
+    r = run(ref)  # an empty folder: a fresh run
+    assert r.returncode == 0, r.stderr
+    assert not _summary(ref)["resumed_from"]
+    p = _start(case, out, "--auto-resume")  # killed after the checkpoint of step 40
+    _when_rows(p, out, 45)
+    p.kill()
+    p.communicate(timeout=30)
+    assert _consistent(out)["status"] == "running"
+    r = run(out)  # the requeue: resumed, the uninterrupted run's history
+    assert r.returncode == 0, r.stderr
+    assert _summary(out)["resumed_from"][0]["steps"] >= 40
+    assert _compare(read_history(ref / "history.csv"), read_history(out / "history.csv")) == 0.0
+    r = run(out)  # finished: run again afresh, as without --resume
+    assert r.returncode == 0, r.stderr
+    assert not _summary(out)["resumed_from"]
+    shutil.rmtree(ref, ignore_errors=True)
+
+
+@pytest.mark.serial
 def test_sigint_stops_like_sigterm(mesh_path: pathlib.Path, shared_dir: pathlib.Path) -> None:
     # Ctrl-C at a terminal (SIGINT): the clean stop of SIGTERM (checkpoint, outputs,
     # "interrupted", exit status 1), not Python's KeyboardInterrupt (exit 130, the
