@@ -28,6 +28,10 @@ from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, Pr
 from breakwater.storms.rigid import Caisson
 from breakwater.storms.waves import Site
 
+# Pure Python, no communicator: nothing here differs on 2 ranks (the 2-rank stage is for
+# partition independence and the ranks' agreement).
+pytestmark = pytest.mark.serial
+
 ROOT = pathlib.Path(__file__).parents[1]
 CASES = [ROOT / "breakwater/cases/goda.toml", ROOT / "examples/goda_design_wave.toml",
          ROOT / "examples/goda_storm.toml", ROOT / "examples/goda_nonmatching.toml"]
