@@ -379,6 +379,23 @@ def test_resume_after_a_kill(tmp_path, how):
     assert [r["status"] for r in rows] == ["finished"] * 4
 
 
+def _case_at_its_checkpoint(tmp_path: pathlib.Path, end: float
+                            ) -> tuple[pathlib.Path, pathlib.Path, subprocess.Popen]:
+    """A one-case study (checkpoints every 20 steps, to ``end``) run in a subprocess
+    until its case has written a checkpoint: the study file, its output folder and the
+    running process."""
+    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
+                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=end)
+    out = tmp_path / "out"
+    process = _sweep(path, out)
+    start = time.monotonic()
+    while not any(out.glob("case-*/checkpoint.npz")):
+        assert process.poll() is None and time.monotonic() - start < 120, \
+            process.communicate()
+        time.sleep(0.02)
+    return path, out, process
+
+
 @pytest.mark.serial
 def test_resumed_case_counts_its_wall_time(tmp_path):
     """A case interrupted (SIGTERM) and resumed from its checkpoint: its ``wall_time`` is
@@ -395,15 +412,7 @@ def test_resumed_case_counts_its_wall_time(tmp_path):
     """
     if COMM.size > 1:
         pytest.skip("subprocess sweeps run serially")
-    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
-                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=0.05)
-    out = tmp_path / "out"
-    process = _sweep(path, out)
-    start = time.monotonic()
-    while not any(out.glob("case-*/checkpoint.npz")):
-        assert process.poll() is None and time.monotonic() - start < 120, \
-            process.communicate()
-        time.sleep(0.02)
+    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.05)
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=120)
     assert process.returncode == 1, err
@@ -442,15 +451,7 @@ def test_a_case_killed_by_sigkill_reads_stopped_and_keeps_its_wall_time(tmp_path
 
     if COMM.size > 1:
         pytest.skip("subprocess sweeps run serially")
-    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
-                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=0.2)
-    out = tmp_path / "out"
-    process = _sweep(path, out)
-    start = time.monotonic()
-    while not any(out.glob("case-*/checkpoint.npz")):
-        assert process.poll() is None and time.monotonic() - start < 120, \
-            process.communicate()
-        time.sleep(0.02)
+    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.2)
     process.send_signal(signal.SIGKILL)
     process.communicate(timeout=120)
     (folder,) = out.glob("case-*")
@@ -491,15 +492,7 @@ def test_killed_case_counts_its_wall_time(tmp_path):
         pytest.skip("subprocess sweeps run serially")
     from breakwater.outputs import checkpoint as ckpt
 
-    path = study_file(tmp_path, '"mesh.refinement" = 0.5\n"output.checkpoint_interval" = 20\n'
-                      '[grid]\n"contact.interface.friction" = [0.5]\n', end=0.2)
-    out = tmp_path / "out"
-    process = _sweep(path, out)
-    start = time.monotonic()
-    while not any(out.glob("case-*/checkpoint.npz")):
-        assert process.poll() is None and time.monotonic() - start < 120, \
-            process.communicate()
-        time.sleep(0.02)
+    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.2)
     process.kill()
     process.communicate(timeout=60)
     (case,) = out.glob("case-*/")
