@@ -76,9 +76,20 @@ def test_a_second_sigint_in_an_interactive_session_raises(monkeypatch: pytest.Mo
     interactive serial session the second SIGINT now raises KeyboardInterrupt (the run
     writes its outputs as interrupted); elsewhere (the command line, MPI) it still kills.
     """
-    before = signal.getsignal(signal.SIGINT)
-    assert before is signal.default_int_handler  # pytest's main thread
+    # An interactive session's handler (pytest's main thread has it unless a test before
+    # left another: on 2 ranks in the whole suite, SIG_DFL), put back after the test.
     monkeypatch.setattr(sys, "ps1", ">>> ", raising=False)  # python -i, IPython alike
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _second_sigint(monkeypatch)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _second_sigint(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The body of :func:`test_a_second_sigint_in_an_interactive_session_raises`."""
+    before = signal.getsignal(signal.SIGINT)
+    assert before is signal.default_int_handler
     serial = COMM.size == 1
     with StopSignal() as outer, StopSignal() as inner:
         os.kill(os.getpid(), signal.SIGINT)
