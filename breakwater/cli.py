@@ -16,7 +16,6 @@ finished.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import logging
 import pathlib
@@ -24,7 +23,7 @@ import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from breakwater import __version__
 from breakwater.common import files, liveness
@@ -133,11 +132,8 @@ def _resumable(folder: pathlib.Path) -> bool:
     """
     from breakwater.outputs import checkpoint
 
-    summary: Any = None
-    with contextlib.suppress(OSError, ValueError):
-        summary = json.loads((folder / files.SUMMARY).read_text(encoding="utf-8"))
-    finished = isinstance(summary, dict) and summary.get("status") == "finished"
-    if finished or not (folder / files.CHECKPOINT).is_file():
+    summary = files.read_json(folder / files.SUMMARY) or {}
+    if summary.get("status") == "finished" or not (folder / files.CHECKPOINT).is_file():
         return False
     checkpoint.check(folder)  # a damaged one: refused in one line, as --resume (kept)
     return True

@@ -52,6 +52,7 @@ __all__ = [
     "path_problem",
     "per_metre",
     "read_history",
+    "read_json",
     "remove_temporaries",
     "temporary_path",
     "to_jsonable",
@@ -347,6 +348,18 @@ def to_jsonable(obj: Any) -> Any:
     if isinstance(obj, pathlib.PurePath):
         return str(obj)
     return obj
+
+
+def read_json(path: str | pathlib.Path) -> dict[str, Any] | None:
+    """A JSON object from a file (a summary, a study case's record), or None.
+
+    None where the file is missing, unreadable, cut short or not an object.
+    """
+    with contextlib.suppress(OSError, ValueError):
+        data = json.loads(pathlib.Path(path).read_text(encoding="utf-8"))
+        if isinstance(data, dict):
+            return data
+    return None
 
 
 def atomic_write_json(path: str | pathlib.Path, data: Mapping[str, Any]) -> pathlib.Path:

@@ -12,9 +12,7 @@ and a killed run reads as ``stopped``.
 
 from __future__ import annotations
 
-import contextlib
 import datetime
-import json
 import os
 import pathlib
 import socket
@@ -22,7 +20,7 @@ from collections.abc import Mapping
 from typing import Any, Literal
 
 from breakwater.common.errors import CaseError
-from breakwater.common.files import SUMMARY
+from breakwater.common.files import SUMMARY, read_json
 
 __all__ = ["STOPPED", "check_not_running", "describe", "process_state", "this_process"]
 
@@ -86,10 +84,8 @@ def check_not_running(directory: str | pathlib.Path, where: str) -> None:
     Raises:
         CaseError: One line naming the folder and the process.
     """
-    summary: Any = None
-    with contextlib.suppress(OSError, ValueError):
-        summary = json.loads((pathlib.Path(directory) / SUMMARY).read_text(encoding="utf-8"))
-    if not isinstance(summary, Mapping) or summary.get("status") != "running":
+    summary = read_json(pathlib.Path(directory) / SUMMARY)
+    if summary is None or summary.get("status") != "running":
         return
     process = summary.get("process")
     # This very process: its run ended by an exception that run() let through (an API

@@ -25,7 +25,6 @@ resumed run, on the same or another number of ranks, equals them to that round-o
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import itertools
@@ -39,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from breakwater.common.errors import BreakwaterError
-from breakwater.common.files import CHECKPOINT, SUMMARY, atomic_write_bytes
+from breakwater.common.files import CHECKPOINT, SUMMARY, atomic_write_bytes, read_json
 
 if TYPE_CHECKING:  # light at import: the command line catches CheckpointError early
     from dolfinx import fem
@@ -376,10 +375,7 @@ def check(directory: str | pathlib.Path, fingerprint: str | None = None) -> dict
             case, or a run that finished.
     """
     directory = pathlib.Path(directory)
-    status = None
-    with contextlib.suppress(OSError, ValueError, AttributeError):
-        status = json.loads((directory / SUMMARY).read_text(encoding="utf-8")).get("status")
-    if status == "finished":
+    if (read_json(directory / SUMMARY) or {}).get("status") == "finished":
         raise CheckpointError(f"nothing to resume: the run in {directory} finished")
     return _read(directory / CHECKPOINT, fingerprint, meta_only=True)[0]
 

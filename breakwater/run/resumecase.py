@@ -16,7 +16,6 @@ any number of ranks, and no calibration solves.
 from __future__ import annotations
 
 import contextlib
-import json
 import pathlib
 import tomllib
 from typing import TYPE_CHECKING, Any
@@ -52,11 +51,8 @@ def _saved(case: Case, folder: pathlib.Path) -> tuple[float, Any] | None:
         candidate = case.calibrated(body, float(modulus))
         if checkpoint.case_fingerprint(candidate.resolved()) != meta.get("fingerprint"):
             return None
-        summary: Any = None
-        with contextlib.suppress(OSError, ValueError):
-            summary = json.loads((folder / files.SUMMARY).read_text(encoding="utf-8")
-                                 ).get("calibration")
-        return float(modulus), summary
+        return float(modulus), (files.read_json(folder / files.SUMMARY) or {}).get(
+            "calibration")
     return None
 
 

@@ -40,7 +40,6 @@ import contextlib
 import csv
 import fcntl
 import io
-import json
 import logging
 import math
 import pathlib
@@ -100,18 +99,10 @@ class StudyOutcome:
 
 # --- the records and the table -------------------------------------------------------------
 
-def _read_json(path: pathlib.Path) -> dict[str, Any] | None:
-    with contextlib.suppress(OSError, ValueError):
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if isinstance(data, dict):
-            return data
-    return None
-
-
 def _finished(folder: pathlib.Path, fingerprint: str) -> bool:
     """Whether the case of a folder finished, for this very case."""
-    record = _read_json(folder / RECORD)
-    summary = _read_json(folder / files.SUMMARY)
+    record = files.read_json(folder / RECORD)
+    summary = files.read_json(folder / files.SUMMARY)
     return (record is not None and summary is not None
             and record.get("status") == "finished" and summary.get("status") == "finished"
             and record.get("fingerprint") == fingerprint)
@@ -119,7 +110,7 @@ def _finished(folder: pathlib.Path, fingerprint: str) -> bool:
 
 def read_records(out: pathlib.Path, points: Sequence[Point]) -> list[dict[str, Any] | None]:
     """The record of each point's folder (None when it has none)."""
-    return [_read_json(out / p.folder / RECORD) for p in points]
+    return [files.read_json(out / p.folder / RECORD) for p in points]
 
 
 def write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
@@ -243,7 +234,7 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
             last checkpoint) and its checkpoint's (the runs' own time up to it, from
             which the summary's ``loop_time`` goes on); 0 when it starts afresh.
         """
-        record = _read_json(folder / RECORD)
+        record = files.read_json(folder / RECORD)
         if (folder / files.CHECKPOINT).is_file() and record is not None \
                 and record.get("fingerprint") == fingerprint:
             with contextlib.suppress(CheckpointError):
@@ -315,7 +306,7 @@ def _record(point: Point, fingerprint: str, status: str, error: str | None = Non
 
 def _wall_time(folder: pathlib.Path) -> float:
     """The wall time in a killed run's ``summary.json`` (to its last checkpoint), or 0."""
-    summary = _read_json(folder / files.SUMMARY) or {}
+    summary = files.read_json(folder / files.SUMMARY) or {}
     wall = summary.get("solver", {}).get("wall_time") \
         if isinstance(summary.get("solver"), dict) else None
     return float(wall) if isinstance(wall, int | float) and math.isfinite(wall) else 0.0
