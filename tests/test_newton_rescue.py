@@ -71,6 +71,9 @@ class CubeRootLaw:
     def true_law(self, crawl: bool = True) -> bool:
         return False
 
+    def regularise(self, stretch: float) -> bool:
+        return False
+
 
 def _newton(law: CubeRootLaw) -> InterfaceNewton:
     timings = Timings()
@@ -221,3 +224,76 @@ def test_the_report_says_what_the_solver_did() -> None:
     quiet = format_report({"solver": {**solver, "newton_rescues": 0,
                                       "elimination": {"X": "kept", "chunks": 0}}}, "out")
     assert "halved" not in quiet and "chunks" not in quiet
+
+
+class SignLaw(CubeRootLaw):
+    """A stick/slip law: G(y) = y + a φ(y) − b, φ(y) = y / sqrt(y² + χ²), a > b > 0.
+
+    A spring against a regularised friction force of a = 1 pulled by b = 0.5: it sticks,
+    at y* = χ b / sqrt(a² − b²) (φ(y*) = b/a). From y₀ = 1 ≫ χ, φ' ≈ 0 and Newton maps y
+    to b − a sign(y): the iterates go round −0.5, 1.5, −0.5, ... (|G| = 2, 2, ...), a cycle
+    of two, as a stick/slip boundary's nodes do on a general pair
+    (:mod:`breakwater.stepping.continuation`).
+    """
+
+    a, b, chi = 1.0, 0.5, 1e-3
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.stretch = 1.0
+        self.stretches: list[float] = []
+
+    def _chi(self) -> float:
+        return self.chi * self.stretch
+
+    def g(self, y: float) -> float:
+        return y + self.a * y / np.hypot(y, self._chi()) - self.b
+
+    def dg(self, y: float) -> float:
+        return 1.0 + self.a * self._chi() ** 2 / np.hypot(y, self._chi()) ** 3
+
+    def regularise(self, stretch: float) -> bool:
+        self.stretch = stretch
+        self.stretches.append(stretch)
+        return True
+
+
+def test_a_cycling_newton_is_stopped_and_continued_in_chi() -> None:
+    from breakwater.stepping import continuation
+
+    law = SignLaw()
+    newton = _newton(law)  # type: ignore[arg-type]
+    its = _solve(newton, 1.0)
+    # The first try goes round the cycle of two, and stops after three repeats
+    # (CYCLE_REPEATS) instead of at max_it.
+    assert newton.continuations == 1 and newton.rescues == 0
+    y_star = law.chi * law.b / np.sqrt(law.a**2 - law.b**2)
+    # Converged on the law's own χ (stretch 1): |G| < atol = 1e-9 × FORCE_SCALE, and with
+    # G' = 1 + (a/χ)(1 − (b/a)²)^1.5 ≈ 650 at y*, y within atol/G' of y* (2.7e-3 of y*).
+    atol = NewtonOptions().atol * FORCE_SCALE
+    assert abs(law.g(newton.y[0])) < atol
+    assert abs(newton.y[0] - y_star) <= atol / law.dg(y_star)
+    assert law.stretch == 1.0 and law.stretches[-1] == 1.0
+    # From TOP χ (1e3: smooth at y ~ 1), down to 1 by stages ten times apart at most.
+    tried = [s for s in law.stretches[1:-1] if s != 1.0]
+    assert tried[0] == continuation.TOP and min(law.stretches) == 1.0
+    ratios = np.array(tried[:-1]) / np.array(tried[1:])
+    assert np.all(ratios <= continuation.DECADE * (1 + 1e-12))
+    assert its < NewtonOptions().max_it + 30 * continuation.MAX_STAGES
+
+
+def test_a_cycle_is_a_failure_named_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    from breakwater.stepping import continuation
+
+    monkeypatch.setattr(continuation, "MAX_STAGES", 1)  # the continuation gives up
+    monkeypatch.setattr(interfacenewton, "HALVINGS", 0)  # so does the halving
+    newton = _newton(SignLaw())  # type: ignore[arg-type]
+    with pytest.raises(ConvergenceError, match=r"test: Newton did not converge \(SNES reason "
+                       r"-5, \d+ iterations, residual 2.000e\+00, in a cycle of 2 iterates\); "
+                       r"again by a continuation in the friction's regularisation: 1 stages "):
+        _solve(newton, 1.0)
+    assert newton.continuations == 0
+    assert [interfacenewton.cycle([9.0, *x], 0.0) for x in (
+        [2.0, 1.0] * 3, [2.0, 1.0] * 2, [3.0, 2.0, 1.0] * 3, [2.0, 1.0, 0.5, 0.25, 2.0, 1.0],
+            [4.0, 2.0, 1.0, 0.5, 0.25, 0.125])] == [2, 0, 3, 0, 0]
+    assert interfacenewton.cycle([9.0, *[2.0, 1.0] * 3], 1.5) == 0  # at the floor: stall test

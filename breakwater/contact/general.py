@@ -89,7 +89,7 @@ def scatter_add(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndar
     return out
 
 
-class SurfaceForces(SurfaceSearch):
+class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
     """A general pair as a provider of the fast solver's interface: f_c and ∂f_c/∂Δa.
 
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.

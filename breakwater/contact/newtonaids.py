@@ -6,6 +6,8 @@
   carries no information (the Newton's test converges there).
 - :class:`CrawlPoints`: the slip guard's decisions, and where it linearises the law of a
   slip that crawls along the saturated law (:mod:`~breakwater.contact.guardkernels`).
+- :class:`Regularised`: the pair's friction law with χ stretched, for the Newton's
+  continuation (:mod:`breakwater.stepping.continuation`).
 
 The first two read the pair's state at the interface unknowns
 (:class:`~breakwater.contact.surfacesearch.SurfaceSearch`; every rank holds the same values,
@@ -14,18 +16,21 @@ so every rank takes the same decisions).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.jit import kernel
 from breakwater.contact import forcekernels, guardkernels
 
 if TYPE_CHECKING:
+    from breakwater.contact.surfaces import SurfacePair
     from breakwater.contact.surfacesearch import SurfaceSearch
 
-__all__ = ["CrawlPoints", "SlipMemory", "friction_normals", "resolution"]
+__all__ = ["CrawlPoints", "Regularised", "SlipMemory", "friction_normals", "resolution"]
 
 
 class SlipMemory:
@@ -268,3 +273,32 @@ class CrawlPoints:
             self.any = False
         self._banned.fill(not allowed)
         return was
+
+
+class Regularised:
+    """A general pair's ``regularise``: its friction law with χ stretched (a mixin).
+
+    The interface Newton's continuation (:mod:`breakwater.stepping.continuation`)
+    replaces ``law`` by the law of ``spec`` with χ times the stretch, and puts it back at
+    1 (a static stage may have replaced both,
+    :meth:`~breakwater.statics.pseudostep.PseudoStepper.friction`: the stretch applies
+    to the stage's law).
+    """
+
+    law: forms.ContactLaw
+    spec: SurfacePair
+    _own_law: forms.ContactLaw | None = None  # the law while stretched
+
+    def regularise(self, stretch: float) -> bool:
+        """The friction's χ times ``stretch`` from now on (1: the law's own).
+
+        Returns:
+            Whether the pair has friction.
+        """
+        if self._own_law is not None:
+            self.law, self._own_law = self._own_law, None
+        if stretch != 1.0:
+            self._own_law = self.law
+            self.law = forms.ContactLaw.of(dataclasses.replace(
+                self.spec, regularisation=self.spec.regularisation * stretch))
+        return bool(self.spec.friction)

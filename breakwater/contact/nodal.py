@@ -327,3 +327,11 @@ class NodalContactForces:
     def true_law(self, crawl: bool = True) -> bool:
         """Always the law itself (the guard moves slips alone): False."""
         return False
+
+    def regularise(self, stretch: float) -> bool:
+        """Its own χ always: False (the continuation is a general pair's rescue).
+
+        A conforming pair's Newton, its nodes' slips each on one master node, converges
+        with the slip guard alone (:mod:`breakwater.stepping.continuation`).
+        """
+        return False

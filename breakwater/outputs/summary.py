@@ -404,6 +404,9 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
         if sol.get("round_off_accepts"):
             lines.append(f"  solver: {sol['round_off_accepts']} steps accepted with a residual "
                          "stalled at round-off (NewtonOptions.floor_atol)")
+        if sol.get("newton_continuations"):
+            lines.append(f"  solver: {sol['newton_continuations']} Newton solves converged only "
+                         "by a continuation in the friction's regularisation χ")
         if sol.get("newton_rescues"):
             lines.append(f"  solver: {sol['newton_rescues']} Newton solves converged only when "
                          f"done again with their overshooting steps halved "

@@ -268,7 +268,9 @@ class Session:
                 "smallest_dt": min(taken, default=None), "largest_dt": max(taken, default=None)}
         if s is not None and s.fast is not None:
             solver["elimination"] = s.fast.factorisations.describe()
-            # Solves done again with their overshooting steps halved (InterfaceNewton).
+            # Solves that converged only by a continuation in χ, or done again with
+            # their overshooting steps halved (InterfaceNewton's rescues).
+            solver["newton_continuations"] = s.fast.newton.continuations
             solver["newton_rescues"] = s.fast.newton.rescues
             solver["newton_halvings"] = s.fast.newton.halvings  # the steps halved in them
         outputs = files.outputs_entry(

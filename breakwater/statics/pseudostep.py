@@ -349,6 +349,10 @@ class _Offset:
         """A constant: False."""
         return False
 
+    def regularise(self, stretch: float) -> bool:
+        """No friction: False."""
+        return False
+
 
 # --- model estimates -----------------------------------------------------------------
 

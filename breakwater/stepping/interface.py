@@ -96,6 +96,17 @@ class ContactForces(Protocol):
         """
         ...
 
+    def regularise(self, stretch: float) -> bool:
+        """The next evaluations' friction law with its regularisation χ times ``stretch``.
+
+        1: the law's own χ again. The interface Newton's continuation
+        (:mod:`breakwater.stepping.continuation`).
+
+        Returns:
+            Whether the provider has a friction law that this changes.
+        """
+        ...
+
 
 class StateProvider(Protocol):
     """Contact forces evaluated at the state Functions (Δa holding the iterate)."""
@@ -207,6 +218,11 @@ class StateForces:
         """The provider's ``true_law(crawl)``, if it has one (a general pair)."""
         law = getattr(self.provider, "true_law", None)
         return bool(law(crawl)) if law is not None else False
+
+    def regularise(self, stretch: float) -> bool:
+        """The provider's ``regularise(stretch)``, if it has one (a general pair)."""
+        regularise = getattr(self.provider, "regularise", None)
+        return bool(regularise(stretch)) if regularise is not None else False
 
     def reach(self) -> np.ndarray | None:
         """The provider's ``reach()``, if it has one; None: any unknown.
@@ -416,6 +432,10 @@ class ContactSum:
     def true_law(self, crawl: bool = True) -> bool:
         """Every provider's :meth:`ContactForces.true_law`; whether any's was not."""
         return any([c.true_law(crawl) for c in self.providers])
+
+    def regularise(self, stretch: float) -> bool:
+        """Every provider's :meth:`ContactForces.regularise`; whether any has friction."""
+        return any([c.regularise(stretch) for c in self.providers])
 
 
 @kernel

@@ -16,8 +16,11 @@ guards. Every rank solves the same small system from the same data, so every ran
 the same decisions; there is no communication inside the iteration unless a provider
 needs it (the general pairs' state).
 
-One rescue the SNES does not have: a solve that does not converge is done again from
-its start with every step that would multiply the residual by more than
+Two rescues the SNES does not have. Where a general pair has friction, a solve that does
+not converge is done again by stages of a larger regularisation χ down to the law's own
+(:mod:`breakwater.stepping.continuation`): a stick/slip boundary on a slave surface finer
+than its master made Newton cycle. If that fails too, or without friction, it is done
+again from its start with every step that would multiply the residual by more than
 :data:`GROWTH` halved, up to :data:`HALVINGS` times
 (:func:`damped_step`), before the step is cut back. A contact or stick/slip
 change inside a step makes the full step overshoot by orders of magnitude: on a caisson
@@ -44,13 +47,15 @@ from breakwater.common.arrays import read_only
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
+from breakwater.stepping import continuation
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
 from breakwater.stepping.reach import NearFactors, Reach
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
-__all__ = ["GROWTH", "HALVINGS", "RESOLVED", "InterfaceNewton", "RoundOff", "active_step",
-           "active_system", "damped_step", "primal_system"]
+__all__ = ["CYCLE_MAX", "CYCLE_REPEATS", "CYCLE_RTOL", "GROWTH", "HALVINGS", "RESOLVED",
+           "InterfaceNewton", "RoundOff", "active_step", "active_system", "cycle",
+           "damped_step", "primal_system"]
 
 _R = PETSc.SNES.ConvergedReason
 
@@ -62,6 +67,12 @@ _R = PETSc.SNES.ConvergedReason
 GROWTH = 10.0
 #: At most this many halvings per step; the last is taken whatever its residual.
 HALVINGS = 5
+#: Newton's residuals that repeat to this relative difference...
+CYCLE_RTOL = 1e-6
+#: ... this many in a row, with a period of at most
+CYCLE_MAX = 16
+#: iterations, are a cycle (:func:`cycle`): the solve has failed.
+CYCLE_REPEATS = 3
 #: A residual below this multiple of ``atol`` (or below the floor) is compared with its
 #: round-off (:meth:`InterfaceNewton._test`, :class:`RoundOff`).
 RESOLVED = 10.0
@@ -82,7 +93,9 @@ class InterfaceNewton:
 
     Attributes:
         floor_accepts: Solves accepted at their round-off floor.
-        rescues: Solves done again with the overshooting steps halved.
+        continuations: Solves that converged only by a continuation in the friction's
+            regularisation (:mod:`breakwater.stepping.continuation`), the first rescue.
+        rescues: Solves done again with the overshooting steps halved (the second).
         halvings: Newton steps halved in them (:data:`GROWTH`).
         flips: Nodes whose slip reversal the guards cut, over the solves.
         y: The converged iterate after :meth:`solve`.
@@ -101,6 +114,7 @@ class InterfaceNewton:
         self.floor = options.floor_atol * force_scale
         self.guarded = guarded
         self.floor_accepts = self.rescues = self.halvings = self.flips = 0
+        self.continuations = 0
         self.y, self.fc, self.F = np.zeros(n), np.zeros(n), np.zeros(n)
         self._columns_of: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # The last evaluation (X_II, S, z_I, y, f_c(y)), for its round-off.
@@ -146,18 +160,11 @@ class InterfaceNewton:
         assembly = T.seconds["interface_assembly"]
         t0 = time.perf_counter()
         try:
-            reason, norms, state = self._iterate(fact, z_I, y0, w_I, w_norm2, v_pred, dv_dx,
-                                                 damped=False)
-            its = len(norms) - 1
-            failure = (f"{self.name}: Newton did not converge (SNES reason {reason}, {its} "
-                       f"iterations, residual {norms[-1]:.3e})")
-            if reason <= 0:  # again from y0, its overshooting steps halved
-                reason, norms, state = self._iterate(fact, z_I, y0, w_I, w_norm2, v_pred,
-                                                     dv_dx, damped=True)
-                self.rescues += reason > 0  # the solves that converged only so
-                its += len(norms) - 1
-                failure += (f"; again with its overshooting steps halved: {len(norms) - 1} "
-                            f"iterations, residual {norms[-1]:.3e}")
+            def iterate(y: np.ndarray, damped: bool = False
+                        ) -> tuple[int, list[float], tuple[np.ndarray, ...]]:
+                return self._iterate(fact, z_I, y, w_I, w_norm2, v_pred, dv_dx, damped)
+
+            reason, state, its, failure = _rescued(self, iterate, y0)
         finally:
             T.seconds["newton"] += time.perf_counter() - t0 - (
                 T.seconds["interface_assembly"] - assembly)
@@ -202,6 +209,9 @@ class InterfaceNewton:
             norms.append(fnorm)
             reason, stalled = self._test(norms, float(np.linalg.norm(x)),
                                          float(np.linalg.norm(δ)), x)
+            if reason == _R.CONVERGED_ITERATING and cycle(
+                    norms, max(self.floor, RESOLVED * self.atol)):
+                reason = int(_R.DIVERGED_MAX_IT)  # going round: the rest would too
             if reason > 0 and self.contact.true_law(not damped):  # on tangent lines: the law
                 fc, G, F = self._residual(x, X_II, S, z_I)
                 norms[-1] = fnorm = float(np.linalg.norm(F))
@@ -267,6 +277,67 @@ class InterfaceNewton:
         return convergence_reason(norms, xnorm, ynorm, rtol=o.rtol, atol=atol,
                                   stol=o.stol, max_it=o.max_it, floor=self.floor,
                                   stall_its=o.stall_its)
+
+
+def _rescued(newton: InterfaceNewton, iterate: Callable[..., tuple[int, list[float], tuple[
+        np.ndarray, ...]]], y0: np.ndarray
+             ) -> tuple[int, tuple[np.ndarray, ...], int, str]:
+    """:meth:`InterfaceNewton._solve`'s tries: Newton, then its two rescues (module doc).
+
+    Args:
+        newton: Its counters (``continuations``, ``rescues``) are updated.
+        iterate: Newton from a start (``damped``: its overshooting steps halved).
+        y0: The start.
+
+    Returns:
+        The last try's reason and (y, f_c, F), the iterations of all tries, and
+        what each try did (the error's message where none converged).
+    """
+    reason, norms, state = iterate(y0)
+    its = len(norms) - 1
+    period = cycle(norms, 0.0)
+    failure = (f"{newton.name}: Newton did not converge (SNES reason {reason}, {its} "
+               f"iterations, residual {norms[-1]:.3e}"
+               + (f", in a cycle of {period} iterates)" if period else ")"))
+    if reason <= 0 and newton.contact.regularise(1.0):  # by stages of larger χ
+        reason, norms, state, stages = continuation.solve(iterate, newton.contact, y0)
+        newton.continuations += reason > 0
+        its += stages.iterations
+        failure += (f"; again by a continuation in the friction's regularisation: "
+                    f"{stages.describe()}, residual {norms[-1]:.3e}")
+    if reason <= 0:  # again from y0, its overshooting steps halved
+        reason, norms, state = iterate(y0, True)
+        newton.rescues += reason > 0  # the solves that converged only so
+        its += len(norms) - 1
+        failure += (f"; again with its overshooting steps halved: {len(norms) - 1} "
+                    f"iterations, residual {norms[-1]:.3e}")
+    return reason, state, its, failure
+
+
+def cycle(norms: list[float], floor: float) -> int:
+    """The period of a cycle that Newton's last residuals go round (0: none).
+
+    The last :data:`CYCLE_REPEATS` residuals each equal to the one p iterations before to
+    :data:`CYCLE_RTOL` (p from 2 to :data:`CYCLE_MAX`), above ``floor`` (near the
+    round-off floor residuals repeat without a cycle, and the stall test decides). The
+    iterates of a Newton with the slip guards are a function of the last one: a
+    residual that repeats so is the same iterate, and the iterations to ``max_it``
+    would go round again (a stick/slip cycle of ten iterates, 40 iterations,
+    :mod:`breakwater.stepping.continuation`).
+
+    Args:
+        norms: The residual norms, iteration 0 first (its ‖F₀‖ is the whole residual's,
+            not compared).
+        floor: Residuals below this are not tested.
+    """
+    n = len(norms) - 1
+    if not n or norms[-1] < floor:
+        return 0
+    for p in range(2, min(CYCLE_MAX, n - CYCLE_REPEATS) + 1):
+        if all(abs(norms[-1 - i] - norms[-1 - i - p]) <= CYCLE_RTOL * norms[-1 - i]
+               for i in range(CYCLE_REPEATS)):
+            return p
+    return 0
 
 
 class RoundOff:

@@ -215,6 +215,10 @@ class NearContact:
         """The providers' ``true_law(crawl)``."""
         return self.contact.true_law(crawl)
 
+    def regularise(self, stretch: float) -> bool:
+        """The providers' ``regularise(stretch)``."""
+        return self.contact.regularise(stretch)
+
     def resolution(self, y: np.ndarray) -> float:
         """The providers' round-off of f_c at the iterate."""
         return self.contact.resolution(self._whole(y))
