@@ -54,7 +54,6 @@ OUT = pathlib.Path(os.environ.get("BREAKWATER_NOTEBOOK_OUTPUT",
 print(f"end time {END_TIME} s, refinement {REFINEMENT}, output folder {OUT}")
 
 # %%
-import dataclasses
 import json
 import math
 
@@ -300,10 +299,11 @@ print(f"caisson mass {m:.2f} kg: sway period T = {2 * math.pi / ω * 1e3:.1f} ms
 # `snapshot_max_ux.npz` (the fields at rest and at the largest horizontal
 # displacement), `fields_<body>.bp` and `contact_<pair>.bp` (ParaView) and
 # `case.toml`, the resolved case, which `python -m breakwater run case.toml` runs
-# again.
+# again. While it runs, one line below the cell shows how far it is (the simulated
+# time, the steps, the time left), updated in place every second;
+# `dataclasses.replace(output_spec, progress=False)` turns it off.
 
 # %%
-output_spec = dataclasses.replace(output_spec, progress=False)
 summary = simulation.run(model, time_spec, output_spec, resolved_case=built.case.resolved(),
                          extra_summary=extra)
 print(sorted(p.name for p in OUT.iterdir()))

@@ -149,6 +149,9 @@ def test_goda_paper_figures(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatc
                  "notebook_gap_at_max_ux.png"):
         assert (out / "figures" / name).is_file(), name
     assert len(_outputs(nb, "image/png")) >= 10
+    # The run's progress line, left at its end.
+    assert any(o["data"]["text/plain"].startswith("goda: 100% |")
+               for o in _outputs(nb, "display_data") if "text/plain" in o["data"])
     # The comparison table with the paper's numbers.
     tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
     assert any("4586 Pa" in t and "about 0.4 mm" in t for t in tables)
@@ -242,3 +245,48 @@ def test_storm(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
     tables = [o["data"]["text/markdown"] for o in _outputs(nb, "text/markdown")]
     assert any("rigid block (mm)" in t for t in tables)
     assert len(_outputs(nb, "image/png")) >= 3
+
+
+def _run_cells(sources: list[str], work: pathlib.Path) -> Any:
+    """Execute code cells in a kernel of this interpreter in ``work``; the notebook."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell(s) for s in sources]
+    NotebookClient(nb, kernel_name="python3", timeout=300,
+                   resources={"metadata": {"path": str(work)}}).execute()
+    return nb
+
+
+_SHORT_RUN = f"""\
+import breakwater
+from mpi4py import MPI
+from breakwater.casefile.case import load_case
+from breakwater.run.simulation import run
+case = load_case(None, ["time.end_time={END_TIME}", "mesh.refinement=0.7",
+                        "output.directory='out'", "output.figures=false"])
+built = case.build(MPI.COMM_WORLD)
+model, time, output, extra = built
+"""
+
+
+@pytest.mark.serial
+@serial_only
+def test_progress_line_in_a_kernel(kernel: pathlib.Path) -> None:
+    """A run in a notebook shows one progress line, updated in place; none when off.
+
+    Before, a kernel's stderr being no terminal, the cell showed nothing until the
+    final report (and ``progress=True`` wrote tqdm's carriage returns into it).
+    """
+    nb = _run_cells([_SHORT_RUN, "summary = run(model, time, output, report=False)",
+                     "import dataclasses\n"
+                     "run(model, time, dataclasses.replace(output, progress=False), "
+                     "report=False)"], kernel)
+    shown = [o for o in nb.cells[1].outputs if o.output_type == "display_data"]
+    assert len(shown) == 1
+    line = shown[0]["data"]["text/plain"]
+    assert line.startswith("goda: 100% |")
+    assert f"t = {END_TIME:.4g}/{END_TIME:.4g} s, 30 steps," in line, line
+    assert not any("\r" in o.get("text", "") for c in nb.cells for o in c.outputs)
+    assert not [o for o in nb.cells[2].outputs if o.output_type == "display_data"]

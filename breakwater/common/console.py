@@ -52,6 +52,10 @@ def rank_zero_logging(logger: logging.Logger, comm: MPI.Comm) -> Iterator[None]:
 class Progress:
     """A tqdm bar in simulated seconds on rank 0 (no-op elsewhere or when disabled).
 
+    In a Jupyter notebook (``notebook``), one line of text updated in place instead
+    (:class:`~breakwater.common.notebookprogress.NotebookLine`): a tqdm bar there left a
+    line per refresh in the saved notebook.
+
     The bar is drawn on entering the context, not before: log lines written before it
     stay whole. While the bar is shown, log records of the console handlers (of the
     root and ``breakwater`` loggers) are routed through ``tqdm.write``, so that they do
@@ -62,18 +66,25 @@ class Progress:
         enabled: Draw the bar (rank 0 only).
         name: The bar's label.
         start: The time it starts from (s).
+        notebook: Draw a notebook's line instead of the bar.
 
     """
 
-    def __init__(self, end_time: float, enabled: bool, name: str, start: float = 0.0
-                 ) -> None:
+    def __init__(self, end_time: float, enabled: bool, name: str, start: float = 0.0,
+                 notebook: bool = False) -> None:
         self.end_time, self.enabled, self.name = end_time, enabled, name
+        self.notebook = notebook
         self.bar: Any = None
+        self.line: Any = None
         self._redirect: contextlib.AbstractContextManager[None] = contextlib.nullcontext()
         self._t = start
 
     def __enter__(self) -> Progress:
-        if self.enabled:
+        if self.enabled and self.notebook:
+            from breakwater.common.notebookprogress import NotebookLine
+
+            self.line = NotebookLine(self.name, self.end_time, self._t)
+        elif self.enabled:
             from tqdm import tqdm
             from tqdm.contrib.logging import logging_redirect_tqdm
 
@@ -87,6 +98,9 @@ class Progress:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        if self.line is not None:
+            self.line.close()
+            self.line = None
         if self.bar is not None:
             self.bar.close()
             self.bar = None
@@ -95,6 +109,8 @@ class Progress:
 
     def update(self, t: float, **postfix: Any) -> None:
         """Move the bar to simulated time ``t``."""
+        if self.line is not None:
+            self.line.update(t, **postfix)
         if self.bar is not None:
             self.bar.update(t - self._t)
             self.bar.set_postfix(postfix, refresh=False)

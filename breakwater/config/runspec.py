@@ -205,7 +205,8 @@ class OutputSpec:
         probes: Point displacement probes.
         pair_probes: Interface slip/opening probes.
         figures: Draw the figures at the end of the run.
-        progress: Progress bar; ``None``: only when stderr is a TTY.
+        progress: Progress bar; ``None``: only when stderr is a TTY, or in a Jupyter
+            kernel (one line updated in place); ``False``: none.
         case_name: Name of the case, used in reports.
         checkpoint_interval: Write a checkpoint every N steps (0: never); see
             :mod:`breakwater.outputs.checkpoint` and ``run(..., resume=True)``.

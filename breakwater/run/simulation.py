@@ -78,6 +78,7 @@ from breakwater.common.errors import (
     PenetrationError,
     cannot_write,
 )
+from breakwater.common.notebookprogress import in_kernel
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
@@ -229,7 +230,10 @@ def _loop(r: Session, stop: StopSignal) -> None:
     assert x is not None
     s = x.stepper
     step, interval = st.step, output.checkpoint_interval
-    show = output.progress if output.progress is not None else sys.stderr.isatty()
+    # A Jupyter kernel's stderr is no terminal: its own line there (unless switched off).
+    notebook = output.progress is not False and in_kernel()
+    show = notebook or (output.progress if output.progress is not None
+                        else sys.stderr.isatty())
     log.info("work estimate: %d steps × %d unknowns = %.3g", r.work["steps_planned"],
              r.work["dofs"], r.work["estimate"])
     if step.adaptive:
@@ -242,7 +246,7 @@ def _loop(r: Session, stop: StopSignal) -> None:
     beat = None if show else SlowPhase(log, "time stepping", every=HEARTBEAT)
     t_start, steps_start, iterations = step.t, st.steps, 0  # of this process
     with Progress(time.end_time, bool(show) and r.comm.rank == 0, output.case_name,
-                  step.t) as progress, clock:
+                  step.t, notebook) as progress, clock:
         while not step.finished:
             _check_stop(r, stop)
             t, trial = step.t, step.propose()
