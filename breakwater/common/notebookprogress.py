@@ -86,7 +86,9 @@ class NotebookLine:
                  clock: Callable[[], float] = time.monotonic,
                  display: Callable[..., Any] | None = None) -> None:
         if display is None:
-            from IPython.display import display
+            from IPython.display import display as ipython_display
+
+            display = ipython_display
         self.name, self.end, self.start, self.clock = name, end_time, start, clock
         self.t, self.steps, self.iterations = start, 0, 0
         self.began = self._shown = clock()
