@@ -498,5 +498,43 @@ if summary["time"]["reached"] < 0.1:
 display(Markdown("\n".join(table) + note))
 
 # %% [markdown]
+# ## 7. The fields in pyvista
+#
+# The fields written for ParaView (`fields_<body>.bp`, `contact_<pair>.bp`: ADIOS2 files,
+# which pyvista does not read) are read back by
+# `breakwater.outputs.fieldgrids.read_fields(folder, name, time)` as a
+# `pyvista.UnstructuredGrid` of the body (or the pair's interface) in its reference
+# configuration, with the fields as point data: `displacement`, `velocity`, `stress`
+# (3 × 3), `von_mises`, `stress_yy`. The time read is the written one nearest to the one
+# asked for (every `output.field_interval` steps; `field_times(folder, name)` lists
+# them). `pyvista.OFF_SCREEN = True` renders without a window, to an image.
+
+# %%
+import pyvista
+
+from breakwater.outputs.fieldgrids import field_times, read_fields
+
+pyvista.OFF_SCREEN = True
+t_max = summary["dynamic"]["time_of_max_ux"]
+grids = {body: read_fields(OUT, body, time=t_max) for body in ("mound", "caisson")}
+t_read = grids["caisson"].field_data["time"][0]
+print(f"{len(field_times(OUT, 'caisson'))} times written; read t = {t_read:.4f} s "
+      f"(largest u_x at {t_max:.4f} s)")
+print(grids["caisson"])
+
+top = max(float(g.point_data["von_mises"].max()) for g in grids.values())
+plotter = pyvista.Plotter(window_size=(1000, 420))
+for grid in grids.values():
+    plotter.add_mesh(grid.warp_by_vector("displacement", factor=20), scalars="von_mises",
+                     clim=(0.0, top), cmap="viridis",
+                     scalar_bar_args={"title": "von Mises (Pa)"})
+plotter.add_text(f"t = {t_read:.4f} s, displacements x 20", font_size=10)
+plotter.view_xy()
+plotter.screenshot(OUT / "figures" / "notebook_pyvista_von_mises.png")
+plotter.close()
+display(Image(filename=str(OUT / "figures" / "notebook_pyvista_von_mises.png"),
+              width=800))
+
+# %% [markdown]
 # The notebook `02_user_variant.py` changes the case (another mound slope, another
 # bolt) and builds a mound of its own with gmsh.

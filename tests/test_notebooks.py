@@ -146,7 +146,7 @@ def test_goda_paper_figures(kernel: pathlib.Path, monkeypatch: pytest.MonkeyPatc
     assert cal["relative_error"] <= 1e-4 and cal["target"] * 0.205 == pytest.approx(500e3)
     # The notebook's own figures, and the paper's figures displayed inline.
     for name in ("notebook_static_pressure.png", "notebook_gauges.png",
-                 "notebook_gap_at_max_ux.png"):
+                 "notebook_gap_at_max_ux.png", "notebook_pyvista_von_mises.png"):
         assert (out / "figures" / name).is_file(), name
     assert len(_outputs(nb, "image/png")) >= 10
     # The run's progress line, left at its end.

@@ -1,0 +1,178 @@
+"""A run's ParaView fields as pyvista grids, for a notebook.
+
+The fields are written as VTX (ADIOS2 ``.bp``, :class:`~breakwater.outputs.writers.
+FieldWriter`), which ParaView reads and pyvista (VTK's pip wheel, without ADIOS2) does
+not. :func:`read_fields` reads one time of ``fields_<body>.bp`` or ``contact_<pair>.bp``
+with ADIOS2's Python module and returns a ``pyvista.UnstructuredGrid``: the P2 cells
+(VTK's Lagrange triangles, tetrahedra, hexahedra, curves), in the reference
+configuration, with every field of the file as point data (``displacement``,
+``velocity``, ``stress``, ``von_mises``, ``stress_yy``; a pair's ``pressure``, ``gap``,
+``slip``, ``slip_velocity``, ``friction_traction``), vectors with three components
+(``grid.warp_by_vector("displacement", factor=20)``), and the time read in
+``grid.field_data["time"]``. Nothing more is written during the run: the files are the
+ParaView ones.
+
+A file written on several ranks holds one block per rank, each with the rank's cells
+and its ghost cells; the blocks are joined and the ghost copies dropped (a cell is kept
+once, by the position of its nodes), so the grid is the one of a serial run. The
+earlier parts of a resumed run (``fields_<body>.part<k>.bp``) are read as well; where
+two files hold one time, the later file's is read.
+"""
+
+from __future__ import annotations
+
+import pathlib
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["field_names", "field_times", "read_fields"]
+
+_GEOMETRY = ("geometry", "connectivity", "types", "NumberOfNodes", "NumberOfEntities",
+             "NumberOfCells", "step", "vtkGhostType", "vtkOriginalPointIds")
+
+
+@dataclass(frozen=True)
+class _Stored:
+    """One time of a field file: its time, the file and the ADIOS2 step."""
+
+    time: float
+    path: pathlib.Path
+    step: int
+
+
+def field_names(directory: str | pathlib.Path) -> list[str]:
+    """The field files of a run's folder, by stem (``fields_caisson``, ``contact_interface``)."""
+    folder = pathlib.Path(directory)
+    return sorted(p.name.removesuffix(".bp") for p in folder.glob("*.bp")
+                  if p.name.startswith(("fields_", "contact_")) and ".part" not in p.name)
+
+
+def _files(directory: str | pathlib.Path, name: str) -> list[pathlib.Path]:
+    """The files of ``name`` (a body, a pair or a file's stem), earlier parts first."""
+    folder = pathlib.Path(directory)
+    names = field_names(folder)
+    stem = name.removesuffix(".bp")
+    if stem not in names:
+        matches = [n for n in (f"fields_{stem}", f"contact_{stem}") if n in names]
+        if not matches:
+            raise ValueError(f"{folder}: no field file of '{name}' (the run's: "
+                             f"{', '.join(names) or 'none'})")
+        if len(matches) > 1:
+            raise ValueError(f"{folder}: '{name}' is a body and a pair: name the file, "
+                             f"{' or '.join(repr(m) for m in matches)}")
+        stem = matches[0]
+
+    def part(p: pathlib.Path) -> int:
+        return int(p.name.removesuffix(".bp").rsplit(".part", 1)[1])
+
+    parts = sorted((p for p in folder.glob(f"{stem}.part*.bp")
+                    if p.name.removesuffix(".bp").rsplit(".part", 1)[1].isdigit()), key=part)
+    return [*parts, folder / f"{stem}.bp"]
+
+
+def _reader(path: pathlib.Path) -> Any:
+    # dolfinx first: with the pip module's ADIOS2 library loaded before it, dolfinx's own
+    # (the dolfinx wheel's) fails to load ("undefined symbol ... HDF5Common_MPI_API").
+    import dolfinx  # noqa: F401
+
+    try:
+        import adios2
+    except ImportError:
+        raise ImportError("reading the .bp fields needs ADIOS2's Python module: "
+                          "pip install adios2 (or breakwater's 'viz' extra)") from None
+    return adios2.FileReader(str(path))
+
+
+def _stored(directory: str | pathlib.Path, name: str) -> list[_Stored]:
+    """Every time stored for ``name``, in order; a later file's where two hold one."""
+    by_time: dict[float, _Stored] = {}
+    for path in _files(directory, name):
+        with _reader(path) as f:
+            for k in range(f.num_steps()):
+                t = float(np.asarray(f.read("step", step_selection=[k, 1])).ravel()[0])
+                by_time[t] = _Stored(t, path, k)
+    return [by_time[t] for t in sorted(by_time)]
+
+
+def field_times(directory: str | pathlib.Path, name: str) -> np.ndarray:
+    """The times (s) at which the fields of ``name`` (a body or a pair) were written."""
+    return np.array([s.time for s in _stored(directory, name)])
+
+
+def _choose(stored: list[_Stored], time: float | None, name: str) -> _Stored:
+    if not stored:
+        raise ValueError(f"the fields of '{name}' hold no time yet")
+    if time is None:
+        return stored[-1]
+    times = np.array([s.time for s in stored])
+    slack = 1e-9 * max(abs(times[-1]), abs(times[0]), 1e-300)
+    if not times[0] - slack <= time <= times[-1] + slack:
+        raise ValueError(f"no fields of '{name}' at t = {time:g} s: written from t = "
+                         f"{times[0]:g} s to {times[-1]:g} s ({len(times)} times)")
+    return stored[int(np.argmin(np.abs(times - time)))]
+
+
+def _blocks(f: Any, step: int, names: list[str]) -> dict[str, np.ndarray]:
+    """The blocks of each variable at ``step``, joined (connectivity renumbered)."""
+    count = len(f.all_blocks_info("connectivity")[0])
+    points, cells, data = [], [], {n: [] for n in names}  # type: ignore[var-annotated]
+    offset = 0
+    for b in range(count):
+        x = np.asarray(f.read("geometry", step_selection=[0, 1], block_id=b), float)
+        c = np.asarray(f.read("connectivity", step_selection=[0, 1], block_id=b), np.int64)
+        c = c.reshape(len(c), -1) if c.ndim == 2 else c.reshape(-1, int(c[0]) + 1)
+        points.append(x.reshape(-1, 3))
+        cells.append(np.column_stack([c[:, 0], c[:, 1:] + offset]))
+        offset += len(points[-1])
+        for n in names:
+            data[n].append(np.asarray(f.read(n, step_selection=[step, 1], block_id=b)))
+    out = {n: np.concatenate(v).reshape(offset, -1) for n, v in data.items()}
+    out["geometry"], out["connectivity"] = np.concatenate(points), np.concatenate(cells)
+    return out
+
+
+def read_fields(directory: str | pathlib.Path, name: str, time: float | None = None
+                ) -> Any:
+    """The fields of a body or a contact pair at one time, as a pyvista grid.
+
+    Args:
+        directory: The run's output folder (``output.directory``).
+        name: A body (``fields_<name>.bp``) or a contact pair (``contact_<name>.bp``),
+            or the file's stem.
+        time: The time (s): the stored time nearest to it is read (the fields are
+            written every ``output.field_interval`` steps); None: the last one.
+
+    Returns:
+        A ``pyvista.UnstructuredGrid`` in the reference configuration, the fields as
+        point data (vectors and the stress tensor with 3 and 9 components), the time
+        read in ``field_data["time"]``.
+
+    Raises:
+        ValueError: No such file in the folder, or a time outside the ones written.
+    """
+    import pyvista
+
+    stored = _choose(_stored(directory, name), time, name)
+    with _reader(stored.path) as f:
+        names = [n for n in f.available_variables() if n not in _GEOMETRY]
+        cell_type = int(np.asarray(f.read("types", step_selection=[0, 1])).ravel()[0])
+        joined = _blocks(f, stored.step, names)
+    x, cells = joined.pop("geometry"), joined.pop("connectivity")
+    # One copy of each cell (a rank's ghost cells are another rank's), by its nodes' mean.
+    scale = max(float(np.abs(x).max(initial=0.0)), 1e-300)
+    centres = np.round(x[cells[:, 1:]].mean(axis=1) / scale, 10)
+    _, first = np.unique(centres, axis=0, return_index=True)
+    cells = cells[np.sort(first)]
+    used = np.unique(cells[:, 1:])
+    renumber = np.full(len(x), -1, np.int64)
+    renumber[used] = np.arange(len(used))
+    cells[:, 1:] = renumber[cells[:, 1:]]
+    grid = pyvista.UnstructuredGrid(cells.ravel(), np.full(len(cells), cell_type, np.uint8),
+                                    x[used])
+    for n, values in joined.items():
+        v = values[used]
+        grid.point_data[n] = v[:, 0] if v.shape[1] == 1 else v
+    grid.field_data["time"] = np.array([stored.time])
+    return grid

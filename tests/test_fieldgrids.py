@@ -1,0 +1,118 @@
+"""The ParaView fields read back as pyvista grids (breakwater.outputs.fieldgrids).
+
+VTX files of known fields are written here with dolfinx's VTXWriter, as a run writes
+them (discontinuous P2, the mesh written once), on any number of ranks: the grid read
+on rank 0 holds each cell once and, at its points, the fields' exact values (quadratics,
+held exactly by P2).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import dolfinx  # before adios2: the other way round, dolfinx's ADIOS2 library fails to load
+import numpy as np
+import pytest
+from dolfinx import fem
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+from breakwater.outputs.fieldgrids import field_names, field_times, read_fields
+
+pytest.importorskip("adios2")
+pytest.importorskip("pyvista")
+
+NX, NY = 4, 3  # 2 × 4 × 3 triangles
+
+
+def _u(x: np.ndarray, scale: float) -> np.ndarray:
+    return scale * np.stack([x[0] * x[1], x[0] ** 2 - x[1]])
+
+
+def _s(x: np.ndarray, scale: float) -> np.ndarray:
+    return scale * (x[0] + 2.0 * x[1] ** 2)
+
+
+def _write(path: pathlib.Path, comm: MPI.Comm, times: list[float], scales: list[float]
+           ) -> None:
+    msh = dolfinx.mesh.create_unit_square(comm, NX, NY,
+                                          ghost_mode=dolfinx.mesh.GhostMode.shared_facet)
+    u = fem.Function(fem.functionspace(msh, ("Discontinuous Lagrange", 2, (2,))),
+                     name="displacement")
+    s = fem.Function(fem.functionspace(msh, ("Discontinuous Lagrange", 2)), name="von_mises")
+    with dolfinx.io.VTXWriter(comm, path, [u, s],
+                              mesh_policy=dolfinx.io.VTXMeshPolicy.reuse) as writer:
+        for t, c in zip(times, scales, strict=True):
+            u.interpolate(lambda x, c=c: _u(x, c))
+            s.interpolate(lambda x, c=c: _s(x, c))
+            writer.write(t)
+
+
+@pytest.fixture
+def folder(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A run's folder (rank 0's) with ``fields_block.bp`` at t = 0, 0.1, 0.2."""
+    comm = MPI.COMM_WORLD
+    path = pathlib.Path(comm.bcast(str(tmp_path) if comm.rank == 0 else None))
+    _write(path / "fields_block.bp", comm, [0.0, 0.1, 0.2], [1.0, 2.0, 3.0])
+    comm.barrier()
+    return path
+
+
+def test_grid_holds_the_fields(folder: pathlib.Path) -> None:
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    assert field_names(folder) == ["fields_block"]
+    assert field_times(folder, "block") == pytest.approx([0.0, 0.1, 0.2], abs=0)
+    grid = read_fields(folder, "block", time=0.12)  # the nearest time written: 0.1
+    assert grid.field_data["time"][0] == 0.1
+    # Each cell once (a rank's ghost cells dropped), six nodes each (discontinuous).
+    assert grid.n_cells == 2 * NX * NY and grid.n_points == 6 * 2 * NX * NY
+    assert set(grid.celltypes) == {69}  # VTK_LAGRANGE_TRIANGLE
+    x = grid.points
+    u = grid.point_data["displacement"]
+    assert u.shape == (grid.n_points, 3)
+    assert np.allclose(u[:, :2], _u(x.T, 2.0).T, rtol=0, atol=1e-14)
+    assert np.all(u[:, 2] == 0.0)
+    assert np.allclose(grid.point_data["von_mises"], _s(x.T, 2.0), rtol=0, atol=1e-14)
+    # The cells cover the square: their nodes' mean is a centroid (P2 triangles: the
+    # mean of the 3 vertices and 3 mid-edge nodes is the centroid), each once.
+    vertices = grid.cell_connectivity.reshape(-1, 6)[:, :3]
+    a, b, c = (x[vertices[:, k], :2] for k in range(3))
+    area = 0.5 * np.abs((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
+    assert area.sum() == pytest.approx(1.0, rel=1e-14)
+    last = read_fields(folder, "fields_block")  # the last time, by the file's stem
+    assert last.field_data["time"][0] == 0.2
+    assert np.allclose(last.point_data["von_mises"], _s(last.points.T, 3.0), atol=1e-14)
+
+
+def test_resumed_run_parts(folder: pathlib.Path) -> None:
+    """A resumed run's earlier part is read too; where both hold a time, the later file."""
+    comm = MPI.COMM_WORLD
+    _write(folder / "fields_block.part1.bp", comm, [0.2, 0.3], [7.0, 8.0])
+    comm.barrier()
+    if comm.rank != 0:
+        return
+    assert field_times(folder, "block") == pytest.approx([0.0, 0.1, 0.2, 0.3], abs=0)
+    # The order by part number: the main file is the latest.
+    grid = read_fields(folder, "block", 0.2)
+    assert np.allclose(grid.point_data["von_mises"], _s(grid.points.T, 3.0), atol=1e-14)
+    grid = read_fields(folder, "block", 0.3)
+    assert np.allclose(grid.point_data["von_mises"], _s(grid.points.T, 8.0), atol=1e-14)
+
+
+def test_refusals(folder: pathlib.Path) -> None:
+    comm = MPI.COMM_WORLD
+    _write(folder / "contact_block.bp", comm, [0.0], [1.0])
+    comm.barrier()
+    if comm.rank != 0:
+        return
+    with pytest.raises(ValueError, match=r"no fields of 'fields_block' at t = 0.5 s: "
+                                         r"written from t = 0 s to 0.2 s \(3 times\)"):
+        read_fields(folder, "fields_block", 0.5)
+    with pytest.raises(ValueError, match=r"'block' is a body and a pair: name the file, "
+                                         r"'fields_block' or 'contact_block'"):
+        read_fields(folder, "block")
+    with pytest.raises(ValueError, match=r"no field file of 'mound' \(the run's: "
+                                         r"contact_block, fields_block\)"):
+        read_fields(folder, "mound")
+    assert read_fields(folder, "contact_block").field_data["time"][0] == 0.0
