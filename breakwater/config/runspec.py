@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.frozen import assignment_hint
 from breakwater.config.typecheck import check_fields
 
 __all__ = ["MAX_CUTBACKS", "InitialSpec", "OutputSpec", "PairProbeSpec", "ProbeSpec",
@@ -29,6 +30,7 @@ MAX_LEVELS = 20
 """Adaptive steps: the halvings of dt allowed at most (a factorisation each)."""
 
 
+@assignment_hint("make another, dataclasses.replace(probe, {name}=...)")
 @dataclass(frozen=True)
 class ProbeSpec:
     """Displacement history of a material point of one body.
@@ -47,6 +49,7 @@ class ProbeSpec:
         check_fields(self)
 
 
+@assignment_hint("make another, dataclasses.replace(probe, {name}=...)")
 @dataclass(frozen=True)
 class PairProbeSpec:
     """Relative slip and opening at an interface point (slave minus master).
@@ -76,6 +79,7 @@ Solver = Literal["fast", "reference"]
 """The GN22 step solvers (:class:`breakwater.stepping.gn22.GN22`'s ``solver``)."""
 
 
+@assignment_hint("make another, dataclasses.replace(time, {name}=...), and pass it to run")
 @dataclass(frozen=True)
 class TimeSpec:
     """``[time]``: GN22 time integration and Newton settings.
@@ -195,6 +199,8 @@ class TimeSpec:
         return self.min_dt if self.min_dt is not None else 0.0
 
 
+@assignment_hint("make another, dataclasses.replace(output, {name}=...), and pass it to "
+                 "run")
 @dataclass(frozen=True)
 class OutputSpec:
     """What to write and where.
@@ -234,6 +240,7 @@ class OutputSpec:
                                  "columns would be the same)")
 
 
+@assignment_hint("model.initial = dataclasses.replace(model.initial, {name}=...)")
 @dataclass(frozen=True)
 class InitialSpec:
     """The initial state of a run (:mod:`breakwater.statics.initial`).

@@ -31,6 +31,7 @@ from dolfinx.io import gmsh as gmshio
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
+from breakwater.model.built import built_parts, gravity_value
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.pairs import ContactPair, PairData, SurfacePair
@@ -99,8 +100,15 @@ class ContactModel(ModelGroups):
     Attributes:
         initial: The initial state of a run (initial velocities, the loads of the
             static state; :mod:`breakwater.statics.initial`); set it before running.
+        bodies, pairs, surface_pairs, loads: What was built of each (tuples; their
+            settings fixed: :mod:`breakwater.model.built`).
 
     """
+
+    bodies = built_parts[BodyData]()
+    pairs = built_parts[PairData]()
+    surface_pairs = built_parts[SurfacePair]()
+    loads = built_parts[LoadData]()
 
     def __init__(
         self,
@@ -127,7 +135,7 @@ class ContactModel(ModelGroups):
                                   + msh.topology.index_map(tdim).num_ghosts, -1, np.int32)
 
         dx = ufl.Measure("dx", domain=msh, subdomain_data=mesh_data.cell_tags)
-        self.bodies: list[BodyData] = []
+        built: list[BodyData] = []
         for i, body in enumerate(bodies):
             tag = group_tag(mesh_data, body.name, tdim)
             cells = mesh_data.cell_tags.find(tag)
@@ -144,16 +152,17 @@ class ContactModel(ModelGroups):
             V = fem.functionspace(sub, ("Lagrange", degree, (self.gdim,)))
             λ, μ = body.material.lame
             const = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
-            self.bodies.append(BodyData(body, i, sub, cmap, ftags, V, dx(tag),
+            built.append(BodyData(body, i, sub, cmap, ftags, V, dx(tag),
                                          const(body.material.density), const(λ), const(μ),
                                          vertex_map=vmap))
+        self.bodies = built
         self.entity_maps = [b.cell_map for b in self.bodies]
         self._by_name = {b.spec.name: b for b in self.bodies}
 
         self.W = ufl.MixedFunctionSpace(*(b.V for b in self.bodies))
         self.w = ufl.TestFunctions(self.W)
-        self.gravity = fem.Constant(msh, np.array(gravity if gravity is not None
-                                                  else np.zeros(self.gdim), dtype=float))
+        self._gravity = fem.Constant(msh, np.zeros(self.gdim))
+        self.gravity = gravity if gravity is not None else np.zeros(self.gdim)
         self.α = fem.Constant(msh, dolfinx.default_scalar_type(0.0))
         self.β = fem.Constant(msh, dolfinx.default_scalar_type(0.0))
         self.damping = damping or Damping()
@@ -172,6 +181,18 @@ class ContactModel(ModelGroups):
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
         self._solvers = 0  # solvers built on this model (see options_prefix)
         self.initial = InitialSpec()
+
+    @property
+    def gravity(self) -> fem.Constant:
+        """The body force per unit mass (m/s²); set (a vector), it sets the forms' value.
+
+        (Assigning a vector replaced the forms' ``fem.Constant`` before: the run failed.)
+        """
+        return self._gravity
+
+    @gravity.setter
+    def gravity(self, g: Sequence[float] | np.ndarray | fem.Constant) -> None:
+        self._gravity.value[:] = gravity_value(g, self.gdim)
 
     @property
     def damping(self) -> Damping:

@@ -19,9 +19,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
+
+from breakwater.config.frozen import assignment_hint
+from breakwater.model.built import REBUILD, BuiltPart
 
 if TYPE_CHECKING:
     import ufl
@@ -54,6 +57,7 @@ def check_pair_settings(penalty: float, friction: float, regularisation: float, 
         raise ValueError("a contact pair needs two different bodies")
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class SurfacePair:
     """Penalty contact with regularised Coulomb friction between two surfaces.
@@ -122,6 +126,7 @@ class SurfacePair:
         return (m,) if isinstance(m, str) else tuple(m)
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class ContactPair:
     """Penalty contact with regularised Coulomb friction on a named facet group.
@@ -153,14 +158,20 @@ class ContactPair:
 
 
 @dataclass
-class PairData:
+class PairData(BuiltPart):
     """What the model builds for one contact pair.
+
+    Fixed once built (:class:`~breakwater.model.built.BuiltPart`).
 
     Attributes:
         law: The contact law (:class:`forms.ContactLaw`) with ``fem.Constant``
             parameters; ``law.values()`` evaluates it on nodal arrays.
 
     """
+
+    FIXED: ClassVar[frozenset[str]] = frozenset(
+        ("spec", "slave", "master", "facet_data", "dS", "n", "law"))
+    WHERE: ClassVar[str] = "model.pairs[k]"
 
     spec: ContactPair
     slave: int

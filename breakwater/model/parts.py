@@ -11,19 +11,22 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import cast
+from typing import ClassVar, cast
 
 import dolfinx
 import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.config.frozen import assignment_hint
 from breakwater.loads.fields import StagedField, TractionField
+from breakwater.model.built import REBUILD, BuiltPart
 
 __all__ = ["Body", "BodyData", "Damping", "Fixed", "LoadData", "Material", "StageWatch",
            "SurfaceLoad"]
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class Material:
     """Linear isotropic elastic material.
@@ -85,6 +88,7 @@ class Material:
         return λ + 2.0 * μ
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class Body:
     """A deformable body: a named cell group and its material."""
@@ -93,6 +97,7 @@ class Body:
     material: Material
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class Fixed:
     """Zero displacement on a named facet group, or at the vertices of a point group.
@@ -107,6 +112,7 @@ class Fixed:
     components: tuple[int, ...] | None = None
 
 
+@assignment_hint(REBUILD)
 @dataclass(frozen=True)
 class SurfaceLoad:
     """A traction ``amplitude(t) × field`` (Pa) on a named facet group.
@@ -150,6 +156,7 @@ class SurfaceLoad:
         return ufl.as_vector(self.direction)
 
 
+@assignment_hint("model.damping = dataclasses.replace(model.damping, {name}=...)")
 @dataclass(frozen=True)
 class Damping:
     """Rayleigh damping C = αM + βK (α in 1/s, β in s), the same for every body."""
@@ -168,8 +175,13 @@ class Damping:
 
 
 @dataclass
-class BodyData:
-    """What the model builds for one body."""
+class BodyData(BuiltPart):
+    """What the model builds for one body; fixed (:class:`~breakwater.model.built.BuiltPart`)."""
+
+    FIXED: ClassVar[frozenset[str]] = frozenset(
+        ("spec", "index", "submesh", "cell_map", "facet_tags", "V", "dx", "ρ", "λ", "μ",
+         "vertex_map"))
+    WHERE: ClassVar[str] = "model.bodies[k]"
 
     spec: Body
     index: int
@@ -185,15 +197,20 @@ class BodyData:
 
 
 @dataclass
-class LoadData:
+class LoadData(BuiltPart):
     """What the model builds for one load: ``traction = amplitude × unit``.
 
     A staged field's ``unit`` reads its parameters from ``parameters`` (a
     ``fem.Constant``), set for the stage holding the load time by :meth:`set_stage`;
     ``version`` counts the changes, so that whoever assembled ``unit`` into a vector
     (the fast solver's load vectors, the ledger, the applied loads) knows when to
-    assemble it again.
+    assemble it again. Its settings and forms are fixed
+    (:class:`~breakwater.model.built.BuiltPart`), its stage is not.
     """
+
+    FIXED: ClassVar[frozenset[str]] = frozenset(
+        ("spec", "body", "ds", "amplitude", "unit", "parameters", "unit_with", "traction"))
+    WHERE: ClassVar[str] = "model.loads[k]"
 
     spec: SurfaceLoad
     body: int

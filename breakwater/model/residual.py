@@ -46,9 +46,9 @@ class ModelForms:
     mesh: dolfinx.mesh.Mesh
     comm: MPI.Comm
     gdim: int
-    bodies: list[BodyData]
-    pairs: list[PairData]
-    loads: list[LoadData]
+    bodies: Sequence[BodyData]
+    pairs: Sequence[PairData]
+    loads: Sequence[LoadData]
     entity_maps: list[dolfinx.mesh.EntityMap]
     W: ufl.MixedFunctionSpace
     w: Sequence

@@ -1,0 +1,113 @@
+"""What a built model fixes: its parts' settings, refused in one line when reassigned.
+
+A :class:`~breakwater.model.model.ContactModel` builds its forms, solvers' data and
+outputs from the settings it is given (bodies' materials, contact pairs' penalty and
+friction, loads). The settings are frozen dataclasses, but the parts holding them were
+not: in a notebook, ``model.pairs[0].spec = dataclasses.replace(spec, friction=0.1)``
+was taken without a word and changed nothing (measured: the run's numbers those of
+μ = 0.65 to the last digit, and ``case.toml`` said 0.65), as would replacing an item of
+``model.pairs``. Now each is refused with one line saying what to do instead
+(:data:`REBUILD`): change the case and build it again. The damping and the gravity are
+the model's settings that may change (``model.damping``, ``model.gravity``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any, ClassVar, NoReturn, overload
+
+import numpy as np
+
+__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "built_parts", "gravity_value"]
+
+REBUILD = ("a built model's bodies, contact pairs and loads are fixed: change the case (e.g. "
+           "load_case(None, ['contact.interface.friction=0.3'])), or what ContactModel is "
+           "given, and build it again (model.damping and model.gravity may be set)")
+"""What to do instead of changing a part of a built model."""
+
+
+def _refuse(what: str) -> NoReturn:
+    raise AttributeError(f"cannot change {what}: {REBUILD}")
+
+
+class BuiltPart:
+    """A part the model built (a body's, a pair's, a load's data): fixed once set.
+
+    The attributes of :attr:`FIXED` are set once (by the dataclass's ``__init__``);
+    assigning one again is refused (``AttributeError``, one line); the others (a load's
+    stage) stay the model's to change.
+    """
+
+    FIXED: ClassVar[frozenset[str]] = frozenset()
+    #: How a user reaches the part (``model.pairs[k]``).
+    WHERE: ClassVar[str] = "a part of the model"
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in self.FIXED and name in self.__dict__:
+            _refuse(f"{self.WHERE}.{name}")
+        object.__setattr__(self, name, value)
+
+    def __delattr__(self, name: str) -> None:
+        if name in self.FIXED:
+            _refuse(f"{self.WHERE}.{name}")
+        object.__delattr__(self, name)
+
+
+class BuiltParts[T](tuple[T, ...]):
+    """The model's bodies, pairs or loads: a tuple whose changes are refused in one line.
+
+    A list before: ``model.pairs[0] = ...`` was taken and ignored by what had been
+    built from it.
+    """
+
+    where: str
+
+    def __new__(cls, items: Iterable[T] = (), where: str = "the model's parts"
+                ) -> BuiltParts[T]:
+        """The items, refused to change; ``where`` names them in the refusal."""
+        parts = super().__new__(cls, items)
+        parts.where = where
+        return parts
+
+    def _changed(self, *_: Any, **__: Any) -> NoReturn:
+        _refuse(self.where)
+
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _changed
+    append = extend = insert = pop = remove = clear = sort = reverse = _changed
+
+
+class built_parts[T]:  # a descriptor, used like a property
+    """A model's attribute holding its parts: set once, as a :class:`BuiltParts`."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name, self.private = name, f"_{name}"
+
+    @overload
+    def __get__(self, obj: None, owner: type) -> built_parts[T]: ...
+
+    @overload
+    def __get__(self, obj: object, owner: type) -> BuiltParts[T]: ...
+
+    def __get__(self, obj: object | None, owner: type) -> built_parts[T] | BuiltParts[T]:
+        if obj is None:
+            return self
+        parts: BuiltParts[T] = getattr(obj, self.private)
+        return parts
+
+    def __set__(self, obj: object, items: Iterable[T]) -> None:
+        if self.private in vars(obj):
+            _refuse(f"model.{self.name}")
+        setattr(obj, self.private, BuiltParts(items, f"model.{self.name}"))
+
+
+def gravity_value(g: Any, gdim: int) -> np.ndarray:
+    """A gravity set on a built model (a vector, or a ``fem.Constant``), checked.
+
+    Raises:
+        ValueError: Not ``gdim`` finite numbers (one line).
+    """
+    value = np.asarray(getattr(g, "value", g))
+    if value.shape != (gdim,) or value.dtype.kind not in "fiu" \
+            or not np.all(np.isfinite(value)):
+        raise ValueError(f"gravity: expected {gdim} finite numbers (m/s²), got {g!r}")
+    return value

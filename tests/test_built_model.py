@@ -1,0 +1,118 @@
+"""What a notebook may change on a built model, and what it is told when it may not.
+
+A built :class:`~breakwater.model.model.ContactModel`'s bodies, pairs and loads are
+built into its forms and solvers. Assigning a part's settings (``model.pairs[0].spec =
+dataclasses.replace(spec, friction=0.1)``) or an item of its lists was taken without a
+word and changed nothing: on the Goda case the run's numbers were those of μ = 0.65 to
+the last digit, and ``case.toml`` said 0.65. Now refused in one line saying what to do.
+The gravity may be set as a vector (before, the assignment replaced the forms'
+constant, and the run failed on it with a traceback).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import re
+
+import numpy as np
+import pytest
+from blocks import two_rectangles
+from mpi4py import MPI
+
+from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.model.built import REBUILD
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import (
+    Body,
+    ContactModel,
+    ContactPair,
+    Damping,
+    Fixed,
+    Material,
+    SurfaceLoad,
+)
+
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(scope="module")
+def model(folder: pathlib.Path) -> ContactModel:
+    path = two_rectangles(folder / "stacked.msh", COMM, (1.0, 0.5), (2.0, 0.5), 0.5)
+    material = Material(2000.0, 0.2, young_modulus=1e8)
+    return ContactModel(read_mesh(path, COMM), [Body("a", material), Body("b", material)],
+                        [ContactPair("interface", "a", "b", penalty=1e10, friction=0.6,
+                                     regularisation=1e-10)],
+                        [Fixed("b_bottom")], [SurfaceLoad("a_left", (1.0, 0.0), lambda t: t)],
+                        gravity=(0.0, -9.81))
+
+
+def _refused(what: str) -> str:
+    return f"^cannot change {re.escape(what)}: {re.escape(REBUILD)}$"
+
+
+def test_parts_of_a_built_model_are_refused(model: ContactModel) -> None:
+    pair, body, load = model.pairs[0], model.bodies[0], model.loads[0]
+    spec = pair.spec
+    attempts = {
+        "model.pairs[k].spec": lambda: setattr(pair, "spec",
+                                               dataclasses.replace(spec, friction=0.1)),
+        "model.pairs[k].law": lambda: setattr(pair, "law", None),
+        "model.bodies[k].spec": lambda: setattr(
+            body, "spec", Body("a", Material(1000.0, 0.3, young_modulus=1e7))),
+        "model.bodies[k].μ": lambda: setattr(body, "μ", None),
+        "model.loads[k].spec": lambda: setattr(load, "spec", None),
+        "model.pairs": lambda: model.pairs.__setitem__(0, pair),
+    }
+    for what, attempt in attempts.items():
+        with pytest.raises(AttributeError, match=_refused(what)):
+            attempt()
+    for what, attempt in {"model.pairs": lambda: setattr(model, "pairs", []),
+                          "model.bodies": lambda: model.bodies.append(body),
+                          "model.surface_pairs": lambda: model.surface_pairs.extend([1]),
+                          "model.loads": lambda: model.loads.pop()}.items():
+        with pytest.raises(AttributeError, match=_refused(what)):
+            attempt()
+    # A frozen setting of the model says the same.
+    with pytest.raises(dataclasses.FrozenInstanceError,
+                       match=r"^cannot assign to field 'friction' of ContactPair: "
+                             + re.escape(REBUILD) + "$"):
+        spec.friction = 0.1  # type: ignore[misc]
+    assert model.pairs[0] is pair and pair.spec is spec and spec.friction == 0.6
+    assert len(model.bodies) == 2 and len(model.loads) == 1 and not model.surface_pairs
+    # What the model changes itself stays changeable (a staged load's stage).
+    load.stage = load.stage
+
+
+def test_gravity_set_on_a_built_model(model: ContactModel) -> None:
+    """``model.gravity = (gx, gy)`` sets the forms' constant (the one they were built on)."""
+    constant = model.gravity
+    try:
+        model.gravity = (0.0, -2.0)  # type: ignore[assignment]
+        assert model.gravity is constant
+        assert constant.value.tolist() == [0.0, -2.0]
+        for bad in ((0.0, -9.81, 0.0), (0.0, "a"), (0.0, np.nan)):
+            with pytest.raises(ValueError, match=r"^gravity: expected 2 finite numbers "
+                                                 r"\(m/s²\), got "):
+                model.gravity = bad  # type: ignore[assignment]
+        assert constant.value.tolist() == [0.0, -2.0]
+    finally:
+        model.gravity = (0.0, -9.81)  # type: ignore[assignment]
+
+
+@pytest.mark.parametrize(("obj", "name", "hint"), [
+    (TimeSpec(dt=1e-4, end_time=1e-3), "dt",
+     "of TimeSpec: make another, dataclasses.replace(time, dt=...), and pass it to run"),
+    (OutputSpec("out"), "field_interval",
+     "of OutputSpec: make another, dataclasses.replace(output, field_interval=...), "
+     "and pass it to run"),
+    (Damping(1.0, 0.0), "alpha",
+     "of Damping: model.damping = dataclasses.replace(model.damping, alpha=...)"),
+    (Material(2000.0, 0.2, young_modulus=1e8), "density", "of Material: " + REBUILD),
+])
+def test_frozen_settings_say_what_to_do(obj: object, name: str, hint: str) -> None:
+    with pytest.raises(dataclasses.FrozenInstanceError,
+                       match=f"^cannot assign to field '{name}' {re.escape(hint)}$"):
+        setattr(obj, name, 1.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        delattr(obj, name)
