@@ -167,6 +167,26 @@ def test_above_the_friction_angle_slides_from_rest(mesh_path, folder, solver, ca
     _same_as_serial(r, folder, ABOVE, solver, dt, 1e-10 if solver == "reference" else 1e-8)
 
 
+def test_asked_frictionless_below_the_friction_angle_warns(mesh_path, caplog):
+    # No frictionless state on the 10° incline (the block would slide): the frictional
+    # one is used, with one warning (rank 0) saying so; before, a debug line.
+    import logging
+
+    from breakwater.config.runspec import InitialSpec
+
+    model = _model(mesh_path, BELOW, COMM)
+    model.initial = InitialSpec(loading="frictionless")
+    model.set_time(0.0)
+    with caplog.at_level(logging.WARNING, logger="breakwater.statics.initial"):
+        state = initial_state(model)
+    assert state.kind == "frictional"
+    warnings = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    if COMM.rank == 0:
+        assert len(warnings) == 1 and "no frictionless static equilibrium" in warnings[0]
+    else:
+        assert warnings == []
+
+
 def test_loads_of_the_initial_state(mesh_path):
     # A sustained side push of half μN, present at t = 0: in the initial state by default
     # (a frictional state: no frictionless one exists), left out with InitialSpec(loads=())

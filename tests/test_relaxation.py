@@ -184,6 +184,22 @@ def test_incline_below_the_friction_angle_stays_at_rest(mesh_path: pathlib.Path)
     assert np.abs(r["x"][-1] - r["x"][0]).max() == pytest.approx(v_creep * 0.1, rel=0.1)
 
 
+def test_incline_asked_frictionless_warns_it_is_frictional(
+        mesh_path: pathlib.Path, caplog: pytest.LogCaptureFixture) -> None:
+    """θ = 10° with ``[initial] loading = "frictionless"``: no frictionless state exists
+    (the block would slide), and the frictional one is used with one warning saying so
+    (before, a debug line: only the summary's ``static.initial_state`` told)."""
+    model = _model(mesh_path, BELOW, loading="frictionless")
+    with caplog.at_level(logging.WARNING, logger="breakwater.statics.relaxation"):
+        state, _ = _static(model)
+    assert state.kind == "frictional" and state.held == []
+    warnings = [rec.getMessage() for rec in caplog.records if rec.levelno == logging.WARNING]
+    if COMM.rank == 0:
+        assert len(warnings) == 1 and "no frictionless static equilibrium" in warnings[0]
+    else:
+        assert warnings == []
+
+
 def test_incline_above_the_friction_angle_is_held_and_released(
         mesh_path: pathlib.Path, caplog: pytest.LogCaptureFixture) -> None:
     """θ = 25°: held up to t = 0 (one warning naming the block), then it slides from

@@ -80,7 +80,7 @@ from breakwater.contact.conforming import (
 )
 from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
-from breakwater.statics.relaxation import no_state_advice, relax
+from breakwater.statics.relaxation import FALLBACK, no_state_advice, relax
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
@@ -266,6 +266,7 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
                     if not model.pairs:
                         raise
                     log.debug("no frictionless static state (%s): solving with friction", e)
+                    log.warning(FALLBACK)
                     try:
                         state = _frictional(model, options, e.iterations)
                     except (ConvergenceError, PETSc.Error) as f:

@@ -131,8 +131,8 @@ from breakwater.model.pairs import SurfacePair
 from breakwater.statics.pseudostep import FALL, GROWTH, LANDING, RATIO, PseudoStepper
 from breakwater.stepping.solver import NewtonOptions
 
-__all__ = ["FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE", "RESIDUAL_FRICTION",
-           "STALL", "TOLERANCE", "Relaxed", "no_state_advice", "relax"]
+__all__ = ["FALLBACK", "FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE",
+           "RESIDUAL_FRICTION", "STALL", "TOLERANCE", "Relaxed", "no_state_advice", "relax"]
 
 log = logging.getLogger("breakwater.statics.relaxation")
 
@@ -147,6 +147,12 @@ tolerances are set to this too."""
 
 RESIDUAL_FRICTION = 1e-4
 """Friction coefficient of the nearly frictionless stage (1b in the module doc)."""
+
+#: The warning of a frictionless initial state asked for and not found (both kinds of pair;
+#: before, a debug line only: the summary's static.initial_state said it).
+FALLBACK = ("initial state: no frictionless static equilibrium ([initial] loading = "
+            "\"frictionless\"): the frictional one is used, gravity and the initial loads "
+            "applied with friction active (static.initial_state = \"frictional\")")
 
 MAX_STEPS = 100
 """Pseudo steps allowed per stage."""
@@ -515,6 +521,8 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                 try:
                     res = _stage(r, True)
                     kind = "frictional"
+                    if loading == "frictionless":
+                        log.warning(FALLBACK)
                 except ConvergenceError as e:
                     its += e.iterations
                     failed.append(f"frictional: {e}")
