@@ -379,7 +379,7 @@ display(Image(filename=str(OUT / "berm" / "figures" / "max_ux_deformed.png"), wi
 # at 2 kHz with transducer noise. To use your own, point `table.file` at it.
 
 # %%
-from breakwater.loads.signals import read_table
+from breakwater.loads.tablefile import read_table
 from breakwater.loads.wavepressure import goda_pressure
 
 (OUT / "measured").mkdir(parents=True, exist_ok=True)

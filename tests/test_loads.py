@@ -34,7 +34,8 @@ from breakwater.casefile.case import CaseError, load_case
 from breakwater.casefile.meshloads import load_summary
 from breakwater.common.errors import MeshError
 from breakwater.loads.fields import Pressure
-from breakwater.loads.signals import Constant, Pulse, Ramp, Table, TableEnded, read_table
+from breakwater.loads.signals import Constant, Pulse, Ramp, Table, TableEnded
+from breakwater.loads.tablefile import read_table
 from breakwater.loads.wavepressure import goda_pressure, impulsive_coefficient, wavelength
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
@@ -105,6 +106,12 @@ SPREADSHEET_TABLES = {
     "utf16_tabs": "t\tF\n0\t0,25\n0,5\t1,5\n1\t0\n".encode("utf-16"),
     # Old Mac line ends (CR only).
     "cr": b"0,0.25\r0.5,1.5\r1,0\r",
+    # Excel's separator line before the header (it was taken as the header, and the
+    # real header refused as a second one).
+    "excel_sep_line": b"sep=;\r\nt;F\r\n0;0,25\r\n0,5;1,5\r\n1;0\r\n",
+    # Units in the header, in seconds: read as they are.
+    "header_in_seconds": b"t [s],F (kN)\n0,0.25\n0.5,1.5\n1,0\n",
+    "iso_header": "t / s\tF / −\n0\t0,25\n0,5\t1,5\n1\t0\n".encode(),
 }
 
 
@@ -130,8 +137,22 @@ def test_read_table_as_spreadsheets_write_it(tmp_path, name):
                               "only the first row may be a header"),
     (b"0,0\n1,nan\n", "bad.csv line 2: expected two numbers t, value ('nan' is not a number"),
     (b"0,0\n1,1_000\n", "bad.csv line 2: expected two numbers t, value ('1_000' is not"),
-    (b"0,0\n1,1\n1,2\n", "bad.csv line 3: t = 1 does not increase (line 2 has t = 1)"),
+    (b"0,0\n1,1\n1,2\n", "bad.csv line 3: t = 1 does not increase (line 2 has t = 1; a "
+                         "jump needs two"),
     (b"t,F\n0,1\n", "bad.csv: a table needs at least two data rows (found 1)"),
+    # A European spreadsheet's thousands separators: "12.500" is 12500, not 12.5 (it was
+    # read as 12.5). A file with another decimal point (0.250) has decimal points.
+    (b"t;p\n0;12.500\n1;1.000\n", "bad.csv line 2: '12.500' in a ';'-separated file: "
+                                    "12500 with thousands separators or 12.5 with a"),
+    # Blanks between cells and a comma in one: 0 and 1,5 or 0, 1 and 5? (A storm's row
+    # "2,5 8" was H = 2, T = 5, start = 8.)
+    (b"0 0\n0,5 1\n", "bad.csv line 2: cells apart by commas and by blanks ('0,5 1')"),
+    # pandas writes a missing value as an empty cell (it said "got 1 cell").
+    (b"t,F\n0,0.25\n0.5,\n", "bad.csv line 3: expected two numbers t, value (an empty "
+                               "cell (a missing value?)"),
+    # A time unit that is not one: refused, not read as seconds.
+    (b"t [days],F\n0,0\n1,1\n", "bad.csv line 1: column 1 ('t [days]') is a time in "
+                                  "'days': give it in one of s, sec"),
 ])
 def test_read_table_refuses_in_one_line(tmp_path, text, message):
     path = tmp_path / "bad.csv"
@@ -139,6 +160,20 @@ def test_read_table_refuses_in_one_line(tmp_path, text, message):
     with pytest.raises(ValueError) as info:
         read_table(path)
     assert message in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(("header", "factor"), [
+    ("t [ms],F", 1e-3), ("t (ms);F", 1e-3), ("time in ms\tF", 1e-3), ("t / min, F", 60.0),
+    ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F (kN)", 1.0),
+])
+def test_read_table_time_unit_in_the_header(tmp_path, header, factor):
+    # An oscilloscope's record in ms was read as seconds: a 10 ms impact acted for 10 s.
+    sep = ";" if ";" in header else "\t" if "\t" in header else ","
+    path = tmp_path / "units.csv"
+    path.write_text(f"{header}\n0{sep}0.25\n5{sep}1.5\n10{sep}0\n")
+    times, values = read_table(path)
+    assert times == pytest.approx((0.0, 5 * factor, 10 * factor), rel=1e-15)
+    assert values == (0.25, 1.5, 0.0)
 
 
 # --- Goda's formula ---------------------------------------------------------------------
@@ -595,6 +630,37 @@ table = { file = "excel.csv", hold_last = true }
 """
     f = load_case(_write_case(folder, stacked, loads, "excel")).loads[0].time_factor()
     assert [f(0.0), f(0.25), f(0.5), f(1.0)] == pytest.approx([0.25, 0.875, 1.5, 0.0])
+
+
+def test_table_in_milliseconds_with_decimal_commas_through_the_case(stacked, folder):
+    # A European spreadsheet's record of an impact in ms: "Zeit [ms];Faktor", decimal
+    # commas, a BOM and CRLF. The knots (0.1, 0.6, 1.1 ms) are step ends (dt = 1e-4), so
+    # GN22's momentum rule at the step ends integrates the piecewise-linear history
+    # exactly: the applied impulse per length is the traction × the face's height AH ×
+    # the trapezoid integral of the rows as written (in s), to round-off (1e-9). Before
+    # the fix the times were read as seconds (0.1 s to 1.1 s): 1e-7 of it in 1.3 ms.
+    rows = [(0.0, 0.0), (0.1, 0.0), (0.6, 2.5), (1.1, 0.0)]  # ms, factor
+    text = "Zeit [ms];Faktor\r\n" + "".join(f"{t:g};{v:g}\r\n".replace(".", ",")
+                                             for t, v in rows)
+    record = folder / "impact_ms.csv"
+    if COMM.rank == 0:
+        record.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    loads = """
+[loads.hit]
+group = "a_left"
+traction = 2000.0
+direction = [1.0, 0.0]
+time_function = "table"
+table = { file = "impact_ms.csv", hold_last = true }
+"""
+    s = _run_case(folder, stacked, loads, "table_ms", 1.3e-3)
+    t = np.array([r[0] for r in rows]) * 1e-3
+    expected = 2000.0 * AH * float(np.trapezoid([r[1] for r in rows], t))
+    applied = s["loads"]["hit"]["applied"]
+    assert applied["impulse_per_length"][0] == pytest.approx(expected, rel=1e-9)
+    assert applied["peak_force_per_length"] == pytest.approx(2000.0 * AH * 2.5, rel=1e-9)
+    assert applied["time_of_peak"] == pytest.approx(6e-4, rel=1e-9)
+
 
 # --- dynamics: a block pushed sideways on a base with friction ------------------------------
 

@@ -132,12 +132,29 @@ def test_read_wave_table(tmp_path):
     ("1.5,8,0\n2,9\n", r"waves.csv line 2: 2 numbers, line 1 has 3"),
     ("1.5,8,0\n2,9,5\n", r"waves.csv line 2: the wave starts at 5 s, before the previous"),
     ("H,T\n", r"waves.csv: no wave"),
+    # A decimal comma in a blank-separated row: H = 2.5, T = 8 was read H = 2, T = 5,
+    # start = 8 (and the next rows alike: a storm of other waves, silently).
+    ("H T\n2,5 8\n3,5 20\n", r"waves.csv line 2: cells apart by commas and by blanks"),
+    ("H [m];T [days]\n2;8\n", r"waves.csv line 1: column 2 \('T \[days\]'\) is a time in"),
 ])
 def test_read_wave_table_refuses_bad_rows(tmp_path, text, match):
     path = tmp_path / "waves.csv"
     path.write_text(text, encoding="utf-8")
     with pytest.raises(ValueError, match=match):
         read_wave_table(path)
+
+
+def test_read_wave_table_units_in_the_header(tmp_path):
+    # A laboratory's waves in cm and ms: read as m and s (they were read as m and s as
+    # written: waves 100 times too high, 1000 times too long).
+    path = tmp_path / "waves.csv"
+    path.write_text("H (cm);T (ms);start (ms)\n15;1400;0\n18,5;1500;1400\n",
+                    encoding="utf-8")
+    waves = read_wave_table(path).waves
+    assert [(w.height, w.period, w.start) for w in waves] == [
+        pytest.approx((0.15, 1.4, 0.0), rel=1e-15), pytest.approx((0.185, 1.5, 1.4), rel=1e-15)]
+    path.write_text("H [ft]\tT [s]\n2\t8\n", encoding="utf-8")
+    assert read_wave_table(path).waves[0].height == pytest.approx(2 * 0.3048, rel=1e-15)
 
 
 def test_capped_waves_are_counted_for_the_warning(tmp_path) -> None:

@@ -47,8 +47,8 @@ from breakwater.loads.signals import (
     Table,
     impact_velocity,
     pendulum_impulse,
-    read_table,
 )
+from breakwater.loads.tablefile import read_table
 from breakwater.loads.wavepressure import GodaPressure, GodaRangeError, goda_pressure
 
 __all__ = ["RESOLVED_STEPS", "GodaCase", "LoadCase", "PendulumCase", "ProfileCase", "TableCase"]
@@ -102,7 +102,8 @@ class TableCase:
                                "the case file: a first row without numbers (a header), "
                                "# comments and blank rows are skipped; separators , ; tab "
                                "or blanks, decimal commas with ; or tab, UTF-8 (with or "
-                               "without BOM) or UTF-16 (see breakwater.loads.signals.read_table)")
+                               "without BOM) or UTF-16; a time unit in the header (t [ms]) "
+                               "converts the times (see breakwater.loads.tablefile.read_table)")
     points: tuple[tuple[float, ...], ...] | None = setting(None, doc="inline [t, value] "
                                                            "pairs (instead of file)")
     hold_last: bool = setting(False, doc="hold the last value after the table ends (else "

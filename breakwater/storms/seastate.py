@@ -36,7 +36,7 @@ assigns, as far as we can tell from the secondary sources available to us (Goda 
 The waves follow one another: start_k = Σ_{j<k} T_j.
 
 :func:`read_wave_table` reads a user's wave-by-wave table instead (rows ``H, T`` or
-``H, T, start``), with :func:`breakwater.loads.signals.read_rows`.
+``H, T, start``), with :func:`breakwater.loads.tablefile.read_rows`.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from breakwater.loads.signals import read_rows
+from breakwater.loads.tablefile import read_rows
 from breakwater.loads.wavepressure import BREAKER_SLOPE, breaking_height
 from breakwater.storms.waves import Site, Wave, WaveTrain
 
@@ -155,10 +155,11 @@ def wave_train(sea: SeaState, site: Site) -> WaveTrain:
 def read_wave_table(path: pathlib.Path) -> WaveTrain:
     """A wave-by-wave table: rows ``H, T`` or ``H, T, start`` (m, s, s).
 
-    Read as :func:`breakwater.loads.signals.read_table` reads a history (UTF-8/UTF-16,
-    ``;``/tab/comma separators, decimal commas, one header row, ``#`` comments). Without
-    a start column, each wave starts when the previous ends (start_k = Σ T of the
-    previous); the column must be in every row or in none.
+    Read as :func:`breakwater.loads.tablefile.read_table` reads a history (UTF-8/UTF-16,
+    ``;``/tab/comma separators, decimal commas, one header row, ``#`` comments); units in
+    the header convert the columns (``H (cm)``, ``T [ms]``: m, cm, mm, ft; s, ms, min,
+    h; another unit is refused). Without a start column, each wave starts when the
+    previous ends (start_k = Σ T of the previous); the column must be in every row or in none.
 
     Raises:
         OSError: The file cannot be read.
@@ -167,7 +168,8 @@ def read_wave_table(path: pathlib.Path) -> WaveTrain:
             one ends, a start column in some rows only, or no row.
 
     """
-    rows = read_rows(path, (2, 3), "two or three numbers H, T[, start]")
+    rows = read_rows(path, (2, 3), "two or three numbers H, T[, start]",
+                     ("length", "time", "time"))
     if not rows:
         raise ValueError(f"{path.name}: no wave in the table (rows H, T[, start])")
     with_start = len(rows[0][1]) == 3
