@@ -662,6 +662,40 @@ table = { file = "impact_ms.csv", hold_last = true }
     assert applied["time_of_peak"] == pytest.approx(6e-4, rel=1e-9)
 
 
+def test_adaptive_steps_on_a_dense_table(stacked, folder):
+    # A record sampled every 1e-5 s (a 100 kHz logger) under adaptive steps of dt = 1e-4:
+    # the steps land on each of its points within the run, 99 of them in (0, 1e-3), ten
+    # times the 10 fixed steps: warned, with the cure. A denser one than time.max_steps
+    # is refused. Before: silent (a 10^6-row record took 2858 steps for its first
+    # millisecond, and would have run ~3 h to fail at time.max_steps).
+    rows = [(k * 1e-5, math.sin(k / 7.0) ** 2) for k in range(201)]
+    record = folder / "dense.csv"
+    if COMM.rank == 0:
+        record.write_text("t,factor\n" + "".join(f"{t!r},{v!r}\n" for t, v in rows))
+    loads = """
+[loads.push]
+group = "a_left"
+traction = 1000.0
+time_function = "table"
+table = { file = "dense.csv", hold_last = true }
+"""
+    path = _write_case(folder, stacked, loads, "dense")
+    inside = sum(1 for t, _ in rows if 0.0 < t < 1e-3)
+    assert inside == 99
+    built = load_case(path, ["time.adaptive=true"]).build(COMM)
+    lines = built.extra["loads"]["push"]["warnings"]
+    assert any(line.startswith(f"loads.push.table: the adaptive steps land on each of its "
+                               f"{inside} points within time.end_time = 0.001 s, 9.9 times "
+                               "the 10 steps of time.dt = 0.0001 s: thin the table")
+               for line in lines), lines
+    fixed = load_case(path).build(COMM).extra["loads"]["push"].get("warnings", [])
+    assert not any("adaptive" in line for line in fixed)
+    with pytest.raises(CaseError, match=f"the adaptive steps land on each of its {inside} "
+                                        "points within time.end_time = 0.001 s, as many as "
+                                        "time.max_steps = 50 or more"):
+        load_case(path, ["time.adaptive=true", "time.max_steps=50"]).build(COMM)
+
+
 # --- dynamics: a block pushed sideways on a base with friction ------------------------------
 
 # As tests/test_friction.py: a stiff block (W × H) on a stiff base of the same width, under

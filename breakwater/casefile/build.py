@@ -25,6 +25,7 @@ from breakwater.casefile.dimension import mesh_problem
 from breakwater.casefile.godaface import check_goda_face, goda_quadrature
 from breakwater.casefile.loadchecks import (
     face_problems,
+    landing_problems,
     pulse_warning,
     start_warning,
     table_warning,
@@ -262,10 +263,15 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         in_state = case.initial.loads is None or ld.name in case.initial.loads
         pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1, in_state)
         start = start_warning(ld, in_state, t.dt)
+        landing = None
         if ld.kind == "table" and ld.table is not None:
             steps = (resolved_step(t.dt, t.levels, ld.table.history(ld.start).breakpoints)
                      if t.adaptive else t.dt)
             pulse = table_warning(ld, steps, t.end_time)
+            error, landing = (landing_problems(ld, t.dt, t.end_time, t.max_steps)
+                              if t.adaptive else (None, None))
+            if error is not None:
+                raise CaseError(error)
         if sampled:
             extra["loads"][ld.name]["sampled"] = sampled
         quadrature = None
@@ -273,7 +279,8 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             entries, quadrature = goda_quadrature(ld, model, exact[ld.name])
             extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
-        lines = [line for line in (warning, start, pulse, quadrature) if line is not None]
+        lines = [line for line in (warning, start, pulse, landing, quadrature)
+                 if line is not None]
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 

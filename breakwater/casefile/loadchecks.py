@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
     from breakwater.storms.waves import WaveLoad
 
-__all__ = ["SAMPLING_TOLERANCE", "face_problems", "profile_area",
+__all__ = ["SAMPLING_TOLERANCE", "face_problems", "landing_problems", "profile_area",
            "pulse_warning", "sampled_pulse", "start_warning", "storm_warning"]
 
 
@@ -160,6 +161,37 @@ def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | 
     return (f"loads.{load.name}.table: the steps of time.dt = {dt:g} s apply "
             f"{100 * got / peak:.3g}% of its peak (|factor| {peak:.4g}); time.dt <= "
             f"{needed:.3g} s samples it to {100 * PEAK_TOLERANCE:g}%")
+
+
+def landing_problems(load: loadcase.LoadCase, dt: float, end_time: float, max_steps: int
+                     ) -> tuple[str | None, str | None]:
+    """Adaptive steps: a table whose points are denser than ``time.dt`` (error, warning).
+
+    Adaptive steps land on each point of a table (:mod:`breakwater.stepping.stepsize`),
+    so a record sampled finer than Δt takes a step per row: measured, a table of 10⁶ rows
+    over 0.35 s took 2858 steps for the first millisecond (10 fixed steps), and the whole
+    run would have taken ~10⁶ steps, about 3 hours, to fail at ``time.max_steps``, with
+    no word. Refused when the points within the run leave no room in ``time.max_steps``;
+    warned when they outnumber the fixed steps (end_time / dt).
+
+    Returns:
+        (a one-line error, a one-line warning); None each where there is none.
+    """
+    if load.kind != "table" or load.table is None or not load.enabled:
+        return None, None
+    times = load.table.history(load.start).breakpoints
+    count = bisect.bisect_left(times, end_time) - bisect.bisect_right(times, 0.0)
+    fixed = math.ceil(end_time / dt * (1 - 1e-12))
+    if count <= fixed:
+        return None, None
+    what = (f"loads.{load.name}.table: the adaptive steps land on each of its {count} "
+            f"points within time.end_time = {end_time:g} s")
+    cure = ("thin the table (every k-th row, keeping its peaks) or set time.adaptive = "
+            "false (steps of time.dt sample it)")
+    if count >= max_steps:  # and a step beyond the last point at least
+        return f"{what}, as many as time.max_steps = {max_steps} or more: {cure}", None
+    return None, (f"{what}, {count / fixed:.3g} times the {fixed} steps of time.dt = "
+                  f"{dt:g} s: {cure}")
 
 
 def storm_warning(name: str, waves: Sequence[WaveLoad], dt: float, end_time: float,
