@@ -432,14 +432,44 @@ def test_surface_on_the_wrong_body(shared_dir: pathlib.Path) -> None:
     bodies = [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 3, 1),
               Rectangle("block", -0.1, 0.0, 0.2, 0.1, 2, 1)]
     wrong = SurfacePair("c", "block", "base", "base_top", "base_top", 1e10)
-    with pytest.raises(MeshError, match="slave surface 'base_top' lies on body 'base', "
-                                        "not on the slave 'block'"):
+    with pytest.raises(MeshError, match="contact.c.slave_surface: 'base_top' lies on body "
+                                        r"'base', not on the slave 'block' \(facet groups on "
+                                        "'block': block_bottom, block_left, block_right, "
+                                        r"block_top\)"):
         _model(shared_dir / "bad.msh", COMM, bodies, wrong)
     missing = SurfacePair("c", "block", "base", "block_base", "base_top", 1e10)
     with pytest.raises(Exception, match="block_base"):
         _model(shared_dir / "bad.msh", COMM, bodies, missing)
     with pytest.raises(ValueError, match="two different bodies"):
         SurfacePair("c", "block", "block", "block_bottom", "base_top", 1e10)
+
+
+@pytest.mark.parametrize(("slave", "master", "key"), [
+    ("block_top", "base_top", "slave_surface"), ("block_left", "base_top", "slave_surface"),
+    ("block_bottom", "base_bottom", "master_surface")])
+def test_surfaces_that_do_not_face_each_other(shared_dir: pathlib.Path, slave: str,
+                                              master: str, key: str) -> None:
+    """A slave surface that exists on the slave, but faces away from the master (the
+    block's top or side for its bottom; or the base's underside for its top), is refused
+    before the static state, naming the key and the groups that face. Before: the top
+    sank the block through the base until its top met the base's (exit 0), the side ended
+    in "no static equilibrium"."""
+    bodies = [Rectangle("base", -0.5, -0.2, 1.0, 0.2, 3, 1),
+              Rectangle("block", -0.1, 0.0, 0.2, 0.1, 2, 1)]
+    model = _model(shared_dir / "facing.msh", COMM, bodies,
+                   SurfacePair("c", "block", "base", slave, master, 1e10),
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G))
+    with pytest.raises(MeshError) as info:
+        GN22(model, 1e-3)
+    message = str(info.value)
+    assert message.startswith(f"contact.c.{key}: slave_surface '{slave}' does not face "
+                              f"master_surface '{master}' anywhere")
+    assert message.endswith("groups of 'block' that face 'base_top': block_bottom; groups "
+                            "of 'base' that 'block_top' faces: none" if slave == "block_top"
+                            else "groups of 'base' that 'block_bottom' faces: base_top"
+                            if key == "master_surface" else "block_bottom; groups of "
+                            "'base' that 'block_left' faces: none")
+    assert "\n" not in message
 
 
 def test_reference_solver_refuses_general_pairs(shared_dir: pathlib.Path) -> None:

@@ -62,6 +62,7 @@ from breakwater.contact import (
     searchkernels,
     slavepoints,
 )
+from breakwater.contact.facing import facing
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.contact.surfacesearch import SurfaceSearch
@@ -420,11 +421,16 @@ class SurfaceContact(SurfaceForces):
         return slavepoints.static_measures(self, self.state(), u, E)
 
     def static_check(self) -> str | None:
-        """Why the bodies start overlapped beyond what the search sees (None: they do not).
+        """Why the pair cannot start from the meshed configuration (None: it can).
 
-        :func:`breakwater.contact.penetration.initial_overlap` (collective).
+        A slave surface that faces no master facet
+        (:func:`breakwater.contact.facing.facing`), else bodies overlapped beyond what
+        the search sees (:func:`breakwater.contact.penetration.initial_overlap`; surfaces
+        turned towards each other but meshed through each other are this case);
+        collective.
         """
-        return initial_overlap(self.model, self.spec)
+        overlap = initial_overlap(self.model, self.spec)
+        return facing(self.model, self.spec, overlap is not None) or overlap
 
     def probe(self, point: Sequence[float], name: str) -> slavepoints.SurfaceProbe:
         """A :class:`breakwater.contact.slavepoints.SurfaceProbe` at ``point``."""

@@ -45,6 +45,13 @@ class ModelGroups(ModelForms):
         found = [b.facet_tags.find(group_tag(self.mesh_data, g, fdim)) for g in groups]
         return np.unique(np.concatenate(found)) if found else np.zeros(0, np.int32)
 
+    def facet_groups_on(self, body: str) -> list[str]:
+        """The facet groups with a facet on a body, by name (collective, every rank)."""
+        fdim, index = self.mesh.topology.dim - 1, self.body(body).index
+        names = sorted(name for name, (dim, _) in self.mesh_data.physical_groups.items()
+                       if dim == fdim)
+        return [name for name in names if self._facet_counts(name)[index] > 0]
+
     def _facet_counts(self, group: str) -> list[int]:
         """The number of facets of a facet group on each body (every rank)."""
         tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)

@@ -275,8 +275,10 @@ class ContactModel(ModelGroups):
             if counts[index] == 0:
                 found = [b.spec.name for b, c in zip(self.bodies, counts, strict=True) if c]
                 if not found:
-                    raise MeshError(f"contact '{pair.name}': {role} surface '{group}' has "
+                    raise MeshError(f"contact.{pair.name}.{role}_surface: '{group}' has "
                                     "no facet on any body")
-                raise MeshError(f"contact '{pair.name}': {role} surface '{group}' lies on "
-                                f"body '{', '.join(found)}', not on the {role} '{body}'")
+                raise MeshError(f"contact.{pair.name}.{role}_surface: '{group}' lies on "
+                                f"body '{', '.join(found)}', not on the {role} '{body}' "
+                                f"(facet groups on '{body}': "
+                                f"{', '.join(self.facet_groups_on(body)) or 'none'})")
         return pair
