@@ -150,6 +150,10 @@ def test_read_table_as_spreadsheets_write_it(tmp_path, name):
     # pandas writes a missing value as an empty cell (it said "got 1 cell").
     (b"t,F\n0,0.25\n0.5,\n", "bad.csv line 3: expected two numbers t, value (an empty "
                                "cell (a missing value?)"),
+    # pandas' to_csv with its index: the message says so (it said "got 3 cells").
+    (b",t,F\n0,0.0,0.25\n1,0.5,1.5\n", "bad.csv line 2: expected two numbers t, value (got "
+                                         "3 cells: an index column? (pandas: to_csv(..., "
+                                         "index=False)): '0,0.0,0.25')"),
     # A time unit that is not one: refused, not read as seconds.
     (b"t [days],F\n0,0\n1,1\n", "bad.csv line 1: column 1 ('t [days]') is a time in "
                                   "'days': give it in one of s, sec"),

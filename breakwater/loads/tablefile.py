@@ -219,6 +219,7 @@ def read_rows(path: pathlib.Path, counts: tuple[int, ...], expected: str,
     grouped_only = True
     factors = [1.0] * len(units)
     header_allowed = True
+    indexed = False  # a header whose first cell is empty: pandas' index column
     for number, line in enumerate(lines, start=1):
         cells, dropped = _cells(line.strip(), separator)
         if not cells:
@@ -231,6 +232,7 @@ def read_rows(path: pathlib.Path, counts: tuple[int, ...], expected: str,
                 titles = (next(csv.reader([line.strip()], skipinitialspace=True))
                           if separator == "," and "," in line else cells)
                 factors = _factors(path, number, [c.strip() for c in titles], units)
+                indexed = len(titles) > 1 and titles[0].strip() in ("", "Unnamed: 0")
                 continue
         if separator == "," and _commas_and_blanks(line.strip()):
             raise ValueError(f"{where}: cells apart by commas and by blanks ("
@@ -243,6 +245,8 @@ def read_rows(path: pathlib.Path, counts: tuple[int, ...], expected: str,
             why = ("an empty cell (a missing value?)" if dropped and len(cells) < min(counts)
                    else f"got {len(cells)} cell{'s' * (len(cells) != 1)}"
                    + (f", the file's separator being {named}" if named else "")
+                   + (": an index column? (pandas: to_csv(..., index=False))"
+                      if indexed and len(cells) == max(counts) + 1 else "")
                    if len(cells) not in counts else
                    "no number: only the first row may be a header, comment others out "
                    "with #" if not any(numeric) else
