@@ -322,7 +322,10 @@ Physical Curve("joint") = {3}; Physical Curve("floor") = {1};
     err = capsys.readouterr().err
     if COMM.rank == 0:
         assert err.count("\n") == 1 and "Traceback" not in err, err
-        assert "split.geo: interface 'joint' has no facet shared by two cells" in err, err
+        assert ("split.geo: contact.joint: interface 'joint' has no facet shared by two cells: "
+                "a conforming pair's name is a facet group between its two bodies (such "
+                "groups here: none); for surfaces meshed apart give slave_surface and "
+                "master_surface") in err, err
 
 
 # --- property-based tests of the parser ----------------------------------------------

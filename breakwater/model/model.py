@@ -233,8 +233,15 @@ class ContactModel(ModelGroups):
                                                       msh.topology, facets)
         if self.comm.allreduce(len(facets)) == 0 or \
                 self.comm.allreduce(integration.size) == 0:
-            raise MeshError(f"interface '{pair.interface}' has no facet shared by two cells "
-                            "(is it a conforming interface between two bodies?)")
+            shared = [name for name, (dim, tag) in sorted(data.physical_groups.items())
+                      if dim == tdim - 1 and self.comm.allreduce(fem.compute_integration_domains(
+                          fem.IntegralType.interior_facet, msh.topology,
+                          data.facet_tags.find(tag)).size) > 0]
+            raise MeshError(f"contact.{pair.interface}: interface '{pair.interface}' has no "
+                            "facet shared by two cells: a conforming pair's name is a facet "
+                            "group between its two bodies (such groups here: "
+                            f"{', '.join(shared) or 'none'}); for surfaces meshed apart give "
+                            "slave_surface and master_surface")
         # Reorder so that '+' is always the slave: unordered data gives wrong numbers.
         d = integration.reshape(-1, 4).copy()
         flip = self._cell_body[d[:, 0]] != s
