@@ -168,7 +168,9 @@ def test_read_table_refuses_in_one_line(tmp_path, text, message):
 
 @pytest.mark.parametrize(("header", "factor"), [
     ("t [ms],F", 1e-3), ("t (ms);F", 1e-3), ("time in ms\tF", 1e-3), ("t / min, F", 60.0),
-    ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F (kN)", 1.0),
+    ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F (kN)", 1.0), ("T [MS],F", 1e-3),
+    # Words after "/" or "in" that are not units are not read (no refusal).
+    ("Zeit/Time,F", 1.0), ("time in Sekunden,F", 1.0),
 ])
 def test_read_table_time_unit_in_the_header(tmp_path, header, factor):
     # An oscilloscope's record in ms was read as seconds: a 10 ms impact acted for 10 s.

@@ -101,9 +101,11 @@ def _factors(path: pathlib.Path, number: int, header: list[str],
             continue
         unit = next(g for g in match.groups() if g is not None)
         known = _UNITS[quantity]
+        if unit.lower() in known and unit not in known:  # "t [S]", "H (M)"
+            unit = unit.lower()
         if unit not in known:
-            if match.group(4) is not None:  # "time in ..." with another word: no unit
-                continue
+            if match.group(1) is None and match.group(2) is None:
+                continue  # "Zeit/Time", "time in Sekunden": another word, not a unit
             raise ValueError(f"{path.name} line {number}: column {k + 1} ({cell!r}) is a "
                              f"{quantity} in {unit!r}: give it in one of "
                              f"{', '.join(known)} (or leave the unit out of the header: "
@@ -155,7 +157,8 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
     - Header: the first row is skipped only when none of its cells is a number (``t,
       value``); a first row with a number in it is data, and a bad one is refused. A
       time unit in the header's first cell (``t [ms]``, ``t (ms)``, ``t / ms``) converts
-      the times to seconds (s, ms, µs, min, h; another unit is refused); the value's
+      the times to seconds (s, ms, µs, min, h, any case; another unit in brackets or
+      parentheses is refused); the value's
       unit is not read (the value is a factor of the load's magnitude).
 
     Raises:
