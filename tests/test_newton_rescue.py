@@ -290,7 +290,8 @@ def test_a_cycle_is_a_failure_named_so(monkeypatch: pytest.MonkeyPatch) -> None:
     newton = _newton(SignLaw())  # type: ignore[arg-type]
     with pytest.raises(ConvergenceError, match=r"test: Newton did not converge \(SNES reason "
                        r"-5, \d+ iterations, residual 2.000e\+00, in a cycle of 2 iterates\); "
-                       r"again by a continuation in the friction's regularisation: 1 stages "):
+                       r"again by a continuation in the friction's regularisation: "
+                       r"1 stage from 1e\+06 χ "):
         _solve(newton, 1.0)
     assert newton.continuations == 0
     assert [interfacenewton.cycle([9.0, *x], 0.0) for x in (

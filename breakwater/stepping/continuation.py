@@ -81,10 +81,11 @@ class Stages:
 
     def describe(self) -> str:
         """The stages in one phrase (for a failed solve's message)."""
-        last = self.stretches[-1] if self.stretches else math.nan
-        return (f"{len(self.stretches)} stages from {self.stretches[0]:.0e} χ to "
-                f"{last:.3g} χ, {self.iterations} iterations" if self.stretches
-                else "no stage")
+        n = len(self.stretches)
+        if not n:
+            return "no stage"
+        return (f"{n} stage{'s' if n > 1 else ''} from {self.stretches[0]:.0e} χ to "
+                f"{self.stretches[-1]:.3g} χ, {self.iterations} iterations")
 
 
 def solve(iterate: Iterate, contact: ContactSum, y0: np.ndarray
