@@ -172,7 +172,8 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
         names = " and ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
         raise MeshError(f"{path}: the {gdim}D cells mix {names}; breakwater reads one cell "
                         "type per mesh: mesh every body with the same kind (recombine every "
-                        "surface or none)")
+                        "surface or none; gmsh leaves triangles where it cannot pair them, "
+                        "Mesh.SubdivisionAlgorithm = 1 gives quadrilaterals only)")
     if gdim == 2:
         check_cells(path)
     return gdim
