@@ -15,6 +15,7 @@ from mpi4py import MPI
 from breakwater.common.errors import MeshError
 from breakwater.common.gmshtools import gmsh_session
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.model.meshcells import check_cell_type, check_group_nodes
 
 log = logging.getLogger("breakwater.model.mesh")
 
@@ -174,6 +175,8 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
                         "type per mesh: mesh every body with the same kind (recombine every "
                         "surface or none; gmsh leaves triangles where it cannot pair them, "
                         "Mesh.SubdivisionAlgorithm = 1 gives quadrilaterals only)")
+    check_cell_type(path, gdim, int(types[0]))
+    check_group_nodes(path, gdim)
     if gdim == 2:
         check_cells(path)
     return gdim
