@@ -15,7 +15,7 @@ from mpi4py import MPI
 from breakwater.common.errors import MeshError
 from breakwater.common.gmshtools import gmsh_session
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
-from breakwater.model.meshcells import check_cell_type, check_group_nodes
+from breakwater.model.meshcells import check_cell_type, check_group_nodes, check_meshed
 
 log = logging.getLogger("breakwater.model.mesh")
 
@@ -407,8 +407,9 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
         target.parent.mkdir(parents=True, exist_ok=True)
         with gmsh_session():
             gmsh.merge(str(path))  # into the session's model
-            gmsh.model.mesh.generate(dim if dim is not None else
-                                     max(2, gmsh.model.getDimension()))
+            mdim = dim if dim is not None else max(2, gmsh.model.getDimension())
+            gmsh.model.mesh.generate(mdim)
+            check_meshed(mdim)
             if order == 2 and gmsh.option.getNumber("Mesh.ElementOrder") == 1:
                 gmsh.model.mesh.setOrder(2)
                 if not curved_edges():

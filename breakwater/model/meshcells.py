@@ -15,7 +15,7 @@ import numpy as np
 
 from breakwater.common.errors import MeshError
 
-__all__ = ["check_cell_type", "check_group_nodes"]
+__all__ = ["check_cell_type", "check_group_nodes", "check_meshed"]
 
 CELL_FAMILIES = {2: ("Triangle", "Quadrilateral"), 3: ("Tetrahedron", "Hexahedron")}
 """The cells breakwater reads, by the mesh's dimension (gmsh's family names)."""
@@ -87,3 +87,28 @@ def check_group_nodes(path: pathlib.Path, gdim: int) -> None:
         raise MeshError(f"{path}: physical group '{name}': {off} of its {total} {what} have "
                         "nodes on no cell: its mesh is not the cells' boundary (meshed "
                         "apart from the cells, or a curve or surface not on a body)")
+
+
+def check_meshed(dim: int) -> None:
+    """Refuse a script that gmsh meshed leaving a surface (2D) or volume (3D) empty.
+
+    gmsh's 3D Delaunay and Frontal algorithms log a failed volume (a point embedded in
+    a surface between two volumes: "No elements in volume 1 2") and return; the file
+    then read as "no 3D cells: truncated?".
+
+    Args:
+        dim: The dimension meshed.
+
+    Raises:
+        RuntimeError: Naming the empty entities and gmsh's last error, if any.
+    """
+    empty = [t for d, t in gmsh.model.getEntities(dim)
+             if not any(len(e) for e in gmsh.model.mesh.getElements(d, t)[1])]
+    if empty:
+        kind = "Surface" if dim == 2 else "Volume"
+        last = gmsh.logger.getLastError()
+        raise RuntimeError(f"gmsh left {kind} {', '.join(map(str, empty))} without cells"
+                           + (f": {last.strip()}" if last else "")
+                           + "; open the script in gmsh (a point embedded on a surface's "
+                           "edge leaves it unmeshed) or try another Mesh.Algorithm"
+                           + ("3D" if dim == 3 else ""))
