@@ -212,7 +212,7 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
 
     Each with the right dimension: cells the case's, facets one less, points 0.
     """
-    where = "the goda mesh" if case.mesh.generated else case.mesh.source
+    where = f"the {case.mesh.source} mesh" if case.mesh.generated else case.mesh.source
     d = dimension(case)
     problem = mesh_problem(case, max(groups.values()))
     if problem is not None:
@@ -226,6 +226,11 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
             return
         have = sorted(n for n, d in groups.items() if d in dims)
         kinds = " or ".join(f"{names.get(k, 'edge')} ({k}D)" for k in dims)
+        if name in groups:  # there, of another dimension: no look-alike to suggest
+            k = groups[name]
+            raise InvalidField(field_path, f"'{name}' is a {names.get(k, 'edge')} ({k}D) "
+                               f"physical group of {where}, where a {kinds} group is "
+                               f"needed (it has: {', '.join(have) or 'none'})")
         raise InvalidField(field_path, f"no {kinds} physical group "
                            f"'{name}' in {where}{suggest(name, have)} (it has: "
                            f"{', '.join(have) or 'none'})")
