@@ -365,6 +365,17 @@ def test_a_3d_goda_case_runs(hexahedra: pathlib.Path, folder: pathlib.Path) -> N
     final = wave["applied"]["final_force"]
     assert final[0] == pytest.approx(T * g.force, rel=1e-12)
     assert final[1] == pytest.approx(T * g.uplift_force(W), rel=1e-12)
+    # The bodies' own sizes (N, kg, m³: nothing per metre): block a is W × AH × T of
+    # 2000 kg/m³, b W × BH × T; the static contact carries a's weight ρ g V (1e-12:
+    # the boxes' volumes are exact in any quadrature).
+    sizes = summary["mesh"]["bodies"]
+    for name, height in (("a", AH), ("b", BH)):
+        assert sizes[name]["extent"] == pytest.approx([W, height, T], rel=1e-12)
+        assert sizes[name]["volume"] == pytest.approx(W * height * T, rel=1e-12)
+        assert sizes[name]["mass"] == pytest.approx(2000.0 * W * height * T, rel=1e-12)
+    static = summary["static"]
+    assert static["weight"] == pytest.approx(9.81 * 2000.0 * W * AH * T, rel=1e-12)
+    assert static["contact_resultant"] == pytest.approx(static["weight"], rel=1e-9)
 
 
 # --- a storm in 3D -----------------------------------------------------------------------

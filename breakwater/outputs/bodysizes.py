@@ -1,0 +1,69 @@
+"""The bodies' sizes as the mesh gives them: extent, volume, mass (``summary.json``).
+
+breakwater reads coordinates in metres. A mesh drawn in millimetres runs as a structure
+1000 times larger (a 0.2 m block on its mound: a 200 m cube of 1.85e7 t, its weight
+1.8e11 N), every number consistent and none flagged. The summary gives each body's
+extent, volume and mass, to be checked against the drawing, and a mesh spanning more
+than :data:`LARGEST_EXTENT` is warned about.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+
+if TYPE_CHECKING:
+    from breakwater.model.model import ContactModel
+
+__all__ = ["LARGEST_EXTENT", "body_sizes", "size_warning"]
+
+LARGEST_EXTENT = 2000.0
+"""m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
+10-40 m, its mound up to a few hundred metres; the same caisson in mm is 10-40 km."""
+
+
+def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
+    """Each body's bounding box extent (m), volume and mass (collective).
+
+    In plane strain the volume is the cross-section's area (m²) and the mass per metre
+    (kg/m), as the model's weights are per metre.
+
+    Returns:
+        By body name: ``extent`` (m, along x, y and z in 3D), ``volume`` (m³; m² in plane
+        strain), ``mass`` (kg; kg/m in plane strain).
+    """
+    comm = model.comm
+    out = {}
+    for b in model.bodies:
+        x = b.submesh.geometry.x[:, :model.gdim]
+        lo = np.full(model.gdim, np.inf) if x.size == 0 else x.min(axis=0)
+        hi = np.full(model.gdim, -np.inf) if x.size == 0 else x.max(axis=0)
+        # Not allreduce(op=MPI.MIN): mpi4py reduces Python objects with min(a, b),
+        # which raises on arrays on one rank and leaves the other waiting.
+        lo = np.min(comm.allgather(lo), axis=0)
+        hi = np.max(comm.allgather(hi), axis=0)
+        dx = ufl.Measure("dx", domain=b.submesh)
+        one = fem.Constant(b.submesh, dolfinx.default_scalar_type(1.0))
+        volume = comm.allreduce(fem.assemble_scalar(fem.form(one * dx)), op=MPI.SUM)
+        out[b.spec.name] = {"extent": [float(v) for v in hi - lo], "volume": float(volume),
+                            "mass": float(volume * b.spec.material.density)}
+    return out
+
+
+def size_warning(sizes: dict[str, dict[str, Any]]) -> str | None:
+    """One line if a body spans more than :data:`LARGEST_EXTENT`, else None."""
+    if not sizes:
+        return None
+    name = max(sizes, key=lambda n: max(sizes[n]["extent"]))
+    largest = max(sizes[name]["extent"])
+    if largest <= LARGEST_EXTENT:
+        return None
+    return (f"mesh: body '{name}' spans {largest:.4g} m: breakwater reads coordinates in metres "
+            f"(a mesh drawn in mm is 1000 times too large; scale it, e.g. gmsh's "
+            f"Mesh.ScalingFactor = 0.001); the bodies' sizes and masses: summary.json, "
+            f"mesh.bodies")
