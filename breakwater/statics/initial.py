@@ -182,6 +182,49 @@ def unsupported(model: ContactModel) -> str | None:
                     f"it{on}, so it has no static state under gravity and the initial "
                     "loads (add its contact pair or a [fixed] group, or start it at rest "
                     "undeformed: [initial] undeformed = true)")
+    return _nothing_beneath(model)
+
+
+LEVEL = 1e-3
+"""A body's contact interfaces are along gravity when the mean |n · g/|g|| over them all
+is below this (their normals perpendicular to gravity, within 0.06°)."""
+
+
+def _nothing_beneath(model: ContactModel) -> str | None:
+    """A body on contact interfaces that all run along gravity (None: none is).
+
+    A body without a ``[fixed]`` group whose conforming pairs' normals are all
+    perpendicular to gravity (and which none presses: gap ≥ 0) has nothing beneath it to
+    carry its weight: a z-up mesh run with y-down gravity (the static Newton failed
+    after 40 iterations, advising to start undeformed). Collective.
+    """
+    g = np.asarray(model.gravity.value, dtype=float)
+    if not np.any(g) or not model.pairs:
+        return None
+    down = ufl.as_vector([float(v) for v in g / np.linalg.norm(g)])
+    on: dict[int, list[tuple[str, float, float]]] = {}
+    for p in model.pairs:
+        if p.spec.gap < 0:
+            continue
+        level = model.assemble(model.form(abs(ufl.dot(p.n, down)) * p.dS))
+        area = model.assemble(model.form(fem.Constant(model.mesh, 1.0) * p.dS))
+        for b in (p.slave, p.master):
+            on.setdefault(b, []).append((p.spec.interface, level, area))
+    # Pressed (a negative gap) or on a general pair: friction may carry it.
+    held = {b for p in model.pairs if p.spec.gap < 0 for b in (p.slave, p.master)}
+    held |= {b for s, m, _ in model.pair_bodies()[len(model.pairs):] for b in (s, m)}
+    for b, pairs in on.items():
+        body = model.bodies[b]
+        if model.fixed_on(body.spec.name) or b in held:
+            continue
+        area = sum(a for _, _, a in pairs)
+        if area > 0 and sum(v for _, v, _ in pairs) < LEVEL * area:
+            names = ", ".join(f"'{n}'" for n, _, _ in pairs)
+            return (f"bodies.{body.spec.name}: nothing beneath it: its contact interfaces "
+                    f"({names}) all run along gravity {tuple(float(v) for v in g)}, so no "
+                    "contact carries its weight: a mesh drawn with z up? breakwater is y "
+                    "up: rotate it, (x, y, z) -> (x, z, -y) (gmsh's affineTransform), or "
+                    "start it at rest undeformed ([initial] undeformed = true)")
     return None
 
 
