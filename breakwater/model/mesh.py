@@ -171,10 +171,12 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
     if len(types) > 1:  # dolfinx raised a RuntimeError ("Multiple cell types")
         names = " and ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
+        how = ("recombine every surface or none; gmsh leaves triangles where it cannot pair "
+               "them, Mesh.SubdivisionAlgorithm = 1 gives quadrilaterals only" if gdim == 2
+               else "all tetrahedra, or all hexahedra: every extruded surface recombined "
+               "into quadrilaterals")
         raise MeshError(f"{path}: the {gdim}D cells mix {names}; breakwater reads one cell "
-                        "type per mesh: mesh every body with the same kind (recombine every "
-                        "surface or none; gmsh leaves triangles where it cannot pair them, "
-                        "Mesh.SubdivisionAlgorithm = 1 gives quadrilaterals only)")
+                        f"type per mesh: mesh every body with the same kind ({how})")
     check_cell_type(path, gdim, int(types[0]))
     check_group_nodes(path, gdim)
     if gdim == 2:
