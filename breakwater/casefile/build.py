@@ -117,10 +117,16 @@ def read_mesh(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
         CaseError: The mesh cannot be made or read (``mesh.source: ...``).
 
     """
+    msh = None
     try:
-        data = _read_msh(mesh_file(case, comm, directory), comm)
+        msh = mesh_file(case, comm, directory)
+        data = _read_msh(msh, comm)
     except MeshError as e:
-        raise CaseError(f"mesh.source: {e}") from e
+        text, source = str(e), pathlib.Path(case.mesh.source)
+        if msh is not None and msh != source and text.startswith(f"{msh}:"):
+            # A .geo's mesh refused: the user's file first (they wrote the .geo).
+            text = f"{source} (meshed into {msh}){text[len(str(msh)):]}"
+        raise CaseError(f"mesh.source: {text}") from e
     problem = mesh_problem(case, data.mesh.geometry.dim)
     if problem is not None:
         raise CaseError(f"mesh.source: {problem}")
