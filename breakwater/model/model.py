@@ -20,13 +20,16 @@ loads (:mod:`~breakwater.model.groups`), the forms and assembly helpers
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import dolfinx
 import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.io import gmsh as gmshio
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
@@ -233,15 +236,7 @@ class ContactModel(ModelGroups):
                                                       msh.topology, facets)
         if self.comm.allreduce(len(facets)) == 0 or \
                 self.comm.allreduce(integration.size) == 0:
-            shared = [name for name, (dim, tag) in sorted(data.physical_groups.items())
-                      if dim == tdim - 1 and self.comm.allreduce(fem.compute_integration_domains(
-                          fem.IntegralType.interior_facet, msh.topology,
-                          data.facet_tags.find(tag)).size) > 0]
-            raise MeshError(f"contact.{pair.interface}: interface '{pair.interface}' has no "
-                            "facet shared by two cells: a conforming pair's name is a facet "
-                            "group between its two bodies (such groups here: "
-                            f"{', '.join(shared) or 'none'}); for surfaces meshed apart give "
-                            "slave_surface and master_surface")
+            raise _no_interface(pair.interface, data, self.comm)
         # Reorder so that '+' is always the slave: unordered data gives wrong numbers.
         d = integration.reshape(-1, 4).copy()
         flip = self._cell_body[d[:, 0]] != s
@@ -289,3 +284,20 @@ class ContactModel(ModelGroups):
                                 f"(facet groups on '{body}': "
                                 f"{', '.join(self.facet_groups_on(body)) or 'none'})")
         return pair
+
+
+def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError:
+    """A conforming pair named after a group with no facet between two cells (one line).
+
+    It names the facet groups that do lie between two bodies, and ``slave_surface`` /
+    ``master_surface`` for surfaces meshed apart.
+    """
+    msh, tdim = data.mesh, data.mesh.topology.dim
+    shared = [group for group, (dim, tag) in sorted(data.physical_groups.items())
+              if dim == tdim - 1 and comm.allreduce(fem.compute_integration_domains(
+                  fem.IntegralType.interior_facet, msh.topology,
+                  data.facet_tags.find(tag)).size) > 0]
+    return MeshError(f"contact.{name}: interface '{name}' has no facet shared by two cells: "
+                     "a conforming pair's name is a facet group between its two bodies (such "
+                     f"groups here: {', '.join(shared) or 'none'}); for surfaces meshed apart "
+                     "give slave_surface and master_surface")
