@@ -106,3 +106,27 @@ def test_redraw_needs_a_run_folder(tmp_path: pathlib.Path,
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and str(folder) in err and "no run outputs" in err
     assert not (study / "figures").exists()
+
+
+@pytest.mark.parametrize("source, paper", [("goda", True), ("/home/me/caisson.geo", False)])
+def test_titles_cite_the_paper_for_its_model_only(tmp_path: pathlib.Path,
+                                                  monkeypatch: pytest.MonkeyPatch,
+                                                  source: str, paper: bool) -> None:
+    # A user's own geometry is not the paper's model: its titles said "cf. paper Fig. 17".
+    import json
+
+    from matplotlib.axes import Axes
+
+    folder = _folder(tmp_path / "run", {"length": "0_contact_length", "normal": "0_normal_force",
+                                        "tangential": "0_tangential_force"},
+                     {"x": "contact_0_x", "pressure": "contact_0_pressure",
+                      "extra": {"contacts": np.array(["0"])}})
+    (folder / "summary.json").write_text(json.dumps({"mesh": {"source": source}}))
+    titles: list[str] = []
+    original = Axes.set_title
+    monkeypatch.setattr(Axes, "set_title", lambda ax, label, *a, **k: (
+        titles.append(str(label)), original(ax, label, *a, **k))[1])
+    figures.make_figures(folder)
+    assert any("Static vertical stress" in t for t in titles), titles
+    cited = [t for t in titles if "cf. paper" in t]
+    assert (len(cited) >= 3) if paper else cited == [], titles

@@ -57,6 +57,9 @@ LEDGER = ("kinetic", "strain", "penalty", "rayleigh_dissipation", "friction_diss
           "external_work", "balance_error")
 # Ledger entries plotted when present (histories written before they existed lack them).
 NUMERICAL = ("numerical_dissipation", "numerical_dissipation_contact")
+#: The meshes of the paper's model (the summary's ``mesh.source``): their figures' titles
+#: refer to the paper's.
+PAPER = ("goda",)
 
 
 def _save(fig: Figure, path: pathlib.Path) -> pathlib.Path:
@@ -87,8 +90,16 @@ def _time_axis(ax: Any, t: np.ndarray, t_peak: float | None = None) -> None:
     ax.label_outer()  # time label on the bottom plot of a column only
 
 
-def _probes(h: dict[str, np.ndarray], t_peak: float | None, path: pathlib.Path
-            ) -> pathlib.Path | None:
+def _cf(summary: dict[str, Any], figure: str) -> str:
+    """`` (cf. paper Fig. N)`` for a run on the paper's Goda mesh, else nothing.
+
+    A user's own geometry is not the paper's model (its titles said "cf. paper Fig. 17").
+    """
+    return f" (cf. paper {figure})" if summary.get("mesh", {}).get("source") in PAPER else ""
+
+
+def _probes(h: dict[str, np.ndarray], t_peak: float | None, path: pathlib.Path,
+            cf: str = "") -> pathlib.Path | None:
     names = [n for n in _names(list(h), "_ux")
              if f"{n}_uy" in h and not n.endswith(("_slave", "_master"))]
     if not names:
@@ -98,14 +109,14 @@ def _probes(h: dict[str, np.ndarray], t_peak: float | None, path: pathlib.Path
     for n in names:
         ax.plot(h["t"], 1e3 * h[f"{n}_ux"], label=n)
     ax.set_ylabel("horizontal displacement $u_x$ (mm)")
-    ax.set_title("Probe displacements (cf. paper Fig. 18)")
+    ax.set_title(f"Probe displacements{cf}")
     _time_axis(ax, h["t"], t_peak)
     ax.legend()
     return _save(fig, path)
 
 
 def _pair_probes(h: dict[str, np.ndarray], t_peak: float | None, component: str,
-                 path: pathlib.Path) -> pathlib.Path | None:
+                 path: pathlib.Path, paper: bool = False) -> pathlib.Path | None:
     names = _names(list(h), "_slip")
     if not names:
         return None
@@ -121,7 +132,7 @@ def _pair_probes(h: dict[str, np.ndarray], t_peak: float | None, component: str,
         ax.plot(h["t"], 1e3 * h[f"{n}_{relative}"], "k", lw=0.9, label=label)
         ax.set_ylabel(f"$u_{component}$ (mm)")
         ax.set_title(f"{n}: {'horizontal' if component == 'x' else 'vertical'} "
-                     f"displacement (cf. paper Fig. {fig_no})")
+                     f"displacement" + (f" (cf. paper Fig. {fig_no})" if paper else ""))
         _time_axis(ax, h["t"], t_peak)
         ax.legend()
     return _save(fig, path)
@@ -273,7 +284,7 @@ def _static_pressure(data: Any, summary: dict[str, Any], path: pathlib.Path
         ax.axhline(mean, color="k", ls="--", lw=0.8, label=f"mean {mean:.4g} Pa")
     ax.set_xlabel("position along the interface (m)")
     ax.set_ylabel("contact pressure (Pa)")
-    ax.set_title("Static contact pressure (cf. paper Fig. 17)")
+    ax.set_title("Static contact pressure" + _cf(summary, "Fig. 17"))
     ax.grid(True, lw=0.3)
     ax.legend()
     return _save(fig, path)
@@ -302,19 +313,20 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
     if (directory / HISTORY).is_file():
         h = _legacy_columns(read_history(directory / HISTORY))
         if len(h.get("t", ())) > 0:
-            drawn += [_probes(h, t_peak, folder / "probes_ux.png"),
-                      _pair_probes(h, t_peak, "x", folder / "pair_probes_ux.png"),
-                      _pair_probes(h, t_peak, "y", folder / "pair_probes_uy.png"),
+            paper = bool(_cf(summary, ""))
+            drawn += [_probes(h, t_peak, folder / "probes_ux.png", _cf(summary, "Fig. 18")),
+                      _pair_probes(h, t_peak, "x", folder / "pair_probes_ux.png", paper),
+                      _pair_probes(h, t_peak, "y", folder / "pair_probes_uy.png", paper),
                       _energy(h, folder / "energy.png", per),
                       _contact(h, folder / "contact.png", per)]
     if (directory / STATIC).is_file():
         with np.load(directory / STATIC) as data:
             drawn += [
                 _contours(data, "uy", 1e3, "$u_y$ (mm)",
-                          "Static vertical displacement (cf. paper Fig. 16)",
+                          "Static vertical displacement" + _cf(summary, "Fig. 16"),
                           folder / "static_uy.png"),
                 _contours(data, "stress_yy", 1.0, r"$\sigma_{yy}$ (Pa)",
-                          "Static vertical stress (cf. paper Fig. 17)",
+                          "Static vertical stress" + _cf(summary, "Fig. 17"),
                           folder / "static_syy.png", cmap="viridis_r"),
                 _static_pressure(data, summary, folder / "static_pressure.png"),
             ]
@@ -324,7 +336,8 @@ def make_figures(directory: str | pathlib.Path, scale: float = 20.0) -> list[pat
             drawn.append(_contours(
                 data, "stress_yy", 1.0, r"$\sigma_{yy}$ (Pa)",
                 f"Deformed shape (×{scale:g}) and vertical stress at t = {t:.4g} s\n"
-                "(largest $u_x$ of the first probe; cf. paper Figs. 20, 22)",
+                "(largest $u_x$ of the first probe" + (
+                    "; cf. paper Figs. 20, 22)" if _cf(summary, "") else ")"),
                 folder / "max_ux_deformed.png", scale=scale, outline=True, cmap="viridis_r"))
     drawn += storm_figures(directory, folder)
     return [p for p in drawn if p is not None]
