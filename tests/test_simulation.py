@@ -410,10 +410,10 @@ def test_batch_log_shows_the_loop_progress(mesh_path: pathlib.Path, shared_dir: 
 
 
 def test_durations_read_as_time() -> None:
-    assert simulation._duration(42.4) == "42 s"
-    assert simulation._duration(185.0) == "3 min 05 s"
-    assert simulation._duration(3725.0) == "1 h 02 min"
-    assert simulation._duration(math.inf) == "?"
+    assert simulation.duration(42.4) == "42 s"
+    assert simulation.duration(185.0) == "3 min 05 s"
+    assert simulation.duration(3725.0) == "1 h 02 min"
+    assert simulation.duration(math.inf) == "?"
 
 
 def test_probes_of_one_name_are_refused(tmp_path: pathlib.Path) -> None:

@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["NotebookLine", "in_kernel", "progress_line"]
+__all__ = ["NotebookLine", "duration", "in_kernel", "progress_line"]
 
 
 def in_kernel() -> bool:
@@ -35,7 +35,7 @@ def in_kernel() -> bool:
     return shell is not None and getattr(shell, "kernel", None) is not None
 
 
-def _duration(seconds: float) -> str:
+def duration(seconds: float) -> str:
     """``1 h 02 min``, ``3 min 05 s`` or ``42 s`` (``?`` when unknown)."""
     if not math.isfinite(seconds):
         return "?"
@@ -60,10 +60,10 @@ def progress_line(name: str, t: float, start: float, end: float, steps: int,
     bar = "█" * filled + " " * (width - filled)
     mean = f"{iterations / steps:.2f}" if steps else "-"
     if done:
-        tail = f"{_duration(elapsed)} elapsed"
+        tail = f"{duration(elapsed)} elapsed"
     else:
         left = elapsed * (end - t) / (t - start) if t > start else math.inf
-        tail = f"{_duration(elapsed)} elapsed, about {_duration(left)} left"
+        tail = f"{duration(elapsed)} elapsed, about {duration(left)} left"
     return (f"{name}: {100 * fraction:3.0f}% |{bar}| t = {t:.4g}/{end:.4g} s, {steps} steps, "
             f"{mean} Newton iterations per step, {tail}")
 

@@ -78,7 +78,7 @@ from breakwater.common.errors import (
     PenetrationError,
     cannot_write,
 )
-from breakwater.common.notebookprogress import in_kernel
+from breakwater.common.notebookprogress import duration, in_kernel
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
@@ -322,19 +322,7 @@ def _beat(beat: SlowPhase, t: float, t_start: float, end: float, steps: int,
     left = elapsed * (end - t) / (t - t_start) if t > t_start else math.inf
     log.info("time stepping: t = %.6g s of %g s (%.0f%%), %d steps, %.2f Newton "
              "iterations per step; %s elapsed, about %s left", t, end, 100 * t / end, steps,
-             mean_iterations, _duration(elapsed), _duration(left))
-
-
-def _duration(seconds: float) -> str:
-    """``1 h 02 min``, ``3 min 05 s`` or ``42 s``."""
-    if not math.isfinite(seconds):
-        return "?"
-    s = round(seconds)
-    if s >= 3600:
-        return f"{s // 3600} h {s % 3600 // 60:02d} min"
-    if s >= 60:
-        return f"{s // 60} min {s % 60:02d} s"
-    return f"{s} s"
+             mean_iterations, duration(elapsed), duration(left))
 
 
 def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
