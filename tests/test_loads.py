@@ -110,7 +110,7 @@ SPREADSHEET_TABLES = {
     # real header refused as a second one).
     "excel_sep_line": b"sep=;\r\nt;F\r\n0;0,25\r\n0,5;1,5\r\n1;0\r\n",
     # Units in the header, in seconds: read as they are.
-    "header_in_seconds": b"t [s],F (kN)\n0,0.25\n0.5,1.5\n1,0\n",
+    "header_in_seconds": b"t [s],F [-]\n0,0.25\n0.5,1.5\n1,0\n",
     "iso_header": "t / s\tF / −\n0\t0,25\n0,5\t1,5\n1\t0\n".encode(),
 }
 
@@ -157,6 +157,10 @@ def test_read_table_as_spreadsheets_write_it(tmp_path, name):
     # A time unit that is not one: refused, not read as seconds.
     (b"t [days],F\n0,0\n1,1\n", "bad.csv line 1: column 1 ('t [days]') is a time in "
                                   "'days': give it in one of s, sec"),
+    # The value is a factor of the load's magnitude: a force in kN was read as 1 (1000×
+    # off, silently) when the magnitude was force = 1.0 N.
+    (b"t [ms],F (kN)\n0,0\n1,1\n", "bad.csv line 1: column 2 ('F (kN)') gives a unit, kN, "
+                                    "that is not read: its values multiply the load's"),
 ])
 def test_read_table_refuses_in_one_line(tmp_path, text, message):
     path = tmp_path / "bad.csv"
@@ -168,7 +172,8 @@ def test_read_table_refuses_in_one_line(tmp_path, text, message):
 
 @pytest.mark.parametrize(("header", "factor"), [
     ("t [ms],F", 1e-3), ("t (ms);F", 1e-3), ("time in ms\tF", 1e-3), ("t / min, F", 60.0),
-    ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F (kN)", 1.0), ("T [MS],F", 1e-3),
+    ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F [-]", 1.0), ("T [MS],F", 1e-3),
+    ("t [s],F/F_max", 1.0), ("t [s],f (1)", 1.0),
     # Words after "/" or "in" that are not units are not read (no refusal).
     ("Zeit/Time,F", 1.0), ("time in Sekunden,F", 1.0),
 ])

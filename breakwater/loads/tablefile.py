@@ -20,8 +20,11 @@ from typing import Literal
 
 __all__ = ["TIME_UNITS", "Quantity", "read_rows", "read_table"]
 
-Quantity = Literal["time", "length"]
-"""What a column holds when its header may give its unit (``t [ms]``, ``H (cm)``)."""
+Quantity = Literal["time", "length", "factor"]
+"""What a column holds when its header may give its unit (``t [ms]``, ``H (cm)``); a
+``factor`` multiplies a magnitude given elsewhere, and a unit on it is refused."""
+#: A factor column's header "units" that say it has none: ``value [-]``, ``f (1)``.
+DIMENSIONLESS = ("", "-", "1", "–")
 
 TIME_UNITS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
               "ms": 1e-3, "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
@@ -100,6 +103,15 @@ def _factors(path: pathlib.Path, number: int, header: list[str],
         if match is None or quantity is None:
             continue
         unit = next(g for g in match.groups() if g is not None)
+        if quantity == "factor":
+            if (match.group(1) is None and match.group(2) is None) \
+                    or unit in DIMENSIONLESS or len(header) != len(units):
+                continue  # "F/F_max", "value [-]", a header not split as the rows are
+            raise ValueError(f"{path.name} line {number}: column {k + 1} ({cell!r}) gives "
+                             f"a unit, {unit}, that is not read: its values multiply the "
+                             "load's magnitude, whose key gives the unit in SI (e.g. "
+                             "force = 1000.0 for a column in kN); write the header without "
+                             "it, or as a factor (value [-])")
         known = _UNITS[quantity]
         if unit.lower() in known and unit not in known:  # "t [S]", "H (M)"
             unit = unit.lower()
@@ -158,8 +170,9 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
       value``); a first row with a number in it is data, and a bad one is refused. A
       time unit in the header's first cell (``t [ms]``, ``t (ms)``, ``t / ms``) converts
       the times to seconds (s, ms, µs, min, h, any case; another unit in brackets or
-      parentheses is refused); the value's
-      unit is not read (the value is a factor of the load's magnitude).
+      parentheses is refused); the value is a factor of the load's magnitude, so a unit
+      in brackets or parentheses on its header (``F (kN)``: read as 1, silently 1000×
+      off) is refused, but ``[-]`` or ``(1)``.
 
     Raises:
         OSError: The file cannot be read (the message names it).
@@ -168,7 +181,7 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
             the line).
 
     """
-    rows = read_rows(path, (2,), "two numbers t, value", ("time", None))
+    rows = read_rows(path, (2,), "two numbers t, value", ("time", "factor"))
     times: list[float] = []
     values: list[float] = []
     for k, (number, (t, v)) in enumerate(rows):
@@ -193,7 +206,8 @@ def read_rows(path: pathlib.Path, counts: tuple[int, ...], expected: str,
         counts: The numbers of cells a data row may have (e.g. ``(2,)``, ``(2, 3)``).
         expected: What a row holds, for the messages (``"two numbers t, value"``).
         units: What each column holds, where a unit in its header cell converts it to
-            SI (``"time"``: s, ``"length"``: m), ``None`` where the header is not read.
+            SI (``"time"``: s, ``"length"``: m; a unit on a ``"factor"`` is refused), ``None``
+            where the header is not read.
 
     Returns:
         (line number, the row's numbers in SI) for each data row, in order.
