@@ -159,8 +159,8 @@ def test_read_table_as_spreadsheets_write_it(tmp_path, name):
                                   "'days': give it in one of s, sec"),
     # The value is a factor of the load's magnitude: a force in kN was read as 1 (1000×
     # off, silently) when the magnitude was force = 1.0 N.
-    (b"t [ms],F (kN)\n0,0\n1,1\n", "bad.csv line 1: column 2 ('F (kN)') gives a unit, kN, "
-                                    "that is not read: its values multiply the load's"),
+    (b"t [ms],F (kN)\n0,0\n1,1\n", "bad.csv line 1: column 2 ('F (kN)') is in kN, which is "
+                                    "not read: its values multiply the load's magnitude"),
 ])
 def test_read_table_refuses_in_one_line(tmp_path, text, message):
     path = tmp_path / "bad.csv"
@@ -173,7 +173,7 @@ def test_read_table_refuses_in_one_line(tmp_path, text, message):
 @pytest.mark.parametrize(("header", "factor"), [
     ("t [ms],F", 1e-3), ("t (ms);F", 1e-3), ("time in ms\tF", 1e-3), ("t / min, F", 60.0),
     ("t [µs],F", 1e-6), ("t [s],F", 1.0), ("time (s), F [-]", 1.0), ("T [MS],F", 1e-3),
-    ("t [s],F/F_max", 1.0), ("t [s],f (1)", 1.0),
+    ("t [s],F/F_max", 1.0), ("t [s],f (1)", 1.0), ("t (s),p (Pa)", 1.0), ("t [s],F [N]", 1.0),
     # Words after "/" or "in" that are not units are not read (no refusal).
     ("Zeit/Time,F", 1.0), ("time in Sekunden,F", 1.0),
 ])

@@ -23,8 +23,9 @@ __all__ = ["TIME_UNITS", "Quantity", "read_rows", "read_table"]
 Quantity = Literal["time", "length", "factor"]
 """What a column holds when its header may give its unit (``t [ms]``, ``H (cm)``); a
 ``factor`` multiplies a magnitude given elsewhere, and a unit on it is refused."""
-#: A factor column's header "units" that say it has none: ``value [-]``, ``f (1)``.
-DIMENSIONLESS = ("", "-", "1", "–")
+#: A factor column's header units that are read as written: none (``value [-]``,
+#: ``f (1)``) or the SI units of a load's magnitude (``p (Pa)`` with the magnitude 1).
+AS_WRITTEN = ("", "-", "1", "–", "N", "Pa", "N/m", "N/m2", "N/m²", "N/m^2")
 
 TIME_UNITS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
               "ms": 1e-3, "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
@@ -105,13 +106,13 @@ def _factors(path: pathlib.Path, number: int, header: list[str],
         unit = next(g for g in match.groups() if g is not None)
         if quantity == "factor":
             if (match.group(1) is None and match.group(2) is None) \
-                    or unit in DIMENSIONLESS or len(header) != len(units):
-                continue  # "F/F_max", "value [-]", a header not split as the rows are
-            raise ValueError(f"{path.name} line {number}: column {k + 1} ({cell!r}) gives "
-                             f"a unit, {unit}, that is not read: its values multiply the "
-                             "load's magnitude, whose key gives the unit in SI (e.g. "
-                             "force = 1000.0 for a column in kN); write the header without "
-                             "it, or as a factor (value [-])")
+                    or unit in AS_WRITTEN or len(header) != len(units):
+                continue  # "F/F_max", "value [-]", "p (Pa)", a header split unlike the rows
+            raise ValueError(f"{path.name} line {number}: column {k + 1} ({cell!r}) is in "
+                             f"{unit}, which is not read: its values multiply the load's "
+                             "magnitude in SI (N, Pa); convert the column, or write it as a "
+                             "factor (value [-]) and give the unit in the magnitude (e.g. "
+                             "force = 1000.0 for kN)")
         known = _UNITS[quantity]
         if unit.lower() in known and unit not in known:  # "t [S]", "H (M)"
             unit = unit.lower()
@@ -170,9 +171,10 @@ def read_table(path: pathlib.Path) -> tuple[tuple[float, ...], tuple[float, ...]
       value``); a first row with a number in it is data, and a bad one is refused. A
       time unit in the header's first cell (``t [ms]``, ``t (ms)``, ``t / ms``) converts
       the times to seconds (s, ms, µs, min, h, any case; another unit in brackets or
-      parentheses is refused); the value is a factor of the load's magnitude, so a unit
-      in brackets or parentheses on its header (``F (kN)``: read as 1, silently 1000×
-      off) is refused, but ``[-]`` or ``(1)``.
+      parentheses is refused); the value is a factor of the load's magnitude (in SI),
+      so a unit in brackets or parentheses on its header other than none (``[-]``,
+      ``(1)``) or an SI unit (``(N)``, ``(Pa)``, ``(N/m)``) is refused (``F (kN)`` was
+      read as 1: silently 1000× off).
 
     Raises:
         OSError: The file cannot be read (the message names it).
