@@ -140,6 +140,13 @@ def _crashed(mesh_path: pathlib.Path, directory: pathlib.Path,
             _run(mesh_path, directory, **kwargs)
 
 
+def _unchanged(files: dict[pathlib.Path, bytes]) -> bool:
+    """Whether each file holds the bytes given, on every rank (collective: the ranks line
+    up here, so that rank 0 may change the files next)."""
+    same = all(p.read_bytes() == data for p, data in files.items())
+    return bool(COMM.allreduce(same, op=MPI.LAND))
+
+
 def _siblings(values: Any) -> float:
     """The largest |float| among a summary table's (or list's) own entries."""
     items = values.values() if isinstance(values, dict) else values
@@ -453,7 +460,15 @@ def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
     with pytest.raises(CheckpointError, match="case differs"):
         _run(mesh_path, shared_dir, resume=True, penalty=2e10)
     COMM.barrier()
-    assert all(p.read_bytes() == data for p, data in files.items())
+    # Every rank compares before rank 0 edits the history below. Without the agreement,
+    # a rank slowed by a busy machine read the edited file: it failed alone while rank
+    # 0 waited at the next barrier until the suite's time limit (seen on 2 ranks beside
+    # a CPU-bound process). The other ranks are made slow here to force that order.
+    if COMM.rank > 0:
+        read_bytes = pathlib.Path.read_bytes
+        monkeypatch.setattr(pathlib.Path, "read_bytes",
+                            lambda p: (_time.sleep(0.3), read_bytes(p))[1])
+    assert _unchanged(files)
     # A kept history row edited into text: refused in one line naming the file, and
     # the history is not cut (it was cut before its rows were read).
     if COMM.rank == 0:
