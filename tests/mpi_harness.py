@@ -43,10 +43,17 @@ The slowest tests take about 60 s serially on an idle machine and up to three ti
 that under ``mpiexec -n 2`` beside another CPU-heavy process: 600 s stops only a hang.
 """
 
+ABORT_GRACE = 2.0
+"""Seconds between a rank's time limit and its abort of the suite."""
+
 PASSED, SKIPPED, FAILED = 0, 1, 2
 
 _CONFIG: list[pytest.Config] = []
 """The session's configuration (its capture manager holds the real stderr)."""
+
+_WAITING: list[pytest.TestReport] = []
+"""The report of the phase this rank waits to agree on (its failure, the cause of a hang,
+is printed by the time limit: its report would come only after the agreement)."""
 
 
 @pytest.hookimpl(trylast=True)
@@ -85,6 +92,10 @@ def _stop(nodeid: str, limit: float) -> None:
         capture.suspend_global_capture(in_=False)
         captured = capture.read_global_capture()[1]
     sys.stderr.write(captured)
+    for report in _WAITING:
+        if report.failed:  # this rank failed and waited for the others in the agreement
+            sys.stderr.write(f"\n[rank {rank}] FAILED {report.nodeid} ({report.when}), "
+                             f"then waited for the other ranks:\n{report.longreprtext}\n")
     sys.stderr.write(f"\n[rank {rank}] {nodeid}: time limit of {limit:g} s exceeded "
                      "(a hang, or a rank left waiting in a collective after a failure "
                      "on another rank); stopping the test suite on every rank\n")
@@ -92,6 +103,9 @@ def _stop(nodeid: str, limit: float) -> None:
     faulthandler.dump_traceback(file=sys.stderr, all_threads=True)
     sys.stderr.flush()
     if MPI.COMM_WORLD.size > 1:
+        # The other ranks' limits end at about the same moment: a pause lets them print
+        # theirs (a rank waiting in the agreement, its failure) before the abort.
+        time.sleep(ABORT_GRACE)
         MPI.COMM_WORLD.Abort(1)
     os._exit(1)
 
@@ -147,7 +161,9 @@ def pytest_runtest_makereport(item: pytest.Item,
     if HARNESS.size == 1:
         return
     report: pytest.TestReport = outcome.get_result()
+    _WAITING[:] = [report]  # shown by the time limit if the other ranks never come
     states = _allgather(_state(report))
+    _WAITING.clear()
     failed = [r for r, s in enumerate(states) if s == FAILED]
     if failed and not report.failed:
         report.outcome = "failed"

@@ -104,6 +104,10 @@ def test_a_rank_left_waiting_stops_the_suite(tmp_path: pathlib.Path) -> None:
     assert result.returncode != 0
     assert "time limit of 5 s exceeded" in result.stderr, result.stderr
     assert "test_rank_one_fails_while_rank_zero_waits" in result.stderr
+    # the failure that left rank 0 waiting is shown (rank 1's report came only after
+    # the agreement, which never ended: a hang of the suite named no cause)
+    assert "[rank 1] FAILED" in result.stderr, result.stderr
+    assert "rank 1 gives up before the barrier" in result.stderr, result.stderr
     assert "passed" not in result.stdout  # test_never_reached did not run
     assert seconds < 60
 
