@@ -430,6 +430,10 @@ def test_keyboard_interrupt_says_what_it_left_and_resumes(
     # outputs kept. It now carries a note; the folder resumes to the uninterrupted run.
     with monkeypatch.context() as mp:
         _flaky(mp, KILL_AT, action="keyboard")
+        if COMM.rank > 0:  # the note is the summary's word, not each rank's look at the
+            is_file = pathlib.Path.is_file  # folder (a rank that does not see the file)
+            mp.setattr(pathlib.Path, "is_file",
+                       lambda p: p.name != CHECKPOINT and is_file(p))
         with pytest.raises(KeyboardInterrupt) as info:
             _run(mesh_path, shared_dir)
     written = _summary(shared_dir)
@@ -481,6 +485,27 @@ def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
         _run(mesh_path, shared_dir, resume=True)
     COMM.barrier()
     assert (shared_dir / "history.csv").read_bytes() == edited
+
+
+@pytest.mark.timeout(120)
+def test_a_checkpoint_unreadable_on_one_rank_is_refused_on_every_rank(
+        mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # Rank 0 finds the checkpoint good; another rank cannot read it (a file system that
+    # answers the ranks differently, the file replaced between their reads). That rank
+    # alone raised, and rank 0 went on to build the stepper and waited in it for good
+    # (the time limit, 120 s here, stopped the suite). Every rank now refuses it.
+    _crashed(mesh_path, shared_dir, monkeypatch)
+    read = ckpt.read
+
+    def unreadable(path: Any, fingerprint: Any = None) -> Any:
+        if COMM.rank == COMM.size - 1:
+            raise CheckpointError(f"cannot read the checkpoint {path}: injected")
+        return read(path, fingerprint)
+
+    monkeypatch.setattr(ckpt, "read", unreadable)
+    with pytest.raises(CheckpointError, match="injected"):
+        _run(mesh_path, shared_dir, resume=True)
 
 
 @pytest.mark.skipif(COMM.size < 2, reason="resumes a parallel checkpoint serially")

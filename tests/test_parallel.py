@@ -8,7 +8,7 @@ import pytest
 from mpi4py import MPI
 
 from breakwater.common.errors import ConvergenceError
-from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.common.parallel import on_every_rank, on_rank_zero, shared_tempdir
 from breakwater.outputs.checkpoint import CheckpointError
 
 COMM = MPI.COMM_WORLD
@@ -45,6 +45,47 @@ def test_error_that_does_not_pickle():
     expected = ConvergenceError if COMM.rank == 0 else RuntimeError
     with pytest.raises(expected, match="Newton diverged"):
         on_rank_zero(COMM, action)
+
+
+def test_every_rank_does_its_own_work():
+    assert on_every_rank(COMM, lambda: COMM.rank) == COMM.rank
+
+
+@pytest.mark.timeout(60)
+def test_an_error_on_one_rank_is_raised_on_every_rank():
+    # The last rank fails alone (on 1 rank: rank 0 itself); every rank raises its error
+    # and the ranks still line up after it (a collective that follows matches).
+    last = COMM.size - 1
+
+    def action() -> int:
+        if COMM.rank == last:
+            raise CheckpointError("cannot read the checkpoint x: injected")
+        return COMM.rank
+
+    with pytest.raises(CheckpointError, match="injected") as info:
+        on_every_rank(COMM, action)
+    assert str(info.value) == "cannot read the checkpoint x: injected"
+    assert COMM.allreduce(1) == COMM.size
+
+
+@pytest.mark.timeout(120)
+def test_a_mesh_file_that_one_rank_does_not_see(shared_dir: pathlib.Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    # Whether the mesh file exists is rank 0's answer (rank 0 reads it): a rank that did
+    # not see it (a network file system's cached answer) raised "mesh file not found"
+    # alone, and rank 0 waited in the mesh's distribution until the time limit.
+    from blocks import two_rectangles
+
+    from breakwater.model.mesh import read_mesh
+
+    path = two_rectangles(shared_dir / "blocks.msh", COMM, (1.0, 0.5), (2.0, 0.5), 0.25)
+    is_file = pathlib.Path.is_file
+    if COMM.rank > 0:
+        monkeypatch.setattr(pathlib.Path, "is_file",
+                            lambda p: False if p == path else is_file(p))
+    data = read_mesh(path, COMM)
+    cells = data.mesh.topology.index_map(data.mesh.topology.dim).size_global
+    assert cells > 0 and COMM.allreduce(cells, op=MPI.MAX) == cells
 
 
 def test_shared_tempdir():

@@ -205,6 +205,29 @@ def test_ranks_per_case_must_divide(shared_dir, capsys):
         assert "--ranks-per-case" in capsys.readouterr().err
 
 
+@pytest.mark.timeout(120)
+def test_a_case_that_one_rank_cannot_read_stops_every_rank(shared_dir, monkeypatch):
+    """Rank 0 checks the points, then every rank reads the cases itself: a rank that
+    met an error alone (a file changed since) raised while the others went on into the
+    fingerprints' broadcast and waited there (the time limit, 120 s here, stopped the
+    suite). Every rank now raises it."""
+    from breakwater.studies import sweep
+
+    path = study_file(shared_dir, '[grid]\n"contact.interface.friction" = [0.5]\n')
+    calls = []
+
+    def changed(study, folder):
+        calls.append(1)
+        if len(calls) == (2 if COMM.rank == 0 else 1):  # each rank's own reading (rank
+            raise CaseError("mesh.source: injected")  # 0's after its check of every point)
+        return check_points(study, folder)
+
+    if COMM.rank == COMM.size - 1:
+        monkeypatch.setattr(sweep, "check_points", changed)
+    with pytest.raises(CaseError, match="injected"):
+        run_study(load_study(path), shared_dir / "out", quiet=True)
+
+
 # --- running studies ---------------------------------------------------------------
 
 NUMBERS_EXCLUDED = ("wall_time", "loop_time", "newton_iterations")  # clocks; counts apart

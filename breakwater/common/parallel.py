@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["on_rank_zero", "shared_tempdir"]
+__all__ = ["on_every_rank", "on_rank_zero", "shared_tempdir"]
 
 
 def on_rank_zero[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
@@ -60,6 +60,40 @@ def on_rank_zero[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
     raise _restore(payload)
 
 
+def on_every_rank[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
+    """Run ``action`` on every rank; when it fails on any rank, every rank raises.
+
+    For work each rank must do itself (reading the part of a file it needs, reading a
+    case's files) but whose failure one rank could meet alone (a file system that
+    answers ranks differently under load, or a file changed between two ranks' reads):
+    that rank would raise while the others go on into the next collective and wait
+    there for good. Collective (an allgather of the outcome).
+
+    Returns:
+        This rank's result of ``action``.
+
+    Raises:
+        Exception: The error of the lowest rank that failed, on every rank (a rank that
+            failed itself raises it with its own error as the cause).
+    """
+    try:
+        result, failure = action(), None
+    except Exception as exc:
+        result, failure = None, exc
+    if comm.size == 1:
+        if failure is not None:
+            raise failure
+        return result  # type: ignore[return-value]
+    outcomes = comm.allgather(None if failure is None else _portable(failure))
+    first = next((r for r, o in enumerate(outcomes) if o is not None), None)
+    if first is None:
+        return result  # type: ignore[return-value]
+    if first == comm.rank:
+        assert failure is not None
+        raise failure
+    raise _restore(outcomes[first], first) from failure
+
+
 def _portable(exc: BaseException) -> tuple[bytes | None, str]:
     """The exception pickled (when it survives a round trip) and its one-line text."""
     text = f"{type(exc).__name__}: {exc}"
@@ -71,10 +105,10 @@ def _portable(exc: BaseException) -> tuple[bytes | None, str]:
     return data, text
 
 
-def _restore(payload: tuple[bytes | None, str]) -> BaseException:
+def _restore(payload: tuple[bytes | None, str], rank: int = 0) -> BaseException:
     data, text = payload
     if data is None:
-        return RuntimeError(f"failed on rank 0: {text}")
+        return RuntimeError(f"failed on rank {rank}: {text}")
     exc: BaseException = pickle.loads(data)
     return exc
 

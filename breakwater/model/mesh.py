@@ -45,7 +45,7 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
 
     """
     path = pathlib.Path(path)
-    if not path.is_file():
+    if not on_rank_zero(comm, path.is_file):  # rank 0's answer: rank 0 reads the file
         raise MeshError(f"mesh file not found: {path}")
     if path.suffix == ".geo":
         with shared_tempdir(comm, "breakwater-geo-") as folder:

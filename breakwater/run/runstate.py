@@ -21,7 +21,7 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from breakwater.common.parallel import on_rank_zero
+from breakwater.common.parallel import on_every_rank, on_rank_zero
 from breakwater.config.runspec import TimeSpec
 from breakwater.outputs import checkpoint as ckpt
 from breakwater.outputs.checkpoint import CheckpointError
@@ -163,15 +163,24 @@ def load(directory: pathlib.Path, fingerprint: str, bodies: Sequence[str], time:
     Raises:
         CheckpointError: No checkpoint, another case, a finished run, or other bodies.
     """
-    on_rank_zero(comm, lambda: ckpt.check(directory, fingerprint))
-    meta, arrays = ckpt.read(directory / ckpt.CHECKPOINT, fingerprint)
+    # Rank 0 decides whether there is a checkpoint to resume, and its metadata is every
+    # rank's; each rank then reads the nodal values, and a read that fails on one rank
+    # fails on every rank (alone, that rank raised while the others went on to build
+    # the stepper, a collective, and waited there for good).
+    meta = on_rank_zero(comm, lambda: ckpt.check(directory, fingerprint))
     if meta["bodies"] != list(bodies):
         raise CheckpointError(f"the checkpoint's bodies {meta['bodies']} are not the "
                               "model's")
+
+    def nodal_values() -> dict[str, np.ndarray]:
+        arrays = ckpt.read(directory / ckpt.CHECKPOINT, fingerprint)[1]
+        if "steps_iterations" not in arrays or "steps_accepted" not in arrays:
+            raise CheckpointError(f"{directory / ckpt.CHECKPOINT}: no per-step arrays (a "
+                                  "damaged checkpoint)")
+        return arrays
+
+    arrays = on_every_rank(comm, nodal_values)
     data = meta["state"]
-    if "steps_iterations" not in arrays or "steps_accepted" not in arrays:
-        raise CheckpointError(f"{directory / ckpt.CHECKPOINT}: no per-step arrays (a "
-                              "damaged checkpoint)")
     data["iterations"] = [int(i) for i in arrays.pop("steps_iterations")]
     data["step"]["accepted"] = [float(h) for h in arrays.pop("steps_accepted")]
     return Checkpoint(RunState.from_dict(data, time), meta["columns"], meta["mpi_size"],

@@ -433,8 +433,9 @@ def _interrupted_note(r: Session, summary: Mapping[str, Any]) -> str:
     """
     reached = summary.get("time", {}).get("reached")
     at = "before its static state" if reached is None else f"at t = {reached:.6g} s"
+    # (the summary's checkpoint, the same on every rank: not each rank's look at the folder)
     go_on = ("; run(..., resume=True) with the same settings continues from its checkpoint"
-             if (r.directory / ckpt.CHECKPOINT).is_file() else "")
+             if summary.get("checkpoint") else "")
     return (f"breakwater: the run stopped {at}; its outputs up to there are in "
             f"{r.directory} (summary.json: \"interrupted\"){go_on}")
 

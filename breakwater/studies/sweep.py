@@ -58,7 +58,7 @@ from breakwater.common.console import StopSignal
 from breakwater.common.cores import core_warning, host_usage
 from breakwater.common.errors import CaseError
 from breakwater.common.gmshtools import settle_signal_handlers
-from breakwater.common.parallel import on_rank_zero
+from breakwater.common.parallel import on_every_rank, on_rank_zero
 from breakwater.outputs import checkpoint  # importing PETSc is collective: at import
 from breakwater.run import simulation
 from breakwater.run.resumecase import build_to_resume
@@ -414,7 +414,8 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     # Rank 0 checks every point (the same error on every rank); then each rank reads
     # the cases itself (cheap, and no large broadcast).
     on_rank_zero(comm, lambda: bool(check_points(study, folder)))
-    points, cases = check_points(study, folder)
+    # (a rank that meets an error alone, a file changed since, raises on every rank)
+    points, cases = on_every_rank(comm, lambda: check_points(study, folder))
     # Rank 0's fingerprints: every group then skips and resumes the same cases.
     fingerprints = comm.bcast([checkpoint.case_fingerprint(c.resolved()) for c in cases]
                               if comm.rank == 0 else None, root=0)
