@@ -343,6 +343,59 @@ def test_failing_point(shared_dir, capsys):
     assert finished.stat().st_mtime_ns == stamp
 
 
+class _Killed(Exception):
+    """Stands for a kill of the study (not an error the study records)."""
+
+
+def test_a_case_killed_before_its_record_is_recorded_not_rerun(shared_dir, monkeypatch):
+    """A study killed after a case's run wrote its summary ("finished") and before the
+    case's record: the rerun ran the whole case again (its record said ``running``). It
+    now records the case from its summary, unless an output the summary names is gone.
+    (One group of every rank: the kill is raised on every rank.)"""
+    from breakwater.common import files
+
+    path = study_file(shared_dir, '[grid]\n"contact.interface.friction" = [0.5]\n')
+    out = shared_dir / "out"
+    write_json = files.atomic_write_json
+
+    def killed(target, data):
+        if pathlib.Path(target).name == RECORD and data.get("status") != "running":
+            raise _Killed("killed before the record")
+        return write_json(target, data)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(files, "atomic_write_json", killed)
+        with pytest.raises(_Killed):
+            run_study(load_study(path), out, quiet=True, ranks_per_case=COMM.size)
+    (case,) = out.glob("case-*/")
+    summary = json.loads((case / "summary.json").read_text())
+    assert summary["status"] == "finished"
+    assert json.loads((case / RECORD).read_text())["status"] == "running"
+    stamp = (case / "summary.json").stat().st_mtime_ns
+    COMM.barrier()  # (every rank has read the folder before the rerun writes in it)
+
+    outcome = run_study(load_study(path), out, quiet=True, ranks_per_case=COMM.size)
+    assert outcome.complete and outcome.skipped == 1  # not run again:
+    assert (case / "summary.json").stat().st_mtime_ns == stamp
+    record = json.loads((case / RECORD).read_text())
+    assert record["status"] == "finished" and record["wall_time"] == \
+        summary["solver"]["wall_time"]
+    (row,) = read_table(out / TABLE)
+    assert row["status"] == "finished"
+    assert float(row["steps"]) == summary["solver"]["steps"]
+    assert float(row["time_reached"]) == summary["time"]["reached"]
+
+    # The same kill, but an output the summary names is gone: the case runs again.
+    if COMM.rank == 0:
+        (case / RECORD).write_text(json.dumps({**record, "status": "running"}))
+        (case / "snapshot_max_ux.npz").unlink()
+    COMM.barrier()
+    outcome = run_study(load_study(path), out, quiet=True, ranks_per_case=COMM.size)
+    assert outcome.complete and outcome.skipped == 0
+    assert (case / "summary.json").stat().st_mtime_ns != stamp
+    assert (case / "snapshot_max_ux.npz").is_file()
+
+
 # --- killed studies (a real process) ------------------------------------------------------
 
 def _sweep(path: pathlib.Path, out: pathlib.Path) -> subprocess.Popen:

@@ -108,6 +108,63 @@ def _finished(folder: pathlib.Path, fingerprint: str) -> bool:
             and record.get("fingerprint") == fingerprint)
 
 
+def _outputs_complete(folder: pathlib.Path, summary: dict[str, Any],
+                      case_toml: dict[str, Any]) -> bool:
+    """Whether the files a finished run's summary names are all in its folder.
+
+    The history, static state, snapshot and ParaView files of its ``outputs``; its
+    figures when the case draws them (the summary names them once drawn: a kill while
+    they were drawn left none); a storm's ``waves.csv``.
+    """
+    outputs = summary.get("outputs")
+    if not isinstance(outputs, dict):
+        return False
+    names: list[Any] = [outputs.get(k) for k in ("history", "static", "snapshot")]
+    names += list(outputs.get("fields") or []) + list(outputs.get("figures") or [])
+    if case_toml.get("output", {}).get("figures", True) and "figures" not in outputs:
+        return False
+    if summary.get("storm"):
+        names.append(files.WAVES)
+    return all(isinstance(n, str) and (folder / n).exists() for n in names if n is not None)
+
+
+def _record_finished_run(folder: pathlib.Path, point: Point, fingerprint: str
+                         ) -> dict[str, Any] | None:
+    """Record a case whose run finished but whose record was not written (rank 0).
+
+    A study killed between the run's last ``summary.json`` ("finished") and the case's
+    record left a record that says ``running``; the rerun ran the whole case again. Its
+    record is written now from the summary, when the record names this very case
+    (fingerprint), the summary says finished and the outputs it names are there.
+
+    Returns:
+        The record written, or None (the case is run again, as before).
+    """
+    import tomllib
+
+    record = files.read_json(folder / RECORD)
+    summary = files.read_json(folder / files.SUMMARY)
+    if record is None or summary is None or record.get("fingerprint") != fingerprint \
+            or summary.get("status") != "finished" or not summary.get("finished"):
+        return None
+    try:
+        case_toml = tomllib.loads((folder / files.CASE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not _outputs_complete(folder, summary, case_toml):
+        return None
+    times = [t for t in (record.get("wall_time"), _wall_time(folder))
+             if isinstance(t, int | float) and not isinstance(t, bool)]
+    ranks = summary.get("mpi_size")
+    done = _record(point, fingerprint, "finished", None, float(max(times, default=0.0)),
+                   ranks if isinstance(ranks, int) else None)
+    done["headline"] = headline(summary, case_toml)
+    done["warnings"] = []  # (the run's warnings were collected by the killed study)
+    (folder / files.CHECKPOINT).unlink(missing_ok=True)  # (the run removes it after
+    files.atomic_write_json(folder / RECORD, done)       # its summary: a kill between)
+    return done
+
+
 def read_records(out: pathlib.Path, points: Sequence[Point]) -> list[dict[str, Any] | None]:
     """The record of each point's folder (None when it has none)."""
     return [files.read_json(out / p.folder / RECORD) for p in points]
@@ -421,19 +478,28 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                               if comm.rank == 0 else None, root=0)
     keys = study.keys
 
-    def pending() -> list[int]:
-        todo = [j for j, p in enumerate(points)
-                if not _finished(folder / p.folder, fingerprints[j])]
+    def pending() -> tuple[list[int], list[str]]:
+        todo, recorded = [], []
+        for j, p in enumerate(points):
+            if _finished(folder / p.folder, fingerprints[j]):
+                continue
+            if _record_finished_run(folder / p.folder, p, fingerprints[j]) is not None:
+                recorded.append(p.folder)
+                continue
+            todo.append(j)
         write_table(folder, points, keys, fingerprints)
-        return todo
+        return todo, recorded
 
-    todo = on_rank_zero(comm, pending)
+    todo, recorded = on_rank_zero(comm, pending)
     say = (lambda text: print(text, flush=True)) if not quiet else (lambda text: None)
     groups = comm.size // ranks_per_case
     if comm.rank == 0:
         say(f"study '{study.name}': {len(points)} cases, {len(points) - len(todo)} finished "
             f"before, {len(todo)} to run by {groups} group(s) of {ranks_per_case} rank(s) "
             f"-> {folder}")
+        for name in recorded:
+            say(f"  {name}: finished before its record was written (the study was "
+                "stopped there): recorded from its summary")
     warning = core_warning(host_usage(comm), ranks_per_case,  # (collective)
                            "--ranks-per-case 1")
     if warning is not None and comm.rank == 0:  # also with --quiet, as the cases'
