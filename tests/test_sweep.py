@@ -386,6 +386,7 @@ def test_a_case_killed_before_its_record_is_recorded_not_rerun(shared_dir, monke
     assert float(row["time_reached"]) == summary["time"]["reached"]
 
     # The same kill, but an output the summary names is gone: the case runs again.
+    COMM.barrier()  # (every rank has read the folder before rank 0 changes it)
     if COMM.rank == 0:
         (case / RECORD).write_text(json.dumps({**record, "status": "running"}))
         (case / "snapshot_max_ux.npz").unlink()
