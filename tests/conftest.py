@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gc
 import pathlib
+import signal
 
 import pytest
 from mpi4py import MPI
@@ -52,6 +53,27 @@ def _collect_and_sync():
     gc.collect()
     gc.freeze()
     MPI.COMM_WORLD.barrier()
+
+
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@pytest.fixture(autouse=True)
+def _signal_handlers_restored():
+    """Fail a test that leaves the handler of SIGINT or SIGTERM changed (and put it back).
+
+    A handler left behind changes every later test: a test that leaves SIGINT at the
+    default action makes a later Ctrl-C test kill the process instead of stopping a run.
+    """
+    before = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+    yield
+    changed = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS
+               if signal.getsignal(sig) != before[sig]}
+    for sig in changed:
+        signal.signal(sig, before[sig])
+    assert not changed, ("the test left the signal handlers changed: "
+                         + ", ".join(f"{signal.Signals(sig).name} {h!r} (was "
+                                     f"{before[sig]!r})" for sig, h in changed.items()))
 
 
 @pytest.fixture

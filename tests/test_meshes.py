@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import math
 import pathlib
+import signal
 import sys
+from typing import Any
 
 import gmsh
 import numpy as np
@@ -59,6 +61,21 @@ def _area(mesh, name: str) -> float:
 def _length(mesh, name: str) -> float:
     x = mesh.points[_cells(mesh, name)[:, :2], :2]
     return float(np.linalg.norm(x[:, 1] - x[:, 0], axis=1).sum())
+
+
+def _read_from_msh(path: pathlib.Path, **kwargs: Any) -> Any:
+    """dolfinx's ``read_from_msh`` (gdim 2) with SIGINT's handler kept.
+
+    Its ``gmsh.initialize()`` (interruptible, on rank 0) sets SIGINT to the default
+    action, and gmsh 4.15's ``finalize`` does not put it back (``initialize`` keeps the
+    previous handler in a local variable): every later test ran with Ctrl-C killing the
+    process (test_signals' interactive test saw it first).
+    """
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        return dolfinx.io.gmsh.read_from_msh(path, COMM, 0, gdim=2, **kwargs)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def test_physical_groups_present_with_dimensions(meshes):
@@ -127,9 +144,7 @@ def test_interface_conforming_in_dolfinx(meshes):
     partitioner = dolfinx.mesh.create_cell_partitioner(
         dolfinx.mesh.GhostMode.shared_facet, 2
     )
-    data = dolfinx.io.gmsh.read_from_msh(
-        meshes[1.0], COMM, 0, gdim=2, partitioner=partitioner
-    )
+    data = _read_from_msh(meshes[1.0], partitioner=partitioner)
     assert data.physical_groups == dict(goda.PHYSICAL_GROUPS)
     mesh, topology = data.mesh, data.mesh.topology
     topology.create_connectivity(1, 2)
@@ -167,7 +182,7 @@ def test_second_order(shared_dir):
     assert len(_cells(mesh, goda.CAISSON)) == len(_cells(mesh, goda.CAISSON)[:, :3])
     assert _area(mesh, goda.CAISSON) == pytest.approx(CAISSON_AREA, rel=1e-12)
     assert _area(mesh, goda.MOUND) == pytest.approx(MOUND_AREA, rel=1e-12)
-    data = dolfinx.io.gmsh.read_from_msh(path, COMM, 0, gdim=2)
+    data = _read_from_msh(path)
     assert data.mesh.geometry.cmaps[0].degree == 2
     cells = data.mesh.topology.index_map(2).size_global
     assert cells == sum(len(_cells(mesh, n)) for n in PAPER_TRIANGLES)
@@ -366,7 +381,7 @@ def test_separate_element_sizes_independent(separate):
 
 def test_separate_in_dolfinx(separate):
     # Every facet of caisson_base / mound_crest is on the boundary of its own body only.
-    data = dolfinx.io.gmsh.read_from_msh(separate, COMM, 0, gdim=2)
+    data = _read_from_msh(separate)
     assert data.physical_groups == dict(goda.SEPARATE_PHYSICAL_GROUPS)
     topology = data.mesh.topology
     topology.create_connectivity(1, 2)
