@@ -309,7 +309,8 @@ def initial_state(model: ContactModel, options: NewtonOptions | None = None) -> 
                     if not model.pairs:
                         raise
                     log.debug("no frictionless static state (%s): solving with friction", e)
-                    log.warning(FALLBACK)
+                    if model.comm.rank == 0:
+                        log.warning(FALLBACK)
                     try:
                         state = _frictional(model, options, e.iterations)
                     except (ConvergenceError, PETSc.Error) as f:

@@ -521,7 +521,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                 try:
                     res = _stage(r, True)
                     kind = "frictional"
-                    if loading == "frictionless":
+                    if loading == "frictionless" and model.comm.rank == 0:
                         log.warning(FALLBACK)
                 except ConvergenceError as e:
                     its += e.iterations
