@@ -70,13 +70,11 @@ class Stages:
 
     Attributes:
         stretches: The χ multiple of each stage tried, in order.
-        converged: Whether each converged.
         iterations: Newton iterations over all stages.
     """
 
     def __init__(self) -> None:
         self.stretches: list[float] = []
-        self.converged: list[bool] = []
         self.iterations = 0
 
     def describe(self) -> str:
@@ -108,7 +106,6 @@ def solve(iterate: Iterate, contact: ContactSum, y0: np.ndarray
         contact.regularise(stretch)
         reason, norms, state = iterate(y)
         stages.stretches.append(stretch)
-        stages.converged.append(reason > 0)
         stages.iterations += len(norms) - 1
         return reason, norms, state
 
