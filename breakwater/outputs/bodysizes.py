@@ -11,20 +11,26 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-import dolfinx
 import numpy as np
-import ufl
-from dolfinx import fem
 from mpi4py import MPI
 
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["LARGEST_EXTENT", "body_sizes", "size_warning"]
+__all__ = ["LARGEST_EXTENT", "body_sizes", "bounding_box", "size_warning"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
 10-40 m, its mound up to a few hundred metres; the same caisson in mm is 10-40 km."""
+
+
+def bounding_box(model: ContactModel, body: int) -> tuple[np.ndarray, np.ndarray]:
+    """A body's bounding box, its lowest and highest coordinates (m; collective)."""
+    x = model.bodies[body].submesh.geometry.x[:, :model.gdim]
+    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
+    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+    return lo, hi
 
 
 def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
@@ -37,21 +43,13 @@ def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
         By body name: ``extent`` (m, along x, y and z in 3D), ``volume`` (m³; m² in plane
         strain), ``mass`` (kg; kg/m in plane strain).
     """
-    comm = model.comm
     out = {}
     for b in model.bodies:
-        x = b.submesh.geometry.x[:, :model.gdim]
-        lo = np.full(model.gdim, np.inf) if x.size == 0 else x.min(axis=0)
-        hi = np.full(model.gdim, -np.inf) if x.size == 0 else x.max(axis=0)
-        # Not allreduce(op=MPI.MIN): mpi4py reduces Python objects with min(a, b),
-        # which raises on arrays on one rank and leaves the other waiting.
-        lo = np.min(comm.allgather(lo), axis=0)
-        hi = np.max(comm.allgather(hi), axis=0)
-        dx = ufl.Measure("dx", domain=b.submesh)
-        one = fem.Constant(b.submesh, dolfinx.default_scalar_type(1.0))
-        volume = comm.allreduce(fem.assemble_scalar(fem.form(one * dx)), op=MPI.SUM)
-        out[b.spec.name] = {"extent": [float(v) for v in hi - lo], "volume": float(volume),
-                            "mass": float(volume * b.spec.material.density)}
+        lo, hi = bounding_box(model, b.index)
+        mass = model.assemble(model.form(b.ρ * b.dx))
+        out[b.spec.name] = {"extent": [float(v) for v in hi - lo],
+                            "volume": float(mass / b.spec.material.density),
+                            "mass": float(mass)}
     return out
 
 

@@ -26,6 +26,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
 from breakwater.model.model import ContactModel
+from breakwater.outputs.bodysizes import bounding_box
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
 
@@ -358,10 +359,7 @@ class _Offset:
 
 def _extent(model: ContactModel, body: int) -> float:
     """The bounding-box diagonal of a body (m)."""
-    x = model.bodies[body].submesh.geometry.x[:, : model.gdim]
-    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
-    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
-    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+    lo, hi = bounding_box(model, body)
     return float(np.linalg.norm(hi - lo))
 
 
