@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["NotebookLine", "duration", "in_kernel", "progress_line"]
+__all__ = ["NotebookLine", "duration", "in_kernel", "progress_line", "time_left"]
 
 
 def in_kernel() -> bool:
@@ -47,6 +47,11 @@ def duration(seconds: float) -> str:
     return f"{s} s"
 
 
+def time_left(elapsed: float, t: float, start: float, end: float) -> float:
+    """Seconds left at the rate since ``start`` (simulated seconds per second; inf: none)."""
+    return elapsed * (end - t) / (t - start) if t > start else math.inf
+
+
 def progress_line(name: str, t: float, start: float, end: float, steps: int,
                   iterations: int, elapsed: float, done: bool = False) -> str:
     """The progress line: ``name: 40% |████      | t = 0.02/0.05 s, 200 steps, ...``.
@@ -62,7 +67,7 @@ def progress_line(name: str, t: float, start: float, end: float, steps: int,
     if done:
         tail = f"{duration(elapsed)} elapsed"
     else:
-        left = elapsed * (end - t) / (t - start) if t > start else math.inf
+        left = time_left(elapsed, t, start, end)
         tail = f"{duration(elapsed)} elapsed, about {duration(left)} left"
     return (f"{name}: {100 * fraction:3.0f}% |{bar}| t = {t:.4g}/{end:.4g} s, {steps} steps, "
             f"{mean} Newton iterations per step, {tail}")

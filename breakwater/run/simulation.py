@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import re
 import signal
 import sys
@@ -78,7 +77,7 @@ from breakwater.common.errors import (
     PenetrationError,
     cannot_write,
 )
-from breakwater.common.notebookprogress import duration, in_kernel
+from breakwater.common.notebookprogress import duration, in_kernel, time_left
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
@@ -319,7 +318,7 @@ def _beat(beat: SlowPhase, t: float, t_start: float, end: float, steps: int,
     it started or resumed) over what remains.
     """
     elapsed = beat.elapsed
-    left = elapsed * (end - t) / (t - t_start) if t > t_start else math.inf
+    left = time_left(elapsed, t, t_start, end)
     log.info("time stepping: t = %.6g s of %g s (%.0f%%), %d steps, %.2f Newton "
              "iterations per step; %s elapsed, about %s left", t, end, 100 * t / end, steps,
              mean_iterations, duration(elapsed), duration(left))
