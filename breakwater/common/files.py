@@ -15,6 +15,7 @@ import json
 import math
 import os
 import pathlib
+import tomllib
 import unicodedata
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -359,6 +360,13 @@ def read_json(path: str | pathlib.Path) -> dict[str, Any] | None:
         data = json.loads(pathlib.Path(path).read_text(encoding="utf-8"))
         if isinstance(data, dict):
             return data
+    return None
+
+
+def read_toml(path: str | pathlib.Path) -> dict[str, Any] | None:
+    """A TOML file's table (a run's ``case.toml``), or None where missing or unreadable."""
+    with contextlib.suppress(OSError, ValueError):  # (TOMLDecodeError is a ValueError)
+        return tomllib.loads(pathlib.Path(path).read_text(encoding="utf-8"))
     return None
 
 

@@ -57,7 +57,6 @@ import re
 import signal
 import sys
 import time as _time
-import tomllib
 from collections.abc import Mapping
 from typing import Any
 
@@ -212,11 +211,8 @@ def _named_differences(r: Session, resolved_case: Mapping[str, Any] | None
     Read from the folder's ``case.toml`` (the checkpointed run's, untouched) on rank 0.
     """
     def keys() -> list[str]:
-        if resolved_case is None:
-            return []
-        try:
-            saved = tomllib.loads((r.directory / files.CASE).read_text(encoding="utf-8"))
-        except (OSError, tomllib.TOMLDecodeError):
+        saved = files.read_toml(r.directory / files.CASE)
+        if resolved_case is None or saved is None:
             return []
         return ckpt.case_differences(saved, resolved_case)
 

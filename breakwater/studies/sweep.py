@@ -140,18 +140,13 @@ def _record_finished_run(folder: pathlib.Path, point: Point, fingerprint: str
     Returns:
         The record written, or None (the case is run again, as before).
     """
-    import tomllib
-
     record = files.read_json(folder / RECORD)
     summary = files.read_json(folder / files.SUMMARY)
     if record is None or summary is None or record.get("fingerprint") != fingerprint \
             or summary.get("status") != "finished" or not summary.get("finished"):
         return None
-    try:
-        case_toml = tomllib.loads((folder / files.CASE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if not _outputs_complete(folder, summary, case_toml):
+    case_toml = files.read_toml(folder / files.CASE)
+    if case_toml is None or not _outputs_complete(folder, summary, case_toml):
         return None
     times = [t for t in (record.get("wall_time"), _wall_time(folder))
              if isinstance(t, int | float) and not isinstance(t, bool)]
@@ -338,12 +333,7 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
 
     def write() -> dict[str, Any]:
         record = _record(point, fingerprint, status, error, wall, comm.size)
-        case_toml = None
-        with contextlib.suppress(OSError, ValueError):
-            import tomllib
-
-            case_toml = tomllib.loads((folder / files.CASE).read_text(encoding="utf-8"))
-        record["headline"] = headline(summary or {}, case_toml)
+        record["headline"] = headline(summary or {}, files.read_toml(folder / files.CASE))
         record["warnings"] = warnings
         files.atomic_write_json(folder / RECORD, record)
         return record
