@@ -199,6 +199,14 @@ class ModelForms:
             self.comm.Allreduce(MPI.IN_PLACE, local, op=MPI.SUM)
         return local
 
+    def bounding_box(self, body: int) -> tuple[np.ndarray, np.ndarray]:
+        """A body's lowest and highest coordinates (m; collective)."""
+        x = self.bodies[body].submesh.geometry.x[:, :self.gdim]
+        lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
+        self.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+        self.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+        return lo, hi
+
     def weight(self) -> list[float]:
         """Weight |g| ∫ρ of each body (N, or N/m in plane strain)."""
         g = float(np.linalg.norm(self.gravity.value))

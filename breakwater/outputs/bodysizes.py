@@ -11,26 +11,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from mpi4py import MPI
-
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["LARGEST_EXTENT", "body_sizes", "bounding_box", "size_warning"]
+__all__ = ["LARGEST_EXTENT", "body_sizes", "size_warning"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
 10-40 m, its mound up to a few hundred metres; the same caisson in mm is 10-40 km."""
-
-
-def bounding_box(model: ContactModel, body: int) -> tuple[np.ndarray, np.ndarray]:
-    """A body's bounding box, its lowest and highest coordinates (m; collective)."""
-    x = model.bodies[body].submesh.geometry.x[:, :model.gdim]
-    lo, hi = x.min(axis=0, initial=np.inf), x.max(axis=0, initial=-np.inf)
-    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
-    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
-    return lo, hi
 
 
 def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
@@ -45,7 +33,7 @@ def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
     """
     out = {}
     for b in model.bodies:
-        lo, hi = bounding_box(model, b.index)
+        lo, hi = model.bounding_box(b.index)
         mass = model.assemble(model.form(b.ρ * b.dx))
         out[b.spec.name] = {"extent": [float(v) for v in hi - lo],
                             "volume": float(mass / b.spec.material.density),

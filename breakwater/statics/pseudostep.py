@@ -26,7 +26,6 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
 from breakwater.model.model import ContactModel
-from breakwater.outputs.bodysizes import bounding_box
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
 
@@ -359,7 +358,7 @@ class _Offset:
 
 def _extent(model: ContactModel, body: int) -> float:
     """The bounding-box diagonal of a body (m)."""
-    lo, hi = bounding_box(model, body)
+    lo, hi = model.bounding_box(body)
     return float(np.linalg.norm(hi - lo))
 
 
