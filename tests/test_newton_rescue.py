@@ -291,7 +291,7 @@ def test_a_cycle_is_a_failure_named_so(monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(ConvergenceError, match=r"test: Newton did not converge \(SNES reason "
                        r"-5, \d+ iterations, residual 2.000e\+00, in a cycle of 2 iterates\); "
                        r"again by a continuation in the friction's regularisation: "
-                       r"1 stage from 1e\+06 χ "):
+                       r"1 stage from 1e\+04 χ "):
         _solve(newton, 1.0)
     assert newton.continuations == 0
     assert [interfacenewton.cycle([9.0, *x], 0.0) for x in (
