@@ -411,3 +411,32 @@ def test_an_unresolved_static_contact_is_warned() -> None:
     assert resolution_warnings({"sliding_contact_length": 0.0}, inputs(0.029), 2) == []
     assert resolution_warnings({"sliding_contact_length": 0.041}, inputs(0.01), 3) == []
     assert len(resolution_warnings({"sliding_contact_length": 4e-4}, inputs(0.01), 3)) == 1
+
+
+def test_a_contact_is_judged_by_its_own_facets() -> None:
+    """A surface refined at its contact and coarse elsewhere is judged by the facets
+    across the contact, counted from its pressed nodes ((n − 1)/degree in 2D,
+    (√n − 1)/degree across in 3D), not by the surface's mean facet: issue 23's Hertz
+    cylinder (benchmarks/hertz_static.py), 0.4 mm P2 facets within its 3.43 mm contact
+    and 4 mm beyond (mean 1.31 mm), has 17 pressed slave nodes (8 facets across) and was
+    told to refine (2.6 mean facets)."""
+    from breakwater.outputs.quality import PairInputs
+    from breakwater.outputs.staticsummary import resolution_warnings
+
+    inputs = [PairInputs("hertz", 1e14, 1.31e-3, (1e9, 1e9), 1e-7, 1e-5)]
+    row = {"hertz_contact_length": 3.43e-3}
+    pressure = np.zeros(60)
+    pressure[:17] = 1e6
+    assert len(resolution_warnings(row, inputs, 2)) == 1  # by the mean facet: 2.6
+    assert resolution_warnings(row, inputs, 2, {"contact_hertz_pressure": pressure}) == []
+    pressure[3:] = 0.0  # three nodes: one P2 facet across, as on the motivating block
+    lines = resolution_warnings(row, inputs, 2, {"contact_hertz_pressure": pressure})
+    assert len(lines) == 1 and "1 interface facets across it (3 nodes pressed" in lines[0]
+    # 3D: a patch of 7 × 7 P2 nodes is 3 facets across; of 5 × 5, 2 (warned); P1 5 × 5, 4.
+    square = {"hertz_contact_length": 1e-4}
+    assert resolution_warnings(square, inputs, 3, {"contact_hertz_pressure": np.ones(49)}) \
+        == []
+    assert len(resolution_warnings(square, inputs, 3,
+                                   {"contact_hertz_pressure": np.ones(25)})) == 1
+    assert resolution_warnings(square, inputs, 3, {"contact_hertz_pressure": np.ones(25)},
+                               degree=1) == []

@@ -8,6 +8,7 @@ interface data of the static state; solves nothing.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -264,25 +265,47 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     return static
 
 
-def resolution_warnings(row: Mapping[str, float], inputs: Sequence[PairInputs], gdim: int
+def resolution_warnings(row: Mapping[str, float], inputs: Sequence[PairInputs], gdim: int,
+                        interface: Mapping[str, np.ndarray] | None = None, degree: int = 2
                         ) -> list[str]:
     """One line per pair whose static contact spans fewer than :data:`RESOLVED_FACETS` facets.
+
+    The facets across the contact are counted from its pressed nodes where ``interface``
+    gives the pressure (n of them: ``(n − 1)/degree`` facets in 2D, ``(√n − 1)/degree``
+    across in 3D), so that a surface refined at its contact and coarse elsewhere (a
+    cylinder of 0.4 mm facets within its 3.4 mm contact and 4 mm ones beyond, mean 1.3 mm:
+    17 facets across) is judged by the facets there, not by the surface's mean facet;
+    without it, by the mean facet length.
 
     Args:
         row: The static state's history row (``<pair>_contact_length``: m, m² in 3D).
         inputs: The pairs' quality inputs (their mean interface facet length h).
         gdim: The model's dimension (3D: the contact's size is the square root of its
             area).
+        interface: The static state's nodal arrays
+            (:func:`~breakwater.outputs.monitor.interface_state`:
+            ``contact_<name>_pressure``).
+        degree: The displacement's polynomial degree (nodes per facet edge).
     """
     out = []
     for q in inputs:
         measured = row.get(f"{q.name}_contact_length", 0.0)
         size = measured if gdim == 2 else float(np.sqrt(measured))
-        h = q.element_size
-        if 0 < size < RESOLVED_FACETS * h:
+        if not size > 0:
+            continue
+        pressure = None if interface is None else interface.get(f"contact_{q.name}_pressure")
+        if pressure is None:
+            facets, h = size / q.element_size, q.element_size
+            what_h = f"of its mean interface facet (h = {h:.3g} m)"
+        else:
+            pressed = int(np.count_nonzero(np.asarray(pressure) > 0))
+            across = pressed if gdim == 2 else math.sqrt(pressed)
+            facets = max(across - 1.0, 0.0) / degree
+            what_h = (f"interface facets across it ({pressed} nodes pressed; mean interface "
+                      f"facet h = {q.element_size:.3g} m)")
+        if facets < RESOLVED_FACETS:
             what = f"{size:.3g} m long" if gdim == 2 else f"{measured:.3g} m² ({size:.3g} m across)"
-            out.append(f"contact '{q.name}': the static contact is {what}, {size / h:.2g} of "
-                       f"its mean interface facet (h = {h:.3g} m): its pressure (edge, centre, "
-                       f"maximum) is not resolved; refine the surfaces there (h ≤ "
-                       f"{size / (2 * RESOLVED_FACETS):.2g} m)")
+            out.append(f"contact '{q.name}': the static contact is {what}, {facets:.2g} "
+                       f"{what_h}: its pressure (edge, centre, maximum) is not resolved; "
+                       f"refine the surfaces there (h ≤ {size / (2 * RESOLVED_FACETS):.2g} m)")
     return out

@@ -81,7 +81,7 @@ def start(r: Session) -> None:
             interface = {**interface, f"{key}_row_x": cut[0], f"{key}_row_pressure": cut[1]}
     out.write_snapshot(files.STATIC, s.u, interface, 0.0)
     r.log_quality()
-    for line in resolution_warnings(row, st.contact, m.gdim):
+    for line in resolution_warnings(row, st.contact, m.gdim, interface, m.degree):
         log.warning("%s", line)
     out.write_fields(0.0, s.u, s.v)
 
