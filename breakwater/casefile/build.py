@@ -26,6 +26,7 @@ from breakwater.casefile.godaface import check_goda_face, goda_quadrature
 from breakwater.casefile.loadchecks import (
     face_problems,
     landing_problems,
+    late_peak_warning,
     pulse_warning,
     start_warning,
     table_warning,
@@ -274,8 +275,9 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         in_state = case.initial.loads is None or ld.name in case.initial.loads
         pulse, sampled = pulse_warning(ld, dt, t.end_time, t.beta1, in_state)
         start = start_warning(ld, in_state, t.dt)
-        landing = None
+        landing = late = None
         if ld.kind == "table" and ld.table is not None:
+            late = late_peak_warning(ld, t.end_time)
             steps = (resolved_step(t.dt, t.levels, ld.table.history(ld.start).breakpoints)
                      if t.adaptive else t.dt)
             pulse = table_warning(ld, steps, t.end_time)
@@ -290,7 +292,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             entries, quadrature = goda_quadrature(ld, model, exact[ld.name])
             extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
-        lines = [line for line in (warning, start, pulse, landing, quadrature)
+        lines = [line for line in (warning, start, pulse, late, landing, quadrature)
                  if line is not None]
         if lines:
             extra["loads"][ld.name]["warnings"] = lines

@@ -6,6 +6,8 @@
   time, are refused by :meth:`LoadCase.check_time <breakwater.casefile.loads.LoadCase.check_time>`;
 - :func:`start_warning`: a load non-zero at t = 0 left out of the initial state (it
   jumps at t = 0, applied over the first step);
+- :func:`table_warning`, :func:`late_peak_warning`: a table whose peak the steps miss, or
+  that comes after the end time (times in ms read as seconds);
 - :func:`storm_warning`: a storm whose shortest impulse the steps do not resolve;
 - :func:`face_problems`: a pressure profile (or Goda's pressure) that is zero on all of
   its loaded facets (refused), or a ``[profile]`` that only partly lies on them
@@ -29,8 +31,8 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
     from breakwater.storms.waves import WaveLoad
 
-__all__ = ["SAMPLING_TOLERANCE", "face_problems", "landing_problems", "profile_area",
-           "pulse_warning", "sampled_pulse", "start_warning", "storm_warning"]
+__all__ = ["SAMPLING_TOLERANCE", "face_problems", "landing_problems", "late_peak_warning",
+           "profile_area", "pulse_warning", "sampled_pulse", "start_warning", "storm_warning"]
 
 
 SAMPLING_TOLERANCE = 0.01
@@ -161,6 +163,36 @@ def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | 
     return (f"loads.{load.name}.table: the steps of time.dt = {dt:g} s apply "
             f"{100 * got / peak:.3g}% of its peak (|factor| {peak:.4g}); time.dt <= "
             f"{needed:.3g} s samples it to {100 * PEAK_TOLERANCE:g}%")
+
+
+def late_peak_warning(load: loadcase.LoadCase, end_time: float) -> str | None:
+    """A one-line warning where a table's largest value comes after the end time, or None.
+
+    The run applies the table up to ``end_time`` only. A record whose times are in
+    milliseconds with no unit in its header (a 20 ms impact written 0 … 20) is read in
+    seconds: its peak at "10 s" lies far beyond a run of 0.15 s, which applies the rise
+    of its first row or two with no word (issue 23's note: undetectable from the header).
+    Whatever the cause, a run that never reaches the table's peak is said so, with the
+    share of the peak it applies and the unit to write if the times are in ms.
+    """
+    if load.kind != "table" or load.table is None or not load.enabled:
+        return None
+    f = load.table.history(load.start)
+    points = list(f.breakpoints)
+    if not points:
+        return None
+    peak_t = max(points, key=lambda t: abs(f(t)))
+    peak = abs(f(peak_t))
+    if peak == 0.0 or peak_t <= end_time:
+        return None
+    inside = [t for t in points if t <= end_time] + [end_time]
+    applied = max(abs(f(t)) for t in inside)
+    if applied >= (1.0 - PEAK_TOLERANCE) * peak:
+        return None
+    return (f"loads.{load.name}.table: its largest value (|factor| {peak:.4g}) is at "
+            f"t = {peak_t:.4g} s, after time.end_time = {end_time:g} s: the run applies at "
+            f"most {100 * applied / peak:.3g}% of it (if the table's times are in ms, say so "
+            "in its header: t [ms])")
 
 
 def landing_problems(load: loadcase.LoadCase, dt: float, end_time: float, max_steps: int
