@@ -60,7 +60,7 @@ from breakwater.casefile.tables import (
 )
 from breakwater.common.errors import CaseError
 from breakwater.common.files import path_problem
-from breakwater.common.gmshtools import physical_groups
+from breakwater.common.gmshtools import UNNAMED, GroupNameError, physical_groups, unsupported_format
 from breakwater.config.fields import InvalidField, suggest
 from breakwater.config.schema import Schema
 
@@ -197,13 +197,15 @@ def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     if not path.is_file():
         raise InvalidField("mesh.source", f"mesh file not found: {path}")
     if path.suffix not in (".msh", ".geo"):
-        raise InvalidField("mesh.source", f"expected a gmsh .msh or .geo file: {path}")
+        raise InvalidField("mesh.source", unsupported_format(path))
     try:
         groups = physical_groups(path)
+    except GroupNameError as e:
+        raise InvalidField("mesh.source", f"{path}: {e}") from None
     except Exception as e:  # unreadable: any parse error (gmsh raises bare Exceptions)
         raise InvalidField("mesh.source", f"cannot read the mesh {path} ({e})") from None
     if not groups:
-        raise InvalidField("mesh.source", f"the mesh {path} has no named physical groups")
+        raise InvalidField("mesh.source", f"{path}: {UNNAMED}")
     return groups
 
 

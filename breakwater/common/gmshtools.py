@@ -26,8 +26,8 @@ from types import MappingProxyType
 
 import gmsh  # type: ignore[import-untyped]
 
-__all__ = ["QUIET", "gmsh_session", "physical_groups", "restore_python_handlers",
-           "settle_signal_handlers"]
+__all__ = ["QUIET", "UNNAMED", "GroupNameError", "gmsh_session", "named_groups", "physical_groups",
+           "restore_python_handlers", "settle_signal_handlers", "unsupported_format"]
 
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
 """The signals whose handlers gmsh replaces and the session gives back to Python."""
@@ -111,6 +111,29 @@ def restore_python_handlers() -> None:
             signal.signal(sig, handler)
 
 
+UNNAMED = ("the mesh has no named physical groups (breakwater finds bodies and boundaries "
+           "by name): name them in gmsh (Physical Surface(\"block\") = {1};) or, writing "
+           "with meshio, give field_data = {\"block\": [tag, dim]}")
+"""The error of a mesh whose physical groups have tags only (meshio's without field_data)."""
+
+_FORMATS = {".xdmf": "XDMF", ".h5": "XDMF", ".bp": "ADIOS2", ".vtu": "VTK", ".vtk": "VTK",
+            ".inp": "Abaqus", ".med": "MED", ".unv": "I-DEAS", ".stl": "STL", ".mesh": "Medit"}
+
+
+def unsupported_format(path: pathlib.Path) -> str:
+    """The message (naming the file) refusing a mesh that is not a gmsh ``.msh`` or ``.geo``."""
+    kind = _FORMATS.get(path.suffix.lower())
+    if kind is None:
+        return f"expected a gmsh .msh or .geo file: {path}"
+    return (f"{path}: breakwater reads gmsh .msh or .geo files, not {kind}: save the mesh "
+            "from gmsh as .msh with its physical groups named (dolfinx's meshtags and "
+            "meshio's conversions keep integer tags only; docs/inputs.md)")
+
+
+class GroupNameError(ValueError):
+    """A mesh file's physical names cannot be told apart or decoded."""
+
+
 def physical_groups(path: pathlib.Path) -> dict[str, int]:
     """Named physical groups (name -> dimension) of a gmsh ``.msh`` or ``.geo`` file.
 
@@ -119,20 +142,34 @@ def physical_groups(path: pathlib.Path) -> dict[str, int]:
 
     Raises:
         ValueError: A ``.msh`` file without a gmsh header.
+        GroupNameError: A name given to groups of two dimensions, or names that are not
+            UTF-8.
         Exception: What gmsh raises on a script it cannot read.
 
     """
     if path.suffix == ".msh":
-        return _msh_groups(path)
+        return named_groups(_msh_groups(path))
     with gmsh_session():
         gmsh.merge(str(path))  # into the session's model (open would make another)
-        return {gmsh.model.getPhysicalName(d, t): d for d, t in gmsh.model.getPhysicalGroups()
-                if gmsh.model.getPhysicalName(d, t)}
+        return named_groups([(gmsh.model.getPhysicalName(d, t), d)
+                       for d, t in gmsh.model.getPhysicalGroups()
+                       if gmsh.model.getPhysicalName(d, t)])
 
 
-def _msh_groups(path: pathlib.Path) -> dict[str, int]:
-    """Physical group names -> dimension, from the header of a gmsh ``.msh`` file."""
+def named_groups(pairs: list[tuple[str, int]]) -> dict[str, int]:
+    """Name -> dimension, refusing a name given to two dimensions (dolfinx keeps one)."""
     groups: dict[str, int] = {}
+    for name, dim in pairs:
+        if groups.setdefault(name, dim) != dim:
+            which = " and a ".join(f"{d}D" for d in sorted({dim, groups[name]}, reverse=True))
+            raise GroupNameError(f"the name '{name}' is given to a {which} physical group; "
+                                 "breakwater finds groups by name: rename one of them in gmsh")
+    return groups
+
+
+def _msh_groups(path: pathlib.Path) -> list[tuple[str, int]]:
+    """Physical group names and dimensions, from the header of a gmsh ``.msh`` file."""
+    groups: list[tuple[str, int]] = []
     with path.open("rb") as fh:
         if fh.readline().strip() != b"$MeshFormat":
             raise ValueError("not a gmsh .msh file (no $MeshFormat header)")
@@ -140,8 +177,14 @@ def _msh_groups(path: pathlib.Path) -> dict[str, int]:
             s = line.strip()
             if s == b"$PhysicalNames":
                 for _ in range(int(fh.readline())):
-                    dim, _tag, name = fh.readline().decode().split(maxsplit=2)
-                    groups[name.strip().strip('"')] = int(dim)
+                    raw = fh.readline()
+                    try:
+                        dim, _tag, name = raw.decode().split(maxsplit=2)
+                    except UnicodeDecodeError:
+                        shown = raw.decode(errors="replace").split(maxsplit=2)[-1].strip()
+                        raise GroupNameError(f"the physical name {shown} is not UTF-8 text: "
+                                             "save the .geo (or the names) in UTF-8") from None
+                    groups.append((name.strip().strip('"'), int(dim)))
                 break
             if s in (b"$Entities", b"$Nodes", b"$Elements", b"$PartitionedEntities"):
                 break

@@ -13,9 +13,20 @@ from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
 
 from breakwater.common.errors import MeshError
-from breakwater.common.gmshtools import gmsh_session
+from breakwater.common.gmshtools import gmsh_session, unsupported_format
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
 from breakwater.model.meshcells import check_cell_type, check_group_nodes, check_meshed
+from breakwater.model.meshfile import (
+    check_names,
+    check_partitions,
+    check_plane,
+    check_unnamed_cells,
+    drop_ghost_cells,
+    drop_ungrouped_cells,
+    empty_names,
+    no_groups,
+    number_cell_nodes_first,
+)
 
 log = logging.getLogger("breakwater.model.mesh")
 
@@ -52,21 +63,28 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
             return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim,
                                       order), comm, gdim)
     if path.suffix != ".msh":
-        raise MeshError(f"{path}: expected a gmsh .msh or .geo file")
+        raise MeshError(unsupported_format(path))
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)
     # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
     with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
         try:
-            dim = on_rank_zero(comm, lambda: _merge(path, gdim))
+            dim, empty = on_rank_zero(comm, lambda: _merge(path, gdim))
         except MeshError:
             raise
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
             raise MeshError(f"{path}: cannot read the mesh ({e})") from e
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=dim, partitioner=partitioner)
         sizes = on_rank_zero(comm, _group_sizes)
-    if not data.physical_groups:
-        raise MeshError(f"{path}: the mesh has no named physical groups")
-    return _with_shared(data, sizes, comm)
+    data.physical_groups.pop("", None)  # the groups without a name (of lower dimensions)
+    for tags, d in ((data.cell_tags, dim), (data.facet_tags, dim - 1)):
+        lost = [n for n, k in empty.items() if k == d]
+        if tags is None and lost:  # the model said "the mesh needs cell and facet groups"
+            raise MeshError(f"{path}: no {d}D physical group holds elements; "
+                            f"{', '.join(lost)} are named in the file with none (a converter "
+                            "kept only the cells' groups?): write the mesh from gmsh")
+    out = _with_shared(data, sizes, comm)
+    out.empty = empty
+    return out
 
 
 class GroupedMeshData(gmshio.MeshData):
@@ -80,9 +98,11 @@ class GroupedMeshData(gmshio.MeshData):
     Attributes:
         shared: By group name: how many of its gmsh elements dolfinx's tags give to
             another group, its element count, and the groups it shares entities with.
+        empty: Groups named in the file that no element carries (name -> dimension).
     """
 
     shared: dict[str, tuple[int, int, list[str]]]
+    empty: dict[str, int]
 
 
 def _group_sizes() -> dict[str, tuple[int, int, list[str]]]:
@@ -129,30 +149,39 @@ def _with_shared(data: gmshio.MeshData, sizes: dict[str, tuple[int, int, list[st
     return out
 
 
-def _merge(path: pathlib.Path, gdim: int | None) -> int:
+def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
     """Read a ``.msh`` into the current gmsh model (rank 0) and check it is whole.
 
     A truncated file may read without error but lack its elements, nodes or physical
     groups (dolfinx would then fail with a RuntimeError or an IndexError).
 
+    A partitioned file's ghost cells are dropped; the checks of :mod:`.meshfile` and
+    :mod:`.meshcells` refuse what dolfinx would read wrongly.
+
     Returns:
-        The model's dimension: ``gdim``, or the highest dimension of its physical
-        groups (2 or 3).
+        The model's dimension (``gdim``, or the highest dimension of its physical
+        groups: 2 or 3) and the groups named with no elements
+        (:func:`.meshfile.empty_names`).
 
     Raises:
         MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups; node
             tags that repeat (two meshes numbered apart and merged into one file).
     """
     gmsh.merge(str(path))
+    drop_ghost_cells()
     groups = gmsh.model.getPhysicalGroups()
     if not groups:
-        raise MeshError(f"{path}: cannot read the mesh (no physical groups: truncated?)")
+        raise no_groups(path)
+    check_names(path)
     if gdim is None:
         gdim = max(d for d, _ in groups)
         if gdim not in (2, 3):
             raise MeshError(f"{path}: no surface (2D) or volume (3D) physical group: "
                             "name the bodies' cells in gmsh (Physical Surface/Volume)")
+    left_out = drop_ungrouped_cells(path, gdim)
+    check_unnamed_cells(path, gdim)
     _single_body_cells(path, gdim)
+    check_partitions(path, gdim)
     tags = gmsh.model.mesh.getNodes()[0]
     if len(tags) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
@@ -162,13 +191,10 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
                         "and merged?): mesh the bodies in one gmsh model (Merge their .geo "
                         "files, not their .msh), or write the second with "
                         "Mesh.FirstNodeTag and Mesh.FirstElementTag above the first's")
-    if tags.min() != 1 or tags.max() != len(tags):
-        # Gaps in the tags (legal, e.g. two meshes merged with distinct first tags):
-        # dolfinx's reader asserts 1..n (AssertionError). Renumbered in their order.
-        gmsh.model.mesh.renumberNodes()
     types, _, _ = gmsh.model.mesh.getElements(gdim)
     if len(types) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no {gdim}D cells: truncated?)")
+    number_cell_nodes_first(gdim)
     if len(types) > 1:  # dolfinx raised a RuntimeError ("Multiple cell types")
         names = " and ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
         how = ("recombine every surface or none; gmsh leaves triangles where it cannot pair "
@@ -180,8 +206,11 @@ def _merge(path: pathlib.Path, gdim: int | None) -> int:
     check_cell_type(path, gdim, int(types[0]))
     check_group_nodes(path, gdim)
     if gdim == 2:
+        check_plane(path)
         check_cells(path)
-    return gdim
+    if left_out:
+        log.warning("%s", left_out)
+    return gdim, empty_names(path)
 
 
 def _single_body_cells(path: pathlib.Path, gdim: int) -> None:
@@ -294,11 +323,6 @@ def check_cells(path: pathlib.Path) -> None:
             position.
     """
     tags, coords, _ = gmsh.model.mesh.getNodes()
-    span = np.ptp(coords.reshape(-1, 3), axis=0)
-    if span[2] > 0 and min(span[0], span[1]) <= 1e-12 * span.max():
-        plane = "y-z" if span[0] <= span[1] else "x-z"
-        raise MeshError(f"{path}: the 2D mesh lies in the {plane} plane; a plane-strain "
-                        "model lies in the x-y plane (y up): rotate it in gmsh")
     xy = np.zeros((int(tags.max()) + 1, 2))
     xy[tags.astype(np.int64)] = coords.reshape(-1, 3)[:, :2]
     cells, elements, sides = [], [], []
@@ -439,6 +463,10 @@ def group_tag(data: gmshio.MeshData, name: str, dim: int | None = None) -> int:
 
     """
     groups = data.physical_groups
+    empty = getattr(data, "empty", {})
+    if name not in groups and name in empty:
+        raise MeshError(f"physical group '{name}' ({empty[name]}D) is named in the mesh file "
+                        "but no element carries its tag (a converter dropped its elements?)")
     if name not in groups:
         known = ", ".join(sorted(groups))
         raise MeshError(f"physical group '{name}' is not in the mesh (it has: {known})")

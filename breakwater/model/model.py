@@ -132,7 +132,7 @@ class ContactModel(ModelGroups):
         self.gdim = msh.geometry.dim
         self.degree = degree
         if mesh_data.cell_tags is None or mesh_data.facet_tags is None:
-            raise MeshError("the mesh needs cell and facet physical groups")
+            raise MeshError("the mesh needs cell and facet physical groups (name them in gmsh)")
         msh.topology.create_connectivity(tdim - 1, tdim)
         self._cell_body = np.full(msh.topology.index_map(tdim).size_local
                                   + msh.topology.index_map(tdim).num_ghosts, -1, np.int32)
