@@ -927,6 +927,20 @@ def test_interface_load_needs_its_side(block):
     assert fy == pytest.approx(-100.0 * W, rel=1e-12)
 
 
+def test_fixed_group_on_two_bodies_holds_both(block):
+    # A fixed facet group on two bodies' boundaries (here their shared interface; a floor
+    # under two bodies likewise) holds each body's part: it was refused, "must lie on
+    # exactly one body (found on 2)". Each body's interface nodes are held: its
+    # displacement there is zero under any load (the bodies' own DOFs, not the parent's).
+    data = read_mesh(block, COMM)
+    mat = Material(ρ, ν, young_modulus=E)
+    model = ContactModel(data, [Body("a", mat), Body("b", mat)], [], [Fixed("interface")])
+    for name in ("a", "b"):
+        assert model.fixed_on(name) == [("interface", (0, 1))]
+    held = [COMM.allreduce(len(bc.dof_indices()[0])) for bc in model.bcs]
+    assert len(held) == 4 and min(held) > 0
+
+
 def test_field_load_on_both_solvers_and_the_ledger(stacked, folder):
     # Block a alone (b not modelled), no gravity, no contact, under the Goda front
     # profile ramped in over 1 ms (a field of x and n): with β₁ = β₂ = ½ the ledger's

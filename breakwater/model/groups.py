@@ -57,16 +57,19 @@ class ModelGroups(ModelForms):
         tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
         return [self.comm.allreduce(len(b.facet_tags.find(tag))) for b in self.bodies]
 
-    def _locate(self, group: str) -> tuple[BodyData, np.ndarray]:
-        """The body whose boundary holds a facet group, and its facets in the submesh."""
+    def _locate(self, group: str) -> list[tuple[BodyData, np.ndarray]]:
+        """The bodies whose boundaries hold a facet group, and its facets in each submesh.
+
+        A fixed group may span several bodies (a floor under two of them): each holds
+        its part (it was refused, "must lie on exactly one body (found on 2)").
+        """
         counts = self._facet_counts(group)
         owners = [i for i, c in enumerate(counts) if c > 0]
-        if len(owners) != 1:
-            raise MeshError(f"facet group '{group}' must lie on exactly one body "
-                            f"(found on {len(owners)})")
-        b = self.bodies[owners[0]]
+        if not owners:
+            raise MeshError(f"fixed '{group}': facet group '{group}' has no facet on any "
+                            "body's boundary")
         tag = group_tag(self.mesh_data, group, self.mesh.topology.dim - 1)
-        return b, b.facet_tags.find(tag)
+        return [(self.bodies[i], self.bodies[i].facet_tags.find(tag)) for i in owners]
 
     def _build_fixed(self, fixed: Fixed) -> list[fem.DirichletBC]:
         """Zero displacement components on a facet group or at a point group's vertices.
@@ -77,21 +80,22 @@ class ModelGroups(ModelForms):
         fdim = self.mesh.topology.dim - 1
         dim = self.mesh_data.physical_groups.get(fixed.group, (fdim, 0))[0]
         if dim == 0:
-            body, entities = self._locate_points(fixed.group)
+            located = [self._locate_points(fixed.group)]
         elif dim == fdim:
-            body, entities = self._locate(fixed.group)
+            located = self._locate(fixed.group)
         else:
             raise MeshError(f"fixed '{fixed.group}': physical group of dimension {dim}, "
                             f"expected a facet ({fdim}D) or point (0D) group")
         comps = range(self.gdim) if fixed.components is None else fixed.components
         bcs = []
-        for c in comps:
-            if not 0 <= c < self.gdim:
-                raise ValueError(f"fixed '{fixed.group}': component {c} out of range")
-            Vc = body.V.sub(c)
-            dofs = fem.locate_dofs_topological(Vc, dim, entities)
-            bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
-        self._fixed.append((fixed.group, body.index, tuple(comps)))
+        for body, entities in located:
+            for c in comps:
+                if not 0 <= c < self.gdim:
+                    raise ValueError(f"fixed '{fixed.group}': component {c} out of range")
+                Vc = body.V.sub(c)
+                dofs = fem.locate_dofs_topological(Vc, dim, entities)
+                bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
+            self._fixed.append((fixed.group, body.index, tuple(comps)))
         return bcs
 
     def _locate_points(self, group: str) -> tuple[BodyData, np.ndarray]:
