@@ -291,6 +291,32 @@ def test_meshio_round_trip_reads_with_names_and_refuses_without(folder, native):
         read_mesh(cells_only, COMM)
 
 
+def test_meshio_without_entity_tags_says_how_to_give_them(folder, native):
+    # meshio given gmsh:physical only writes every element in entity 0: gmsh keeps groups
+    # per entity, so both bodies' cells were in both groups ("the cells of gmsh Surface 0
+    # are in both 'base' and 'block' ... meshes merged?"). With gmsh:geometrical = the
+    # physical tags, as the message says, the bodies are gmsh's.
+    meshio = pytest.importorskip("meshio")
+    source = write(folder, "for_meshio_tags.msh", V22)
+    bare, tagged = folder / "meshio_bare.msh", folder / "meshio_tagged.msh"
+
+    def convert() -> None:
+        m = meshio.read(source)
+        physical = m.cell_data["gmsh:physical"]
+        for path, data in ((bare, {"gmsh:physical": physical}),
+                           (tagged, {"gmsh:physical": physical, "gmsh:geometrical": physical})):
+            meshio.write(path, meshio.Mesh(m.points, m.cells, cell_data=data,
+                                           field_data=m.field_data), file_format="gmsh22")
+
+    on_rank_zero(COMM, convert)
+    with pytest.raises(MeshError, match=r"'base' and 'block' are all in elementary entity 0 "
+                       r".*cell_data\["):
+        read_mesh(bare, COMM)
+    data = read_mesh(tagged, COMM)
+    assert cells(data) == native
+    assert areas(data) == pytest.approx(AREAS, rel=1e-12)
+
+
 def test_a_group_named_with_no_elements_is_refused_when_used(folder):
     # The cells' and a facet group kept; "block_left" named, its elements dropped.
     path = write(folder, "dropped.msh", V22, edit=_without_group_5)

@@ -24,6 +24,7 @@ from breakwater.model.meshfile import (
     drop_ghost_cells,
     drop_ungrouped_cells,
     empty_names,
+    meshio_entities,
     no_groups,
     number_cell_nodes_first,
 )
@@ -231,6 +232,8 @@ def _single_body_cells(path: pathlib.Path, gdim: int) -> None:
             other = owner.setdefault(int(entity), name)
             if other != name:
                 kind = "Surface" if gdim == 2 else "Volume"
+                if entity == 0:  # gmsh numbers entities from 1; meshio's default is 0
+                    raise MeshError(meshio_entities(path, other, name))
                 raise MeshError(f"{path}: the cells of gmsh {kind} {entity} are in both "
                                 f"'{other}' and '{name}' (a cell belongs to one body; "
                                 "meshes merged whose entity tags repeat? give each file's "

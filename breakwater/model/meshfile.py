@@ -24,6 +24,9 @@ without error but that dolfinx read wrongly or the checks of :mod:`.mesh` misjud
   serially); node tags with gaps (two meshes merged with distinct first tags): it
   failed an assertion. The cells' nodes are numbered 1..n first
   (:func:`number_cell_nodes_first`);
+- cells of several physical groups in elementary entity 0 (meshio, given
+  ``gmsh:physical`` only, writes ``gmsh:geometrical`` 0): gmsh keeps the groups per
+  entity, so each cell would be in every group (:func:`meshio_entities`);
 - a 2D mesh that is not flat (z varying, a plane tilted about an axis): dolfinx keeps x
   and y only, so the bodies were their projection on the x-y plane
   (:func:`check_plane`).
@@ -189,6 +192,13 @@ def check_unnamed_cells(path: pathlib.Path, gdim: int) -> None:
         raise MeshError(f"{path}: the {gdim}D physical group(s) {', '.join(tags)} have no "
                         "name, so no body can be given their cells: name them in gmsh "
                         f"(Physical {kind}(\"rock\", {tags[0]}) = {{...}};)")
+
+
+def meshio_entities(path: pathlib.Path, first: str, second: str) -> str:
+    """The message refusing cell groups that share gmsh's elementary entity 0."""
+    return (f"{path}: the cells of '{first}' and '{second}' are all in elementary entity 0 "
+            "(meshio writes it without gmsh:geometrical), so gmsh cannot tell them apart: "
+            "give meshio cell_data[\"gmsh:geometrical\"] = the gmsh:physical tags")
 
 
 def check_plane(path: pathlib.Path) -> None:
