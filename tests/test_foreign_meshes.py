@@ -247,6 +247,14 @@ def test_unnamed_groups_say_how_to_name_them(folder):
         read_mesh(path, COMM)
 
 
+def test_a_byte_order_mark_is_named(folder):
+    # A .msh saved by a Windows editor: "not a gmsh .msh file (no $MeshFormat header)".
+    path = write(folder, "bom.msh", V22)
+    on_rank_zero(COMM, lambda: path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes()))
+    with pytest.raises(ValueError, match=r"begins with a byte-order mark.*without BOM"):
+        physical_groups(path)
+
+
 def test_a_cell_group_without_a_name_is_refused(folder):
     # No body can name it: dolfinx read it as the group "" (left out: "cell group ''").
     path = write(folder, "unnamed_rock.msh", geo=GEO + ROCK + "Physical Surface(7) = {3};\n")

@@ -171,7 +171,11 @@ def _msh_groups(path: pathlib.Path) -> list[tuple[str, int]]:
     """Physical group names and dimensions, from the header of a gmsh ``.msh`` file."""
     groups: list[tuple[str, int]] = []
     with path.open("rb") as fh:
-        if fh.readline().strip() != b"$MeshFormat":
+        first = fh.readline().strip()
+        if first == b"\xef\xbb\xbf$MeshFormat":  # gmsh: "line 1: syntax error ($)"
+            raise ValueError("it begins with a byte-order mark, which gmsh does not read: "
+                             "save it as UTF-8 without BOM")
+        if first != b"$MeshFormat":
             raise ValueError("not a gmsh .msh file (no $MeshFormat header)")
         for line in fh:
             s = line.strip()
