@@ -255,6 +255,13 @@ def test_a_byte_order_mark_is_named(folder):
         physical_groups(path)
 
 
+def test_format_1_is_named(folder):
+    # Format 1 has no header and no names: "not a gmsh .msh file (no $MeshFormat header)".
+    path = write(folder, "format1.msh", {"Mesh.MshFileVersion": 1.0})
+    with pytest.raises(ValueError, match=r"gmsh format 1, .* format 4\.1"):
+        physical_groups(path)
+
+
 def test_a_cell_group_without_a_name_is_refused(folder):
     # No body can name it: dolfinx read it as the group "" (left out: "cell group ''").
     path = write(folder, "unnamed_rock.msh", geo=GEO + ROCK + "Physical Surface(7) = {3};\n")

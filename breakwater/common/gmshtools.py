@@ -175,6 +175,9 @@ def _msh_groups(path: pathlib.Path) -> list[tuple[str, int]]:
         if first == b"\xef\xbb\xbf$MeshFormat":  # gmsh: "line 1: syntax error ($)"
             raise ValueError("it begins with a byte-order mark, which gmsh does not read: "
                              "save it as UTF-8 without BOM")
+        if first in (b"$NOD", b"$NOE"):  # format 1: no names, no header
+            raise ValueError("gmsh format 1, which cannot name physical groups: write it in "
+                             "format 4.1 (gmsh -format msh41, or Mesh.MshFileVersion = 4.1)")
         if first != b"$MeshFormat":
             raise ValueError("not a gmsh .msh file (no $MeshFormat header)")
         for line in fh:
