@@ -15,6 +15,7 @@ import re
 from collections.abc import Callable
 
 import gmsh
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -225,6 +226,35 @@ def test_a_2d_mesh_not_flat_is_refused(folder, move):
     path = write(folder, "tilted.msh", V22, edit=lambda t: _nodes(t, move))
     with pytest.raises(MeshError, match=r"the 2D mesh is not flat: its z coordinates span"):
         read_mesh(path, COMM)
+
+
+def test_survey_coordinates_are_refused_saying_to_translate(folder, native):
+    # In UTM coordinates (x ~ 5e5 m, y ~ 4e6 m) every 5 cm cell was "degenerate" (its
+    # area lost to cancellation); past that, a conforming interface's nodes "did not
+    # coincide" (round-off of 4e6 m above 1e-9 of 0.2 m). 3000 m off (7500 times the
+    # 0.4 m extent, below FAR) reads the same bodies.
+    def shift(dx: float, dy: float) -> Callable[[str], str]:
+        return lambda t: _nodes(t, lambda x, y, z: (x + dx, y + dy, z))
+
+    path = write(folder, "utm.msh", V22, edit=shift(512345.0, 4123456.0))
+    with pytest.raises(MeshError, match=r"the mesh lies 4\.12e\+06 m from the origin, 1e\+07 "
+                       r"times its size \(0\.4 m; survey coordinates\?\).*translate it"):
+        read_mesh(path, COMM)
+    data = read_mesh(write(folder, "off.msh", V22, edit=shift(2000.0, 2900.0)), COMM)
+    assert cells(data) == native
+    assert areas(data) == pytest.approx(AREAS, rel=1e-9)  # x carries ~1e-13 m of round-off
+
+
+def test_cell_quality_far_from_the_origin():
+    # The same right triangle (legs 0.02 m: area 2e-4 m², height/longest edge 1/2) at the
+    # origin and 4e6 m from it: the shoelace on absolute coordinates lost the area.
+    from breakwater.model.mesh import cell_quality
+
+    tri = np.array([[[0.0, 0.0], [0.02, 0.0], [0.0, 0.02]]])
+    for offset in (0.0, 512345.0, 4123456.0):
+        area, quality = cell_quality(tri + offset)
+        assert area[0] == pytest.approx(2e-4, rel=1e-6)  # round-off 4e6 × 2e-16 / 0.02
+        assert quality[0] == pytest.approx(0.5, rel=1e-6)
 
 
 def test_a_name_on_groups_of_two_dimensions_is_refused(folder):

@@ -18,6 +18,7 @@ from breakwater.common.parallel import on_rank_zero, shared_tempdir
 from breakwater.model.meshcells import check_cell_type, check_group_nodes, check_meshed
 from breakwater.model.meshfile import (
     check_names,
+    check_offset,
     check_partitions,
     check_plane,
     check_unnamed_cells,
@@ -183,6 +184,7 @@ def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
     check_unnamed_cells(path, gdim)
     _single_body_cells(path, gdim)
     check_partitions(path, gdim)
+    check_offset(path)
     tags = gmsh.model.mesh.getNodes()[0]
     if len(tags) == 0:
         raise MeshError(f"{path}: cannot read the mesh (no nodes: truncated?)")
@@ -264,7 +266,11 @@ def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         its height over the longest edge divided by that edge: √3/2 equilateral, 0
         collapsed).
     """
-    x, y = corners[..., 0], corners[..., 1]
+    # Relative to each cell's first corner: products of absolute coordinates lose the
+    # area to cancellation far from the origin (a mesh in UTM coordinates, x ~ 5e5 m,
+    # y ~ 4e6 m: every 2 cm cell was "degenerate", its area 0 to round-off).
+    local = corners - corners[:, :1]
+    x, y = local[..., 0], local[..., 1]
     xn, yn = np.roll(x, -1, axis=1), np.roll(y, -1, axis=1)
     area = 0.5 * np.sum(x * yn - xn * y, axis=1)
     longest = np.max(np.hypot(xn - x, yn - y), axis=1)

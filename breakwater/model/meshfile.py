@@ -27,6 +27,11 @@ without error but that dolfinx read wrongly or the checks of :mod:`.mesh` misjud
 - cells of several physical groups in elementary entity 0 (meshio, given
   ``gmsh:physical`` only, writes ``gmsh:geometrical`` 0): gmsh keeps the groups per
   entity, so each cell would be in every group (:func:`meshio_entities`);
+- a mesh far from the origin for its size (survey coordinates, UTM: x ~ 5e5 m,
+  y ~ 4e6 m, on a 0.6 m model): coordinates then carry round-off above breakwater's
+  relative tolerances (the cells' areas, the coincidence of a conforming interface's
+  nodes: a 2 cm cell was "degenerate", the interface "not conforming")
+  (:func:`check_offset`);
 - a 2D mesh that is not flat (z varying, a plane tilted about an axis): dolfinx keeps x
   and y only, so the bodies were their projection on the x-y plane
   (:func:`check_plane`).
@@ -45,6 +50,7 @@ from breakwater.common.gmshtools import UNNAMED, GroupNameError, named_groups, p
 __all__ = [
     "FLAT",
     "check_names",
+    "check_offset",
     "check_partitions",
     "check_plane",
     "check_unnamed_cells",
@@ -54,6 +60,11 @@ __all__ = [
     "no_groups",
     "number_cell_nodes_first",
 ]
+
+FAR = 1e4
+"""A mesh whose coordinates reach this many times its extent is refused as too far from
+the origin: their round-off (2.2e-16 of them) would approach 1e-11 of the extent, and of
+a contact interface 10 times smaller, within 100 of breakwater's 1e-9 tolerances."""
 
 FLAT = 1e-6
 """A 2D mesh whose z coordinates span more than this fraction of its extent in x and y is
@@ -199,6 +210,25 @@ def meshio_entities(path: pathlib.Path, first: str, second: str) -> str:
     return (f"{path}: the cells of '{first}' and '{second}' are all in elementary entity 0 "
             "(meshio writes it without gmsh:geometrical), so gmsh cannot tell them apart: "
             "give meshio cell_data[\"gmsh:geometrical\"] = the gmsh:physical tags")
+
+
+def check_offset(path: pathlib.Path) -> None:
+    """Refuse a mesh whose distance from the origin exceeds :data:`FAR` times its extent.
+
+    Raises:
+        MeshError: Naming the distance, the extent and how to move it.
+    """
+    coords = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
+    if not len(coords):
+        return
+    far = float(np.abs(coords).max())
+    extent = float(np.ptp(coords, axis=0).max())
+    if far > FAR * extent:
+        raise MeshError(f"{path}: the mesh lies {far:.3g} m from the origin, {far / extent:.2g} "
+                        f"times its size ({extent:.3g} m; survey coordinates?): its "
+                        "coordinates' round-off would exceed breakwater's tolerances; "
+                        "translate it near the origin (gmsh: Translate{...}), with the case's "
+                        "coordinates")
 
 
 def check_plane(path: pathlib.Path) -> None:
