@@ -168,12 +168,21 @@ def test_ghost_cells_are_dropped(folder, native):
     assert areas(data) == pytest.approx(AREAS, rel=1e-12)
 
 
-def test_one_file_of_a_split_partition_is_refused(folder):
-    # One file per partition: the first ran alone, a block of a fraction of its weight.
-    write(folder, "split.msh", {"Mesh.PartitionSplitMeshFiles": 1}, parts=2)
-    with pytest.raises(MeshError, match=r"split_1\.msh: holds partition 1 of a mesh in 2 "
-                       r"partitions .*give the whole mesh in one file"):
-        read_mesh(folder / "split_1.msh", COMM)
+@pytest.mark.parametrize("version", [4.1, 2.2])
+@pytest.mark.parametrize("part", [1, 3])
+def test_one_file_of_a_split_partition_is_refused(folder, version, part):
+    # One file per partition: the first ran alone, a block of a fraction of its weight
+    # (format 2.2 does not give the number of partitions: split_1 is told by split_2).
+    write(folder, f"split{version}.msh", {"Mesh.PartitionSplitMeshFiles": 1,
+                                          "Mesh.MshFileVersion": version}, parts=3)
+    with pytest.raises(MeshError, match=rf"split{version}_{part}\.msh: holds only partition "
+                       rf"{part} of a partitioned mesh .*give the whole mesh in one file"):
+        read_mesh(folder / f"split{version}_{part}.msh", COMM)
+
+
+def test_a_mesh_partitioned_in_one_reads(folder, native):
+    data = read_mesh(write(folder, "one_part.msh", V22, parts=1), COMM)
+    assert cells(data) == native
 
 
 def test_saveall_in_format_22_is_refused_saying_why(folder):

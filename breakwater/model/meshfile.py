@@ -123,20 +123,26 @@ def number_cell_nodes_first(gdim: int) -> None:
 def check_partitions(path: pathlib.Path, gdim: int) -> None:
     """Refuse one part of a partitioned mesh written as one file per partition.
 
+    Format 4.1 gives the number of partitions: some have no cells in the file. Format 2.2
+    gives each element's partition only: its first file (``name_1.msh``) reads as a whole
+    mesh partitioned in one, told apart by its sibling ``name_2.msh``.
+
     Raises:
-        MeshError: Some of the mesh's partitions have no cells in the file.
+        MeshError: Naming the partitions the file holds.
     """
     total = gmsh.model.getNumberOfPartitions()
-    if total < 2:
+    if total < 1:
         return
     present: set[int] = set()
     for d, t in gmsh.model.getEntities(gdim):
         if any(len(e) for e in gmsh.model.mesh.getElements(d, t)[1]):
             present.update(int(p) for p in gmsh.model.getPartitions(d, t))
-    if present and len(present) < total:
+    stem = path.stem.rsplit("_", 1)
+    sibling = len(stem) == 2 and stem[1] == "1" and path.with_name(f"{stem[0]}_2.msh").is_file()
+    if present and (len(present) < total or sibling):
         held = ", ".join(map(str, sorted(present)))
-        raise MeshError(f"{path}: holds partition {held} of a mesh in {total} partitions "
-                        "(written with Mesh.PartitionSplitMeshFiles): give the whole mesh in "
+        raise MeshError(f"{path}: holds only partition {held} of a partitioned mesh (one file "
+                        "per partition: Mesh.PartitionSplitMeshFiles): give the whole mesh in "
                         "one file; breakwater partitions it over the MPI ranks itself")
 
 
