@@ -200,9 +200,16 @@ def test_cells_in_no_group_are_left_out_with_a_warning(folder, native, caplog):
         data = read_mesh(path, COMM)
     assert cells(data) == native
     assert areas(data) == pytest.approx(AREAS, rel=1e-12)
+
+    def in_file() -> int:
+        with gmsh_session():
+            gmsh.merge(str(path))
+            return sum(len(t) for t in gmsh.model.mesh.getElements(2)[1])
+
+    assert data.ungrouped == on_rank_zero(COMM, in_file) - native > 0  # the summary's count
     if COMM.rank == 0:
-        assert any(re.search(r"cells in no physical group \(gmsh Surface 3\) are left out",
-                             r.getMessage()) for r in caplog.records)
+        assert any(re.search(rf"{data.ungrouped} cells in no physical group \(gmsh Surface "
+                             r"3\) are left out", r.getMessage()) for r in caplog.records)
 
 
 def test_a_node_on_no_cell_numbered_among_the_cells_nodes(folder):

@@ -390,6 +390,8 @@ def _mesh_summary(case: CaseSettings, data: gmshio.MeshData) -> dict[str, Any]:
         if dim == tdim and name not in cells:
             found = data.cell_tags.find(int(tag))
             left_out[name] = int(msh.comm.allreduce(int((found < nlocal).sum())))
+    if getattr(data, "ungrouped", 0):  # cells in no physical group (warned when read)
+        info["ungrouped_cells"] = data.ungrouped  # type: ignore[attr-defined]
     if left_out:
         info["left_out"] = left_out
         info["warnings"] = [f"mesh: cell group '{name}' ({n} cells) is no body of the case "

@@ -70,7 +70,7 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
     # dolfinx's read_from_msh, but with gmsh quiet: rank 0 reads, all ranks distribute.
     with gmsh_session(model="breakwater-read") if comm.rank == 0 else nullcontext():
         try:
-            dim, empty = on_rank_zero(comm, lambda: _merge(path, gdim))
+            dim, empty, ungrouped = on_rank_zero(comm, lambda: _merge(path, gdim))
         except MeshError:
             raise
         except Exception as e:  # gmsh raises bare Exceptions on unreadable files
@@ -85,7 +85,7 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
                             f"{', '.join(lost)} are named in the file with none (a converter "
                             "kept only the cells' groups?): write the mesh from gmsh")
     out = _with_shared(data, sizes, comm)
-    out.empty = empty
+    out.empty, out.ungrouped = empty, ungrouped
     return out
 
 
@@ -101,10 +101,12 @@ class GroupedMeshData(gmshio.MeshData):
         shared: By group name: how many of its gmsh elements dolfinx's tags give to
             another group, its element count, and the groups it shares entities with.
         empty: Groups named in the file that no element carries (name -> dimension).
+        ungrouped: Cells in no physical group, left out.
     """
 
     shared: dict[str, tuple[int, int, list[str]]]
     empty: dict[str, int]
+    ungrouped: int
 
 
 def _group_sizes() -> dict[str, tuple[int, int, list[str]]]:
@@ -151,7 +153,7 @@ def _with_shared(data: gmshio.MeshData, sizes: dict[str, tuple[int, int, list[st
     return out
 
 
-def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
+def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int], int]:
     """Read a ``.msh`` into the current gmsh model (rank 0) and check it is whole.
 
     A truncated file may read without error but lack its elements, nodes or physical
@@ -162,8 +164,8 @@ def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
 
     Returns:
         The model's dimension (``gdim``, or the highest dimension of its physical
-        groups: 2 or 3) and the groups named with no elements
-        (:func:`.meshfile.empty_names`).
+        groups: 2 or 3), the groups named with no elements
+        (:func:`.meshfile.empty_names`) and the number of cells in no group, left out.
 
     Raises:
         MeshError: No nodes, no cells of dimension ``gdim`` or no physical groups; node
@@ -180,7 +182,7 @@ def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
         if gdim not in (2, 3):
             raise MeshError(f"{path}: no surface (2D) or volume (3D) physical group: "
                             "name the bodies' cells in gmsh (Physical Surface/Volume)")
-    left_out = drop_ungrouped_cells(path, gdim)
+    ungrouped, left_out = drop_ungrouped_cells(path, gdim)
     check_unnamed_cells(path, gdim)
     _single_body_cells(path, gdim)
     check_partitions(path, gdim)
@@ -213,7 +215,7 @@ def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int]]:
         check_cells(path)
     if left_out:
         log.warning("%s", left_out)
-    return gdim, empty_names(path)
+    return gdim, empty_names(path), ungrouped
 
 
 def _single_body_cells(path: pathlib.Path, gdim: int) -> None:

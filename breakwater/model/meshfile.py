@@ -84,11 +84,11 @@ def drop_ghost_cells() -> int:
     return len(ghosts)
 
 
-def drop_ungrouped_cells(path: pathlib.Path, gdim: int) -> str | None:
+def drop_ungrouped_cells(path: pathlib.Path, gdim: int) -> tuple[int, str]:
     """Remove the cells in no physical group from the current model.
 
     Returns:
-        The warning to give once the mesh is accepted (None: no such cells).
+        How many, and the warning to give once the mesh is accepted ("": none).
     """
     kind = "Surface" if gdim == 2 else "Volume"
     drop, count = [], 0
@@ -98,11 +98,11 @@ def drop_ungrouped_cells(path: pathlib.Path, gdim: int) -> str | None:
             drop.append((d, t))
             count += n
     if not drop:
-        return None
+        return 0, ""
     gmsh.model.removeEntities(drop)
-    return (f"{path}: {count} cells in no physical group (gmsh {kind} "
-            f"{', '.join(str(t) for _, t in drop)}) are left out: name them in a physical "
-            "group to model them")
+    return count, (f"{path}: {count} cells in no physical group (gmsh {kind} "
+                   f"{', '.join(str(t) for _, t in drop)}) are left out: name them in a "
+                   "physical group to model them")
 
 
 def number_cell_nodes_first(gdim: int) -> None:
