@@ -192,6 +192,18 @@ def test_saveall_in_format_22_is_refused_saying_why(folder):
         read_mesh(path, COMM)
 
 
+@pytest.mark.parametrize("options", ["Mesh.MshFileVersion = 2.2; Mesh.SaveAll = 1;",
+                                     "Mesh.MshFileVersion = 1;"], ids=["v22_saveall", "v1"])
+def test_a_geo_script_s_output_format_is_breakwater_s(folder, native, options):
+    # breakwater writes the script's mesh in its own format: the script's 2.2 with
+    # SaveAll (every element in group 0) or format 1 (no names) refused its own file.
+    script = folder / f"format_{len(options)}.geo"
+    on_rank_zero(COMM, lambda: script.write_text(GEO + options + "\n"))
+    data = read_mesh(script, COMM)
+    assert cells(data) == native
+    assert areas(data) == pytest.approx(AREAS, rel=1e-12)
+
+
 def test_cells_in_no_group_are_left_out_with_a_warning(folder, native, caplog):
     # Mesh.SaveAll writes the third square's cells, in no group: dolfinx raised "All cells
     # are expected to be tagged once" (a traceback).

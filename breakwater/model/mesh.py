@@ -414,6 +414,12 @@ def curved_edges() -> int:
     return count
 
 
+WRITE = {"Mesh.MshFileVersion": 4.1}
+"""gmsh options of the ``.msh`` that :func:`mesh_geo` writes, whatever the script sets: a
+script's ``Mesh.MshFileVersion = 2.2`` with ``Mesh.SaveAll = 1`` wrote every element in
+physical group 0, its format 1 no names (the run then refused breakwater's own file)."""
+
+
 def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
              dim: int | None = None, order: int = 1) -> pathlib.Path:
     """Mesh a gmsh ``.geo`` script on rank 0 and write the ``.msh`` to ``target``.
@@ -442,8 +448,10 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
     """
     def write() -> None:
         target.parent.mkdir(parents=True, exist_ok=True)
-        with gmsh_session():
+        with gmsh_session(WRITE):
             gmsh.merge(str(path))  # into the session's model
+            for name, value in WRITE.items():  # over the script's (format 1 or 2.2: refused)
+                gmsh.option.setNumber(name, value)
             mdim = dim if dim is not None else max(2, gmsh.model.getDimension())
             gmsh.model.mesh.generate(mdim)
             check_meshed(mdim)
