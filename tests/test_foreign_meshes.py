@@ -320,6 +320,14 @@ def test_format_1_is_named(folder):
         physical_groups(path)
 
 
+def test_a_fluent_msh_is_named(folder):
+    # ANSYS Fluent writes .msh too: "not a gmsh .msh file (no $MeshFormat header)".
+    path = folder / "fluent.msh"
+    on_rank_zero(COMM, lambda: path.write_text('(0 "fluent mesh")\n(2 2)\n(10 (0 1 4 0))\n'))
+    with pytest.raises(ValueError, match=r"an ANSYS Fluent mesh .*export the mesh from gmsh"):
+        physical_groups(path)
+
+
 def test_a_cell_group_without_a_name_is_refused(folder):
     # No body can name it: dolfinx read it as the group "" (left out: "cell group ''").
     path = write(folder, "unnamed_rock.msh", geo=GEO + ROCK + "Physical Surface(7) = {3};\n")

@@ -178,6 +178,9 @@ def _msh_groups(path: pathlib.Path) -> list[tuple[str, int]]:
         if first in (b"$NOD", b"$NOE"):  # format 1: no names, no header
             raise ValueError("gmsh format 1, which cannot name physical groups: write it in "
                              "format 4.1 (gmsh -format msh41, or Mesh.MshFileVersion = 4.1)")
+        if first.startswith(b"("):  # Fluent's "(0 ...)" or "(1 ...)" sections
+            raise ValueError("an ANSYS Fluent mesh (the same .msh suffix), not gmsh's: "
+                             "export the mesh from gmsh, with named physical groups")
         if first != b"$MeshFormat":
             raise ValueError("not a gmsh .msh file (no $MeshFormat header)")
         for line in fh:
