@@ -380,7 +380,8 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
         point = np.sign(c1) * np.minimum(far, guardkernels.GROW * np.abs(c1))
         lin_next = np.full(len(p.node_pos), np.nan)
         lin_next[keep[crawl]] = point[crawl]
-        got, banned = none.copy(), np.zeros(len(p.node_pos), bool)
+        got = none.copy()
+        banned = np.full(len(p.node_pos), guardkernels.FREE, np.int8)
         original = step.copy()
         assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
                                        chi, none, got, banned) == fix.sum()
@@ -388,13 +389,23 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
                                    atol=1e-12 * np.abs(step).max())
         np.testing.assert_allclose(got, lin_next, rtol=1e-12)
         assert crawl.sum() > 0 if kind == "reverse" else True
-        # A reversing node takes no crawl point for the rest of the solve (banned); with
-        # every node banned (a rescue), none takes one.
-        np.testing.assert_array_equal(np.flatnonzero(banned), np.sort(keep[reverse]))
-        step, got = original, none.copy()
-        guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv, chi, none,
-                                got, np.ones(len(p.node_pos), bool))
-        assert np.isnan(got).all()
+        # A reversing node is REVERSED for the rest of the solve: its crawl points are at
+        # most REGROW |c₁|; with every node NONE (a rescue), none takes one.
+        np.testing.assert_array_equal(np.flatnonzero(banned == guardkernels.REVERSED),
+                                      np.sort(keep[reverse]))
+        assert np.all(banned[banned != guardkernels.REVERSED] == guardkernels.FREE)
+        for state, grow in ((guardkernels.REVERSED, guardkernels.REGROW),
+                            (guardkernels.NONE, None)):
+            step, got = original.copy(), none.copy()
+            guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv, chi,
+                                    none, got, np.full(len(p.node_pos), state, np.int8))
+            if grow is None:
+                assert np.isnan(got).all()
+            else:
+                bounded = np.sign(c1) * np.minimum(far, grow * np.abs(c1))
+                expected = np.full(len(p.node_pos), np.nan)
+                expected[keep[crawl]] = bounded[crawl]
+                np.testing.assert_allclose(got, expected, rtol=1e-12)
 
 
 @pytest.mark.parametrize("nn", [2, 3])

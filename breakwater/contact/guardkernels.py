@@ -30,16 +30,26 @@ Newton with the node's force as its unknown, whose law (the inverse of φ) is sm
 φ saturates: the next step treats the node as sliding at nearly the full friction force.
 A solve that converges on such tangent lines is tested again on the law itself
 (:meth:`breakwater.stepping.interfacenewton.InterfaceNewton`), so the accepted states
-are the law's. A node whose slip reverses takes no crawl point for the rest of the solve
-(``banned``): on the caisson meshed apart by hand (``examples/goda_nonmatching.toml``) a
-node's crawl point 100× out let it slide far, reverse, stick and crawl again, in a cycle
-of eight iterations, and the step was cut back. A Newton's rescue (its second try) takes
-none. Measured, Newton iterations before → after, every headline digit the same: the
-separately meshed Goda case 4114 → 3816 (its longest solve 23 → 14), the hand-meshed one
-4070 → 3817, the storm sliding the caisson 1891 → 1833, the sliding block 622 → 622;
-with GROW from 10 to 1e4, 3800–3880 on both Goda cases; unbounded, 20 177 and 17 639
-(about 360 rescues each; while the rescue took crawl points too, the impact's first steps
-failed).
+are the law's. A Newton's rescue (its second try) takes none. Measured, Newton iterations
+before → after, every headline digit the same: the separately meshed Goda case 4114 →
+3816 (its longest solve 23 → 14), the hand-meshed one 4070 → 3817, the storm sliding the
+caisson 1891 → 1833, the sliding block 622 → 622; with GROW from 10 to 1e4, 3800–3880 on
+both Goda cases; unbounded, 20 177 and 17 639 (about 360 rescues each; while the rescue
+took crawl points too, the impact's first steps failed).
+
+A node whose slip reverses takes crawl points at most :data:`REGROW` times Newton's
+proposal for the rest of the solve (``reversed``): on the caisson meshed apart by hand
+(``examples/goda_nonmatching.toml``) a node's crawl point 100× out let it slide far,
+reverse, stick and crawl again, in a cycle of eight iterations, and the step was cut back.
+Such nodes first took none at all, and then crawled: on a caisson of 6 mm elements on a
+mound of 30 mm (``examples/goda_apart/goda_apart.geo`` with those sizes), in the impact's
+first milliseconds, a node landed at zero slip by the reversal cut went from stick to
+sliding through the curved zone at about twice its slip per iteration (1.8χ, 3.3χ, 6.5χ,
+21χ, 372χ), the residual halving each time, the rest of the surface converged; that
+was most of the 15 iterations per step there. Newton iterations of whole runs (the 6/30
+mm case, ``examples/goda_apart``, the same with 10/20 mm elements) with REGROW 1 (none),
+3, 10, 20, 30 and 100 (as any node): 7931/3830/4299, 6670/3773/4241, 6547/3754/4164,
+7095/3749/4090, 7011/3742/4102, 7387/3722/4152; every headline digit the same.
 
 :func:`land` is the compiled form of :func:`breakwater.contact.slipguard.land` (the
 same floating-point operations), used by the conforming pairs' compiled guard
@@ -56,7 +66,8 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.forcekernels import law_line, tangential_slip
 
-__all__ = ["CRAWL", "CURVED", "F_MAX", "GROW", "crawl_point", "land", "slip_guard"]
+__all__ = ["CRAWL", "CURVED", "FREE", "F_MAX", "GROW", "NONE", "REGROW", "REVERSED",
+           "crawl_point", "land", "slip_guard"]
 
 #: The landing applies where the linear model's slip is within this many χ.
 CURVED = 100.0
@@ -64,8 +75,13 @@ CURVED = 100.0
 F_MAX = CURVED / math.sqrt(1.0 + CURVED * CURVED)
 #: A slip that Newton grows by more than this factor beyond the curved zone crawls.
 CRAWL = 1.25
-#: A crawling slip's linearisation point is at most this many times Newton's proposal.
+#: A crawling slip's linearisation point is at most this many times Newton's proposal...
 GROW = 100.0
+#: ... and this many at a node whose slip has reversed in the solve.
+REGROW = 10.0
+#: The crawl points a node may take (``banned``): :data:`GROW`'s, :data:`REGROW`'s (its slip
+#: reversed in this solve), none (a Newton's rescue).
+FREE, REVERSED, NONE = 0, 1, 2
 
 
 @kernel
@@ -92,20 +108,21 @@ def land(c0, c1, chi, out):  # type: ignore[no-untyped-def]
 
 
 @kernel
-def crawl_point(force, c1, chi):  # type: ignore[no-untyped-def]
+def crawl_point(force, c1, chi, grow):  # type: ignore[no-untyped-def]
     """Where a crawling slip's law is linearised next (the module doc).
 
     Args:
         force: |f|, the linear model's force (of magnitude at least F_MAX).
         c1: Newton's proposal for the slip.
         chi: χ.
+        grow: The bound's multiple of |c₁| (:data:`GROW`, or :data:`REGROW`).
 
     Returns:
         The slip where the law gives ``force`` (infinite from |f| ≥ 1 on), at most
-        GROW |c₁|, with c₁'s sign.
+        ``grow`` |c₁|, with c₁'s sign.
     """
     far = chi * force / math.sqrt(1.0 - force * force) if force < 1.0 else np.inf
-    return math.copysign(min(far, GROW * abs(c1)), c1)
+    return math.copysign(min(far, grow * abs(c1)), c1)
 
 
 @kernel
@@ -133,8 +150,8 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         chi: The stick band χ.
         lin: The iterate's linearisation slips (NaN: the law at the slip itself).
         lin_next: Out: the next iterate's.
-        banned: The nodes that take no crawl point (in/out: a node whose slip reverses
-            is added).
+        banned: The crawl points each node may take, :data:`FREE`, :data:`REVERSED` or
+            :data:`NONE` (in/out: a node whose slip reverses becomes REVERSED).
 
     Returns:
         The nodes whose step changed.
@@ -155,7 +172,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         c1 = c0 - dv * tangential_slip(ext, j, f, N0, t0, node_pos, pos_m)
         if c0 * c1 < 0 and abs(c0) > chi:
             target = 0.0
-            banned[j] = True  # not a monotone crawl: no crawl point in this solve
+            banned[j] = max(banned[j], REVERSED)  # not a monotone crawl: a bounded one
         else:
             a[0], b[0] = (lin[j] if lin[j] == lin[j] else c0), c1
             if land(a, b, chi, out):
@@ -163,8 +180,9 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
                     continue
                 target = out[0]
             else:
-                if c1 * a[0] > 0 and abs(c1) > CRAWL * abs(a[0]) and not banned[j]:
-                    lin_next[j] = crawl_point(abs(out[0]), c1, chi)
+                if c1 * a[0] > 0 and abs(c1) > CRAWL * abs(a[0]) and banned[j] != NONE:
+                    lin_next[j] = crawl_point(abs(out[0]), c1, chi,
+                                              GROW if banned[j] == FREE else REGROW)
                 continue
         ym0, ym1 = 0.0, 0.0
         for k in range(nm):

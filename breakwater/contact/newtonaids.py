@@ -221,7 +221,8 @@ class CrawlPoints:
     friction force at the node is the law's tangent line at a crawl point
     (:func:`~breakwater.contact.guardkernels.slip_guard`,
     :func:`~breakwater.contact.forcekernels.friction`) until :meth:`drop`. A node whose
-    slip reverses takes none until then.
+    slip reverses takes crawl points closer to Newton's proposal until then
+    (:data:`~breakwater.contact.guardkernels.REGROW`).
 
     Args:
         nodes: The slave nodes.
@@ -236,7 +237,7 @@ class CrawlPoints:
         self.none = np.full(nodes, np.nan)
         self.at, self._next = self.none.copy(), self.none.copy()
         self.any = False
-        self._banned = np.zeros(nodes, bool)
+        self._banned = np.full(nodes, guardkernels.FREE, np.int8)
 
     def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
               node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float) -> int:
@@ -271,7 +272,7 @@ class CrawlPoints:
         if was:
             self.at.fill(np.nan)
             self.any = False
-        self._banned.fill(not allowed)
+        self._banned.fill(guardkernels.FREE if allowed else guardkernels.NONE)
         return was
 
 
