@@ -35,9 +35,8 @@ class _Killed(Exception):
     """Stands for a kill: not a BreakwaterError, so run() leaves the checkpoint."""
 
 
-def test_calibrated_case_resumes_on_another_number_of_ranks(
-        shared_dir: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    out = shared_dir / "run"
+def _killed_run(out: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A run of rank 0 alone into ``out``, killed after its checkpoint of step 20."""
     overrides = [*SETTINGS, f'output.directory="{out}"']
     check = simulation._check_stop
 
@@ -60,12 +59,19 @@ def test_calibrated_case_resumes_on_another_number_of_ranks(
             error = repr(e)
     error = COMM.bcast(error, root=0)
     assert error is None, error
+
+
+def _no_calibration(*args, **kwargs):  # type: ignore[no-untyped-def]
+    raise AssertionError("the resumed run calibrated again")
+
+
+def test_calibrated_case_resumes_on_another_number_of_ranks(
+        shared_dir: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    out = shared_dir / "run"
+    _killed_run(out, monkeypatch)
     saved = tomllib.loads((out / "case.toml").read_text())["bodies"]["mound"]["shear_modulus"]
 
-    def no_calibration(*args, **kwargs):  # type: ignore[no-untyped-def]
-        raise AssertionError("the resumed run calibrated again")
-
-    monkeypatch.setattr(casebuild, "calibrate", no_calibration)
+    monkeypatch.setattr(casebuild, "calibrate", _no_calibration)
     args = ["run", "--out", str(out), "--resume", "--quiet"]
     for s in SETTINGS:
         args += ["--set", s]
@@ -77,3 +83,29 @@ def test_calibrated_case_resumes_on_another_number_of_ranks(
     assert summary["calibration"]["shear_modulus"] == saved
     ran = tomllib.loads((out / "case.toml").read_text())["bodies"]["mound"]["shear_modulus"]
     assert ran == saved
+
+
+@pytest.mark.parametrize("option", ["--resume", "--auto-resume"])
+def test_an_edited_case_is_refused_before_calibrating(
+        shared_dir: pathlib.Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str], option: str) -> None:
+    """The case edited after the kill (μ 0.65 -> 0.5): refused in one line naming the key
+    changed, not the calibrated modulus (before: calibrated again, then refused naming
+    ``bodies.mound.shear_modulus`` too on another number of ranks, after the
+    calibration's solves: minutes in 3D), and nothing in the folder changed."""
+    out = shared_dir / "run"
+    _killed_run(out, monkeypatch)
+    before = (out / "checkpoint.npz").read_bytes(), (out / "case.toml").read_text()
+    monkeypatch.setattr(casebuild, "calibrate", _no_calibration)
+    args = ["run", "--out", str(out), option, "--quiet",
+            "--set", "contact.interface.friction=0.5"]
+    for s in SETTINGS:
+        args += ["--set", s]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1, err
+        assert "cannot resume: the case differs" in err
+        assert err.rstrip().endswith("in contact.interface.friction (run it without "
+                                     "--resume, or into another --out folder)"), err
+    assert ((out / "checkpoint.npz").read_bytes(), (out / "case.toml").read_text()) == before
