@@ -16,6 +16,8 @@ finished.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import logging
 import pathlib
@@ -23,7 +25,7 @@ import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 from breakwater import __version__
 from breakwater.common import files, liveness
@@ -44,6 +46,27 @@ def _rank() -> int:
     from mpi4py import MPI
 
     return MPI.COMM_WORLD.rank
+
+
+class _Parser(argparse.ArgumentParser):
+    """The command line's parser (and its subcommands'): a usage error is one line."""
+
+    def error(self, message: str) -> NoReturn:
+        """Exit with status 2 and one line: the error and where the options are listed."""
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None
+           ) -> argparse.Namespace:
+    """The parsed arguments, the parser's output printed by rank 0 only.
+
+    Under mpiexec every rank parses the command line: what the parser prints (a usage
+    error, ``--help``, ``--version``) was printed once per rank.
+    """
+    if _rank() == 0:
+        return parser.parse_args(argv)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        return parser.parse_args(argv)
 
 
 def _say(text: str, quiet: bool = False) -> None:
@@ -309,7 +332,7 @@ def _cmd_show_case(args: argparse.Namespace) -> int:
 # --- the parser ---------------------------------------------------------------------
 
 def _parser() -> argparse.ArgumentParser:
-    flags = argparse.ArgumentParser(add_help=False)
+    flags = _Parser(add_help=False)
     flags.add_argument("--set", action="append", metavar="KEY=VALUE",
                        help="override a case field by its dotted path, e.g. "
                             "time.dt=5e-5 or bodies.mound.density=1800; a table value "
@@ -322,11 +345,11 @@ def _parser() -> argparse.ArgumentParser:
     noise.add_argument("-v", "--verbose", action="store_true", help="print debug messages")
     flags.add_argument("--debug", action="store_true",
                        help="show the traceback of errors")
-    common = argparse.ArgumentParser(add_help=False, parents=[flags])
+    common = _Parser(add_help=False, parents=[flags])
     common.add_argument("case", nargs="?", default=None, metavar="CASE",
                         help="case file (TOML) or built-in case name (default: goda)")
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description="Dynamic frictional contact of deformable bodies: a "
         "breakwater caisson on a gravel mound struck by a pendulum (Goda 1994; "
         "Stickle et al. 2011).")
@@ -406,7 +429,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = _parser()
     try:
-        args = parser.parse_args(argv)
+        args = _parse(parser, argv)
     except SystemExit as e:  # usage errors (2) and --help/--version (0)
         return int(e.code or 0) if not isinstance(e.code, str) else EXIT_INPUT
     from breakwater.outputs.checkpoint import CheckpointError

@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 from mpi4py import MPI
 
-import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+import breakwater  # (imports dolfinx_solver before dolfinx)
 
 # isort: split
 from breakwater.meshes import PHYSICAL_GROUPS, read
@@ -64,6 +64,30 @@ def test_bad_key_exit_2(capsys):
 def test_usage_error_exit_2(capsys):
     assert cli.main(["frobnicate"]) == 2
     assert cli.main(["--version"]) == 0
+
+
+def test_usage_errors_help_and_version_print_once(capsys):
+    """Under mpiexec every rank parses the command line: a usage error, --help and
+    --version were printed by every rank (3 times on 3 ranks), a usage error on two
+    lines (the usage, then the error). Now rank 0 prints, a usage error in one line."""
+    assert cli.main(["study", "x.toml"]) == 2
+    error = capsys.readouterr()
+    assert cli.main(["mesh"]) == 2  # a subcommand's: --out is required
+    mesh = capsys.readouterr()
+    assert cli.main(["run", "--help"]) == 0
+    usage = capsys.readouterr()
+    assert cli.main(["--version"]) == 0
+    version = capsys.readouterr()
+    if COMM.rank == 0:
+        assert error.err == ("python -m breakwater: error: argument COMMAND: invalid choice: "
+                             "'study' (choose from 'run', 'mesh', 'calibrate', 'sweep', "
+                             "'show-case') (see python -m breakwater --help)\n")
+        assert mesh.err == ("python -m breakwater mesh: error: the following arguments are "
+                            "required: --out (see python -m breakwater mesh --help)\n")
+        assert usage.out.startswith("usage: python -m breakwater run")
+        assert version.out == f"breakwater {breakwater.__version__}\n"
+    else:
+        assert [error, mesh, usage, version] == [("", "")] * 4
 
 
 def test_calibrate_command(capsys):
