@@ -182,7 +182,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         args.resume = bool(on_rank_zero(comm, lambda: _resumable(folder)))
     if args.resume:
         # Fail early, before meshing and calibrating, when there is nothing to resume;
-        # run() then checks that the case (case.toml) is the checkpoint's.
+        # build_to_resume then refuses, as early, a checkpoint of another case.
         on_rank_zero(comm, lambda: checkpoint.check(folder))
     _say(f"breakwater {__version__}: case '{case.name}' -> {folder}"
          + (" (resuming)" if args.resume else ""), args.quiet)
