@@ -14,7 +14,8 @@ ParaView ones.
 
 A file written on several ranks holds one block per rank, each with the rank's cells
 and its ghost cells; the blocks are joined and the ghost copies dropped (a cell is kept
-once, by the position of its nodes), so the grid is the one of a serial run. The
+once, by the position of its nodes), so the grid is the one of a serial run; a rank
+that holds no cell of the body or pair wrote an empty block, left out. The
 earlier parts of a resumed run (``fields_<body>.part<k>.bp``) are read as well; where
 two files hold one time, the later file's is read.
 """
@@ -115,11 +116,17 @@ def _choose(stored: list[_Stored], time: float | None, name: str) -> _Stored:
 
 
 def _blocks(f: Any, step: int, names: list[str]) -> dict[str, np.ndarray]:
-    """The blocks of each variable at ``step``, joined (connectivity renumbered)."""
-    count = len(f.all_blocks_info("connectivity")[0])
+    """The blocks of each variable at ``step``, joined (connectivity renumbered).
+
+    A rank that holds no cell of the body or pair wrote an empty block: skipped (ADIOS2's
+    reader fails on one, dividing its size by its count of zero).
+    """
+    blocks = f.all_blocks_info("connectivity")[0]
     points, cells, data = [], [], {n: [] for n in names}  # type: ignore[var-annotated]
     offset = 0
-    for b in range(count):
+    for b, block in enumerate(blocks):
+        if 0 in [int(c) for c in str(block["Count"]).split(",") if c.strip()]:
+            continue
         x = np.asarray(f.read("geometry", step_selection=[0, 1], block_id=b), float)
         c = np.asarray(f.read("connectivity", step_selection=[0, 1], block_id=b), np.int64)
         c = c.reshape(len(c), -1) if c.ndim == 2 else c.reshape(-1, int(c[0]) + 1)
