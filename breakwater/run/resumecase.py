@@ -55,11 +55,16 @@ def _saved(case: Case, folder: pathlib.Path) -> tuple[float, Any] | None:
     if meta is None or saved is None:
         return None
     modulus = _modulus(case, saved)
-    candidate = case if modulus is None else case.calibrated(case.calibration.body, modulus)
     if case.calibration.enabled and modulus is None:
         return None  # the run calibrates and compares
-    resolved = candidate.resolved()
-    if checkpoint.case_fingerprint(resolved) != meta.get("fingerprint"):
+    try:
+        candidate = case if modulus is None else case.calibrated(case.calibration.body,
+                                                                 modulus)
+        resolved = candidate.resolved()
+        same = checkpoint.case_fingerprint(resolved) == meta.get("fingerprint")
+    except (ValueError, KeyError, TypeError):
+        return None  # the run builds the case and compares
+    if not same:
         raise checkpoint.CaseMismatch.of(folder / checkpoint.CHECKPOINT,
                                          checkpoint.case_differences(saved, resolved))
     if modulus is None:
