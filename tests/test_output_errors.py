@@ -187,6 +187,92 @@ def test_full_disk_from_the_start(shared_dir, capsys, monkeypatch):
         assert not list(out.glob(".*.tmp*"))  # no temporary file left behind
 
 
+@pytest.mark.serial  # under MPI ADIOS2 hangs on a failed write: the next test's check
+def test_full_disk_in_a_paraview_file(shared_dir, capsys, monkeypatch):
+    """A field file meets a real write error of ADIOS2 (a file-size limit, EFBIG: the
+    path of a full disk) at its third time: exit 1, one line, the summary failed, the
+    file readable up to its last whole time, and --resume goes on from the checkpoint.
+
+    Before: a traceback of ADIOS2's coloured RuntimeError, then the process aborted
+    (``terminate called ...``, exit 134) when the failed writer's C++ destructor threw
+    again, with ``summary.json`` left ``running`` (measured on a 3 MB tmpfs).
+    """
+    import resource
+
+    import dolfinx.io
+
+    from breakwater.outputs.fieldgrids import field_times, read_fields
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    args = ["run", str(case), "--out", str(out), "--no-progress", "--set",
+            "output.field_interval=1", "--set", "output.checkpoint_interval=1"]
+    write, times = dolfinx.io.VTXWriter.write, []
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)
+
+    def limited(self: dolfinx.io.VTXWriter, t: float) -> None:
+        times.append(t)  # fields_a.bp is written first at each time
+        if len(set(times)) != 3 or times.count(t) > 1:
+            return write(self, t)
+        # Python ignores SIGXFSZ: a write past the limit fails with EFBIG.
+        size = (out / "fields_a.bp" / "data.0").stat().st_size
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, limit[1]))
+        try:
+            return write(self, t)
+        finally:
+            resource.setrlimit(resource.RLIMIT_FSIZE, limit)
+
+    monkeypatch.setattr(dolfinx.io.VTXWriter, "write", limited)
+    code, err = _main(args, capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = f"cannot write {out / 'fields_a.bp'}: {os.strerror(errno.EFBIG)}"
+        assert err == f"breakwater: error: {reason}\n", err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
+        assert summary["checkpoint"]["steps"] == 1  # the last whole step's
+        assert field_times(out, "a").tolist() == pytest.approx([0.0, 1e-4])
+        assert read_fields(out, "a").field_data["time"][0] == pytest.approx(1e-4)
+    COMM.barrier()
+    monkeypatch.setattr(dolfinx.io.VTXWriter, "write", write)
+    code, err = _main([*args, "--resume"], capsys)
+    assert code == 0, err
+    if COMM.rank == 0:
+        assert _summary(out)["status"] == "finished"
+        assert field_times(out, "a").tolist() == pytest.approx([0.0, 1e-4, 2e-4, 3e-4])
+
+
+def test_no_room_for_the_next_paraview_time(shared_dir, capsys, monkeypatch):
+    """The disk has no room for one more field write (twice the mean bytes of a write and
+    4 MB): the run stops before ADIOS2 fails (which hangs under MPI), in one line, with
+    the summary failed, the checkpoint of the step before, and room left for them."""
+    import shutil
+
+    from breakwater.outputs import vtxfiles
+    from breakwater.outputs.fieldgrids import field_times
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    usage, calls = shutil.disk_usage, []
+
+    def nearly_full(path: Any) -> Any:
+        calls.append(path)  # (rank 0) the third time: 3 MB free
+        total, used, free = usage(path)
+        return type(usage(path))(total, used, 3_000_000 if len(calls) == 2 else free)
+
+    monkeypatch.setattr(vtxfiles.shutil, "disk_usage", nearly_full)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress", "--set",
+                       "output.field_interval=1", "--set", "output.checkpoint_interval=1"],
+                      capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        assert err.count("\n") == 1, err
+        assert err.startswith(f"breakwater: error: cannot write {out}: {FULL} (3 MB free; "
+                              "the ParaView fields take about "), err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] in err, summary
+        assert summary["checkpoint"]["steps"] == 1
+        assert field_times(out, "a").tolist() == pytest.approx([0.0, 1e-4])
+
+
 # --- output folders that cannot be written, refused before the run ------------------------
 
 def _commands(case: pathlib.Path, study: pathlib.Path, out: pathlib.Path

@@ -58,6 +58,7 @@ from breakwater.outputs.checkpoint import match_nodes
 from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.section import section, section_plane
 from breakwater.outputs.vertexaverage import VertexAverage
+from breakwater.outputs.vtxfiles import VTXFiles
 
 __all__ = ["SCALARS", "VECTORS", "BodyFields", "FieldWriter", "HistoryWriter", "PairFields",
            "RunFiles", "read_history", "snapshot_arrays"]
@@ -449,24 +450,26 @@ class FieldWriter:
         self.interfaces = list(interfaces)
         files: list[BodyFields | PairFields] = [*self.fields, *self.interfaces]
         self.paths = [directory / f.filename for f in files]
-        # The mesh is the reference configuration: written once (warp by displacement).
-        self.writers = [dolfinx.io.VTXWriter(comm, p, f.functions,
-                                             mesh_policy=dolfinx.io.VTXMeshPolicy.reuse)
-                        for p, f in zip(self.paths, files, strict=True)]
+        self.files = VTXFiles(comm, self.paths, [f.functions for f in files])
 
     def write(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
-        """Write the state (one Function per body) at time ``t``."""
+        """Write the state (one Function per body) at time ``t`` (collective).
+
+        Raises:
+            OutputError: A file cannot be written (a full disk), on every rank; the
+                files keep the times written before, and nothing more is written.
+        """
+        if self.files.failed is not None:
+            return
         for f, ui, vi in zip(self.fields, u, v, strict=True):
             f.update(ui, vi)
         for i in self.interfaces:
             i.update(u, v)
-        for w in self.writers:
-            w.write(t)
+        self.files.write(t)
 
     def close(self) -> None:
-        """Close the files."""
-        for w in self.writers:
-            w.close()
+        """Close the files (collective; an OutputError when they cannot be)."""
+        self.files.close()
 
 
 def snapshot_arrays(fields: Sequence[BodyFields], u: Sequence[fem.Function],
