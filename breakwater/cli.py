@@ -28,7 +28,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, NoReturn
 
 from breakwater import __version__
-from breakwater.common import files, liveness
+from breakwater.common import files, folderlock, liveness
 from breakwater.common.errors import BreakwaterError, CaseError, MeshError
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
 from breakwater.studies.studyfile import MAX_POINTS
@@ -196,7 +196,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     # process, exit 143, leaving a half-made folder); the run then stops after its
     # static state, with a checkpoint, as at any step (the run's StopSignal nests).
     settle_signal_handlers()
-    with StopSignal():
+    # Held from before the case is built (its summary, which names the run, is written
+    # after): a second run started meanwhile is refused, not run into the same files.
+    with folderlock.holding(folder, comm, where), StopSignal():
         if args.resume:  # the killed run's calibrated modulus (the same model, any ranks)
             from breakwater.run.resumecase import build_to_resume
 

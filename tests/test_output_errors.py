@@ -428,3 +428,40 @@ def test_a_new_run_clears_the_earlier_runs_outputs(tmp_path: pathlib.Path) -> No
     assert left == ["figures", "figures/data", "mesh", "mesh/data", "notes.txt"]
     (tmp_path / "history.csv").write_text("x")
     assert files.clear_previous_run(tmp_path) == 0 and (tmp_path / "history.csv").exists()
+
+
+def test_a_second_run_in_a_locked_folder_is_refused(shared_dir, capsys):
+    """A folder whose lock another process holds (a run still building its case, before
+    its summary names it): refused in one line naming the holder, nothing written.
+
+    Before: the summary's check alone let a second run in while the first meshed and
+    calibrated; both ran to "finished" in one folder (two Goda runs started 1 s apart).
+    """
+    import fcntl
+
+    from breakwater.common import folderlock
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    args = ["run", str(case), "--out", str(out), "--no-progress"]
+    fd = None
+    if COMM.rank == 0:  # another open file description: another process's lock
+        out.mkdir()
+        fd = os.open(out / folderlock.LOCK, os.O_RDWR | os.O_CREAT)
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.write(fd, json.dumps({"host": "node7", "pid": 4242, "started": "then"}).encode())
+    COMM.barrier()
+    try:
+        code, err = _main(args, capsys)
+        _refused(code, err, f"--out {out}: a run is going on in this folder (pid 4242 on "
+                            "host node7, started then)")
+        if COMM.rank == 0:
+            assert sorted(p.name for p in out.iterdir()) == [folderlock.LOCK]
+    finally:
+        if fd is not None:
+            os.close(fd)  # the other process ends: its lock goes with it
+    COMM.barrier()
+    code, err = _main(args, capsys)
+    assert code == 0, err
+    if COMM.rank == 0:
+        assert _summary(out)["status"] == "finished"
+        assert not (out / folderlock.LOCK).exists()  # given back, the file removed

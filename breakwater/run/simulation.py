@@ -64,7 +64,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from breakwater.common import files
+from breakwater.common import files, folderlock
 from breakwater.common.arrays import finite
 from breakwater.common.console import Progress, SlowPhase, StopSignal, rank_zero_logging
 from breakwater.common.errors import (
@@ -364,7 +364,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
                                        if model.comm.rank == 0 else None, root=0)
     elif fingerprint is None:
         fingerprint = ckpt.model_fingerprint(model, time, output)
-    with rank_zero_logging(log, model.comm), StopSignal() as stop:
+    with rank_zero_logging(log, model.comm), StopSignal() as stop, \
+            folderlock.holding(output.directory, model.comm):
         if (line := changed_line(as_run)) is not None:
             log.warning("%s", line)
         r = Session(model, time, output, fingerprint, extra_summary)
