@@ -273,6 +273,36 @@ def test_no_room_for_the_next_paraview_time(shared_dir, capsys, monkeypatch):
         assert field_times(out, "a").tolist() == pytest.approx([0.0, 1e-4])
 
 
+def test_fields_that_will_not_fit_are_foreseen(shared_dir, capsys, monkeypatch):
+    """After its second field write a run warns once, in one line, when the writes still
+    planned will not fit on the disk (before: a long run learned it when the disk was
+    full). Here the disk has room for the next write (and no margin) but not for the 9
+    more that 10 steps write."""
+    import shutil
+
+    from breakwater.outputs import vtxfiles
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    usage, calls = shutil.disk_usage, []
+
+    def tight(path: Any) -> Any:
+        calls.append(path)  # (rank 0) before the third write: what the fields hold + 1
+        total, used, free = usage(path)
+        held = sum(f.stat().st_size for f in out.glob("*.bp/*"))
+        return type(usage(path))(total, used, held + 1 if len(calls) == 2 else free)
+
+    monkeypatch.setattr(vtxfiles.shutil, "disk_usage", tight)
+    monkeypatch.setattr(vtxfiles, "MARGIN", 0)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress", "--set",
+                       "output.field_interval=1", "--set", "time.end_time=1e-3"], capsys)
+    assert code == 0, err
+    if COMM.rank == 0:
+        lines = [line for line in err.splitlines() if "ParaView fields will take" in line]
+        assert len(lines) == 1 and "(9 writes of " in lines[0], err
+        assert lines[0].endswith("the run will stop when it is full (raise "
+                                 "output.field_interval)"), err
+
+
 # --- output folders that cannot be written, refused before the run ------------------------
 
 def _commands(case: pathlib.Path, study: pathlib.Path, out: pathlib.Path

@@ -16,6 +16,7 @@ is written; measured after a full disk and after SIGKILL).
 from __future__ import annotations
 
 import ctypes
+import logging
 import pathlib
 import re
 import shutil
@@ -30,6 +31,8 @@ from breakwater.common.errors import OutputError
 from breakwater.common.parallel import on_every_rank, on_rank_zero
 
 __all__ = ["VTXFiles", "abandon", "adios_reason"]
+
+log = logging.getLogger("breakwater.run.simulation")  # the run's: rank 0 only
 
 MARGIN = 4e6
 """Bytes left free beside two field writes: the summary, a checkpoint's rows (B)."""
@@ -51,6 +54,14 @@ def adios_reason(error: BaseException) -> str:
     text = re.sub(r"\[[^\]]*\]|<[^>]*>", " ", text)  # [date] [ADIOS2 EXCEPTION] <Tag>
     return " ".join(text.replace(": iostream error", "").split()).strip(" :") or \
         type(error).__name__
+
+
+def _size(size: float) -> str:
+    """Bytes for a message: ``631 kB``, ``1.27 GB``."""
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if size >= scale:
+            return f"{size / scale:.3g} {unit}"
+    return f"{size:.0f} bytes"
 
 
 def abandon(writer: Any) -> None:
@@ -80,8 +91,8 @@ class VTXFiles:
     """
 
     def __init__(self, comm: MPI.Comm, paths: Sequence[pathlib.Path],
-                 functions: Sequence[Sequence[fem.Function]]) -> None:
-        self.comm, self.paths = comm, list(paths)
+                 functions: Sequence[Sequence[fem.Function]], expected: int = 0) -> None:
+        self.comm, self.paths, self.expected = comm, list(paths), expected
         # The mesh is the reference configuration: written once (warp by displacement).
         self.writers = [dolfinx.io.VTXWriter(comm, p, list(f),
                                              mesh_policy=dolfinx.io.VTXMeshPolicy.reuse)
@@ -89,6 +100,7 @@ class VTXFiles:
         self.failed: OutputError | None = None
         self._bad: set[int] = set()  # writers abandoned on this rank
         self._writes = 0  # times written
+        self._first = 0  # bytes after the first (rank 0)
 
     def _each(self, call: str, *args: float) -> None:
         """Call ``write``/``close`` on every writer of this rank; raise the first failure.
@@ -138,14 +150,31 @@ class VTXFiles:
         if not self._writes:
             return
         used = sum(f.stat().st_size for p in self.paths if p.is_dir() for f in p.iterdir())
-        need = 2 * used / self._writes + MARGIN
         free = shutil.disk_usage(self.paths[0].parent).free
+        if self._writes == 1:
+            self._first = used
+        elif self._writes == 2:
+            self._foresee(used - self._first, free)
+        need = 2 * used / self._writes + MARGIN
         if free < need:
             raise OutputError(
                 f"cannot write {self.paths[0].parent}: No space left on device "
-                f"({free / 1e6:.3g} MB free; the ParaView fields take about "
-                f"{used / self._writes / 1e6:.3g} MB a write: raise output.field_interval "
+                f"({_size(free)} free; the ParaView fields take about "
+                f"{_size(used / self._writes)} a write: raise output.field_interval "
                 "or free space)")
+
+    def _foresee(self, per_write: int, free: int) -> None:
+        """Warn (rank 0) when the writes still planned will not fit on the disk.
+
+        Said after the second write (the first holds the mesh): before, a long run
+        learned it only when the disk was full, hours in.
+        """
+        left = self.expected - 2
+        if left > 0 and per_write * left > free:
+            log.warning("the ParaView fields will take about %s more (%d writes of %s) "
+                        "and %s has %s free: the run will stop when it is full (raise "
+                        "output.field_interval)", _size(per_write * left), left,
+                        _size(per_write), self.paths[0].parent, _size(free))
 
     def close(self) -> None:
         """Close the files (collective); a failure to close is raised on every rank.

@@ -445,12 +445,12 @@ class FieldWriter:
 
     def __init__(self, fields: Sequence[BodyFields],
                  interfaces: Sequence[PairFields],
-                 directory: pathlib.Path, comm: MPI.Comm) -> None:
+                 directory: pathlib.Path, comm: MPI.Comm, expected: int = 0) -> None:
         self.fields = list(fields)
         self.interfaces = list(interfaces)
         files: list[BodyFields | PairFields] = [*self.fields, *self.interfaces]
         self.paths = [directory / f.filename for f in files]
-        self.files = VTXFiles(comm, self.paths, [f.functions for f in files])
+        self.files = VTXFiles(comm, self.paths, [f.functions for f in files], expected)
 
     def write(self, t: float, u: Sequence[fem.Function], v: Sequence[fem.Function]) -> None:
         """Write the state (one Function per body) at time ``t`` (collective).
@@ -526,12 +526,13 @@ class RunFiles:
         self.history = HistoryWriter(self.directory / HISTORY, columns, self.comm, keep_rows)
         return self.history.kept
 
-    def open_fields(self, resume: bool = False) -> list[str]:
+    def open_fields(self, resume: bool = False, steps: int = 0) -> list[str]:
         """Start the ParaView files (when fields are written); collective.
 
         Args:
             resume: Rename the files of the interrupted part first:
                 ``<file>.part<k>.bp`` (a VTX file cannot be appended to).
+            steps: The steps planned (a warning when their fields will not fit).
 
         Returns:
             The names of the files set aside.
@@ -552,7 +553,8 @@ class RunFiles:
             return parts
 
         parts = on_rank_zero(self.comm, set_aside)
-        self.writer = FieldWriter(self.bodies, self.interfaces, self.directory, self.comm)
+        self.writer = FieldWriter(self.bodies, self.interfaces, self.directory, self.comm,
+                                  1 + -(-steps // self.interval))
         return parts
 
     @property

@@ -67,7 +67,7 @@ def start(r: Session) -> None:
     if st.step.adaptive:
         adaptive_start(st.step, m, s.u)
     r.rows = out.open_history(x.monitor.columns)
-    out.open_fields()
+    out.open_fields(steps=r.time.planned_steps)
     row = r.record(0.0, st.static_iterations)
     interface = interface_state(s.contacts, s.u)
     st.static = static_summary(m, row, interface, st.static_iterations, s.contacts)
@@ -143,7 +143,8 @@ def restore(r: Session) -> None:
                               f"{r.rows[-1]['t']:.6g} s) is not the checkpoint's "
                               f"(t = {t:.6g} s)")
     st.resumed_from.append({"t": t, "steps": st.steps, "mpi_size": comm.size})
-    st.field_parts += x.files.open_fields(resume=True)
+    st.field_parts += x.files.open_fields(resume=True,
+                                          steps=max(r.time.planned_steps - st.steps, 0))
     r.checkpointed = {"file": files.CHECKPOINT, "t": t, "steps": st.steps,
                       "history_rows": st.history_rows}
     if comm.rank == 0:
