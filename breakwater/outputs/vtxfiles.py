@@ -135,6 +135,10 @@ class VTXFiles:
             on_every_rank(self.comm, lambda: self._each("write", t))
         except OutputError as e:
             self.failed = e
+            if self.comm.size > 1:  # a file failed on one rank is closed on none
+                for k in set().union(*self.comm.allgather(self._bad)) - self._bad:
+                    self._bad.add(k)
+                    abandon(self.writers[k])
             raise
         self._writes += 1
 
