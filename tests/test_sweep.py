@@ -329,6 +329,12 @@ def test_failing_point(shared_dir, capsys):
     rows = read_table(out / TABLE)
     assert [r["status"] for r in rows] == ["finished", "failed"]
     assert rows[0]["error"] == ""
+    # the failed case's row gives what it did, not the partial run's peaks and residuals
+    # (its first step failed: they were the static state's)
+    assert rows[0]["residual_slip"] != "" and rows[0]["peak_ux.gauge_top"] != ""
+    assert rows[1]["residual_slip"] == rows[1]["peak_ux.gauge_top"] == ""
+    assert rows[1]["residual_ux.gauge_top"] == rows[1]["external_work"] == ""
+    assert rows[1]["steps"] != "" and rows[1]["static_mean_pressure"] != ""
     assert "did not converge" in rows[1]["error"] and "\n" not in rows[1]["error"]
     printed = capsys.readouterr().out
     if COMM.rank == 0:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["FIXED", "TABLE_COLUMNS", "headline", "headline_columns"]
+__all__ = ["FIXED", "RESULTS", "TABLE_COLUMNS", "headline", "headline_columns"]
 
 FIXED = ("time_reached", "time_of_max_ux", "residual_slip", "max_uplift",
          "static_mean_pressure", "energy_balance_error", "external_work", "steps",
@@ -21,6 +21,10 @@ PROBE = ("peak_ux", "time_peak_ux", "residual_ux")
 """The headline columns of each point probe, ``<column>.<probe>``."""
 STORM = ("storm.total_sliding", "storm.waves_finished", "storm.rigid_total_sliding")
 """The headline columns of a run with a storm."""
+RESULTS = ("peak_ux", "time_peak_ux", "residual_ux", "time_of_max_ux", "residual_slip",
+           "max_uplift", "energy_balance_error", "external_work", "storm.total_sliding",
+           "storm.rigid_total_sliding")
+"""The headline columns (a probe's before its ``.``) that only a finished run gives."""
 TABLE_COLUMNS = ("case", "folder", "status", "wall_time", "warnings", "error")
 """The columns of ``sweep.csv`` besides the varied keys and the headline numbers."""
 
@@ -37,10 +41,19 @@ def headline(summary: Mapping[str, Any], case_toml: Mapping[str, Any] | None = N
     ``storm.total_sliding``, ``storm.waves_finished`` and the rigid-block model's
     ``storm.rigid_total_sliding`` (m); per body
     ``shear_modulus.<body>`` of the case as run (the calibrated G included).
+
+    A run that did not finish (failed, interrupted) gives only what it did
+    (``time_reached``, the static pressure, the solver's counts, the moduli): its peaks,
+    residuals, energies and sliding are those of the steps it took, which a study's
+    table would show beside the finished cases' as if they were results (a case failing
+    at its first step gave the static state's displacement as its residual).
     """
     out: dict[str, float] = {}
+    partial = summary.get("status", "finished") != "finished"
 
     def put(name: str, value: Any) -> None:
+        if partial and (name in RESULTS or name.split(".")[0] in RESULTS):
+            return
         if isinstance(value, int | float) and not isinstance(value, bool):
             out[name] = float(value)
 
