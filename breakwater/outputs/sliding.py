@@ -46,5 +46,6 @@ def sliding_warnings(pairs: Sequence[Pair], u: Sequence[fem.Function],
                        f"{slip / size:.2g} of its element size h = {size:.3g} m: a conforming "
                        "(node-to-node) pair holds only slips small against h (past "
                        f"{SMALL_SLIDING:g} h the results are not reliable); mesh the bodies "
-                       "apart with a general pair for finite sliding (examples/goda_apart)")
+                       "apart with a general pair for finite sliding (a [contact.<pair>] with "
+                       "slave_surface and master_surface; the manual's general contact page)")
     return out

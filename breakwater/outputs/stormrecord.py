@@ -281,7 +281,8 @@ def small_sliding_warning(rows: Sequence[Mapping[str, float]], r: Mapping[str, A
             f"'{r.get('pair')}', {100 * slip / h:.3g}% of its element size h = {h:.3g} m: "
             "node-to-node contact holds only for slips small against h (the results "
             "past that are not reliable); mesh the bodies apart with a general pair "
-            "(finite sliding: examples/goda_nonmatching.toml)")
+            "(finite sliding: a [contact.<pair>] with slave_surface and master_surface; the "
+            "manual's general contact page)")
 
 
 def write_storm_record(model: Any, rows: Sequence[Mapping[str, float]],
