@@ -28,6 +28,7 @@ import tomllib
 from dataclasses import dataclass
 
 import pytest
+from mpi4py import MPI
 
 from breakwater import cli
 
@@ -197,13 +198,14 @@ _HELP: dict[str, tuple[int, str]] = {}
 def cli_help(subcommand: str) -> tuple[int, str]:
     """``python -m breakwater <subcommand> --help``: its exit status and text.
 
-    ``""`` gives the program's own ``--help``.
+    ``""`` gives the program's own ``--help``. Rank 0's text (under mpiexec the other
+    ranks print nothing: :func:`breakwater.cli._parse`).
     """
     if subcommand not in _HELP:
         out, err = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             status = cli.main([subcommand, "--help"] if subcommand else ["--help"])
-        _HELP[subcommand] = (status, out.getvalue())
+        _HELP[subcommand] = (status, MPI.COMM_WORLD.bcast(out.getvalue(), root=0))
     return _HELP[subcommand]
 
 
