@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 from breakwater.casefile.loads import RESOLVED_STEPS
 from breakwater.loads.fields import PressureProfile
-from breakwater.loads.signals import Pulse
+from breakwater.loads.signals import Pulse, Table
 from breakwater.storms.waveforce import PulseHistory
 
 if TYPE_CHECKING:
@@ -132,6 +132,13 @@ PEAK_TOLERANCE = 0.05
 """A table's peak may be missed by this fraction by the steps' sampling unwarned."""
 
 
+def _table_history(load: loadcase.LoadCase) -> Table | None:
+    """An enabled table load's time factor (its time 0 at the load's start), else None."""
+    if load.kind != "table" or load.table is None or not load.enabled:
+        return None
+    return load.table.history(load.start)
+
+
 def sampled_peak(f: Callable[[float], float], dt: float, end_time: float) -> float:
     """The largest |f| at the step ends k Δt (k Δt ≤ end_time): what the steps apply."""
     steps = max(1, math.ceil(end_time / dt - 1e-9))
@@ -147,9 +154,9 @@ def table_warning(load: loadcase.LoadCase, dt: float, end_time: float) -> str | 
     third of the resolved run's, with no word (found by a user). The warning gives the
     peak applied and a Δt that samples it to :data:`PEAK_TOLERANCE`.
     """
-    if load.kind != "table" or load.table is None or not load.enabled:
+    f = _table_history(load)
+    if f is None:
         return None
-    f = load.table.history(load.start)  # the load's time factor
     inside = [t for t in f.breakpoints if 0.0 <= t <= end_time] or [0.0]
     peak = max(abs(f(t)) for t in inside)
     if peak == 0.0:
@@ -175,9 +182,9 @@ def late_peak_warning(load: loadcase.LoadCase, end_time: float) -> str | None:
     Whatever the cause, a run that never reaches the table's peak is said so, with the
     share of the peak it applies and the unit to write if the times are in ms.
     """
-    if load.kind != "table" or load.table is None or not load.enabled:
+    f = _table_history(load)
+    if f is None:
         return None
-    f = load.table.history(load.start)
     points = list(f.breakpoints)
     if not points:
         return None
@@ -209,9 +216,10 @@ def landing_problems(load: loadcase.LoadCase, dt: float, end_time: float, max_st
     Returns:
         (a one-line error, a one-line warning); None each where there is none.
     """
-    if load.kind != "table" or load.table is None or not load.enabled:
+    f = _table_history(load)
+    if f is None:
         return None, None
-    times = load.table.history(load.start).breakpoints
+    times = f.breakpoints
     count = bisect.bisect_left(times, end_time) - bisect.bisect_right(times, 0.0)
     fixed = math.ceil(end_time / dt * (1 - 1e-12))
     if count <= fixed:
