@@ -381,19 +381,19 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
         lin_next = np.full(len(p.node_pos), np.nan)
         lin_next[keep[crawl]] = point[crawl]
         got = none.copy()
-        banned = np.full(len(p.node_pos), guardkernels.FREE, np.int8)
+        bounds = np.full(len(p.node_pos), guardkernels.FREE, np.int8)
         original = step.copy()
         assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
-                                       chi, none, got, banned) == fix.sum()
+                                       chi, none, got, bounds) == fix.sum()
         np.testing.assert_allclose(step, expected_step, rtol=0,
                                    atol=1e-12 * np.abs(step).max())
         np.testing.assert_allclose(got, lin_next, rtol=1e-12)
         assert crawl.sum() > 0 if kind == "reverse" else True
         # A reversing node is REVERSED for the rest of the solve: its crawl points are at
         # most REGROW |c₁|; with every node NONE (a rescue), none takes one.
-        np.testing.assert_array_equal(np.flatnonzero(banned == guardkernels.REVERSED),
+        np.testing.assert_array_equal(np.flatnonzero(bounds == guardkernels.REVERSED),
                                       np.sort(keep[reverse]))
-        assert np.all(banned[banned != guardkernels.REVERSED] == guardkernels.FREE)
+        assert np.all(bounds[bounds != guardkernels.REVERSED] == guardkernels.FREE)
         for state, grow in ((guardkernels.REVERSED, guardkernels.REGROW),
                             (guardkernels.NONE, None)):
             step, got = original.copy(), none.copy()

@@ -79,7 +79,7 @@ CRAWL = 1.25
 GROW = 100.0
 #: ... and this many at a node whose slip has reversed in the solve.
 REGROW = 10.0
-#: The crawl points a node may take (``banned``): :data:`GROW`'s, :data:`REGROW`'s (its slip
+#: The crawl points a node may take (``bounds``): :data:`GROW`'s, :data:`REGROW`'s (its slip
 #: reversed in this solve), none (a Newton's rescue).
 FREE, REVERSED, NONE = 0, 1, 2
 
@@ -127,7 +127,7 @@ def crawl_point(force, c1, chi, grow):  # type: ignore[no-untyped-def]
 
 @kernel
 def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next,  # type: ignore[no-untyped-def]
-               banned):
+               bounds):
     """``SurfaceForces.precheck``: a general pair's slip guard on Newton's step.
 
     Per slave node with a start-of-step master point: the slip velocity along the
@@ -150,7 +150,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         chi: The stick band χ.
         lin: The iterate's linearisation slips (NaN: the law at the slip itself).
         lin_next: Out: the next iterate's.
-        banned: The crawl points each node may take, :data:`FREE`, :data:`REVERSED` or
+        bounds: The crawl points each node may take, :data:`FREE`, :data:`REVERSED` or
             :data:`NONE` (in/out: a node whose slip reverses becomes REVERSED).
 
     Returns:
@@ -172,7 +172,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         c1 = c0 - dv * tangential_slip(ext, j, f, N0, t0, node_pos, pos_m)
         if c0 * c1 < 0 and abs(c0) > chi:
             target = 0.0
-            banned[j] = max(banned[j], REVERSED)  # not a monotone crawl: a bounded one
+            bounds[j] = max(bounds[j], REVERSED)  # not a monotone crawl: a bounded one
         else:
             a[0], b[0] = (lin[j] if lin[j] == lin[j] else c0), c1
             if land(a, b, chi, out):
@@ -180,9 +180,9 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
                     continue
                 target = out[0]
             else:
-                if c1 * a[0] > 0 and abs(c1) > CRAWL * abs(a[0]) and banned[j] != NONE:
+                if c1 * a[0] > 0 and abs(c1) > CRAWL * abs(a[0]) and bounds[j] != NONE:
                     lin_next[j] = crawl_point(abs(out[0]), c1, chi,
-                                              GROW if banned[j] == FREE else REGROW)
+                                              GROW if bounds[j] == FREE else REGROW)
                 continue
         ym0, ym1 = 0.0, 0.0
         for k in range(nm):

@@ -237,7 +237,7 @@ class CrawlPoints:
         self.none = np.full(nodes, np.nan)
         self.at, self._next = self.none.copy(), self.none.copy()
         self.any = False
-        self._banned = np.full(nodes, guardkernels.FREE, np.int8)
+        self._bounds = np.full(nodes, guardkernels.FREE, np.int8)
 
     def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
               node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float) -> int:
@@ -257,7 +257,7 @@ class CrawlPoints:
         """
         facet, N0, t0 = frozen
         fixed = int(guardkernels.slip_guard(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi,
-                                            self.at, self._next, self._banned))
+                                            self.at, self._next, self._bounds))
         self.at, self._next = self._next, self.at
         self.any = not np.isnan(self.at).all()
         return fixed
@@ -272,7 +272,7 @@ class CrawlPoints:
         if was:
             self.at.fill(np.nan)
             self.any = False
-        self._banned.fill(guardkernels.FREE if allowed else guardkernels.NONE)
+        self._bounds.fill(guardkernels.FREE if allowed else guardkernels.NONE)
         return was
 
 
