@@ -115,6 +115,8 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         self._accepted_friction: tuple[Any, np.ndarray, dict[str, np.ndarray] | None] | None \
             = None
         self.crawl = newtonaids.CrawlPoints(len(self.node_pos))
+        # _nodal_friction's last: (λ, frozen, v₁, crawl points, key, the result).
+        self._kept_friction: tuple[Any, ...] | None = None
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
                   accepted: bool = False) -> dict[str, np.ndarray] | None:
@@ -165,13 +167,42 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         p = self._normal(u1)
         out = p["out"].copy()
         if self.spec.friction:
-            self._step_frozen = facet, N0, t0 = self._frozen(u0)
-            _, _, mu, chi = self._law
-            k, _, force, _ = forcekernels.friction(
-                newtonaids.friction_normals(p["lam"], facet)[0], facet, N0, t0, self._node_pos,
-                self._pm, v1, mu, chi, self.crawl.none if accepted else self.crawl.at)
+            self._step_frozen = frozen = self._frozen(u0)
+            _, _, k, _, force, _ = self._nodal_friction(
+                p["lam"], frozen, v1, self.crawl.none if accepted else self.crawl.at)
             if len(k):
-                forcekernels.add_friction(out, k, force, facet, N0, self._node_pos, self._pm)
+                forcekernels.add_friction(out, k, force, frozen[0], frozen[1], self._node_pos,
+                                          self._pm)
+        return out
+
+    def _nodal_friction(self, lam: np.ndarray, frozen: tuple[np.ndarray, np.ndarray, np.ndarray],
+                        v1: np.ndarray, lin: np.ndarray) -> tuple[Any, ...]:
+        """The friction's normal forces and the nodal friction at an iterate (cached).
+
+        :func:`~.newtonaids.friction_normals` and
+        :func:`~breakwater.contact.forcekernels.friction` of the slave nodes' normal
+        forces ``lam``, the start-of-step projection ``frozen``, the velocities ``v1``
+        and the crawl points ``lin``. The residual and the Jacobian of one Newton
+        iterate ask for the same: kept while those arrays are the same (read-only)
+        objects, the crawl points unchanged (:attr:`~.newtonaids.CrawlPoints.version`)
+        and the law the same.
+
+        Returns:
+            ``(λ̂, s, k, v_T, force, unit)``: the scaled forces λ̂ = s λ and the scale,
+            then the kernel's.
+        """
+        _, _, mu, chi = self._law
+        key = (self.crawl.version, mu, chi)
+        kept = self._kept_friction
+        if (kept is not None and kept[0] is lam and kept[1] is frozen and kept[2] is v1
+                and kept[3] is lin and kept[4] == key):
+            return kept[5]
+        facet, N0, t0 = frozen
+        lam_f, s = newtonaids.friction_normals(lam, facet)
+        out = (lam_f, s, *forcekernels.friction(lam_f, facet, N0, t0, self._node_pos,
+                                                self._pm, v1, mu, chi, lin))
+        if not v1.flags.writeable:  # an iterate's (λ: a new array per search, never changed)
+            self._kept_friction = (lam, frozen, v1, lin, key, out)
         return out
 
     def left_product(self, X: np.ndarray) -> np.ndarray:
@@ -215,10 +246,8 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         v_T = unit = np.zeros((0, 2))
         lam = p["lam"]
         if self.spec.friction and len(p["index"]):
-            facet, N0, t0 = self._frozen(u0)
-            lam, s = newtonaids.friction_normals(lam, facet)
-            k, v_T, _, unit = forcekernels.friction(lam, facet, N0, t0, self._node_pos,
-                                                    self._pm, v1, mu, chi, self.crawl.at)
+            frozen = facet, N0, t0 = self._frozen(u0)
+            lam, s, k, v_T, _, unit = self._nodal_friction(lam, frozen, v1, self.crawl.at)
             unit = unit * s  # the friction's λ̂ = s λ, s taken as a constant: dλ̂ = s dλ
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))

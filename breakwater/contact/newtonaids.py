@@ -231,12 +231,14 @@ class CrawlPoints:
         none: No crawl point (NaN at every node): the law itself.
         at: The current iterate's crawl points (NaN: none at the node).
         any: Whether ``at`` holds one.
+        version: Counts the changes of ``at`` (a cache's key).
     """
 
     def __init__(self, nodes: int) -> None:
         self.none = np.full(nodes, np.nan)
         self.at, self._next = self.none.copy(), self.none.copy()
         self.any = False
+        self.version = 0
         self._bounds = np.full(nodes, guardkernels.FREE, np.int8)
 
     def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
@@ -260,6 +262,7 @@ class CrawlPoints:
                                             self.at, self._next, self._bounds))
         self.at, self._next = self._next, self.at
         self.any = not np.isnan(self.at).all()
+        self.version += 1
         return fixed
 
     def drop(self, allowed: bool = True) -> bool:
@@ -272,6 +275,7 @@ class CrawlPoints:
         if was:
             self.at.fill(np.nan)
             self.any = False
+            self.version += 1
         self._bounds.fill(guardkernels.FREE if allowed else guardkernels.NONE)
         return was
 
