@@ -825,3 +825,66 @@ def test_resolution_bounds_the_round_off_of_the_forces(shared_dir: pathlib.Path)
             provider.end_step()
     assert np.nanmax(ratios) > 1e-3
     stepper.destroy()
+
+
+def test_friction_kept_per_iterate_follows_the_crawl_points(shared_dir: pathlib.Path) -> None:
+    """The residual of an iterate is recomputed when its crawl points change.
+
+    The residual and the Jacobian of one iterate share the nodal friction
+    (``SurfaceForces._nodal_friction``). The slip guard's crawl points and their drop
+    (the solve tested again on the law itself) change the friction at the same iterate:
+    the block of the sliding test, mid-slide, a step that grows every slip tenfold (so the
+    guard sets crawl points; twice, so that they are written into the array the first
+    evaluation read), f_c at the iterate before, with and after the drop of the crawl
+    points, each against a fresh evaluation (the kept friction cleared).
+    """
+    μ, w, h = 0.6, 0.1, 0.05
+    m = STEEL_LIKE.density * w * h
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 1e10, friction=μ)
+    model = _model(shared_dir / "crawlkeep.msh", COMM,
+                   [Rectangle("base", -0.1, -0.05, 0.4, 0.05, 20, 2),
+                    Rectangle("block", -0.05, 0.0, w, h, 3, 2)], pair,
+                   fixed=[Fixed("base_bottom")], gravity=(0.0, -G),
+                   loads=[SurfaceLoad("block_left", (1.5 * μ * m * G / h, 0.0), lambda t: 1.0)])
+    stepper = GN22(model, 4e-3)
+    try:
+        stepper.initialise()
+        provider = _provider(stepper)
+        for _ in range(20):
+            stepper.step()
+        stepper.stage()
+        provider.begin_step()
+        try:
+            x = provider._start()[3][:-1].copy()
+            x.setflags(write=False)
+            provider.at(x)
+
+            def fresh() -> np.ndarray:
+                provider._kept_friction = None
+                return provider.vector()
+
+            law = provider.vector()
+            np.testing.assert_array_equal(law, fresh())
+            u0, _, v1 = provider._state()
+            frozen = provider._frozen(u0)
+            along = provider.memory.along(v1, *frozen)
+            sliding = np.isfinite(along) & (np.abs(along) > 100 * pair.regularisation)
+            assert sliding.sum() >= 3  # the block slides
+            step = np.zeros(provider.n)  # c₁ = c₀ − β₁Δt t₀·δ_s = 10 c₀ at those nodes
+            dv = provider.beta1 * provider.step_dt()
+            for j in np.flatnonzero(sliding):
+                for d in range(2):
+                    if provider.node_pos[j, d] >= 0:
+                        step[provider.node_pos[j, d]] = -9 * along[j] * frozen[2][j, d] / dv
+            for grow in (1.0, 1e3):  # the guard's two arrays: the second writes law's
+                provider.precheck(x, grow * step)
+                assert provider.crawl.any  # the guard set crawl points at the iterate
+            on_lines = provider.vector()
+            np.testing.assert_array_equal(on_lines, fresh())
+            assert not np.array_equal(on_lines, law)
+            assert provider.true_law()  # the drop: the law itself again
+            np.testing.assert_array_equal(provider.vector(), law)
+        finally:
+            provider.end_step()
+    finally:
+        stepper.destroy()
