@@ -117,6 +117,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import logging
+import math
 import time
 from collections.abc import Iterator
 
@@ -207,6 +208,7 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
     c, its = ps.c0, 0
     history: list[tuple[float, float]] = []  # (c, max|Δu|) of the steps since progress
     solved = 0.0  # c of the last solved step
+    failed, since = math.inf, 0  # the last c that failed, the steps solved since
     gaps = ps.gaps()
     k = falls = 0  # steps, and those of a fall (not counted in MAX_STEPS)
     while k - falls < MAX_STEPS and falls < LANDING / FALL:
@@ -221,11 +223,12 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
                 its += e.iterations
                 log.debug("relaxation step %d: c = %.3e s² failed, retried at %.3e s²",
                           k, c, max(solved, c / 10))
+                failed, since = c, 0
                 c = max(solved, c / 10)
                 continue
             raise ConvergenceError(f"relaxation step {k}: {e}", e.reason,
                                    its + e.iterations) from e
-        solved = c
+        solved, since = c, since + 1
         inc, residual = ps.advance(c)
         log.debug("relaxation step %d: c = %.3e s², max|Δu| = %.3e m, residual %.3e, "
                   "%d Newton iterations", k, c, inc, residual / ps.scale, its)
@@ -245,7 +248,11 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
         if inc < 0.5 * FALL * ps.reach:
             # Not at c₀'s free fall (FALL r per step: whether it is below FALL r is
             # round-off, which differed between serial and 2 ranks).
-            c = min(c * GROWTH, ps.c_max)
+            grown = min(c * GROWTH, ps.c_max)
+            # Not back to a c that failed before STALL + 1 steps have converged below it
+            # (a stall at the lower c is found first):
+            # it fails again where the contact state has not changed.
+            c = c if grown >= failed and since <= STALL else grown
     left = residual / ps.scale
     why = (f"; its residual stalled at {left:.1e} of the load, above [initial] tolerance = "
            f"{ps.tolerance:g}: raise it if that is round-off" if left < 1e-6 else "")
