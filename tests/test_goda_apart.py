@@ -86,3 +86,9 @@ def test_a_slave_five_times_finer_than_its_master_is_not_cut_back(
     s = summary["solver"]
     assert s["steps"] == round(end / 1e-4) and s["cutbacks"] == 0, s
     assert s["newton_continuations"] >= 1, s  # two steps before 5 ms (module doc)
+    # Its frictionless static state does not exist (the caisson drifts on the crest it
+    # deforms unevenly): the relaxation's first stage gives up at a stall and the nearly
+    # frictionless one finds the state. It retried the step that failed at c_max after
+    # each success (five times, 392 Newton iterations in all); not before a stall is
+    # found at the lower c: 157.
+    assert summary["static"]["newton_iterations"] < 250, summary["static"]
