@@ -185,7 +185,11 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
 
     c grows ×:data:`GROWTH` per step up to c_max while the increments stay below half
     the free fall's at c₀ (:data:`~breakwater.statics.pseudostep.FALL` search radius); a
-    failed step after a grown one is retried at a tenth of it. A step in which some
+    failed step after a grown one is retried at a tenth of it, and c grows back to the
+    failed value only after :data:`STALL` + 1 steps converge below it, so that a stall
+    there is found first (the frictionless stage of the Goda caisson meshed apart, which
+    has no state, retried c_max after every success: 392 Newton iterations against 157
+    on the 6/30 mm mesh, the state the same bit for bit). A step in which some
     pair's gap closes by more than half the increment (a body falling onto its support)
     is progress: it is not counted as a stalled step nor in :data:`MAX_STEPS`; a body
     lands from at most :data:`~breakwater.statics.pseudostep.LANDING` search radii.
