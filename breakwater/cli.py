@@ -31,6 +31,7 @@ from breakwater import __version__
 from breakwater.common import files, folderlock, liveness
 from breakwater.common.errors import BreakwaterError, CaseError, MeshError
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.common.xdmfinfo import is_xdmf
 from breakwater.studies.studyfile import MAX_POINTS
 
 if TYPE_CHECKING:
@@ -229,6 +230,11 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
         raise CaseError(f"--out {out}: unknown mesh file suffix '{out.suffix}' "
                         "(use .msh, .xdmf, .vtu or another meshio format)")
     case = _load(args)
+    xdmf = is_xdmf(out)
+    if not xdmf and not case.mesh.generated and is_xdmf(pathlib.Path(case.mesh.source)):
+        raise CaseError(f"--out {out}: the case's mesh is an XDMF ({case.mesh.source}); "
+                        "breakwater converts gmsh meshes: give the .msh or .geo as "
+                        "mesh.source, or --out x.xdmf")
 
     def check() -> None:
         if out.is_dir():
@@ -237,6 +243,16 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
 
     on_rank_zero(comm, check)
     with shared_tempdir(comm, "breakwater-mesh-") as folder:
+        if xdmf:  # read as a run reads it (every check), written with its groups' names
+            from breakwater.model.xdmfmesh import write_xdmf
+
+            data = case.read_mesh(comm, folder)
+            with files.writing(out):
+                h5 = write_xdmf(data, out)
+            _say(f"wrote {out} and {h5.name} (keep them together): a case reads it as "
+                 f"mesh.source = \"{out.name}\", on any number of ranks; ParaView opens "
+                 "it", args.quiet)
+            return EXIT_OK
         source = case.mesh_file(comm, folder)
         with files.writing(out):
             meshes.convert(source, out, comm=comm)

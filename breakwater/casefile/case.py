@@ -58,9 +58,10 @@ from breakwater.casefile.tables import (
     ProbeCase,
     TimeCase,
 )
-from breakwater.common.errors import CaseError
+from breakwater.common.errors import CaseError, MeshError
 from breakwater.common.files import path_problem
 from breakwater.common.gmshtools import UNNAMED, GroupNameError, physical_groups, unsupported_format
+from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
 from breakwater.config.fields import InvalidField, suggest
 from breakwater.config.schema import Schema
 
@@ -196,6 +197,11 @@ def _mesh_groups(mesh: MeshCase) -> dict[str, int]:
     path = pathlib.Path(mesh.source)
     if not path.is_file():
         raise InvalidField("mesh.source", f"mesh file not found: {path}")
+    if is_xdmf(path):  # breakwater's own XDMF keeps the names in a record
+        try:
+            return xdmf_groups(path)
+        except MeshError as e:
+            raise InvalidField("mesh.source", str(e)) from None
     if path.suffix not in (".msh", ".geo"):
         raise InvalidField("mesh.source", unsupported_format(path))
     try:

@@ -121,13 +121,20 @@ _FORMATS = {".xdmf": "XDMF", ".h5": "XDMF", ".bp": "ADIOS2", ".vtu": "VTK", ".vt
 
 
 def unsupported_format(path: pathlib.Path) -> str:
-    """The message (naming the file) refusing a mesh that is not a gmsh ``.msh`` or ``.geo``."""
+    """The message (naming the file) refusing a mesh that is not a ``.msh``, ``.geo`` or XDMF.
+
+    breakwater's own XDMF (``breakwater mesh --out x.xdmf``) is read
+    (:mod:`breakwater.common.xdmfinfo`); its ``.h5`` is named as its data file.
+    """
+    if path.suffix.lower() == ".h5":
+        return (f"{path}: an HDF5 data file: give the .xdmf written with it (by "
+                "`python -m breakwater mesh CASE --out x.xdmf`), or the gmsh .msh")
     kind = _FORMATS.get(path.suffix.lower())
     if kind is None:
-        return f"expected a gmsh .msh or .geo file: {path}"
+        return f"expected a gmsh .msh or .geo file (or breakwater's .xdmf): {path}"
     return (f"{path}: breakwater reads gmsh .msh or .geo files, not {kind}: save the mesh "
-            "from gmsh as .msh with its physical groups named (dolfinx's meshtags and "
-            "meshio's conversions keep integer tags only; docs/inputs.md)")
+            "from gmsh as .msh with its physical groups named (meshio's conversions keep "
+            "integer tags only; docs/inputs.md)")
 
 
 class GroupNameError(ValueError):

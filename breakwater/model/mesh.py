@@ -15,6 +15,7 @@ from mpi4py import MPI
 from breakwater.common.errors import MeshError
 from breakwater.common.gmshtools import gmsh_session, unsupported_format
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
+from breakwater.common.xdmfinfo import is_xdmf
 from breakwater.model.meshcells import check_cell_type, check_group_nodes, check_meshed
 from breakwater.model.meshfile import (
     check_names,
@@ -35,7 +36,7 @@ log = logging.getLogger("breakwater.model.mesh")
 
 def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
               gdim: int | None = None, order: int = 2) -> gmshio.MeshData:
-    """Read a gmsh ``.msh`` (or mesh a ``.geo``) with its physical groups.
+    """Read a gmsh ``.msh`` (or mesh a ``.geo``, or breakwater's XDMF) with its physical groups.
 
     Cells are ghosted across shared facets, which interior-facet (interface)
     integrals need in parallel. A ``.msh`` of second order (six-node triangles) is
@@ -43,7 +44,9 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
 
     Args:
         path: A ``.msh`` file, or a ``.geo`` script that gmsh meshes first (into a
-            temporary folder: nothing is written beside the script).
+            temporary folder: nothing is written beside the script), or the ``.xdmf``
+            that ``breakwater mesh --out`` writes (:mod:`.xdmfmesh`; another XDMF,
+            without the groups' names, is refused).
         comm: Communicator to distribute the mesh over.
         gdim: Geometric dimension of the model: 2 (plane strain) or 3; None: the
             highest dimension of the file's physical groups.
@@ -64,6 +67,14 @@ def read_mesh(path: str | pathlib.Path, comm: MPI.Comm = MPI.COMM_WORLD,
         with shared_tempdir(comm, "breakwater-geo-") as folder:
             return read_mesh(mesh_geo(path, folder / f"{path.stem}.msh", comm, gdim,
                                       order), comm, gdim)
+    if is_xdmf(path):  # breakwater's own (`breakwater mesh --out x.xdmf`), with names
+        from breakwater.model.xdmfmesh import read_xdmf
+
+        xdmf, record = read_xdmf(path, comm, gdim)
+        out = GroupedMeshData(*xdmf)
+        out.shared, out.empty = record["shared"], record["empty"]
+        out.ungrouped = int(record["ungrouped"])
+        return out
     if path.suffix != ".msh":
         raise MeshError(unsupported_format(path))
     partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet, 2)

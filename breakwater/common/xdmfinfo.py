@@ -1,0 +1,130 @@
+"""The XDMF mesh file of ``breakwater mesh --out x.xdmf``: what it holds, read without dolfinx.
+
+dolfinx's ``XDMFFile`` writes the mesh (grid ``mesh``) and its meshtags (grids
+``cell_tags``, ``facet_tags``, ``ridge_tags``, ``peak_tags``), whose values are gmsh's
+integer physical tags: the names breakwater finds bodies and boundaries by are not
+among them. breakwater's writer (:func:`breakwater.model.xdmfmesh.write_xdmf`) keeps
+them in an ``<Information Name="breakwater_groups">`` element of the file's domain
+(``XDMFFile.write_information``), a JSON object:
+
+- ``groups``: name -> [dimension, tag], gmsh's physical groups;
+- ``tags``: the meshtags grids written;
+- ``gdim``: the model's dimension (2 plane strain, 3);
+- ``shared``, ``empty``, ``ungrouped``: what the ``.msh`` reader found
+  (:class:`breakwater.model.mesh.GroupedMeshData`), refused or reported again when the
+  XDMF is read.
+
+An XDMF without it (meshio's, one written by dolfinx elsewhere, breakwater's before it
+wrote names) is refused: :func:`read_info`. This module reads the XML only (rank 0 or
+every rank), so that a case is checked against its mesh's names before any solver
+library is imported.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import xml.etree.ElementTree as ET
+from typing import Any
+
+from breakwater.common.errors import MeshError
+
+__all__ = ["GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "heavy_files", "is_xdmf",
+           "read_info", "xdmf_groups"]
+
+SUFFIXES = (".xdmf", ".xmf")
+"""Suffixes of XDMF files."""
+GROUPS = "breakwater_groups"
+"""Name of the ``<Information>`` element holding the physical groups' names."""
+MESH_GRID = "mesh"
+"""Name of the mesh's grid."""
+TAG_GRIDS = ("cell_tags", "facet_tags", "ridge_tags", "peak_tags")
+"""Names of the meshtags grids, codimension 0 to 3 (dolfinx's ``MeshData`` order)."""
+VERSION = 1
+"""Version of the ``breakwater_groups`` record."""
+
+FOREIGN = ("an XDMF without breakwater's physical group names (meshio's, or dolfinx's "
+           "meshtags: integer tags only), and breakwater finds bodies and boundaries by "
+           "name: write it with `python -m breakwater mesh CASE --out {name}` (from the "
+           "gmsh .msh or .geo), or give the .msh")
+"""The refusal of an XDMF that breakwater did not write (``{name}``: the file's name)."""
+
+
+def is_xdmf(path: pathlib.Path) -> bool:
+    """Whether ``path`` names an XDMF file (by its suffix)."""
+    return path.suffix.lower() in SUFFIXES
+
+
+def _root(path: pathlib.Path) -> ET.Element:
+    try:
+        return ET.parse(path).getroot()
+    except ET.ParseError as e:
+        raise MeshError(f"{path}: cannot read the mesh (not XDMF: the XML is broken: "
+                        f"{e})") from None
+    except OSError as e:
+        raise MeshError(f"{path}: cannot read the mesh ({e.strerror or e})") from None
+
+
+def read_info(path: pathlib.Path) -> dict[str, Any]:
+    """The ``breakwater_groups`` record of an XDMF mesh file, checked.
+
+    Raises:
+        MeshError: One line: the file is not XML, has no such record (an XDMF that
+            breakwater did not write: :data:`FOREIGN`), a record of another version or
+            broken, or lacks a grid the record names.
+    """
+    root = _root(path)
+    domain = root.find("Domain")
+    info = None if domain is None else domain.find(f"Information[@Name='{GROUPS}']")
+    if domain is None or info is None:
+        raise MeshError(f"{path}: {FOREIGN.format(name=path.name)}")
+    try:
+        record = json.loads(info.get("Value") or info.text or "")
+        groups = {str(n): (int(d), int(t)) for n, (d, t) in record["groups"].items()}
+        tags = [str(t) for t in record["tags"]]
+        version = int(record.get("version", 0))
+        if not set(tags) <= set(TAG_GRIDS):
+            raise ValueError(tags)
+    except (ValueError, KeyError, TypeError, AttributeError):
+        raise MeshError(f"{path}: its {GROUPS} record is broken (edited?): write the file "
+                        "again with `python -m breakwater mesh CASE --out "
+                        f"{path.name}`") from None
+    if version != VERSION:
+        raise MeshError(f"{path}: its {GROUPS} record is of version {version}, this "
+                        f"breakwater reads version {VERSION}: write the file again with "
+                        f"`python -m breakwater mesh CASE --out {path.name}`")
+    grids = {g.get("Name") for g in domain.findall("Grid")}
+    missing = [g for g in (MESH_GRID, *tags) if g not in grids]
+    if missing:
+        raise MeshError(f"{path}: no grid {', '.join(repr(g) for g in missing)} in the file "
+                        "(edited or cut short?): write it again with `python -m breakwater "
+                        f"mesh CASE --out {path.name}`")
+    record["groups"], record["tags"] = groups, tags
+    return dict(record)
+
+
+def heavy_files(path: pathlib.Path) -> tuple[bool, list[pathlib.Path]]:
+    """Whether the file's arrays are inline XML, and the HDF5 files it refers to.
+
+    dolfinx writes the arrays to ``x.h5`` beside ``x.xdmf`` (``Format="HDF"``, the item's
+    text ``x.h5:/Mesh/mesh/geometry``) or, with ASCII encoding, into the XML.
+    """
+    inline, files = True, []
+    for item in _root(path).iter("DataItem"):
+        if item.get("Format", "XML") != "HDF":
+            continue
+        inline = False
+        name = (item.text or "").strip().split(":", 1)[0]
+        h5 = path.parent / name
+        if h5 not in files:
+            files.append(h5)
+    return inline, files
+
+
+def xdmf_groups(path: pathlib.Path) -> dict[str, int]:
+    """The named physical groups (name -> dimension) of breakwater's XDMF mesh file.
+
+    Raises:
+        MeshError: As :func:`read_info`.
+    """
+    return {name: dim for name, (dim, _) in read_info(path)["groups"].items()}
