@@ -408,7 +408,7 @@ def test_a_group_named_with_no_elements_is_refused_when_used(folder):
         group_tag(data, "block_left", 1)
 
 
-@pytest.mark.parametrize("suffix", [".xdmf", ".vtu", ".inp"])
+@pytest.mark.parametrize("suffix", [".vtu", ".inp"])
 def test_other_formats_say_what_to_do(folder, suffix):
     path = folder / f"mesh{suffix}"
     on_rank_zero(COMM, lambda: path.write_text("<Xdmf/>\n"))
@@ -416,3 +416,14 @@ def test_other_formats_say_what_to_do(folder, suffix):
                        r"mesh from gmsh as \.msh with its physical groups named"):
         read_mesh(path, COMM)
 
+
+def test_an_xdmf_breakwater_did_not_write_says_what_to_do(folder):
+    # An XDMF is read when breakwater wrote it (tests/test_xdmfmesh.py), with its names.
+    path = folder / "mesh.xdmf"
+    on_rank_zero(COMM, lambda: path.write_text("<Xdmf><Domain/></Xdmf>\n"))
+    with pytest.raises(MeshError, match=r"mesh.xdmf: an XDMF without breakwater's physical "
+                       r"group names .*`python -m breakwater mesh CASE --out mesh.xdmf`"):
+        read_mesh(path, COMM)
+    on_rank_zero(COMM, lambda: path.write_text("<Xdmf><Domain>\n"))
+    with pytest.raises(MeshError, match=r"mesh.xdmf: cannot read the mesh \(not XDMF"):
+        read_mesh(path, COMM)
