@@ -102,13 +102,31 @@ def test_an_xdmf_without_names_is_refused_in_one_line(folder):
         assert "\n" not in str(info.value)
 
 
-def test_an_xdmf_without_its_h5_is_refused_naming_it(folder):
+def test_an_xdmf_without_its_whole_h5_is_refused_naming_it(folder):
+    # dolfinx reads the arrays from the .h5 of the .xdmf's name: a pair renamed together
+    # reads; a missing or cut-short .h5 is refused before HDF5 prints its error stack.
     out = folder / "alone.xdmf"
     write_xdmf(read_mesh(RUNS / "g_shared_groups.geo", COMM), out)
-    on_rank_zero(COMM, lambda: out.with_suffix(".h5").rename(folder / "elsewhere.h5"))
+    renamed = folder / "renamed.xdmf"
+
+    def rename() -> None:
+        renamed.write_bytes(out.read_bytes())
+        out.with_suffix(".h5").rename(renamed.with_suffix(".h5"))
+
+    on_rank_zero(COMM, rename)
+    assert read_mesh(renamed, COMM).physical_groups["block_top"].dim == 1
     with pytest.raises(MeshError, match=r"alone.xdmf: its data file alone.h5 is missing .*"
                        r"copy alone.h5 with alone.xdmf"):
         read_mesh(out, COMM)
+    h5 = renamed.with_suffix(".h5")
+    size = on_rank_zero(COMM, lambda: h5.stat().st_size)
+    on_rank_zero(COMM, lambda: h5.write_bytes(h5.read_bytes()[:size // 2]))
+    with pytest.raises(MeshError, match=rf"renamed.h5 is cut short: {size // 2} of its "
+                       rf"{size} bytes"):
+        read_mesh(renamed, COMM)
+    on_rank_zero(COMM, lambda: h5.write_bytes(b"not HDF5\n" * 100))
+    with pytest.raises(MeshError, match=r"renamed.h5 is not an HDF5 file"):
+        read_mesh(renamed, COMM)
 
 
 def history(path: pathlib.Path) -> tuple[list[str], np.ndarray]:

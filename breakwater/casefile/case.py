@@ -320,6 +320,8 @@ def case_inputs(path: str | pathlib.Path | None, case: Case) -> list[pathlib.Pat
     inputs = case_sources(path)
     if not case.mesh.generated:
         inputs.append(pathlib.Path(case.mesh.source))
+        if is_xdmf(inputs[-1]):  # and its arrays, written beside it
+            inputs.append(inputs[-1].with_suffix(".h5"))
     inputs += [pathlib.Path(ld.table.file) for ld in case.loads
                if ld.table is not None and ld.table.file is not None]
     inputs += [pathlib.Path(ld.storm.waves) for ld in case.loads

@@ -29,8 +29,8 @@ from typing import Any
 
 from breakwater.common.errors import MeshError
 
-__all__ = ["GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "heavy_files", "is_xdmf",
-           "read_info", "xdmf_groups"]
+__all__ = ["GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "hdf5_problem", "heavy_files",
+           "is_xdmf", "read_info", "xdmf_groups"]
 
 SUFFIXES = (".xdmf", ".xmf")
 """Suffixes of XDMF files."""
@@ -103,22 +103,51 @@ def read_info(path: pathlib.Path) -> dict[str, Any]:
     return dict(record)
 
 
-def heavy_files(path: pathlib.Path) -> tuple[bool, list[pathlib.Path]]:
-    """Whether the file's arrays are inline XML, and the HDF5 files it refers to.
+def heavy_files(path: pathlib.Path) -> pathlib.Path | None:
+    """The HDF5 file holding the arrays of an XDMF file, or None when they are inline XML.
 
-    dolfinx writes the arrays to ``x.h5`` beside ``x.xdmf`` (``Format="HDF"``, the item's
-    text ``x.h5:/Mesh/mesh/geometry``) or, with ASCII encoding, into the XML.
+    dolfinx writes the arrays to ``x.h5`` beside ``x.xdmf`` (``Format="HDF"``) or, with
+    ASCII encoding, into the XML; it reads them from the ``.h5`` of the ``.xdmf``'s name,
+    whatever file the items name (a pair renamed together reads).
     """
-    inline, files = True, []
-    for item in _root(path).iter("DataItem"):
-        if item.get("Format", "XML") != "HDF":
-            continue
-        inline = False
-        name = (item.text or "").strip().split(":", 1)[0]
-        h5 = path.parent / name
-        if h5 not in files:
-            files.append(h5)
-    return inline, files
+    if any(item.get("Format", "XML") == "HDF" for item in _root(path).iter("DataItem")):
+        return path.with_suffix(".h5")
+    return None
+
+
+_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def hdf5_problem(h5: pathlib.Path) -> str | None:
+    """What makes an HDF5 file unreadable at a glance: not HDF5, or cut short.
+
+    The superblock (at byte 0, or 512, 1024, ... after a user block) stores the file's
+    end address: a copy cut short (an interrupted transfer) ends before it. Checked
+    before HDF5 opens the file, which prints its error stack (30 lines) to stderr.
+
+    Returns:
+        None, or the problem ("not an HDF5 file", "cut short: ...").
+    """
+    size = h5.stat().st_size
+    with open(h5, "rb") as f:
+        at = 0
+        while True:
+            f.seek(at)
+            head = f.read(64)
+            if head.startswith(_SIGNATURE):
+                break
+            at = 512 if at == 0 else 2 * at
+            if at >= size:
+                return "not an HDF5 file"
+    version, offsets = head[8], head[13] if head[8] < 2 else head[9]
+    if offsets not in (2, 4, 8):
+        return "not an HDF5 file (its superblock is broken)"
+    start = {0: 24, 1: 28}.get(version, 12)  # the base address, then EOF two on
+    base = int.from_bytes(head[start:start + offsets], "little")
+    end = int.from_bytes(head[start + 2 * offsets:start + 3 * offsets], "little")
+    if at + base + end > size:
+        return f"cut short: {size} of its {at + base + end} bytes"
+    return None
 
 
 def xdmf_groups(path: pathlib.Path) -> dict[str, int]:

@@ -24,7 +24,15 @@ from mpi4py import MPI
 
 from breakwater.common.errors import MeshError
 from breakwater.common.parallel import on_rank_zero
-from breakwater.common.xdmfinfo import GROUPS, MESH_GRID, TAG_GRIDS, VERSION, heavy_files, read_info
+from breakwater.common.xdmfinfo import (
+    GROUPS,
+    MESH_GRID,
+    TAG_GRIDS,
+    VERSION,
+    hdf5_problem,
+    heavy_files,
+    read_info,
+)
 
 __all__ = ["read_xdmf", "write_xdmf"]
 
@@ -66,15 +74,19 @@ def write_xdmf(data: gmshio.MeshData, out: pathlib.Path) -> pathlib.Path:
 
 
 def _inspect(path: pathlib.Path) -> tuple[dict[str, Any], bool]:
-    """The file's record and whether its arrays are inline (rank 0), its data files there."""
+    """The file's record and whether its arrays are inline XML (rank 0; its .h5 checked)."""
     record = read_info(path)
-    inline, files = heavy_files(path)
-    for h5 in files:
-        if not h5.is_file():
-            raise MeshError(f"{path}: its data file {h5.name} is missing (an XDMF keeps its "
-                            f"arrays in the .h5 written beside it: copy {h5.name} with "
-                            f"{path.name})")
-    return record, inline
+    h5 = heavy_files(path)
+    if h5 is not None and not h5.is_file():
+        raise MeshError(f"{path}: its data file {h5.name} is missing (an XDMF keeps its "
+                        f"arrays in the .h5 written beside it: copy {h5.name} with "
+                        f"{path.name})")
+    problem = None if h5 is None else hdf5_problem(h5)
+    if h5 is not None and problem is not None:
+        raise MeshError(f"{path}: its data file {h5.name} is {problem} (copy it again "
+                        f"with {path.name}, or write both again with `python -m "
+                        f"breakwater mesh CASE --out {path.name}`)")
+    return record, h5 is None
 
 
 def read_xdmf(path: pathlib.Path, comm: MPI.Comm, gdim: int | None
