@@ -39,6 +39,7 @@ import numpy as np
 
 from breakwater.common.errors import BreakwaterError
 from breakwater.common.files import CHECKPOINT, SUMMARY, atomic_write_bytes, read_json
+from breakwater.common.xdmfinfo import is_xdmf
 
 if TYPE_CHECKING:  # light at import: the command line catches CheckpointError early
     from dolfinx import fem
@@ -159,11 +160,13 @@ def case_differences(saved: Mapping[str, Any], resolved_case: Mapping[str, Any])
 
 
 def _input_files(resolved_case: Mapping[str, Any]) -> list[str]:
-    """The files a resolved case reads: its mesh, its load tables, a storm's waves."""
+    """The files a resolved case reads: its mesh (an XDMF's .h5 too), tables, waves."""
     paths = []
     source = resolved_case.get("mesh", {}).get("source")
     if source is not None and source != "goda":
         paths.append(str(source))
+        if is_xdmf(pathlib.Path(source)):  # its arrays (coordinates, cells) are in the .h5
+            paths.append(str(pathlib.Path(source).with_suffix(".h5")))
     for load in resolved_case.get("loads", {}).values():
         table = load.get("table") if isinstance(load, Mapping) else None
         if isinstance(table, Mapping) and table.get("file") is not None:
