@@ -394,7 +394,9 @@ def _parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("mesh", parents=[common], help="write the case's mesh",
                        description="Generate (or convert) the case's mesh; the format "
-                       "follows the suffix: .msh, .xdmf, .vtu, ...")
+                       "follows the suffix: .msh, .xdmf, .vtu, ... A case reads the .msh, "
+                       "and the .xdmf (dolfinx's, with x.h5 beside it and the groups' "
+                       "names) as its mesh.source; the others are for viewing.")
     p.add_argument("--out", type=pathlib.Path, required=True, metavar="FILE",
                    help="output mesh file")
     p.set_defaults(func=_cmd_mesh)

@@ -47,7 +47,9 @@ class MeshCase:
 
     source: str = setting(GODA, doc='"goda" (the built-in generator, [mesh.goda]), "goda3d" '
                           '(its 3D block on the mound, hexahedra, [mesh.goda3d]) or a gmsh '
-                          '.msh/.geo file with named physical groups, relative to the case file')
+                          '.msh/.geo file with named physical groups, or the .xdmf that '
+                          '`breakwater mesh --out x.xdmf` wrote (with its .h5), relative to '
+                          'the case file')
     refinement: float = setting(1.0, doc="goda, goda3d only: element sizes are divided by "
                                 "this (cell counts grow as refinement², refinement³ in 3D)")
     degree: int = setting(2, doc="polynomial degree of the displacement (2: six-node "
