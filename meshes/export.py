@@ -12,7 +12,9 @@ Format notes:
       entity-to-group links of its own input).
     * XDMF is written with inline XML data (one self-contained file) and without
       the point (dim-0) groups: meshio cannot read back polyvertex cells in a
-      mixed topology.
+      mixed topology. A case does not read it (no names): ``breakwater mesh --out
+      x.xdmf`` writes dolfinx's XDMF with the names instead
+      (:mod:`breakwater.model.xdmfmesh`), which a case reads.
 """
 
 from __future__ import annotations
