@@ -27,8 +27,10 @@ __all__ = ["on_every_rank", "on_rank_zero", "shared_tempdir"]
 def on_rank_zero[T](comm: MPI.Comm, action: Callable[[], T]) -> T:
     """Run ``action`` on rank 0 of ``comm``; every rank returns its result or raises its error.
 
-    Collective: every rank calls it, and returns only once rank 0 has finished (the
-    broadcast is also a barrier). ``action`` itself must not be collective.
+    Collective: every rank calls it, and the others return only once rank 0 has
+    finished. It is not a barrier: rank 0 may return before the others have received
+    its result (a file it rewrites next may still be read by them). ``action`` itself
+    must not be collective.
 
     Args:
         comm: MPI communicator.
