@@ -142,3 +142,80 @@ def test_ranks_without_cells(shared_dir: pathlib.Path) -> None:
     assert grid.n_cells == count and grid.n_points == 6 * count
     assert np.allclose(grid.point_data["von_mises"], _s(grid.points.T, 2.0), rtol=0,
                        atol=1e-14)
+
+
+def _run(folder: pathlib.Path, end_time: float) -> pathlib.Path:
+    """The outputs of the tests' two-block case (fields every step) run to ``end_time``."""
+    from blocks import two_block_case, two_rectangles
+
+    from breakwater import cli
+
+    comm = MPI.COMM_WORLD
+    folder.mkdir(exist_ok=True) if comm.rank == 0 else None
+    comm.barrier()
+    mesh = two_rectangles(folder / "blocks.msh", comm, (1.0, 0.5), (1.0, 0.5), 0.25)
+    case = folder / "tiny.toml"
+    if comm.rank == 0:
+        case.write_text(two_block_case(mesh.name, tail="[output]\nfield_interval = 1\n"
+                                       "figures = false\n")
+                        .replace("end_time = 1e-3", f"end_time = {end_time:g}"))
+    comm.barrier()
+    out = folder / "out"
+    assert cli.main(["run", str(case), "--out", str(out), "--no-progress", "--quiet"]) == 0
+    return out
+
+
+@pytest.mark.timeout(120)
+def test_a_run_cut_short(shared_dir: pathlib.Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A run's folder whose ``data.0`` is shorter than its index lists (a copy of a run
+    still running, a run killed, a power loss): a time cut short is refused in one line
+    naming the last whole time, the whole times are read as in the whole file, on every
+    rank. Before, ADIOS2 retried the read past the file's end for good: the notebook
+    hung (measured: still waiting after 60 s). A metadata file cut short is refused too,
+    within ADIOS2's open timeout set to 1 s (10 s by default).
+
+    The cut lands a quarter of the way into the fourth time's data (of five): after the
+    bytes of a run of the same case to its third time (the same data written in the same
+    order), so the fifth time is refused naming the third, the fourth being cut too.
+    """
+    import shutil
+    import time
+
+    comm = MPI.COMM_WORLD
+    whole = _run(shared_dir / "whole", 4e-4)  # fields at t = 0, 1e-4, ..., 4e-4
+    three = _run(shared_dir / "three", 2e-4)  # at t = 0, 1e-4, 2e-4
+    capsys.readouterr()
+    cut = shared_dir / "cut"
+    data = cut / "fields_a.bp" / "data.0"
+    if comm.rank == 0:
+        shutil.copytree(whole, cut)
+        first, full = (three / "fields_a.bp" / "data.0").stat().st_size, data.stat().st_size
+        assert first < full
+        with open(data, "r+b") as f:
+            f.truncate(first + (full - first) // 4)
+        shutil.copytree(whole, shared_dir / "meta")
+        md = shared_dir / "meta" / "fields_a.bp" / "md.0"
+        with open(md, "r+b") as f:
+            f.truncate(md.stat().st_size // 2)
+    comm.barrier()
+    size = data.stat().st_size
+    assert field_times(cut, "a") == pytest.approx([0.0, 1e-4, 2e-4, 3e-4, 4e-4], rel=1e-12)
+    for t, shown in ((None, "0.0004"), (3e-4, "0.0003")):
+        with pytest.raises(ValueError) as refused:
+            read_fields(cut, "a", t)
+        assert str(refused.value) == (
+            f"{cut / 'fields_a.bp'}: the fields at t = {shown} s are cut short, its data "
+            f"files hold {size} bytes, fewer than its index lists (a copy of a run still "
+            "running, or a run killed, stopped by a full disk or a power loss); the last "
+            "whole time before it is t = 0.0002 s")
+    grid, reference = read_fields(cut, "a", 2e-4), read_fields(whole, "a", 2e-4)
+    assert grid.field_data["time"][0] == pytest.approx(2e-4, rel=1e-12)
+    assert np.array_equal(grid.points, reference.points)
+    for n in ("displacement", "velocity", "von_mises"):
+        assert np.array_equal(grid.point_data[n], reference.point_data[n]), n
+    assert read_fields(cut, "b").field_data["time"][0] == pytest.approx(4e-4, rel=1e-12)
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=r"^" + str(shared_dir / "meta" / "fields_a.bp")
+                       + r": cannot be read, its metadata is cut short \(a copy of a run "):
+        field_times(shared_dir / "meta", "a")
+    assert time.perf_counter() - start < 5.0  # ADIOS2's default: 10 s

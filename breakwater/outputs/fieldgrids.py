@@ -73,7 +73,25 @@ def _files(directory: str | pathlib.Path, name: str) -> list[pathlib.Path]:
     return [*parts, folder / f"{stem}.bp"]
 
 
+#: Why a file's index can list more than its data files hold.
+_CUT = ("a copy of a run still running, or a run killed, stopped by a full disk or a "
+        "power loss")
+
+
+class _CutShort(Exception):
+    """ADIOS2 failed to read what the file's index lists (a data or metadata file cut)."""
+
+
 def _reader(path: pathlib.Path) -> Any:
+    """An ADIOS2 reader of ``path`` that fails at once on a file cut short.
+
+    ADIOS2's default (POSIX) transport retries a read past the end of a data file
+    forever, waiting for a writer to append (a data file shorter than its index: a copy
+    of a running run, a run killed in a write, a power loss): a notebook hung. The
+    ``stdio`` transport for the data files (engine parameter ``DataFileTransport``)
+    raises instead; ``OpenTimeoutSecs`` bounds the wait for a metadata file shorter
+    than its index (10 s by default).
+    """
     # dolfinx first: with the pip module's ADIOS2 library loaded before it, dolfinx's own
     # (the dolfinx wheel's) fails to load ("undefined symbol ... HDF5Common_MPI_API").
     import dolfinx  # noqa: F401
@@ -83,17 +101,30 @@ def _reader(path: pathlib.Path) -> Any:
     except ImportError:
         raise ImportError("reading the .bp fields needs ADIOS2's Python module: "
                           "pip install adios2 (or breakwater's 'viz' extra)") from None
-    return adios2.FileReader(str(path))
+    io = adios2.Adios().declare_io(f"breakwater:{path}")
+    io.set_parameters({"DataFileTransport": "stdio", "OpenTimeoutSecs": "1"})
+    try:
+        return adios2.FileReader(io, str(path))
+    except RuntimeError as error:
+        raise _CutShort(str(error)) from None
 
 
 def _stored(directory: str | pathlib.Path, name: str) -> list[_Stored]:
-    """Every time stored for ``name``, in order; a later file's where two hold one."""
+    """Every time stored for ``name``, in order; a later file's where two hold one.
+
+    Raises:
+        ValueError: A file whose metadata is cut short (ADIOS2 cannot open it).
+    """
     by_time: dict[float, _Stored] = {}
     for path in _files(directory, name):
-        with _reader(path) as f:
-            for k in range(f.num_steps()):
-                t = float(np.asarray(f.read("step", step_selection=[k, 1])).ravel()[0])
-                by_time[t] = _Stored(t, path, k)
+        try:
+            with _reader(path) as f:
+                for k in range(f.num_steps()):
+                    t = float(np.asarray(f.read("step", step_selection=[k, 1])).ravel()[0])
+                    by_time[t] = _Stored(t, path, k)
+        except (_CutShort, RuntimeError):
+            raise ValueError(f"{path}: cannot be read, its metadata is cut short "
+                             f"({_CUT})") from None
     return [by_time[t] for t in sorted(by_time)]
 
 
@@ -140,6 +171,36 @@ def _blocks(f: Any, step: int, names: list[str]) -> dict[str, np.ndarray]:
     return out
 
 
+def _read_step(stored: _Stored) -> tuple[int, dict[str, np.ndarray]]:
+    """The cell type and the joined blocks of one stored time.
+
+    Raises:
+        _CutShort: A data file holds fewer bytes than the index lists for this time.
+    """
+    try:
+        with _reader(stored.path) as f:
+            names = [n for n in f.available_variables() if n not in _GEOMETRY]
+            cell_type = int(np.asarray(f.read("types", step_selection=[0, 1])).ravel()[0])
+            return cell_type, _blocks(f, stored.step, names)
+    except RuntimeError as error:  # ADIOS2's: "read size of 600 is not equal to ..."
+        raise _CutShort(str(error)) from None
+
+
+def _cut_message(stored: _Stored, every: list[_Stored]) -> str:
+    """The line refusing a time cut short, naming the last whole time before it."""
+    whole = "no earlier time of it is whole"
+    for earlier in reversed([s for s in every if s.time < stored.time]):
+        try:
+            _read_step(earlier)
+        except _CutShort:
+            continue
+        whole = f"the last whole time before it is t = {earlier.time:g} s"
+        break
+    size = sum(p.stat().st_size for p in stored.path.glob("data.*"))
+    return (f"{stored.path}: the fields at t = {stored.time:g} s are cut short, its data "
+            f"files hold {size} bytes, fewer than its index lists ({_CUT}); {whole}")
+
+
 def read_fields(directory: str | pathlib.Path, name: str, time: float | None = None
                 ) -> Any:
     """The fields of a body or a contact pair at one time, as a pyvista grid.
@@ -157,15 +218,19 @@ def read_fields(directory: str | pathlib.Path, name: str, time: float | None = N
         read in ``field_data["time"]``.
 
     Raises:
-        ValueError: No such file in the folder, or a time outside the ones written.
+        ValueError: No such file in the folder, a time outside the ones written, or a
+            file whose data or metadata is cut short at that time (its index lists more
+            than its files hold: a copy of a running run, a run killed, a full disk); the
+            line names the last whole time before it.
     """
     import pyvista
 
-    stored = _choose(_stored(directory, name), time, name)
-    with _reader(stored.path) as f:
-        names = [n for n in f.available_variables() if n not in _GEOMETRY]
-        cell_type = int(np.asarray(f.read("types", step_selection=[0, 1])).ravel()[0])
-        joined = _blocks(f, stored.step, names)
+    every = _stored(directory, name)
+    stored = _choose(every, time, name)
+    try:
+        cell_type, joined = _read_step(stored)
+    except _CutShort:
+        raise ValueError(_cut_message(stored, every)) from None
     x, cells = joined.pop("geometry"), joined.pop("connectivity")
     # One copy of each cell (a rank's ghost cells are another rank's), by its nodes' mean.
     scale = max(float(np.abs(x).max(initial=0.0)), 1e-300)
