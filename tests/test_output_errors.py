@@ -104,6 +104,59 @@ def test_full_disk_during_the_run(shared_dir, capsys, monkeypatch):
         assert len((out / files.HISTORY).read_text().splitlines()) == 4
 
 
+def test_no_byte_left_for_the_summary(shared_dir, capsys, monkeypatch):
+    """history.csv's 4th row meets a disk with no byte left (another process filled it):
+    the summary says failed all the same, written in the room the folder's lock file
+    kept for it (:data:`~breakwater.common.folderlock.RESERVE`), and the lock file goes.
+
+    Before: the summary could not be rewritten and said ``running`` after the run had
+    failed (measured on an 8 MB tmpfs that another file filled at that row; with the
+    room kept it says ``failed``). Here the disk is full from that row on: a file
+    written after it fits only in the bytes the lock file gave back since (its allocated
+    size then, less its size now), less the bytes written since.
+    """
+    from breakwater.common import folderlock
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    lock = out / folderlock.LOCK
+    write, lines, disk = HistoryWriter._write, [], {"kept": -1, "used": 0}
+
+    def allocated() -> int:
+        return lock.stat().st_blocks * 512 if lock.exists() else 0
+
+    def full(self: HistoryWriter, line: str) -> None:
+        lines.append(line)
+        if len(lines) > 4:  # the header, the static row, two steps
+            disk["kept"] = allocated()
+            assert disk["kept"] >= folderlock.RESERVE
+            raise OSError(errno.ENOSPC, FULL)
+        write(self, line)
+
+    class Full(io.FileIO):
+        def write(self, data: Any) -> int:
+            if len(data) > disk["kept"] - allocated() - disk["used"]:
+                raise OSError(errno.ENOSPC, FULL)
+            disk["used"] += len(data)
+            return super().write(data)
+
+    def full_open(path: Any, mode: str = "r", **kwargs: Any) -> Any:
+        if disk["kept"] >= 0 and mode == "wb":
+            return Full(path, "w")
+        return open(path, mode, **kwargs)
+
+    monkeypatch.setattr(HistoryWriter, "_write", full)
+    monkeypatch.setattr(files, "open", full_open, raising=False)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 1, err
+    if COMM.rank == 0:
+        reason = f"cannot write {out / files.HISTORY}: {FULL}"
+        assert err == f"breakwater: error: {reason}\n", err
+        summary = _summary(out)
+        assert summary["status"] == "failed" and summary["error"] == reason, summary
+        assert 0 < disk["used"] < folderlock.RESERVE
+        assert not lock.exists() and not list(out.glob(".*.tmp*"))
+
+
 def test_full_disk_in_the_file_system(shared_dir, capsys, monkeypatch):
     """history.csv meets a full disk in the file system, below Python's buffer: one line.
 
@@ -479,6 +532,7 @@ def test_a_second_run_in_a_locked_folder_is_refused(shared_dir, capsys):
         fd = os.open(out / folderlock.LOCK, os.O_RDWR | os.O_CREAT)
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         os.write(fd, json.dumps({"host": "node7", "pid": 4242, "started": "then"}).encode())
+        os.posix_fallocate(fd, 0, folderlock.RESERVE)  # its room for the last summary
     COMM.barrier()
     try:
         code, err = _main(args, capsys)

@@ -12,6 +12,12 @@ in the file). The kernel releases the lock when the process ends, however it end
 (SIGKILL included), so a killed run leaves no stale lock. On a file system without
 ``flock`` (some network file systems) nothing is locked and the summary's check alone
 remains.
+
+The lock file also keeps :data:`RESERVE` bytes allocated while the run holds the folder:
+room for its last ``summary.json`` on a full disk (:func:`write_final_summary` frees it
+when that write meets ENOSPC and writes again). Before, a disk with no byte left kept
+the summary at ``"status": "running"`` after the run had failed, and a study's table
+reported the failed case as running.
 """
 
 from __future__ import annotations
@@ -25,28 +31,33 @@ import pathlib
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
-from breakwater.common.errors import CaseError
-from breakwater.common.files import writing
+from breakwater.common.errors import CaseError, OutputError
+from breakwater.common.files import atomic_write_json, writing
 from breakwater.common.liveness import describe, this_process
 from breakwater.common.parallel import on_rank_zero
 
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["LOCK", "holding"]
+__all__ = ["LOCK", "RESERVE", "holding", "spend_reserve", "write_final_summary"]
 
 LOCK = ".breakwater.lock"
 """The lock file's name in the output folder (removed when the run ends)."""
 
+RESERVE = 1 << 20
+"""Bytes the lock file keeps allocated for the last ``summary.json`` (1 MiB; a summary
+takes 5-50 kB, written beside the one it replaces)."""
+
 _HELD: dict[pathlib.Path, list[int]] = {}
-"""The folders this process holds: the lock file's descriptor and the holders' count
-(a run inside a command that holds the folder already takes it again)."""
+"""The folders this process holds: the lock file's descriptor, the holders' count (a
+run inside a command that holds the folder already takes it again) and the bytes of the
+file's text, or -1 once no room is kept (spent, or none could be allocated)."""
 
 
 def _holder(fd: int) -> str:
     """Who holds the lock, from the file (``pid 1234 on host node7, started ...``)."""
     try:
-        data = json.loads(os.pread(fd, 4096, 0).decode("utf-8") or "{}")
+        data = json.loads(os.pread(fd, 4096, 0).rstrip(b"\0").decode("utf-8") or "{}")
     except (OSError, ValueError):
         data = None
     return describe(data) if isinstance(data, dict) and data else "another process"
@@ -88,9 +99,49 @@ def _acquire(directory: pathlib.Path, where: str) -> bool:
             break
         os.close(fd)
     os.ftruncate(fd, 0)
-    os.pwrite(fd, json.dumps(this_process()).encode("utf-8"), 0)
-    _HELD[directory] = [fd, 1]
+    text = json.dumps(this_process()).encode("utf-8")
+    os.pwrite(fd, text, 0)
+    try:  # zeros after the text: read back without them (_holder)
+        os.posix_fallocate(fd, 0, len(text) + RESERVE)
+        kept = len(text)
+    except OSError:  # a disk (nearly) full already, or no fallocate: no room kept
+        os.ftruncate(fd, len(text))
+        kept = -1
+    _HELD[directory] = [fd, 1, kept]
     return created
+
+
+def spend_reserve(directory: str | pathlib.Path) -> bool:
+    """Free the room kept in the folder's lock file (rank 0); whether there was any."""
+    held = _HELD.get(pathlib.Path(directory).resolve())
+    if held is None or held[2] < 0:
+        return False
+    try:
+        os.ftruncate(held[0], held[2])
+    except OSError:
+        return False
+    held[2] = -1
+    return True
+
+
+def write_final_summary(path: pathlib.Path, summary: dict[str, object]) -> None:
+    """Write a run's ``summary.json`` that ends it (rank 0), on a full disk as well.
+
+    When the write meets a full disk (ENOSPC, EDQUOT), the room kept in the folder's
+    lock file is freed and the summary written again: its status then says how the run
+    ended, not ``running``.
+
+    Raises:
+        OutputError: The summary cannot be written (no room kept, or another reason).
+    """
+    try:
+        atomic_write_json(path, summary)
+    except OutputError as e:
+        cause = e.__cause__
+        if not (isinstance(cause, OSError) and cause.errno in (errno.ENOSPC, errno.EDQUOT)
+                and spend_reserve(path.parent)):
+            raise
+        atomic_write_json(path, summary)
 
 
 def _release(directory: pathlib.Path, created: bool) -> None:

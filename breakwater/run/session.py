@@ -23,7 +23,7 @@ from typing import Any
 
 from dolfinx import fem
 
-from breakwater.common import files, liveness
+from breakwater.common import files, folderlock, liveness
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.energy.ledger import EnergyLedger
@@ -228,9 +228,18 @@ class Session:
         return self.state.wall_before + _time.perf_counter() - self.wall0
 
     def write_summary(self, summary: Mapping[str, Any]) -> None:
-        """Write ``summary.json`` (rank 0; collective: an OutputError on every rank)."""
-        on_rank_zero(self.comm, lambda: bool(files.atomic_write_json(
-            self.directory / files.SUMMARY, {**summary, "process": self.process})))
+        """Write ``summary.json`` (rank 0; collective: an OutputError on every rank).
+
+        A summary that ends the run (any status but ``running``) is written on a full
+        disk too, in the room the folder's lock keeps for it
+        (:func:`~breakwater.common.folderlock.write_final_summary`).
+        """
+        data = {**summary, "process": self.process}
+        path = self.directory / files.SUMMARY
+        if data.get("status") == "running":
+            on_rank_zero(self.comm, lambda: bool(files.atomic_write_json(path, data)))
+        else:
+            on_rank_zero(self.comm, lambda: folderlock.write_final_summary(path, data))
 
     def log_quality(self, dynamic: bool = False) -> None:
         """Log (rank 0) the warnings of the contact quality not logged yet.

@@ -462,7 +462,7 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
                 log.warning("%s", line)
 
     def write() -> dict[str, Any]:
-        files.atomic_write_json(r.directory / files.SUMMARY, summary)
+        folderlock.write_final_summary(r.directory / files.SUMMARY, summary)
         if error is None:
             # Removed once the summary says finished, not before the last outputs: a
             # kill (the time limit) or a full disk between the two lost the whole run.
@@ -479,7 +479,7 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
             else:
                 summary["outputs"]["figures"] = [str(p.relative_to(r.directory))
                                                  for p in drawn]
-                files.atomic_write_json(r.directory / files.SUMMARY, summary)
+                folderlock.write_final_summary(r.directory / files.SUMMARY, summary)
         if report:
             print(format_report(summary, r.directory), flush=True)
         return summary
