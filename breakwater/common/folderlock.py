@@ -32,7 +32,8 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from breakwater.common.errors import CaseError, OutputError
-from breakwater.common.files import atomic_write_json, writing
+from breakwater.common import files
+from breakwater.common.files import writing
 from breakwater.common.liveness import describe, this_process
 from breakwater.common.parallel import on_rank_zero
 
@@ -135,13 +136,13 @@ def write_final_summary(path: pathlib.Path, summary: dict[str, object]) -> None:
         OutputError: The summary cannot be written (no room kept, or another reason).
     """
     try:
-        atomic_write_json(path, summary)
+        files.atomic_write_json(path, summary)
     except OutputError as e:
         cause = e.__cause__
         if not (isinstance(cause, OSError) and cause.errno in (errno.ENOSPC, errno.EDQUOT)
                 and spend_reserve(path.parent)):
             raise
-        atomic_write_json(path, summary)
+        files.atomic_write_json(path, summary)
 
 
 def _release(directory: pathlib.Path, created: bool) -> None:
