@@ -216,6 +216,6 @@ def test_a_run_cut_short(shared_dir: pathlib.Path, capsys: pytest.CaptureFixture
     assert read_fields(cut, "b").field_data["time"][0] == pytest.approx(4e-4, rel=1e-12)
     start = time.perf_counter()
     with pytest.raises(ValueError, match=r"^" + str(shared_dir / "meta" / "fields_a.bp")
-                       + r": cannot be read, its metadata is cut short \(a copy of a run "):
+                       + r": cannot be read, its metadata is cut short or damaged \(a copy "):
         field_times(shared_dir / "meta", "a")
     assert time.perf_counter() - start < 5.0  # ADIOS2's default: 10 s

@@ -31,8 +31,8 @@ import pathlib
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
-from breakwater.common.errors import CaseError, OutputError
 from breakwater.common import files
+from breakwater.common.errors import CaseError, OutputError
 from breakwater.common.files import writing
 from breakwater.common.liveness import describe, this_process
 from breakwater.common.parallel import on_rank_zero

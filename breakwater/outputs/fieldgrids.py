@@ -123,7 +123,7 @@ def _stored(directory: str | pathlib.Path, name: str) -> list[_Stored]:
                     t = float(np.asarray(f.read("step", step_selection=[k, 1])).ravel()[0])
                     by_time[t] = _Stored(t, path, k)
         except (_CutShort, RuntimeError):
-            raise ValueError(f"{path}: cannot be read, its metadata is cut short "
+            raise ValueError(f"{path}: cannot be read, its metadata is cut short or damaged "
                              f"({_CUT})") from None
     return [by_time[t] for t in sorted(by_time)]
 
