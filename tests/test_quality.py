@@ -7,6 +7,8 @@ penetration δ = max ⟨−g_n⟩₊, settlement s = |mean(½(u_s + u_m)·n)|, s
 
 from __future__ import annotations
 
+import pathlib
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -177,3 +179,137 @@ def test_range_matches_verdict(ε: float, h: float, E: float, p: float, s_b: flo
         assert at(low * (1 + 1e-6)).verdict == "ok"
         assert at(high * (1 - 1e-6)).verdict == "ok"
     assert "stiff" in at(high * (1 + 1e-6)).verdict
+
+
+def _graded_blocks(path: pathlib.Path, ratio: float) -> pathlib.Path:
+    """Block ``a`` on block ``b`` (both 1 m wide, ``b`` 0.5 m high), meshed by gmsh.
+
+    ``a``'s top slopes from 0.2 m high at its left (x = −0.5) to 0.6 m at its right, and
+    the interface has 10 facets in a geometric progression of ``ratio``, the finest at
+    the right end. Physical names as :func:`blocks.two_rectangles` (``a``, ``b``,
+    ``interface``, ``b_bottom``).
+    """
+    import gmsh
+    from breakwater.meshes import gmsh_session
+
+    from breakwater.common.parallel import on_rank_zero
+
+    def build() -> None:
+        with gmsh_session():
+            geo = gmsh.model.geo
+            p = [geo.addPoint(x, y, 0, 0.1) for x, y in
+                 ((-0.5, 0.0), (0.5, 0.0), (0.5, 0.5), (-0.5, 0.5), (0.5, 1.1), (-0.5, 0.7))]
+            bottom, right, itf, left = (geo.addLine(p[0], p[1]), geo.addLine(p[1], p[2]),
+                                        geo.addLine(p[3], p[2]), geo.addLine(p[3], p[0]))
+            a_right, a_top, a_left = (geo.addLine(p[2], p[4]), geo.addLine(p[4], p[5]),
+                                      geo.addLine(p[5], p[3]))
+            sb = geo.addPlaneSurface([geo.addCurveLoop([bottom, right, -itf, left])])
+            sa = geo.addPlaneSurface([geo.addCurveLoop([itf, a_right, a_top, a_left])])
+            geo.synchronize()
+            # From p[3] (left) to p[2] (right): each facet 1/ratio of the one before.
+            gmsh.model.mesh.setTransfiniteCurve(itf, 11, "Progression", 1 / ratio)
+            for dim, tags, name in ((2, [sa], "a"), (2, [sb], "b"), (1, [itf], "interface"),
+                                    (1, [bottom], "b_bottom")):
+                gmsh.model.addPhysicalGroup(dim, tags, name=name)
+            gmsh.model.mesh.generate(2)
+            gmsh.write(str(path))
+
+    on_rank_zero(COMM, build)
+    return path
+
+
+def _interface_facets(path: pathlib.Path) -> np.ndarray:
+    """The lengths of the interface's facets in the .msh file, left to right."""
+    import gmsh
+    from breakwater.meshes import gmsh_session
+
+    with gmsh_session():
+        gmsh.open(str(path))
+        tag = next(t for d, t in gmsh.model.getPhysicalGroups(1)
+                   if gmsh.model.getPhysicalName(d, t) == "interface")
+        x = gmsh.model.mesh.getNodesForPhysicalGroup(1, tag)[1].reshape(-1, 3)[:, 0]
+    return np.diff(np.sort(x))
+
+
+def test_graded_interface_compares_the_penetration_with_its_facet(
+        shared_dir: pathlib.Path) -> None:
+    """A graded interface (fine where the contact presses most, coarse elsewhere): the
+    largest penetration is compared with the facet where it is largest, not the mean.
+
+    A block whose top slopes (0.2 m high at its left, 0.6 m at its right) rests on
+    another under gravity on a penalty ε_n far softer than the blocks (E/ε_n = 34 m for
+    1 m blocks: they are rigid against it). A rigid block on a penalty's springs takes the
+    linear pressure of its weight and moment, here p(x) = ρ g H(x) (each column carries
+    its own weight), so the law p = ε_n g gives the largest penetration, at the right
+    end, δ = ρ g H(0.5) / ε_n, within a few % (the blocks' own deformation, of order
+    ε_n L / E = 3 %: 10 % allowed). ε_n is chosen for δ = 2 % of the finest facet (the
+    right end's, 0.02 m): 5 times 1 % of h there, 0.4 times 1 % of the mean h = 0.1 m.
+    Before, the report compared δ with the mean and said nothing of it (the warning of
+    the settlement criterion alone); now it warns, naming h and the facet.
+    """
+    import json
+
+    from blocks import two_block_case
+
+    from breakwater import cli
+
+    ratio = 1.3314  # 10 facets over 1 m, geometric, the last (the right end's) 0.02 m
+    mesh = _graded_blocks(shared_dir / "graded.msh", ratio)
+    sizes = COMM.bcast(_interface_facets(mesh) if COMM.rank == 0 else None)
+    h_end, h_mean = float(sizes[-1]), float(sizes.mean())
+    assert len(sizes) == 10 and h_end == pytest.approx(0.02, rel=0.01)
+    assert h_mean == pytest.approx(0.1, rel=1e-12) and sizes.min() == h_end
+    ρ, g, H = 2000.0, 9.81, 0.6
+    penalty = ρ * g * H / (0.02 * h_end)  # δ = 2 % of h_end
+    case = shared_dir / "graded.toml"
+    if COMM.rank == 0:
+        case.write_text(two_block_case(mesh.name, tail="[output]\nfield_interval = 0\n"
+                                       "figures = false\n")
+                        .replace("penalty = 1e12", f"penalty = {penalty!r}")
+                        .replace("end_time = 1e-3", "end_time = 2e-4"))
+    COMM.barrier()
+    out = shared_dir / "out"
+    assert cli.main(["run", str(case), "--out", str(out), "--no-progress", "--quiet"]) == 0
+    q = json.loads((out / "summary.json").read_text())["contact_quality"]["interface"]
+    δ = q["static_penetration"]
+    assert δ == pytest.approx(ρ * g * H / penalty, rel=0.1)
+    assert q["element_size"] == pytest.approx(h_mean, rel=1e-9)
+    assert δ < 0.01 * h_mean  # the mean h hides it
+    assert "static_penetration_over_h" in q["issues"], q["warnings"]
+    warning = next(w for w in q["warnings"] if "static penetration" in w and "element" in w)
+    assert (f"static penetration {δ:.3g} m > 1% of the element size h = {h_end:.3g} m, the "
+            "facet where it is largest; ") in warning, warning
+    assert q["penetration_element_size"] == pytest.approx(h_end, rel=1e-9)
+    assert q["static_penetration_over_h"] == pytest.approx(δ / h_end, rel=1e-12)
+
+
+def test_facet_size() -> None:
+    # As the mean h: a segment's length; in 3D the side of the equilateral triangle or
+    # the square of the facet's area (so a regular facet's size is its side).
+    from breakwater.model.pairs import facet_size
+
+    assert facet_size(np.array([[0.0, 1.0], [3.0, 5.0]])) == pytest.approx(5.0, rel=1e-15)
+    s = 2.0
+    triangle = np.array([[0, 0, 0], [s, 0, 0], [s / 2, s * np.sqrt(3) / 2, 0]])
+    assert facet_size(triangle) == pytest.approx(s, rel=1e-14)
+    square = np.array([[0, 0, 1], [3, 0, 1], [0, 3, 1], [3, 3, 1]], float)  # v₃ opp. v₀
+    assert facet_size(square) == pytest.approx(3.0, rel=1e-15)
+    assert facet_size(np.stack([triangle, 2 * triangle])) == pytest.approx([s, 2 * s])
+
+
+def test_dynamic_penetration_against_the_smallest_facet() -> None:
+    # Nothing penetrates in the static state: a dynamic penetration is compared with the
+    # interface's smallest facet (the run cannot tell where it will press), and the
+    # summary's ratios with it; without a measured size (an older checkpoint), the mean.
+    args = {**_goda(), "static_penetration": 0.0}
+    h = args["element_size"]
+    q = quality.assess(**args, dynamic_penetration=0.005 * h, penetration_size=h / 4)
+    assert q.issues == ("dynamic_penetration_over_h",)
+    assert f"> 1% of the element size h = {h / 4:.3g} m, the smallest facet of the " \
+           "interface; " in q.warnings[0]
+    d = q.as_dict()
+    assert d["penetration_element_size"] == h / 4 and d["element_size"] == h
+    assert d["dynamic_penetration_over_h"] == pytest.approx(0.02, rel=1e-14)
+    low, _ = q.suggested_penalty  # r = 2: ε_n (2 / 0.8)² (the edge's exponent ½)
+    assert low == pytest.approx((2 / 0.8) ** 2 * args["penalty"], rel=1e-12)
+    assert quality.assess(**args, dynamic_penetration=0.005 * h).issues == ()

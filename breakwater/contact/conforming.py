@@ -23,6 +23,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common.errors import MeshError
 from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.model import ContactModel, PairData
+from breakwater.model.pairs import facet_size
 
 RELEASE = 100.0
 """Slip speed of a released body's slave nodes at t = 0, in units of χ: the law then
@@ -42,6 +43,8 @@ class InterfaceNodes:
     Attributes:
         x: Node coordinates, shape ``(n, gdim)``, sorted, the same on every rank.
         normal: Master outward unit normal at each node (facet normals averaged).
+        facet_size: The size of the smallest facet at each node (m; :func:`breakwater.
+            model.pairs.facet_size`).
 
     """
 
@@ -106,17 +109,20 @@ class InterfaceNodes:
             n /= np.linalg.norm(n)
             if np.dot(X[c].mean(axis=0) - v.mean(axis=0), n) < 0:  # point into the slave
                 n = -n
-            local.append((facet_nodes(X[f], corners, degree, gdegree), n))
+            local.append((facet_nodes(X[f], corners, degree, gdegree), n,
+                          float(facet_size(v))))
         facet_list = [item for part in comm.allgather(local) for item in part]
         normal = np.zeros((self.size, gdim))
+        self.facet_size = np.full(self.size, np.inf)
         scale = max(float(np.ptp(self.x, axis=0).max()), 1e-300)
-        for points, n in facet_list:
+        for points, n, size in facet_list:
             d = np.linalg.norm(self.x[None, :, :] - points[:, None, :], axis=2)
             at = d.argmin(axis=1)
             if d[np.arange(len(points)), at].max() > 1e-9 * scale:
                 raise MeshError(f"interface '{pair.spec.interface}' is not conforming: a "
                                 "facet's node is not an interface node")
             normal[at] += n
+            np.minimum.at(self.facet_size, at, size)
         length = np.linalg.norm(normal, axis=1)
         if np.any(length == 0):
             raise MeshError(f"interface '{pair.spec.interface}': a node lies on no facet")

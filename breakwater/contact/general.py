@@ -471,7 +471,8 @@ class SurfaceContact(SurfaceForces):
         Returns:
             ``x`` (current position), ``gap`` (g_n; NaN without a projection),
             ``pressure``, ``weight`` (reference length), ``facet`` (master facet, −1:
-            none), ``xi`` (its local coordinate).
+            none), ``xi`` (its local coordinate), ``slave_facet`` (the slave facet of a
+            point with a projection, −1: none).
         """
         _, u1, _ = self._state(accepted=accepted)
         p = self._normal(u1)  # the points of this state (cached: the search once)
@@ -481,7 +482,8 @@ class SurfaceContact(SurfaceForces):
         total = len(points)
         out: dict[str, Any] = {"x": points, "weight": p["all_weight"],
                                "gap": np.full(total, np.nan), "pressure": np.zeros(total),
-                               "facet": np.full(total, -1), "xi": np.zeros(total)}
+                               "facet": np.full(total, -1), "xi": np.zeros(total),
+                               "slave_facet": np.full(total, -1)}
         if len(p["index"]):
             gap = p["gap"]
             i = p["index"]
@@ -489,6 +491,7 @@ class SurfaceContact(SurfaceForces):
             out["pressure"][i] = self.law.normal.pressure(gap)
             out["facet"][i] = p["facet"]
             out["xi"][i] = p["xi_bar"]
+            out["slave_facet"][i] = p["slave_facet"]
         self._state_of = (p, out)
         return out
 

@@ -155,15 +155,22 @@ class ConformingPair:
                                         *(self._sides(v) if v is not None else (None, None)))
 
     def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
-        """h: the interface's length over its facets; δ and s at its nodes."""
+        """h: the interface's length over its facets; δ and s at its nodes.
+
+        The penetration's facet size: the smallest facet at the node where δ is largest
+        (the interface's smallest when nothing penetrates).
+        """
         m, p, nd = self.model, self.pair, self.nodes
         us, um = nd.gather(*self._sides(u))
+        gap = nd.contact_state(*self._sides(u))["gap"]
+        δ = max_penetration(gap)
+        at = nd.facet_size[int(np.argmin(gap))] if δ > 0 else nd.facet_size.min(initial=np.inf)
         return StaticMeasures(
             penalty=p.spec.penalty, element_size=mean_facet_length(m, p),
             young_moduli=(m.bodies[p.slave].spec.material.E,
                           m.bodies[p.master].spec.material.E),
-            static_penetration=max_penetration(nd.contact_state(*self._sides(u))["gap"]),
-            settlement=settlement(us, um, nd.normal))
+            static_penetration=δ, settlement=settlement(us, um, nd.normal),
+            penetration_size=float(at) if np.isfinite(at) else None)
 
     def static_check(self) -> str | None:
         """None: the two sides share their interface nodes, so they cannot start overlapped.

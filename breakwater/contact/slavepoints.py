@@ -51,7 +51,7 @@ from dolfinx import fem
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
 from breakwater.contact.projection import FacetGrid, closest_point, curve, project, shape
-from breakwater.model.pairs import PROBE_KEYS, StaticMeasures, settlement
+from breakwater.model.pairs import PROBE_KEYS, StaticMeasures, facet_size, settlement
 
 if TYPE_CHECKING:
     from breakwater.contact.surfacesearch import SurfaceSearch
@@ -321,18 +321,28 @@ def static_measures(contact: SurfaceSearch, state: dict[str, np.ndarray],
     :data:`ROUND_OFF` of the surfaces' extent counts as none: the gap is a difference
     of coordinates of that size, whose round-off (≈ 1e-16 of it) a pair touching in
     the undeformed state shows as a penetration (measured 6e-19 m), and against a zero
-    settlement it would read as a too soft penalty.
+    settlement it would read as a too soft penalty. The penetration's facet size is the
+    smaller of the slave and the master facet at the point where it is largest (the
+    slave surface's smallest facet when nothing penetrates).
     """
     c = contact
     closed = state["gap"] <= 0  # NaN (no projection): open
     X = np.concatenate([c.slave.X, c.master.X]).reshape(-1, c.slave.X.shape[2])
     noise = ROUND_OFF * float(np.ptp(X, axis=0).max())
     penetration = float(-state["gap"][closed].min(initial=0.0))
+    penetration = penetration if penetration > noise else 0.0
     facets = max(len(c.slave.X), 1)
+    sizes = facet_size(c.slave.X[:, :2])
+    at = float(sizes.min(initial=np.inf))
+    if penetration > 0:
+        k = int(np.flatnonzero(closed)[np.argmin(state["gap"][closed])])
+        at = float(min(sizes[state["slave_facet"][k]],
+                       facet_size(c.master.X[state["facet"][k], :2])))
     points = SlavePoints.nodes(c)
     nodal = points.evaluate(c.interface_values(u))
     return StaticMeasures(
         penalty=c.spec.penalty, element_size=float(state["weight"].sum()) / facets,
         young_moduli=young_moduli,
-        static_penetration=penetration if penetration > noise else 0.0,
-        settlement=settlement(nodal["u_slave"], nodal["u_master"], points.normal0))
+        static_penetration=penetration,
+        settlement=settlement(nodal["u_slave"], nodal["u_master"], points.normal0),
+        penetration_size=at if np.isfinite(at) else None)

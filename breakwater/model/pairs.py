@@ -34,8 +34,8 @@ if TYPE_CHECKING:
 
 __all__ = ["INTEGRATIONS", "PROBE_KEYS", "PROBE_KEYS_3D", "ContactPair", "EnergyTerms",
            "FieldNodes", "Pair", "PairData", "PairProbe", "StaticMeasures", "SurfacePair",
-           "check_pair_settings", "max_penetration", "pair_names", "probe_keys", "probed_pair",
-           "settlement"]
+           "check_pair_settings", "facet_size", "max_penetration", "pair_names", "probe_keys",
+           "probed_pair", "settlement"]
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
@@ -211,6 +211,10 @@ class StaticMeasures:
         young_moduli: Young's moduli (slave, master) (Pa).
         static_penetration: Largest static penetration (m).
         settlement: Static settlement (m), see :func:`settlement`.
+        penetration_size: The size (:func:`facet_size`) of the facet where the static
+            penetration is largest (the smallest of those meeting at its node), or the
+            smallest facet of the interface when nothing penetrates (m); None: not
+            measured (the mean h stands for it).
     """
 
     penalty: float
@@ -218,6 +222,7 @@ class StaticMeasures:
     young_moduli: tuple[float, float]
     static_penetration: float
     settlement: float
+    penetration_size: float | None = None
 
 
 @dataclass(frozen=True)
@@ -398,6 +403,25 @@ def probed_pair(probe: str, pair: int | str, conforming: int, general: Sequence[
         raise ValueError(f"pair probe '{probe}': no contact pair {pair} "
                          f"(the model has {conforming})")
     return pair
+
+
+def facet_size(vertices: np.ndarray) -> np.ndarray:
+    """The size h of facets from their vertices ``(..., corners, gdim)`` (m).
+
+    As the interface's mean h (:func:`breakwater.contact.conforming.mean_facet_length`):
+    in 2D the length; in 3D the side of the equilateral triangle (3 corners) or of the
+    square (4 corners, dolfinx's order: v₃ opposite v₀) of the facet's area.
+    """
+    v = np.asarray(vertices, dtype=float)
+    if v.shape[-1] == 2:
+        return np.linalg.norm(v[..., 1, :] - v[..., 0, :], axis=-1)
+    if v.shape[-2] == 3:
+        area = 0.5 * np.linalg.norm(np.cross(v[..., 1, :] - v[..., 0, :],
+                                             v[..., 2, :] - v[..., 0, :]), axis=-1)
+        return np.sqrt(area * 4 / np.sqrt(3))
+    area = 0.5 * np.linalg.norm(np.cross(v[..., 3, :] - v[..., 0, :],
+                                         v[..., 2, :] - v[..., 1, :]), axis=-1)
+    return np.sqrt(area)
 
 
 def max_penetration(gap: np.ndarray) -> float:

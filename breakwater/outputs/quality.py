@@ -6,6 +6,11 @@ result (the paper asks for "no noticeable interpenetration", the paper's §5.4);
 it buys nothing but a worse-conditioned Jacobian. The measures, per contact pair:
 
 - ``h``, the element size at the interface: the mean length of the interface facets;
+- ``h_δ``, the size of the facet where the static penetration is largest (the smallest
+  facet at its node; the interface's smallest facet when nothing penetrates): the
+  penetration is compared with the facets it distorts, not with the mean (on a graded
+  mesh, fine where the contact presses and coarse elsewhere, the mean hid a penetration
+  of several % of the pressed facets: before 2026-11-28);
 - ``δ_static`` and ``δ_dynamic``, the largest nodal penetration ``max ⟨−g_n⟩₊`` over
   the interface nodes, in the static state and over the time steps (m);
 - ``s``, the static settlement: the mean, over the interface nodes, of the normal
@@ -16,7 +21,7 @@ it buys nothing but a worse-conditioned Jacobian. The measures, per contact pair
 
 Thresholds (constants below) and why:
 
-- too soft: ``max(δ_static, δ_dynamic) > 1% h`` (:data:`MAX_PENETRATION_OVER_H`): the
+- too soft: ``max(δ_static, δ_dynamic) > 1% h_δ`` (:data:`MAX_PENETRATION_OVER_H`): the
   penetration then distorts the interface elements themselves by more than the
   error of a P2 interpolation of a smooth field on them, and it is visible on a
   deformed plot scaled to show the elements; or ``δ_static > 10% s``
@@ -101,16 +106,19 @@ def stiffness_ratio(penalty: float, h: float, young_modulus: float) -> float:
 
 def suggested_penalty(penalty: float, h: float, young_moduli: tuple[float, float],
                       static_penetration: float, settlement_: float,
-                      dynamic_penetration: float | None = None) -> tuple[float, float]:
+                      dynamic_penetration: float | None = None,
+                      penetration_size: float | None = None) -> tuple[float, float]:
     """The ε_n range meeting the criteria of this module (see its docstring).
 
     Args:
         penalty: The current ε_n (N/m³).
-        h: Interface element size (m).
+        h: Mean interface element size (m), of the stiffness criterion.
         young_moduli: Young's moduli of the two sides (Pa).
         static_penetration: Static penetration at ``penalty`` (m).
         settlement_: Static settlement (m), penetration included.
         dynamic_penetration: Largest penetration over the time steps (m), if known.
+        penetration_size: The facet size h_δ the penetration is compared with (m);
+            None: ``h``.
 
     Returns:
         ``(low, high)``: ``low`` from the penetration criteria (0 without
@@ -119,7 +127,7 @@ def suggested_penalty(penalty: float, h: float, young_moduli: tuple[float, float
     """
     δ = max(static_penetration, dynamic_penetration or 0.0)
     # Each criterion's ratio r: the penetration over what it allows (> 1: fails).
-    ratios = [δ / (MAX_PENETRATION_OVER_H * h)]
+    ratios = [δ / (MAX_PENETRATION_OVER_H * (penetration_size or h))]
     # The settlement (both sides averaged) holds at most half the largest penetration:
     # s' = s − (δ − δ')/2 at ε' > ε_n, s_b = s − δ/2 the bodies' own part at least.
     # δ' ≤ f s' is δ' (1 − f/2) ≤ f s_b: r = δ (1 − f/2) / (f s_b), exactly δ ≤ f s at
@@ -149,6 +157,7 @@ class ContactQuality:
         penalty: ε_n (N/m³).
         element_size: Mean interface facet length h (m).
         settlement: Static settlement s (m).
+        penetration_size: The facet size h_δ the penetrations are compared with (m).
         static_penetration: Largest static penetration (m).
         dynamic_penetration: Largest penetration over the steps (m), None before.
         time_of_dynamic_penetration: When it occurred (s).
@@ -170,6 +179,7 @@ class ContactQuality:
     issues: tuple[str, ...]
     suggested_penalty: tuple[float, float]
     warnings: tuple[str, ...]
+    penetration_size: float = 0.0
 
     @property
     def verdict(self) -> str:
@@ -182,6 +192,7 @@ class ContactQuality:
     def as_dict(self) -> dict[str, object]:
         """The summary entry (``contact_quality.<pair>`` in ``summary.json``)."""
         h, s = self.element_size, self.settlement
+        h_δ = self.penetration_size or h
 
         def over(x: float | None, y: float) -> float | None:
             return None if x is None or not y > 0 else x / y
@@ -189,13 +200,14 @@ class ContactQuality:
         return {
             "penalty": self.penalty,
             "element_size": h,
+            "penetration_element_size": h_δ,
             "static_settlement": s,
             "static_penetration": self.static_penetration,
-            "static_penetration_over_h": over(self.static_penetration, h),
+            "static_penetration_over_h": over(self.static_penetration, h_δ),
             "static_penetration_over_settlement": over(self.static_penetration, s),
             "dynamic_penetration": self.dynamic_penetration,
             "time_of_dynamic_penetration": self.time_of_dynamic_penetration,
-            "dynamic_penetration_over_h": over(self.dynamic_penetration, h),
+            "dynamic_penetration_over_h": over(self.dynamic_penetration, h_δ),
             "dynamic_penetration_over_settlement": over(self.dynamic_penetration, s),
             "penalty_h_over_E": {"slave": self.stiffness_ratio[0],
                                  "master": self.stiffness_ratio[1]},
@@ -213,7 +225,8 @@ class ContactQuality:
 def assess(name: str, penalty: float, element_size: float,
            young_moduli: tuple[float, float], static_penetration: float,
            settlement_: float, dynamic_penetration: float | None = None,
-           time_of_dynamic_penetration: float | None = None) -> ContactQuality:
+           time_of_dynamic_penetration: float | None = None,
+           penetration_size: float | None = None) -> ContactQuality:
     """Assess one contact pair against the thresholds of this module.
 
     Args:
@@ -225,12 +238,18 @@ def assess(name: str, penalty: float, element_size: float,
         settlement_: Static settlement (m), see :func:`settlement`.
         dynamic_penetration: Largest penetration over the steps (m), if any.
         time_of_dynamic_penetration: When it occurred (s).
+        penetration_size: The size h_δ of the facet where the static penetration is
+            largest (the interface's smallest facet when nothing penetrates) (m): the
+            penetrations are compared with it; None (not measured): the mean ``h``.
     """
     h, s = element_size, settlement_
+    h_δ = penetration_size or h
+    at = ("the facet where it is largest" if static_penetration > 0 else
+          "the smallest facet of the interface") if penetration_size else "the mean facet"
     ratios = (stiffness_ratio(penalty, h, young_moduli[0]),
               stiffness_ratio(penalty, h, young_moduli[1]))
     low, high = suggested_penalty(penalty, h, young_moduli, static_penetration, s,
-                                  dynamic_penetration)
+                                  dynamic_penetration, h_δ)
     advice = f"suggested ε_n in [{low:.3g}, {high:.3g}] N/m³" if low < high else (
         f"suggested ε_n = {high:.3g} N/m³, the stiffest accepted (at a stiff body's edge "
         "the penetration falls as ε_n^-½ only: if it is still too soft, refine the mesh "
@@ -240,19 +259,20 @@ def assess(name: str, penalty: float, element_size: float,
     issues: list[str] = []
     warnings: list[str] = []
     pre = f"contact '{name}': penalty ε_n = {penalty:.3g} N/m³"
-    limit = MAX_PENETRATION_OVER_H * h
+    limit = MAX_PENETRATION_OVER_H * h_δ
     if static_penetration > limit:
         issues.append("static_penetration_over_h")
         warnings.append(f"{pre} is too soft: static penetration {static_penetration:.3g} m "
-                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h:.3g} m;"
-                        f" {advice}")
+                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h_δ:.3g} m,"
+                        f" {at}; {advice}")
     if dynamic_penetration is not None and dynamic_penetration > limit:
         when = ("" if time_of_dynamic_penetration is None
                 else f" at t = {time_of_dynamic_penetration:.4g} s")
         issues.append("dynamic_penetration_over_h")
+        where = at.replace("where it is", "where the static penetration is")
         warnings.append(f"{pre} is too soft: penetration {dynamic_penetration:.3g} m{when} "
-                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h:.3g} m;"
-                        f" {advice}")
+                        f"> {MAX_PENETRATION_OVER_H:.0%} of the element size h = {h_δ:.3g} m,"
+                        f" {where}; {advice}")
     if static_penetration > MAX_PENETRATION_OVER_SETTLEMENT * s:
         issues.append("penetration_over_settlement")
         warnings.append(f"{pre} is too soft: static penetration {static_penetration:.3g} m "
@@ -265,7 +285,7 @@ def assess(name: str, penalty: float, element_size: float,
                         f"conditioning for no accuracy; {advice}")
     return ContactQuality(penalty, h, s, static_penetration, dynamic_penetration,
                           time_of_dynamic_penetration, ratios, tuple(issues), (low, high),
-                          tuple(warnings))
+                          tuple(warnings), h_δ)
 
 
 @dataclass(frozen=True)
@@ -281,6 +301,8 @@ class PairInputs:
         young_moduli: Young's moduli (slave, master) (Pa).
         static_penetration: Largest static penetration (m).
         settlement: Static settlement (m), see :func:`settlement`.
+        penetration_size: The facet size h_δ where the static penetration is largest
+            (m), None: not measured (a checkpoint of an earlier version).
 
     The pair's largest penetration over a run is its history column
     ``<name>_penetration``.
@@ -292,6 +314,7 @@ class PairInputs:
     young_moduli: tuple[float, float]
     static_penetration: float
     settlement: float
+    penetration_size: float | None = None
 
     def __post_init__(self) -> None:
         a, b = self.young_moduli  # (a list when read back from JSON)
@@ -302,10 +325,11 @@ class PairInputs:
         """The quality of the pair (:func:`assess`), with the dynamic penetration if known."""
         return assess(self.name, self.penalty, self.element_size, self.young_moduli,
                       self.static_penetration, self.settlement, dynamic_penetration,
-                      time_of_dynamic_penetration)
+                      time_of_dynamic_penetration, self.penetration_size)
 
     @classmethod
     def of(cls, name: str, measures: StaticMeasures) -> PairInputs:
         """The inputs of the pair ``name`` from its static measures."""
         return cls(name, measures.penalty, measures.element_size, measures.young_moduli,
-                   measures.static_penetration, measures.settlement)
+                   measures.static_penetration, measures.settlement,
+                   measures.penetration_size)
