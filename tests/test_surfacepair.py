@@ -831,8 +831,9 @@ def test_friction_kept_per_iterate_follows_the_crawl_points(shared_dir: pathlib.
     """The residual of an iterate is recomputed when its crawl points change.
 
     The residual and the Jacobian of one iterate share the nodal friction
-    (``SurfaceForces._nodal_friction``). The slip guard's crawl points and their drop
-    (the solve tested again on the law itself) change the friction at the same iterate:
+    (:func:`breakwater.contact.general.nodal_friction`). The slip guard's crawl points
+    and their drop (the solve tested again on the law itself) change the friction at the
+    same iterate:
     the block of the sliding test, mid-slide, a step that grows every slip tenfold (so the
     guard sets crawl points; twice, so that they are written into the array the first
     evaluation read), f_c at the iterate before, with and after the drop of the crawl

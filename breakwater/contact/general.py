@@ -72,7 +72,7 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces", "nodal_friction"]
 
 QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
@@ -88,6 +88,39 @@ def scatter_add(out: np.ndarray, pos: np.ndarray, values: np.ndarray) -> np.ndar
     keep = pos >= 0
     out += np.bincount(pos[keep], weights=values[keep], minlength=len(out))
     return out
+
+
+def nodal_friction(pair: SurfaceForces, lam: np.ndarray,
+                   frozen: tuple[np.ndarray, np.ndarray, np.ndarray], v1: np.ndarray,
+                   lin: np.ndarray) -> tuple[Any, ...]:
+    """A general pair's friction normals and nodal friction at an iterate (kept).
+
+    :func:`~.newtonaids.friction_normals` and
+    :func:`~breakwater.contact.forcekernels.friction` of the slave nodes' normal forces
+    ``lam``, the start-of-step projection ``frozen``,
+    the velocities ``v1`` and the crawl points ``lin``. The residual and the Jacobian
+    of one Newton iterate ask for the same: kept while those are the same objects (v₁
+    read-only; λ a new array per search), the crawl points unchanged
+    (:attr:`~.newtonaids.CrawlPoints.version`) and the law the same.
+
+    Returns:
+        ``(λ̂, s, k, v_T, force, unit)``: the scaled forces λ̂ = s λ and the scale, then
+        the kernel's.
+    """
+    _, _, mu, chi = pair._law
+    key = (pair.crawl.version, mu, chi)
+    kept = pair._kept_friction
+    if (kept is not None and kept[0] is lam and kept[1] is frozen and kept[2] is v1
+            and kept[3] is lin and kept[4] == key):
+        return kept[5]  # type: ignore[no-any-return]
+    facet, N0, t0 = frozen
+    lam_f, s = newtonaids.friction_normals(lam, facet)
+    out = (lam_f, s, *forcekernels.friction(lam_f, facet, N0, t0, pair._node_pos, pair._pm,
+                                            v1, mu, chi, lin))
+    if not v1.flags.writeable:
+        pair._kept_friction = (lam, frozen, v1, lin, key, out)
+    return out
+
 
 
 class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
@@ -115,7 +148,7 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         self._accepted_friction: tuple[Any, np.ndarray, dict[str, np.ndarray] | None] | None \
             = None
         self.crawl = newtonaids.CrawlPoints(len(self.node_pos))
-        # _nodal_friction's last: (λ, frozen, v₁, crawl points, key, the result).
+        # nodal_friction's last: (λ, frozen, v₁, crawl points, key, result).
         self._kept_friction: tuple[Any, ...] | None = None
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, λ: np.ndarray,
@@ -168,41 +201,11 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         out = p["out"].copy()
         if self.spec.friction:
             self._step_frozen = frozen = self._frozen(u0)
-            _, _, k, _, force, _ = self._nodal_friction(
-                p["lam"], frozen, v1, self.crawl.none if accepted else self.crawl.at)
+            _, _, k, _, force, _ = nodal_friction(
+                self, p["lam"], frozen, v1, self.crawl.none if accepted else self.crawl.at)
             if len(k):
                 forcekernels.add_friction(out, k, force, frozen[0], frozen[1], self._node_pos,
                                           self._pm)
-        return out
-
-    def _nodal_friction(self, lam: np.ndarray, frozen: tuple[np.ndarray, np.ndarray, np.ndarray],
-                        v1: np.ndarray, lin: np.ndarray) -> tuple[Any, ...]:
-        """The friction's normal forces and the nodal friction at an iterate (cached).
-
-        :func:`~.newtonaids.friction_normals` and
-        :func:`~breakwater.contact.forcekernels.friction` of the slave nodes' normal
-        forces ``lam``, the start-of-step projection ``frozen``, the velocities ``v1``
-        and the crawl points ``lin``. The residual and the Jacobian of one Newton
-        iterate ask for the same: kept while those arrays are the same (read-only)
-        objects, the crawl points unchanged (:attr:`~.newtonaids.CrawlPoints.version`)
-        and the law the same.
-
-        Returns:
-            ``(λ̂, s, k, v_T, force, unit)``: the scaled forces λ̂ = s λ and the scale,
-            then the kernel's.
-        """
-        _, _, mu, chi = self._law
-        key = (self.crawl.version, mu, chi)
-        kept = self._kept_friction
-        if (kept is not None and kept[0] is lam and kept[1] is frozen and kept[2] is v1
-                and kept[3] is lin and kept[4] == key):
-            return kept[5]
-        facet, N0, t0 = frozen
-        lam_f, s = newtonaids.friction_normals(lam, facet)
-        out = (lam_f, s, *forcekernels.friction(lam_f, facet, N0, t0, self._node_pos,
-                                                self._pm, v1, mu, chi, lin))
-        if not v1.flags.writeable:  # an iterate's (λ: a new array per search, never changed)
-            self._kept_friction = (lam, frozen, v1, lin, key, out)
         return out
 
     def left_product(self, X: np.ndarray) -> np.ndarray:
@@ -247,7 +250,7 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
         lam = p["lam"]
         if self.spec.friction and len(p["index"]):
             frozen = facet, N0, t0 = self._frozen(u0)
-            lam, s, k, v_T, _, unit = self._nodal_friction(lam, frozen, v1, self.crawl.at)
+            lam, s, k, v_T, _, unit = nodal_friction(self, lam, frozen, v1, self.crawl.at)
             unit = unit * s  # the friction's λ̂ = s λ, s taken as a constant: dλ̂ = s dλ
         if facet is None:
             facet, N0, t0 = np.zeros(0, np.int64), np.zeros((0, 1)), np.zeros((0, 2))

@@ -140,17 +140,15 @@ log = logging.getLogger("breakwater.statics.relaxation")
 TOLERANCE = 1e-9
 """Default static residual ‖f − K u − f_c(u)‖ of the state, as a fraction of ‖f‖.
 
-The Newton tolerance of a time step (``NewtonOptions.atol``); the case's
-``[initial] tolerance``. The pseudo steps are exact (the bulk balances the Newton's
-interface iterate: :attr:`breakwater.stepping.condensed.CondensedNewton.consistent`),
-so the state's residual is the last step's ‖M (u₁ − u_k)‖/c plus its Newton's, whose
+A time step's Newton tolerance (``NewtonOptions.atol``); the case's ``[initial] tolerance``.
+The pseudo steps are exact (:attr:`breakwater.stepping.condensed.CondensedNewton.consistent`):
+the state's residual is the last step's ‖M (u₁ − u_k)‖/c plus its Newton's, whose
 tolerances are set to this too."""
 
 RESIDUAL_FRICTION = 1e-4
 """Friction coefficient of the nearly frictionless stage (1b in the module doc)."""
 
-#: The warning of a frictionless initial state asked for and not found (both kinds of pair;
-#: before, a debug line only: the summary's static.initial_state said it).
+#: The warning of a frictionless initial state asked for and not found (both kinds of pair).
 FALLBACK = ("initial state: no frictionless static equilibrium ([initial] loading = "
             "\"frictionless\"): the frictional one is used, gravity and the initial loads "
             "applied with friction active (static.initial_state = \"frictional\")")
@@ -166,9 +164,8 @@ FLOOR = 1e-7
 round-off (the stall test of :func:`breakwater.stepping.solver.convergence_reason`)."""
 
 HELD_FRICTION = 100.0
-"""Friction coefficient of every pair while the bodies are held (stage 3); the
-regularisation χ is multiplied by it too, so that the stick tangent μp/χ stays that of
-μ = 1 (the Newton of a step converges as in stage 2)."""
+"""Friction coefficient of every pair while the bodies are held (stage 3); χ is multiplied
+by it too: the stick tangent μp/χ stays that of μ = 1 (a step converges as in stage 2)."""
 
 
 @dataclasses.dataclass
@@ -185,11 +182,8 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
 
     c grows ×:data:`GROWTH` per step up to c_max while the increments stay below half
     the free fall's at c₀ (:data:`~breakwater.statics.pseudostep.FALL` search radius); a
-    failed step after a grown one is retried at a tenth of it, and c grows back to the
-    failed value only after :data:`STALL` + 1 steps converge below it, so that a stall
-    there is found first (the frictionless stage of the Goda caisson meshed apart, which
-    has no state, retried c_max after every success: 392 Newton iterations against 157
-    on the 6/30 mm mesh, the state the same bit for bit). A step in which some
+    failed step after a grown one is retried at a tenth of it, and c grows back only
+    after a stall could be found below it (:data:`STALL` + 1 steps). A step in which some
     pair's gap closes by more than half the increment (a body falling onto its support)
     is progress: it is not counted as a stalled step nor in :data:`MAX_STEPS`; a body
     lands from at most :data:`~breakwater.statics.pseudostep.LANDING` search radii.
@@ -253,9 +247,8 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
             # Not at c₀'s free fall (FALL r per step: whether it is below FALL r is
             # round-off, which differed between serial and 2 ranks).
             grown = min(c * GROWTH, ps.c_max)
-            # Not back to a c that failed before STALL + 1 steps have converged below it
-            # (a stall at the lower c is found first):
-            # it fails again where the contact state has not changed.
+            # Not back to a failed c before a stall below it could be found (the Goda caisson
+            # meshed apart retried c_max after every success: 392 Newton iterations, now 157).
             c = c if grown >= failed and since <= STALL else grown
     left = residual / ps.scale
     why = (f"; its residual stalled at {left:.1e} of the load, above [initial] tolerance = "
