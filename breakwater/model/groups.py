@@ -23,12 +23,32 @@ from breakwater.model.residual import ModelForms
 __all__ = ["ModelGroups"]
 
 
+def _owned_measure(msh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray) -> float:
+    """The measure of this rank's share of entities: owned points' count, facets' area/length.
+
+    Facets are taken flat between their vertices (a quadrilateral as two triangles):
+    exact for the plane faces a fixed boundary usually is.
+    """
+    owned = entities[entities < msh.topology.index_map(dim).size_local]
+    if dim == 0 or not len(owned):
+        return float(len(owned))
+    msh.topology.create_connectivity(dim, 0)
+    x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, dim, owned, False)]
+    if dim == 1:
+        return float(np.linalg.norm(x[:, 1] - x[:, 0], axis=1).sum())
+    area = 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+    if msh.topology.cell_type == dolfinx.mesh.CellType.hexahedron:  # v3 opposite v0
+        area += 0.5 * np.linalg.norm(np.cross(x[:, 1] - x[:, 3], x[:, 2] - x[:, 3]), axis=1)
+    return float(area.sum())
+
+
 class ModelGroups(ModelForms):
     """The model's named groups on its bodies: look-ups, fixed boundaries and loads."""
 
     _by_name: dict[str, BodyData]
     _cell_body: np.ndarray
     _fixed: list[tuple[str, int, tuple[int, ...]]]  # group, body, components
+    _fixed_sizes: list[float]  # each entry of _fixed: its area (3D), length or points
     _load_data: list[tuple[int, np.ndarray]]
 
     def body(self, name: str) -> BodyData:
@@ -96,6 +116,8 @@ class ModelGroups(ModelForms):
                 dofs = fem.locate_dofs_topological(Vc, dim, entities)
                 bcs.append(fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs, Vc))
             self._fixed.append((fixed.group, body.index, tuple(comps)))
+            self._fixed_sizes.append(self.comm.allreduce(
+                _owned_measure(body.submesh, dim, entities)))
         return bcs
 
     def _locate_points(self, group: str) -> tuple[BodyData, np.ndarray]:
@@ -128,6 +150,24 @@ class ModelGroups(ModelForms):
         """The fixed boundaries on a body: (facet or point group, components held)."""
         index = self.body(body).index
         return [(group, comps) for group, i, comps in self._fixed if i == index]
+
+    def fixed_summary(self) -> dict[str, dict[str, object]]:
+        """What the fixed groups hold (the summary's ``fixed``), by group name.
+
+        Each: ``components`` held (``"x"``, ``"y"``, ``"z"``), and per body it holds
+        the group's ``area`` on it (m², 3D), ``length`` (m, plane strain) or ``points``.
+        """
+        out: dict[str, dict[str, object]] = {}
+        fdim = self.mesh.topology.dim - 1
+        for (group, index, comps), size in zip(self._fixed, self._fixed_sizes, strict=True):
+            dim = self.mesh_data.physical_groups.get(group, (fdim, 0))[0]
+            key = "points" if dim == 0 else "area" if fdim == 2 else "length"
+            entry = out.setdefault(group, {"components": ["xyz"[c] for c in comps],
+                                           "bodies": {}})
+            bodies = entry["bodies"]
+            assert isinstance(bodies, dict)
+            bodies[self.bodies[index].spec.name] = {key: int(size) if dim == 0 else size}
+        return out
 
     def _build_load(self, k: int, load: SurfaceLoad) -> LoadData:
         """The load's measure: one-sided facet integrals on the loaded body.

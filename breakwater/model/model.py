@@ -178,7 +178,7 @@ class ContactModel(ModelGroups):
             raise MeshError("general contact pairs (non-matching surfaces) are plane strain "
                             "only for now: in 3D the bodies must share their interface's nodes")
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
-        self._fixed = []
+        self._fixed, self._fixed_sizes = [], []
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
         self._load_data = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]

@@ -380,6 +380,18 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                      f"weight {num(s.get('weight'))} N{per}, mean pressure "
                      f"{num(s.get('mean_contact_pressure'))} Pa (edge "
                      f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
+    held = []
+    for group, f in summary.get("fixed", {}).items():
+
+        def size(k: str, v: float) -> str:
+            return (f"{v:g} point{'' if v == 1 else 's'}" if k == "points" else
+                    f"{v:.4g} m{'²' if k == 'area' else ''}")
+
+        on = ", ".join(f"{body} " + ", ".join(size(k, v) for k, v in measures.items())
+                       for body, measures in f.get("bodies", {}).items())
+        held.append(f"{group} {''.join(f.get('components', []))} ({on})")
+    if held:
+        lines.append(f"  fixed: {'; '.join(held)}")
     for name, peak in d.get("peak_ux", {}).items():
         line = (f"  {name}: peak u_x {num(peak.get('value'))} m at t = "
                 f"{num(peak.get('time'))} s, residual {num(d.get('residual_ux', {}).get(name))} m")

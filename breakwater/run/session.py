@@ -153,6 +153,7 @@ class Session:
         self.model, self.time, self.output = model, time, output
         self.fingerprint = fingerprint
         self.extra = dict(extra_summary or {})
+        self.extra.setdefault("fixed", model.fixed_summary())  # what holds the bodies
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()

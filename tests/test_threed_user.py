@@ -1,0 +1,80 @@
+"""A user's own 3D mesh: a .geo written by hand, not breakwater's builders.
+
+``tests/bad_cases/run/h_tet_slab.geo``: a 0.3 x 0.2 x 0.25 m block on a 0.8 x 0.1 x
+0.5 m slab, linear tetrahedra of gmsh's default 3D algorithm (a few hundred cells), the
+slab's faces z = 0 and 0.5 one group (side walls), the block's top corner a point group.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import pytest
+from mpi4py import MPI
+
+from breakwater import cli
+from breakwater.outputs.summary import format_report
+
+COMM = MPI.COMM_WORLD
+GEO = pathlib.Path(__file__).parent / "bad_cases" / "run" / "h_tet_slab.geo"
+
+CASE = f'''name = "user3d"
+gravity = [0.0, -9.81, 0.0]
+mesh.source = "{GEO}"
+mesh.degree = 1
+[bodies.block]
+density = 2314.0
+poisson = 0.2
+shear_modulus = 2.0e9
+[bodies.slab]
+density = 2314.0
+poisson = 0.2
+shear_modulus = 2.0e9
+[calibration]
+enabled = false
+[contact.interface]
+slave = "block"
+master = "slab"
+penalty = 1.0e11
+friction = 0.6
+[fixed.slab_bottom]
+[fixed.slab_sides]      # the side walls: rollers
+components = [2]
+[fixed.top_corner]      # a point group
+components = [2]
+[time]
+dt = 1.0e-3
+end_time = 2.0e-3
+[output]
+figures = false
+field_interval = 0
+'''
+
+
+def test_fixed_groups_are_reported(shared_dir: pathlib.Path,
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    # What holds the bodies is in summary.json and the report: each fixed group's
+    # components and, per body, its area (the boxes' faces: exact to round-off) or its
+    # points. Before, neither said which groups were fixed, nor that the side walls
+    # were rollers (only case.toml, the input, did).
+    path = shared_dir / "user3d.toml"
+    if COMM.rank == 0:
+        path.write_text(CASE)
+    COMM.barrier()
+    out = shared_dir / "out"
+    code = cli.main(["run", str(path), "--out", str(out), "--quiet", "--no-progress"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    fixed = summary["fixed"]
+    assert list(fixed) == ["slab_bottom", "slab_sides", "top_corner"]
+    assert fixed["slab_bottom"]["components"] == ["x", "y", "z"]
+    assert fixed["slab_bottom"]["bodies"]["slab"]["area"] == pytest.approx(0.8 * 0.5, rel=1e-12)
+    assert fixed["slab_sides"]["components"] == ["z"]
+    assert list(fixed["slab_sides"]["bodies"]) == ["slab"]
+    assert fixed["slab_sides"]["bodies"]["slab"]["area"] == pytest.approx(2 * 0.8 * 0.1,
+                                                                          rel=1e-12)
+    assert fixed["top_corner"] == {"components": ["z"], "bodies": {"block": {"points": 1}}}
+    line = next(x for x in format_report(summary, out).splitlines() if "fixed:" in x)
+    assert line == ("  fixed: slab_bottom xyz (slab 0.4 m²); slab_sides z (slab 0.16 m²); "
+                    "top_corner z (block 1 point)")
