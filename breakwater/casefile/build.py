@@ -245,6 +245,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     exact = {ld.name: check_goda_face(ld, data) for ld in case.loads
              if ld.enabled and ld.goda is not None}
     extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
+    probes, pair_probes = _probe_points(case, data)  # checked before the heavy work
     if case.calibration.enabled:
         result = calibrate(case, data)
         case = case.calibrated(result.body, result.shear_modulus)
@@ -297,30 +298,6 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 
-    def where(name: str, group: str | None, point: tuple[float, ...] | None
-              ) -> tuple[float, ...]:
-        if point is not None:
-            return tuple(point)
-        assert group is not None
-        try:
-            x = group_points(data, group)
-        except MeshError as e:
-            raise CaseError(f"{name}: {e}") from e
-        if len(x) != 1:
-            raise CaseError(f"{name}: point group '{group}' holds {len(x)} points, "
-                            "expected one")
-        return tuple(float(c) for c in x[0, :model.gdim])
-
-    # A conforming pair by its index in model.pairs, a general pair by its name.
-    pair_index: dict[str, int | str] = {
-        c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
-    pair_index.update({c.name: c.name for c in case.contact if c.general})
-    o = case.output
-    probes = tuple(ProbeSpec(p.name, p.body, where(f"output.probes.{p.name}", p.group, p.point))
-                   for p in o.probes)
-    pair_probes = tuple(PairProbeSpec(q.name, pair_index[q.pair],
-                                      where(f"output.pair_probes.{q.name}", q.group, q.point))
-                        for q in o.pair_probes)
     storms = [ld.name for ld in case.loads if ld.enabled and ld.storm is not None]
     if len(storms) > 1:
         raise CaseError(f"loads.{storms[1]}.storm: one storm per case (loads.{storms[0]} "
@@ -336,10 +313,100 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
                 raise CaseError(f"output.pair_probes.{sorted(taken)[0]}: the name is the "
                                 f"probe of loads.{ld.name}'s per-wave record (rename it)")
             pair_probes += more
+    o = case.output
     output = OutputSpec(directory=case.output_directory, field_interval=o.field_interval,
                         probes=probes, pair_probes=pair_probes, figures=o.figures,
                         case_name=case.name, checkpoint_interval=o.checkpoint_interval)
     return BuiltCase(case, model, case.time, output, extra)
+
+
+def _probe_points(case: CaseSettings, data: gmshio.MeshData
+                  ) -> tuple[tuple[ProbeSpec, ...], tuple[PairProbeSpec, ...]]:
+    """The probes' points (given, or their point groups'), each checked in its bodies.
+
+    A point outside its body (or a conforming pair's probe off its interface) is refused
+    in one line naming the key and the body's extent, before the calibration and the
+    static state (it was found when the run's probes were built, after both: minutes
+    in 3D, then a failed run's three lines).
+    """
+    gdim = data.mesh.geometry.dim
+
+    def where(name: str, group: str | None, point: tuple[float, ...] | None
+              ) -> tuple[float, ...]:
+        if point is not None:
+            return tuple(point)
+        assert group is not None
+        try:
+            x = group_points(data, group)
+        except MeshError as e:
+            raise CaseError(f"{name}: {e}") from e
+        if len(x) != 1:
+            raise CaseError(f"{name}: point group '{group}' holds {len(x)} points, "
+                            "expected one")
+        return tuple(float(c) for c in x[0, :gdim])
+
+    contact = {c.name: c for c in case.contact}
+    # A conforming pair by its index in model.pairs, a general pair by its name.
+    pair_index: dict[str, int | str] = {
+        c.name: k for k, c in enumerate(c for c in case.contact if not c.general)}
+    pair_index.update({c.name: c.name for c in case.contact if c.general})
+    o = case.output
+    probes = []
+    for p in o.probes:
+        key = f"output.probes.{p.name}"
+        x = where(key, p.group, p.point)
+        outside = _outside(data, p.body, x)
+        if outside:
+            raise CaseError(f"{key}.{_what(p.group, p.point, x)} is not in body "
+                            f"'{p.body}' ({outside})")
+        probes.append(ProbeSpec(p.name, p.body, x))
+    pair_probes = []
+    for q in o.pair_probes:
+        key = f"output.pair_probes.{q.name}"
+        x = where(key, q.group, q.point)
+        c = contact[q.pair]
+        for body in (c.slave,) if c.general else (c.slave, c.master):
+            outside = _outside(data, body, x)
+            if outside:
+                on = (f"the slave surface of '{q.pair}'" if c.general else
+                      f"the interface '{c.name}'")
+                raise CaseError(f"{key}.{_what(q.group, q.point, x)} is not on {on} (not "
+                                f"in body '{body}': {outside})")
+        pair_probes.append(PairProbeSpec(q.name, pair_index[q.pair], x))
+    return tuple(probes), tuple(pair_probes)
+
+
+def _what(group: str | None, point: tuple[float, ...] | None, x: tuple[float, ...]) -> str:
+    """``point: (x, y, z)`` or ``group: point group 'g' at (x, y, z)``, for a message."""
+    at = f"({', '.join(f'{c:g}' for c in x)})"
+    return f"point: {at}" if point is not None else f"group: point group '{group}' at {at}"
+
+
+def _outside(data: gmshio.MeshData, body: str, x: tuple[float, ...]) -> str | None:
+    """None if x lies in the body's cells (or touches them); else the body's extent.
+
+    (A body the mesh does not have is left to the model's own message.)
+    """
+    from breakwater.model.pointprobe import locate_point
+
+    msh, comm = data.mesh, data.mesh.comm
+    tdim = msh.topology.dim
+    if data.physical_groups.get(body, (-1, 0))[0] != tdim or data.cell_tags is None:
+        return None
+    cells = data.cell_tags.find(group_tag(data, body, tdim))
+    cells = cells[cells < msh.topology.index_map(tdim).size_local].astype(np.int32)
+    point = np.zeros(3)
+    point[: len(x)] = x
+    if comm.allreduce(len(locate_point(msh, cells, point, comm)), op=MPI.MAX):
+        return None
+    gdim = msh.geometry.dim
+    nodes = msh.geometry.x[msh.geometry.dofmap[cells].ravel(), :gdim]
+    lo = np.min(comm.allgather(nodes.min(axis=0) if len(nodes) else np.full(gdim, np.inf)),
+                axis=0)
+    hi = np.max(comm.allgather(nodes.max(axis=0) if len(nodes) else np.full(gdim, -np.inf)),
+                axis=0)
+    span = ", ".join(f"{'xyz'[k]} {lo[k]:g}..{hi[k]:g}" for k in range(gdim))
+    return f"which spans {span} m"
 
 
 #: A body whose own weight would strain it by more than this is refused: linear

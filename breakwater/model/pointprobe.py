@@ -19,7 +19,7 @@ from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.fields import suggest
 from breakwater.model.model import ContactModel
 
-__all__ = ["TOUCH", "PointProbe"]
+__all__ = ["TOUCH", "PointProbe", "locate_point"]
 
 
 TOUCH = 1e-5
@@ -54,6 +54,22 @@ def _touching(msh: dolfinx.mesh.Mesh, owned: np.ndarray, tree: dolfinx.geometry.
         else np.zeros(0, np.int32)
 
 
+def locate_point(msh: dolfinx.mesh.Mesh, owned: np.ndarray, x: np.ndarray, comm: MPI.Comm
+                 ) -> np.ndarray:
+    """The cells among ``owned`` (this rank's) that hold the point x (3 values; collective).
+
+    A point within :data:`TOUCH` of a cell's size outside every cell is taken in the
+    nearest (:func:`_touching`). Empty on every rank: the point is in none of the cells.
+    """
+    tdim = msh.topology.dim
+    tree = dolfinx.geometry.bb_tree(msh, tdim, entities=owned)
+    candidates = dolfinx.geometry.compute_collisions_points(tree, x.reshape(1, 3))
+    local = dolfinx.geometry.compute_colliding_cells(msh, candidates, x.reshape(1, 3)).links(0)
+    if not comm.allreduce(len(local), op=MPI.MAX):
+        local = _touching(msh, owned, tree, x, comm)
+    return local
+
+
 class PointProbe:
     """Evaluate a body's fields at a fixed point of the reference configuration.
 
@@ -86,15 +102,9 @@ class PointProbe:
         x[: len(point)] = point
         self.point = x
         msh = b.submesh
-        tdim = msh.topology.dim
-        owned = np.arange(msh.topology.index_map(tdim).size_local, dtype=np.int32)
-        tree = dolfinx.geometry.bb_tree(msh, tdim, entities=owned)
-        candidates = dolfinx.geometry.compute_collisions_points(tree, x.reshape(1, 3))
-        cells = dolfinx.geometry.compute_colliding_cells(msh, candidates, x.reshape(1, 3))
-        local = cells.links(0)
+        owned = np.arange(msh.topology.index_map(msh.topology.dim).size_local, dtype=np.int32)
         comm = model.comm
-        if not comm.allreduce(len(local), op=MPI.MAX):
-            local = _touching(msh, owned, tree, x, comm)
+        local = locate_point(msh, owned, x, comm)
         self.owner = comm.allreduce(comm.rank if len(local) else comm.size, op=MPI.MIN)
         if self.owner == comm.size:
             raise MeshError(f"probe '{self.name}': point {tuple(point)} is not in body "
