@@ -40,6 +40,23 @@ def test_mesh_bad_suffix(shared_dir, capsys):
         assert "unknown mesh file suffix" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", ["run", "mesh", "show-case"])
+def test_a_mesh_given_as_the_case(shared_dir, capsys, command):
+    # A user's own .geo given where the case file goes (python -m breakwater run my.geo):
+    # it was read as TOML, "invalid TOML: Invalid statement (at line 1, column 1)".
+    geo = shared_dir / "block.geo"
+    if COMM.rank == 0:
+        geo.write_text('SetFactory("OpenCASCADE");\nBox(1) = {0, 0, 0, 1, 1, 1};\n')
+    COMM.barrier()
+    out = ["--out", str(shared_dir / ("out.msh" if command == "mesh" else "out"))]
+    assert cli.main([command, str(geo), *(out if command != "show-case" else [])]) == 2
+    if COMM.rank == 0:
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "TOML" not in err, err
+        assert f"block.geo: a mesh, not a case file: name it in a case file (mesh.source = " \
+               '"block.geo"' in err
+
+
 def test_show_case_prints_the_resolved_case(capsys):
     assert cli.main(["show-case", "--set", "time.dt=5e-5"]) == 0
     if COMM.rank == 0:

@@ -60,7 +60,13 @@ from breakwater.casefile.tables import (
 )
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.common.files import path_problem
-from breakwater.common.gmshtools import UNNAMED, GroupNameError, physical_groups, unsupported_format
+from breakwater.common.gmshtools import (
+    MESH_SUFFIXES,
+    UNNAMED,
+    GroupNameError,
+    physical_groups,
+    unsupported_format,
+)
 from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
 from breakwater.config.fields import InvalidField, suggest
 from breakwater.config.schema import Schema
@@ -302,6 +308,11 @@ def _case_file(path: str | pathlib.Path | None) -> pathlib.Path:
         return builtin_case(str(path))
     if not file.is_file():
         raise CaseError(f"{path}: case file not found")
+    if file.suffix.lower() in MESH_SUFFIXES:
+        # (read as TOML it was "invalid TOML: Invalid statement (at line 1, column 1)")
+        raise CaseError(f"{path}: a mesh, not a case file: name it in a case file "
+                        f"(mesh.source = \"{file.name}\", with its bodies, contact and "
+                        "loads: docs/case.md, 'Bring your own geometry')")
     return file
 
 

@@ -26,8 +26,9 @@ from types import MappingProxyType
 
 import gmsh  # type: ignore[import-untyped]
 
-__all__ = ["QUIET", "UNNAMED", "GroupNameError", "gmsh_session", "named_groups", "physical_groups",
-           "restore_python_handlers", "settle_signal_handlers", "unsupported_format"]
+__all__ = ["MESH_SUFFIXES", "QUIET", "UNNAMED", "GroupNameError", "gmsh_session",
+           "named_groups", "physical_groups", "restore_python_handlers",
+           "settle_signal_handlers", "unsupported_format"]
 
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
 """The signals whose handlers gmsh replaces and the session gives back to Python."""
@@ -118,6 +119,10 @@ UNNAMED = ("the mesh has no named physical groups (breakwater finds bodies and b
 
 _FORMATS = {".xdmf": "XDMF", ".h5": "XDMF", ".bp": "ADIOS2", ".vtu": "VTK", ".vtk": "VTK",
             ".inp": "Abaqus", ".med": "MED", ".unv": "I-DEAS", ".stl": "STL", ".mesh": "Medit"}
+
+
+MESH_SUFFIXES = (".geo", ".msh", *_FORMATS)
+"""The suffixes of mesh files: gmsh's and the formats :func:`unsupported_format` names."""
 
 
 def unsupported_format(path: pathlib.Path) -> str:
