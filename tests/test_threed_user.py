@@ -78,3 +78,22 @@ def test_fixed_groups_are_reported(shared_dir: pathlib.Path,
     line = next(x for x in format_report(summary, out).splitlines() if "fixed:" in x)
     assert line == ("  fixed: slab_bottom xyz (slab 0.4 m²); slab_sides z (slab 0.16 m²); "
                     "top_corner z (block 1 point)")
+
+
+def test_a_block_friction_cannot_hold_is_told_in_newtons(
+        shared_dir: pathlib.Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # Gravity tilted past the friction angle (tan = 6/7.76 = 0.77 > μ = 0.6): the block
+    # is held in the static state and released at t = 0, and the warning gives the 3D
+    # block's forces in N, T = ρ V g_x, μN = μ ρ V g_y (the message's four digits); it
+    # said N/m, the plane-strain unit.
+    path = shared_dir / "tilted.toml"
+    if COMM.rank == 0:
+        path.write_text(CASE.replace("gravity = [0.0, -9.81, 0.0]", "gravity = [6.0, -7.76, 0.0]"))
+    COMM.barrier()
+    code = cli.main(["run", str(path), "--out", str(shared_dir / "out"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    if COMM.rank == 0:
+        mass = 2314.0 * 0.3 * 0.2 * 0.25
+        assert (f"cannot be held by friction on 'interface' (tangential force "
+                f"{mass * 6.0:.4g} N, μN = {0.6 * mass * 7.76:.4g} N)") in err, err

@@ -191,25 +191,31 @@ is below this (their normals perpendicular to gravity, within 0.06°)."""
 
 
 def _nothing_beneath(model: ContactModel) -> str | None:
-    """A body on contact interfaces that all run along gravity (None: none is).
+    """A body whose contact interfaces all run along gravity or lie above it (None: none).
 
-    A body without a ``[fixed]`` group whose conforming pairs' normals are all
-    perpendicular to gravity (and which none presses: gap ≥ 0) has nothing beneath it to
-    carry its weight: a z-up mesh run with y-down gravity (the static Newton failed
-    after 40 iterations, advising to start undeformed). Collective.
+    A body without a ``[fixed]`` group whose conforming pairs (none pressed: gap ≥ 0)
+    have no part beneath it, their normals perpendicular to gravity or the other body
+    on the side gravity pulls away from, has nothing to carry its weight: a z-up mesh
+    run with y-down gravity, or gravity given upwards (``[0, 9.81, 0]``); the static
+    Newton failed after 40 iterations, advising to leave the loads out or start
+    undeformed. Collective.
     """
     g = np.asarray(model.gravity.value, dtype=float)
     if not np.any(g) or not model.pairs:
         return None
     down = ufl.as_vector([float(v) for v in g / np.linalg.norm(g)])
-    on: dict[int, list[tuple[str, float, float]]] = {}
+    # Per body and pair: ∫ |n·ĝ|, the part of it beneath the body (∫ (n_out·ĝ)₊, n_out the
+    # body's outward normal: the master's is n, the slave's −n) and the area.
+    on: dict[int, list[tuple[str, float, float, float]]] = {}
     for p in model.pairs:
         if p.spec.gap < 0:
             continue
         level = model.assemble(model.form(abs(ufl.dot(p.n, down)) * p.dS))
+        signed = model.assemble(model.form(ufl.dot(p.n, down) * p.dS))
         area = model.assemble(model.form(fem.Constant(model.mesh, 1.0) * p.dS))
-        for b in (p.slave, p.master):
-            on.setdefault(b, []).append((p.spec.interface, level, area))
+        for b, sign in ((p.slave, -1.0), (p.master, 1.0)):
+            beneath = 0.5 * (level + sign * signed)
+            on.setdefault(b, []).append((p.spec.interface, level, beneath, area))
     # Pressed (a negative gap) or on a general pair: friction may carry it.
     held = {b for p in model.pairs if p.spec.gap < 0 for b in (p.slave, p.master)}
     held |= {b for s, m, _ in model.pair_bodies()[len(model.pairs):] for b in (s, m)}
@@ -217,14 +223,24 @@ def _nothing_beneath(model: ContactModel) -> str | None:
         body = model.bodies[b]
         if model.fixed_on(body.spec.name) or b in held:
             continue
-        area = sum(a for _, _, a in pairs)
-        if area > 0 and sum(v for _, v, _ in pairs) < LEVEL * area:
-            names = ", ".join(f"'{n}'" for n, _, _ in pairs)
+        area = sum(a for *_, a in pairs)
+        names = ", ".join(f"'{n}'" for n, *_ in pairs)
+        gravity = tuple(float(v) for v in g)
+        if area > 0 and sum(v for _, v, _, _ in pairs) < LEVEL * area:
             return (f"bodies.{body.spec.name}: nothing beneath it: its contact interfaces "
-                    f"({names}) all run along gravity {tuple(float(v) for v in g)}, so no "
+                    f"({names}) all run along gravity {gravity}, so no "
                     "contact carries its weight: a mesh drawn with z up? breakwater is y "
                     "up: rotate it, (x, y, z) -> (x, z, -y) (gmsh's affineTransform), or "
                     "start it at rest undeformed ([initial] undeformed = true)")
+        if area > 0 and sum(v for _, _, v, _ in pairs) < LEVEL * area:
+            up = gravity[1] > 0 and not any(gravity[k] for k in range(len(gravity)) if k != 1)
+            return (f"bodies.{body.spec.name}: nothing beneath it: gravity {gravity} pulls "
+                    f"it off its contact interfaces ({names}), so no contact carries its "
+                    "weight: "
+                    + ("gravity points up? breakwater is y up: gravity = "
+                       f"[0.0, {-gravity[1]:g}{', 0.0' if len(gravity) == 3 else ''}]"
+                       if up else "check gravity's direction")
+                    + " (or start it at rest undeformed: [initial] undeformed = true)")
     return None
 
 
@@ -409,9 +425,11 @@ def _frictional(model: ContactModel, options: NewtonOptions | None, tried: int) 
         T = float(np.linalg.norm(shear))
         body = model.bodies[p.slave].spec.name
         if model.comm.rank == 0:
+            unit = "N" if model.gdim == 3 else "N/m"  # (3D: the whole body's; was N/m)
             log.warning("initial state: body '%s' cannot be held by friction on '%s' "
-                        "(tangential force %.4g N/m, μN = %.4g N/m): held in place up to "
-                        "t = 0 and released at t = 0", body, p.spec.interface, T, μ * N)
+                        "(tangential force %.4g %s, μN = %.4g %s): held in place up to "
+                        "t = 0 and released at t = 0", body, p.spec.interface, T, unit,
+                        μ * N, unit)
         if body not in held:
             held.append(body)
     return InitialState(u, v, its, "held" if held else "frictional", held)
