@@ -438,5 +438,12 @@ def test_a_contact_is_judged_by_its_own_facets() -> None:
         == []
     assert len(resolution_warnings(square, inputs, 3,
                                    {"contact_hertz_pressure": np.ones(25)})) == 1
+    # Touching, nothing pressed (a 3D block on its slab with gravity = [0, 0, 0], the
+    # contact measured 0.075 m² at zero pressure): no pressure to resolve. It was told
+    # "0 interface facets across it (0 nodes pressed ...): refine the surfaces there".
+    touching = {"hertz_contact_length": 0.075}
+    assert resolution_warnings(touching, inputs, 3, {"contact_hertz_pressure": np.zeros(49)}) \
+        == []
+    assert resolution_warnings(row, inputs, 2, {"contact_hertz_pressure": np.zeros(60)}) == []
     assert resolution_warnings(square, inputs, 3, {"contact_hertz_pressure": np.ones(25)},
                                degree=1) == []

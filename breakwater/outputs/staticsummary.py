@@ -299,6 +299,8 @@ def resolution_warnings(row: Mapping[str, float], inputs: Sequence[PairInputs], 
             what_h = f"of its mean interface facet (h = {h:.3g} m)"
         else:
             pressed = int(np.count_nonzero(np.asarray(pressure) > 0))
+            if not pressed:  # touching, nothing pressed (no gravity): nothing to resolve
+                continue
             across = pressed if gdim == 2 else math.sqrt(pressed)
             facets = max(across - 1.0, 0.0) / degree
             what_h = (f"interface facets across it ({pressed} nodes pressed; mean interface "
