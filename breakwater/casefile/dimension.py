@@ -81,6 +81,17 @@ def dimension_problem(case: _Case) -> None:
             with gravity along z, ``out_of_plane_length`` or a per-metre calibration.
     """
     d = dimension(case)
+    others = [(k, v) for k, v in _vectors(case) if not k.endswith("profile.axis")]
+    zs = [f"fixed.{f.name}.components" for f in case.fixed
+          if f.components is not None and max(f.components) >= 2]
+    keys = [k for k, _ in others] + (zs if d == 2 else [])
+    if len(keys) > 1 and all(len(v) == 5 - d for _, v in others) and (d == 2 or not zs):
+        # Gravity is the odd one out of several (a 3D case given [0, -9.81]): it was the
+        # first fixed group holding z, or the first vector, that the message blamed.
+        raise InvalidField("gravity", f"{d} components, but the case's other vectors have "
+                           f"{5 - d} ({', '.join(keys[:3])}{', ...' if len(keys) > 3 else ''})"
+                           ": a case's vectors all have 2 components (plane strain) or all 3 "
+                           f"(got {list(case.gravity)})")
     for f in case.fixed:
         if f.components is not None and max(f.components) >= d:
             raise InvalidField(f"fixed.{f.name}.components", f"component {max(f.components)} "
