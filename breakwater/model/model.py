@@ -297,7 +297,10 @@ def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError
               if dim == tdim - 1 and comm.allreduce(fem.compute_integration_domains(
                   fem.IntegralType.interior_facet, msh.topology,
                   data.facet_tags.find(tag)).size) > 0]
+    apart = ("for surfaces meshed apart give slave_surface and master_surface" if tdim == 2
+             else "in 3D the bodies must share the interface's nodes (general pairs are plane "
+             "strain only for now): mesh them together, e.g. gmsh's BooleanFragments "
+             "(OpenCASCADE) or one Extrude of both")  # (the 2D advice was refused in 3D)
     return MeshError(f"contact.{name}: interface '{name}' has no facet shared by two cells: "
                      "a conforming pair's name is a facet group between its two bodies (such "
-                     f"groups here: {', '.join(shared) or 'none'}); for surfaces meshed apart "
-                     "give slave_surface and master_surface")
+                     f"groups here: {', '.join(shared) or 'none'}); {apart}")
