@@ -4,7 +4,8 @@ breakwater reads coordinates in metres. A mesh drawn in millimetres runs as a st
 1000 times larger (a 0.2 m block on its mound: a 200 m cube of 1.85e7 t, its weight
 1.8e11 N), every number consistent and none flagged. The summary gives each body's
 extent, volume and mass, to be checked against the drawing, and a mesh spanning more
-than :data:`LARGEST_EXTENT` is warned about.
+than :data:`LARGEST_EXTENT` is warned about, or in 3D a body of more than
+:data:`LARGEST_VOLUME`.
 """
 
 from __future__ import annotations
@@ -14,11 +15,18 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["LARGEST_EXTENT", "body_sizes", "size_warning"]
+__all__ = ["LARGEST_EXTENT", "LARGEST_VOLUME", "body_sizes", "size_warning"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
 10-40 m, its mound up to a few hundred metres; the same caisson in mm is 10-40 km."""
+
+
+LARGEST_VOLUME = 1e7
+"""m³: a 3D body of more than this (a 215 m cube) is warned about. A laboratory model
+drawn in mm spans less than :data:`LARGEST_EXTENT` (Goda's 1.16 m mound: 1160 m) but its
+volume is 1e9 times its own (the mound's 0.03 m³: 3e7 m³); a prototype mound 100 m wide
+and 15 m high is 1e7 m³ over 7 km of breakwater."""
 
 
 def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
@@ -47,9 +55,15 @@ def size_warning(sizes: dict[str, dict[str, Any]]) -> str | None:
         return None
     name = max(sizes, key=lambda n: max(sizes[n]["extent"]))
     largest = max(sizes[name]["extent"])
-    if largest <= LARGEST_EXTENT:
-        return None
-    return (f"mesh: body '{name}' spans {largest:.4g} m: breakwater reads coordinates in metres "
+    if largest > LARGEST_EXTENT:
+        what = f"spans {largest:.4g} m"
+    else:  # 3D: a laboratory model drawn in mm (its extents those of a prototype)
+        name = max(sizes, key=lambda n: sizes[n]["volume"])
+        volume = sizes[name]["volume"]
+        if len(sizes[name]["extent"]) < 3 or volume <= LARGEST_VOLUME:
+            return None
+        what = f"is {volume:.3g} m³"
+    return (f"mesh: body '{name}' {what}: breakwater reads coordinates in metres "
             f"(a mesh drawn in mm is 1000 times too large; scale it, e.g. gmsh's "
             f"Mesh.ScalingFactor = 0.001); the bodies' sizes and masses: summary.json, "
             f"mesh.bodies")
