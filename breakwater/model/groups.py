@@ -199,9 +199,10 @@ class ModelGroups(ModelForms):
                                 f"body '{load.body}'")
         elif len(owners) != 1:
             names = ", ".join(self.bodies[i].spec.name for i in owners)
+            key = f" (loads.{load.name}.body)" if load.name else ""
             raise MeshError(f"facet group '{load.group}' must lie on exactly one body "
                             f"(found on {len(owners)}{': ' + names if names else ''}; name "
-                            "the body loaded)")
+                            f"the body loaded{key})")
         else:
             index = owners[0]
         if self.comm.allreduce(len(inner)) == 0:
