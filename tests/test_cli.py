@@ -53,7 +53,7 @@ def test_a_mesh_given_as_the_case(shared_dir, capsys, command):
     if COMM.rank == 0:
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "TOML" not in err, err
-        assert f"block.geo: a mesh, not a case file: name it in a case file (mesh.source = " \
+        assert "block.geo: a mesh, not a case file: name it in a case file (mesh.source = " \
                '"block.geo"' in err
 
 
