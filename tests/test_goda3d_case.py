@@ -52,3 +52,15 @@ def test_goda3d_first_steps(folder: pathlib.Path) -> None:
     assert impact["applied"]["impulse"][0] == pytest.approx(
         0.5 * impulse + (β1 - 0.5) * dt * 2 * impulse / T, rel=1e-12)
     assert summary["mesh"]["cells"] == {"caisson": 210, "mound": 822}
+    # What holds it (summary.json's fixed): the flume's floor under the mound in x, y
+    # and z (its 1.16 m base across the 0.205 m flume), the glass walls as rollers (u_z
+    # on the mound's two faces across the flume: twice its cross-section, its volume
+    # over the flume's width); the block's sides free (no group).
+    fixed = summary["fixed"]
+    assert list(fixed) == ["base", "mound_sides"]
+    assert fixed["base"]["components"] == ["x", "y", "z"]
+    assert fixed["base"]["bodies"]["mound"]["area"] == pytest.approx(1.16 * 0.205, rel=1e-12)
+    assert fixed["mound_sides"]["components"] == ["z"]
+    section = summary["mesh"]["bodies"]["mound"]["volume"] / 0.205
+    assert fixed["mound_sides"]["bodies"] == {
+        "mound": {"area": pytest.approx(2 * section, rel=1e-12)}}
