@@ -122,7 +122,8 @@ _FORMATS = {".xdmf": "XDMF", ".h5": "XDMF", ".bp": "ADIOS2", ".vtu": "VTK", ".vt
 
 
 MESH_SUFFIXES = (".geo", ".msh", *_FORMATS)
-"""The suffixes of mesh files: gmsh's and the formats :func:`unsupported_format` names."""
+"""The suffixes of mesh files (gmsh's, XDMF and the formats :func:`unsupported_format` refuses):
+not case files."""
 
 
 def unsupported_format(path: pathlib.Path) -> str:
