@@ -375,11 +375,10 @@ def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
         if T - μ * N > 1e-6 * max(N, T):
             body = _moving(ps.model, p.spec)
             if ps.model.comm.rank == 0:
-                unit = "N" if ps.model.gdim == 3 else "N/m"
+                u = "N" if ps.model.gdim == 3 else "N/m"
                 log.warning("initial state: body '%s' cannot be held by friction on '%s' "
                             "(tangential force %.4g %s, μN = %.4g %s): held in place up "
-                            "to t = 0 and released at t = 0", body, p.spec.name, T, unit,
-                            μ * N, unit)
+                            "to t = 0 and released at t = 0", body, p.spec.name, T, u, μ * N, u)
             index = ps.model.body(body).index
             # Against the friction on it (the master's is the slave's, reversed).
             sign = 1.0 if body == p.spec.slave else -1.0
