@@ -64,10 +64,9 @@ stages 1 and 1b first:
    normal, so a frictionless body on a deformed support carries a tangential
    out-of-balance of the discretisation (1e-6 of the load on the Goda caisson, whose
    crest the caisson deforms unevenly) and its rigid tangential mode slides away; a
-   friction of 1e-4 μp holds it. The state is the frictionless one to that fraction
-   (on the Goda mesh the corner's static slip equals the conforming frictionless
-   state's to 0.3 %) and the dynamics starts from it at rest, as from stage 1
-   (``kind = "frictionless"``).
+   friction of 1e-4 μp holds it. The state is the frictionless one to that fraction (on
+   the Goda mesh the corner's static slip is the conforming frictionless state's to
+   0.3 %); the dynamics starts from it at rest, as from stage 1 (``kind = "frictionless"``).
 2. **Frictional** (if some pair has friction): the friction law acts on the total slip
    from the unloaded state over a pseudo time τ (``v = u/τ``, as ``initial.py`` stage
    2), with τ such that the stick band χτ is ``stick_band``
@@ -361,10 +360,10 @@ def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     """The slave bodies whose pair's tangential resultant exceeds μN (held state).
 
     Returns:
-        Their names, each named in a warning, and (general pairs) each body's sliding
-        direction (against the held friction), for :func:`_slide` and :func:`_release`.
+        Their names, each in a warning, and (general pairs) each body's sliding direction
+        (against the held friction), for :func:`_slide` and :func:`_release`.
     """
-    out = []
+    out: list[str] = []
     sliding: dict[int, np.ndarray] = {}
     ps.rest()
     with ps.friction(HELD_FRICTION, HELD_FRICTION):
