@@ -448,6 +448,56 @@ def test_keyboard_interrupt_says_what_it_left_and_resumes(
     assert _same_run(reference, shared_dir, summary) == 0.0 or COMM.size > 1
 
 
+@pytest.mark.parametrize("when", ["stopped", "finished"])
+def test_second_interrupt_while_the_outputs_are_written(
+        when: str, mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        reference: tuple[pathlib.Path, dict], monkeypatch: pytest.MonkeyPatch) -> None:
+    # In a notebook a first interrupt stops the run at its next step; a second one,
+    # while the run writes its last outputs (its snapshot, fields, storm record),
+    # raised KeyboardInterrupt out of the writing: summary.json said "running", the
+    # error had no note. The summary now says "interrupted" with the checkpoint kept (a
+    # run whose summary already said "finished" keeps it), and the folder resumes.
+    finish, write_json = Session.finish, files.atomic_write_json
+
+    def second_interrupt(self: Session, finished: bool, *args: Any) -> dict[str, Any]:
+        if not finished:  # the stopped run writes its outputs up to there
+            raise KeyboardInterrupt
+        return finish(self, finished, *args)
+
+    def interrupted_after(path: Any, data: Any) -> pathlib.Path:
+        written = write_json(path, data)
+        if data.get("status") == "finished":  # (then the figures, the report)
+            raise KeyboardInterrupt
+        return written
+
+    with monkeypatch.context() as mp:
+        if when == "stopped":
+            _flaky(mp, TERM_AT, action="sigterm")
+            mp.setattr(Session, "finish", second_interrupt)
+        else:
+            _flaky(mp)
+            mp.setattr(files, "atomic_write_json", interrupted_after)
+        with pytest.raises(KeyboardInterrupt) as info:
+            _run(mesh_path, shared_dir)
+    written = _summary(shared_dir)
+    if when == "finished":
+        assert written["status"] == "finished" and not (shared_dir / CHECKPOINT).exists()
+        assert info.value.__notes__ == [f"breakwater: the run finished; its outputs are in "
+                                        f"{shared_dir} (its figures or report may be missing)"]
+        return
+    assert written["status"] == "interrupted", written["status"]
+    assert written["checkpoint"]["steps"] == written["solver"]["steps"] == 13
+    assert (shared_dir / CHECKPOINT).is_file()
+    assert info.value.__notes__ == [
+        f"breakwater: the run stopped at t = {written['time']['reached']:.6g} s; its "
+        f"outputs up to there are in {shared_dir} (summary.json: \"interrupted\"); "
+        "run(..., resume=True) with the same settings continues from its checkpoint"]
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        summary = _run(mesh_path, shared_dir, resume=True)
+    assert _same_run(reference, shared_dir, summary) == 0.0 or COMM.size > 1
+
+
 def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
                         reference: tuple[pathlib.Path, dict],
                         monkeypatch: pytest.MonkeyPatch) -> None:

@@ -396,6 +396,9 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         checkpointed = r.checkpointed  # (a finished run's summary names none)
         try:
             summary = _end(r, error, output, report)
+        except KeyboardInterrupt as e:  # (a second interrupt while the outputs are
+            error = e  # written: the summary said "running" and the error had no note)
+            summary = _interrupted_end(r, e, checkpointed)
         except (OutputError, OSError) as e:  # e.g. a full disk: the first error is
             if error is None:  # the reason
                 error = e if isinstance(e, OutputError) else cannot_write(e.filename, e)
@@ -427,6 +430,9 @@ def _interrupted_note(r: Session, summary: Mapping[str, Any]) -> str:
 
     The command line prints its error's one line only, without the note.
     """
+    if summary.get("status") == "finished":  # interrupted once its summary was written
+        return (f"breakwater: the run finished; its outputs are in {r.directory} "
+                "(its figures or report may be missing)")
     reached = summary.get("time", {}).get("reached")
     at = "before its static state" if reached is None else f"at t = {reached:.6g} s"
     # (the summary's checkpoint, the same on every rank: not each rank's look at the folder)
@@ -486,6 +492,22 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
 
     # Rank 0 writes; an error (e.g. OutputError: a full disk) is raised on every rank.
     return on_rank_zero(r.comm, write)
+
+
+def _interrupted_end(r: Session, error: KeyboardInterrupt,
+                     checkpointed: dict[str, Any] | None) -> dict[str, Any]:
+    """The summary of a run interrupted while its last outputs were written (collective).
+
+    A finished run whose ``summary.json`` already says so keeps it (its checkpoint is
+    removed, its figures or report may be missing); else the summary says
+    ``interrupted`` at the state reached, naming the checkpoint kept.
+    """
+    written = on_rank_zero(r.comm, lambda: files.read_json(r.directory / files.SUMMARY))
+    if written is not None and written.get("status") == "finished":
+        on_rank_zero(r.comm, lambda: (r.directory / files.CHECKPOINT).unlink(missing_ok=True))
+        return written
+    r.checkpointed = checkpointed
+    return _failed_end(r, error)
 
 
 def _failed_end(r: Session, error: BaseException) -> dict[str, Any]:
