@@ -127,6 +127,37 @@ def test_each_solver_has_its_own_options_prefix(folder: pathlib.Path) -> None:
     assert prefixes[0] == COMM.bcast(prefixes[0], root=0)  # the same on every rank
 
 
+def test_solver_options_leave_petsc_options_database(folder: pathlib.Path) -> None:
+    """A solver's options are read, then removed from PETSc's global options database.
+
+    Before, every solver's ``breakwater_<name>_<k>_snes_*`` options (11 per prefix)
+    stayed in the database for the rest of the process: a notebook that ran a case
+    kept them, and the next solver of the same prefix read them again.
+    """
+    path = two_rectangles(folder / "options.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    database = PETSc.Options()
+    database["user_own_option"] = 3  # (a caller's own: left alone)
+    u = model.functions("u")
+    options = NewtonOptions(rtol=1e-7, max_it=17)
+    solver = NewtonSolver(model, model.residual(u), u, "static", options)
+    try:
+        left = sorted(k for k in database.getAll() if k.startswith("breakwater_"))
+        assert left == []
+        assert database.getInt("user_own_option") == 3
+        # ... after the solver has read them.
+        rtol, _, _, max_it = solver.snes.getTolerances()
+        assert (rtol, max_it) == (1e-7, 17)
+        assert solver.snes.getKSP().getPC().getFactorSolverType() == options.linear_solver
+    finally:
+        solver.destroy()
+        database.delValue("user_own_option")
+
+
 def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
     """destroy() frees a solver's PETSc objects, and then Python can free the solver.
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import ufl
@@ -141,6 +141,19 @@ class NewtonTimings(Timings):
         self.seconds = {"newton": 0.0}
 
 
+def clear_options(prefix: str, options: Mapping[str, object]) -> None:
+    """Remove a solver's options, read already, from PETSc's global options database.
+
+    dolfinx's ``NonlinearProblem`` means to (``del opts[k]`` with the prefix pushed),
+    but petsc4py's deletion ignores a pushed prefix: every solver's
+    ``breakwater_<name>_<k>_snes_*`` options stayed in the database for the rest of
+    the process (a notebook), read again by the next solver of that prefix.
+    """
+    database = PETSc.Options()
+    for key in options:
+        database.delValue(f"{prefix}{key}")
+
+
 class NewtonSolver(StepSolver):
     """SNES Newton on ``F(x) = 0`` for one Function per body.
 
@@ -185,8 +198,9 @@ class NewtonSolver(StepSolver):
         self.problem = fem_petsc.NonlinearProblem(
             ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, kind="mpi",
             entity_maps=model.entity_maps,
-            petsc_options_prefix=model.options_prefix(name),
+            petsc_options_prefix=(prefix := model.options_prefix(name)),
             petsc_options=petsc_options)
+        clear_options(prefix, petsc_options)
         self.snes: PETSc.SNES = self.problem.solver
         self.residual = HomogeneousLifting(self.problem, model.bcs)
         self.snes.setFunction(self.residual, self.problem.b)
