@@ -279,7 +279,12 @@ class NewtonSolver(StepSolver):
         self.jacobian.new_solve()
         try:
             self.problem.solve()
-        except PETSc.Error:  # a factorisation MUMPS could not complete: say so in one line
+        except PETSc.Error as e:
+            if isinstance(e.__cause__, KeyboardInterrupt):  # raised in a callback (the
+                # residual's assembly: a second interrupt in a notebook), which petsc4py
+                # turns into PETSc error 101: the run said "failed", a crash
+                raise e.__cause__ from None
+            # A factorisation MUMPS could not complete: say so in one line.
             check_factorisation(self.snes.getKSP(), f"the Newton matrix of {self.name}")
             raise
         self.timings.seconds["newton"] += time.perf_counter() - t0
