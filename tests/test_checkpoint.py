@@ -40,8 +40,8 @@ from breakwater.outputs.checkpoint import CHECKPOINT, CheckpointError, match_nod
 from breakwater.outputs.writers import read_history
 from breakwater.run import simulation
 from breakwater.run.session import Session
-from breakwater.stepping.snesassembly import HomogeneousLifting
 from breakwater.stepping.gn22 import GN22
+from breakwater.stepping.snesassembly import HomogeneousLifting
 
 COMM = MPI.COMM_WORLD
 WIDTH, HEIGHT = 1.0, 0.5   # block a (m)
