@@ -11,6 +11,7 @@ model's (:mod:`breakwater.model.pairs`, re-exported here); its forces are
 from __future__ import annotations
 
 import logging
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -33,7 +34,11 @@ TURN = 1e-4
 """A surface turning by more than this angle (rad) at consecutive vertices is
 curved (a chord h of a circle turning by θ at its ends sags hθ/8: above 1e-5 h)."""
 
-_warned: set[tuple[str, str]] = set()  # (pair, surface) warned about: once per process
+_warned: weakref.WeakKeyDictionary[ContactModel, set[tuple[str, str]]] = \
+    weakref.WeakKeyDictionary()
+"""(pair, surface) warned about, per model: once per case built, not per stepper (the
+adaptive levels') nor per run of the same model. Once per process, as before, a case
+run after another in a notebook or a study's next case said nothing of its own mesh."""
 
 
 @dataclass
@@ -168,8 +173,9 @@ def warn_first_order(model: ContactModel, spec: SurfacePair, surfaces: Sequence[
     if model.mesh.geometry.cmaps[0].degree != 1:
         return
     names = (spec.slave_surface, "+".join(spec.master_groups))
+    warned = _warned.setdefault(model, set())
     for name, surface in zip(names, surfaces, strict=True):
-        if surface.X.shape[1] != 3 or (spec.name, name) in _warned:
+        if surface.X.shape[1] != 3 or (spec.name, name) in warned:
             continue
         n, turn, sag = chord_sag(surface)
         if n and model.comm.rank == 0:
@@ -182,4 +188,4 @@ def warn_first_order(model: ContactModel, spec: SurfacePair, surfaces: Sequence[
                 "gmsh: Mesh.ElementOrder = 2, or -order 2)", spec.name, name,
                 np.degrees(turn), n, sag)
         if n:
-            _warned.add((spec.name, name))
+            warned.add((spec.name, name))
