@@ -22,6 +22,7 @@ from mpi4py import MPI
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
+from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
 
 from breakwater.common.errors import ConvergenceError
@@ -156,6 +157,38 @@ def test_solver_options_leave_petsc_options_database(folder: pathlib.Path) -> No
     finally:
         solver.destroy()
         database.delValue("user_own_option")
+
+
+def test_solver_interrupted_while_built_leaves_no_error(folder: pathlib.Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """A KeyboardInterrupt while the SNES problem is built is the only error shown.
+
+    Before, dolfinx's ``NonlinearProblem.__del__`` then met a half-built problem:
+    ``Exception ignored in ... AttributeError: ... '_snes'`` in the notebook's cell.
+    """
+    path = two_rectangles(folder / "halfbuilt.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8)],
+                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    u = model.functions("u")
+    create_vector = fem_petsc.create_vector
+
+    def interrupted(*args: object, **kwargs: object) -> PETSc.Vec:
+        raise KeyboardInterrupt  # (after the matrix, before the SNES: every rank)
+
+    unraisable: list[object] = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    with monkeypatch.context() as mp:
+        mp.setattr(fem_petsc, "create_vector", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            NewtonSolver(model, model.residual(u), u, "static")
+    gc.collect()
+    assert [getattr(x, "exc_value", x) for x in unraisable] == []
+    assert fem_petsc.create_vector is create_vector
+    solver = NewtonSolver(model, model.residual(u), u, "static")  # and the next one works
+    solver.destroy()
 
 
 def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
