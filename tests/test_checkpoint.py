@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import errno
 import json
+import logging
 import os
 import pathlib
 import shutil
@@ -25,10 +26,12 @@ import sys
 import time as _time
 from typing import Any
 
+import gmsh
 import numpy as np
 import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from breakwater.common import files
 from breakwater.common.errors import ConvergenceError
@@ -529,6 +532,33 @@ def test_keyboard_interrupt_in_the_static_newton(
         _flaky(mp)
         summary = _run(mesh_path, shared_dir)
     assert _same_run(reference, shared_dir, summary) == 0.0 or COMM.size > 1
+
+
+def test_runs_in_one_process_leave_nothing_behind(
+        mesh_path: pathlib.Path, shared_dir: pathlib.Path,
+        reference: tuple[pathlib.Path, dict], monkeypatch: pytest.MonkeyPatch) -> None:
+    # A notebook runs case after case in one process: a run, finished or interrupted,
+    # leaves PETSc's options database, the logging handlers, the signal handlers and
+    # gmsh as it found them, and the next run gives the numbers of the first. Before,
+    # each solver's breakwater_<name>_<k>_snes_*/ksp_* options stayed in the database.
+    def process_state() -> tuple[Any, ...]:
+        return (sorted(PETSc.Options().getAll()), logging.getLogger().handlers[:],
+                logging.getLogger("breakwater").handlers[:],
+                signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM),
+                gmsh.isInitialized())
+
+    before = process_state()
+    with monkeypatch.context() as mp:
+        _flaky(mp, TERM_AT, action="sigterm")
+        with pytest.raises(simulation.RunInterrupted):
+            _run(mesh_path, shared_dir / "stopped")
+    assert process_state() == before
+    with monkeypatch.context() as mp:
+        _flaky(mp)
+        summary = _run(mesh_path, shared_dir / "again")
+    assert process_state() == before
+    assert [k for k in PETSc.Options().getAll() if k.startswith("breakwater_")] == []
+    assert _same_run(reference, shared_dir / "again", summary) == 0.0 or COMM.size > 1
 
 
 def test_resume_refused(mesh_path: pathlib.Path, shared_dir: pathlib.Path,
