@@ -260,3 +260,52 @@ def test_run_stops_on_sigterm_while_its_case_is_built(tmp_path):
     assert "interrupted by SIGTERM at t = 0 s" in stderr and "Traceback" not in stderr
     assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
     assert (out / "checkpoint.npz").exists()
+
+
+def _package(root: pathlib.Path, name: str) -> None:
+    """A package whose import is interrupted half-way (SIGINT sent by its __init__),
+    after loading a submodule that a later submodule reads as an attribute (as
+    ``matplotlib._docstring`` is read by ``matplotlib.colorizer``)."""
+    (root / name).mkdir()
+    (root / name / "first.py").write_text("VALUE = 1\n")
+    (root / name / "second.py").write_text(f"import {name}\nVALUE = {name}.first.VALUE + 1\n")
+    (root / name / "__init__.py").write_text(textwrap.dedent(f'''
+        import os, signal, time
+        import {name}.first
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # the handler runs here, between bytecodes
+        import {name}.second
+    '''))
+
+
+def test_an_interrupted_import_is_completed_first(tmp_path: pathlib.Path,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """SIGINT during a lazy import (matplotlib's, when a run or a study draws its
+    figures) is delivered once the module is whole.
+
+    Measured in one process: a second interrupt while a study wrapped up left
+    ``AttributeError: module 'matplotlib' has no attribute '_docstring'`` in every later
+    figure, the user's own too: the interrupted import had left ``matplotlib``'s
+    submodules in ``sys.modules`` and ``matplotlib`` out.
+    """
+    from breakwater.common.wholeimport import import_whole
+
+    name = f"interrupted_{COMM.rank}"
+    _package(tmp_path, name)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # a kernel's
+    try:
+        with pytest.raises(KeyboardInterrupt):  # the interrupt still comes
+            import_whole(name)
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        assert sys.modules[name].second.VALUE == 2  # but the package is whole
+        with StopSignal() as stop:  # a run's handler gets it (no KeyboardInterrupt)
+            for module in (name, f"{name}.first", f"{name}.second"):
+                del sys.modules[module]
+            assert import_whole(name).second.VALUE == 2
+            time.sleep(0.05)
+            assert stop.received == signal.SIGINT
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        for module in (name, f"{name}.first", f"{name}.second"):
+            sys.modules.pop(module, None)

@@ -22,9 +22,11 @@ def default_style[**P, R](draw: Callable[P, R]) -> Callable[P, R]:
 
     @functools.wraps(draw)
     def drawn(*args: P.args, **kwargs: P.kwargs) -> R:
-        import matplotlib.style  # when drawing: importing the callers loads no matplotlib
+        from breakwater.common.wholeimport import import_whole
 
-        with matplotlib.style.context("default"):
+        # When drawing (importing the callers loads no matplotlib), whole.
+        style = import_whole("matplotlib.style")
+        with style.context("default"):
             return draw(*args, **kwargs)
 
     return drawn

@@ -223,8 +223,9 @@ def read_fields(directory: str | pathlib.Path, name: str, time: float | None = N
             than its files hold: a copy of a running run, a run killed, a full disk); the
             line names the last whole time before it.
     """
-    import pyvista
+    from breakwater.common.wholeimport import import_whole
 
+    pyvista = import_whole("pyvista")  # (an interrupt in its import broke it for good)
     every = _stored(directory, name)
     stored = _choose(every, time, name)
     try:
