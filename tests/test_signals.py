@@ -288,24 +288,28 @@ def test_an_interrupted_import_is_completed_first(tmp_path: pathlib.Path,
     figure, the user's own too: the interrupted import had left ``matplotlib``'s
     submodules in ``sys.modules`` and ``matplotlib`` out.
     """
-    from breakwater.common.wholeimport import import_whole
+    import importlib
+
+    from breakwater.common.wholeimport import whole_imports
 
     name = f"interrupted_{COMM.rank}"
+    modules = (name, f"{name}.first", f"{name}.second")
     _package(tmp_path, name)
     monkeypatch.syspath_prepend(str(tmp_path))
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)  # a kernel's
     try:
-        with pytest.raises(KeyboardInterrupt):  # the interrupt still comes
-            import_whole(name)
+        with pytest.raises(KeyboardInterrupt), whole_imports():  # the interrupt comes,
+            importlib.import_module(name)
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        assert sys.modules[name].second.VALUE == 2  # but the package is whole
+        assert sys.modules[name].second.VALUE == 2  # once the package is whole
         with StopSignal() as stop:  # a run's handler gets it (no KeyboardInterrupt)
-            for module in (name, f"{name}.first", f"{name}.second"):
+            for module in modules:
                 del sys.modules[module]
-            assert import_whole(name).second.VALUE == 2
+            with whole_imports():
+                assert importlib.import_module(name).second.VALUE == 2
             time.sleep(0.05)
             assert stop.received == signal.SIGINT
     finally:
         signal.signal(signal.SIGINT, previous)
-        for module in (name, f"{name}.first", f"{name}.second"):
+        for module in modules:
             sys.modules.pop(module, None)

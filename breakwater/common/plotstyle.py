@@ -22,11 +22,12 @@ def default_style[**P, R](draw: Callable[P, R]) -> Callable[P, R]:
 
     @functools.wraps(draw)
     def drawn(*args: P.args, **kwargs: P.kwargs) -> R:
-        from breakwater.common.wholeimport import import_whole
+        from breakwater.common.wholeimport import whole_imports
 
-        # When drawing (importing the callers loads no matplotlib), whole.
-        style = import_whole("matplotlib.style")
-        with style.context("default"):
+        with whole_imports():  # when drawing: importing the callers loads no matplotlib
+            import matplotlib.style
+
+        with matplotlib.style.context("default"):
             return draw(*args, **kwargs)
 
     return drawn

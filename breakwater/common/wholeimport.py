@@ -6,40 +6,40 @@ process meets submodules that its new module object lacks. Measured: a second
 interrupt while a study was wrapping up (it imports matplotlib to draw its figures)
 left ``AttributeError: module 'matplotlib' has no attribute '_docstring'`` for every
 later figure of the kernel, the user's own too, until a restart.
-:func:`import_whole` holds SIGINT back until the import is done, then delivers it.
+:func:`whole_imports` holds SIGINT back while its block imports, then delivers it.
 """
 
 from __future__ import annotations
 
-import importlib
+import contextlib
 import signal
-import sys
 import threading
-from types import FrameType, ModuleType
+from collections.abc import Iterator
+from types import FrameType
 
-__all__ = ["import_whole"]
+__all__ = ["whole_imports"]
 
 
-def import_whole(name: str) -> ModuleType:
-    """``importlib.import_module(name)``, with a SIGINT during it delivered after it.
+@contextlib.contextmanager
+def whole_imports() -> Iterator[None]:
+    """Hold SIGINT back inside the block (its lazy imports); deliver it after the block.
 
-    The signal goes, once the module is whole, to the handler it was meant for: a
+    The signal goes, once the modules are whole, to the handler it was meant for: a
     KeyboardInterrupt (Python's default handler), or a run's or a study's stop.
-    Outside the main thread, or where SIGINT's handler is not Python's, a plain import.
+    Outside the main thread, or where SIGINT's handler is not Python's, nothing is held.
     """
-    if name in sys.modules or threading.current_thread() is not threading.main_thread():
-        return importlib.import_module(name)
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous is None:
+        yield  # (a handler set outside Python could not be put back)
+        return
     caught: list[int] = []
 
     def hold(signum: int, frame: FrameType | None) -> None:
         caught.append(signum)
 
-    previous = signal.getsignal(signal.SIGINT)
-    if previous is None:  # set outside Python: it could not be put back
-        return importlib.import_module(name)
     signal.signal(signal.SIGINT, hold)
     try:
-        return importlib.import_module(name)
+        yield
     finally:
         signal.signal(signal.SIGINT, previous)
         if caught:

@@ -223,9 +223,11 @@ def read_fields(directory: str | pathlib.Path, name: str, time: float | None = N
             than its files hold: a copy of a running run, a run killed, a full disk); the
             line names the last whole time before it.
     """
-    from breakwater.common.wholeimport import import_whole
+    from breakwater.common.wholeimport import whole_imports
 
-    pyvista = import_whole("pyvista")  # (an interrupt in its import broke it for good)
+    with whole_imports():  # (an interrupt in its import broke it for the process)
+        import pyvista
+
     every = _stored(directory, name)
     stored = _choose(every, time, name)
     try:

@@ -78,7 +78,7 @@ from breakwater.common.errors import (
 )
 from breakwater.common.notebookprogress import duration, in_kernel, time_left
 from breakwater.common.parallel import on_rank_zero
-from breakwater.common.wholeimport import import_whole
+from breakwater.common.wholeimport import whole_imports
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.model import ContactModel
 from breakwater.outputs import checkpoint as ckpt
@@ -475,7 +475,8 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
             # kill (the time limit) or a full disk between the two lost the whole run.
             (r.directory / files.CHECKPOINT).unlink(missing_ok=True)
         if output.figures and not stopped:
-            figures = import_whole("breakwater.outputs.figures")  # (matplotlib)
+            with whole_imports():  # (matplotlib)
+                from breakwater.outputs import figures
 
             try:
                 drawn = figures.make_figures(r.directory)

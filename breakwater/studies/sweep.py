@@ -59,7 +59,7 @@ from breakwater.common.cores import core_warning, host_usage
 from breakwater.common.errors import CaseError
 from breakwater.common.gmshtools import settle_signal_handlers
 from breakwater.common.parallel import on_every_rank, on_rank_zero
-from breakwater.common.wholeimport import import_whole
+from breakwater.common.wholeimport import whole_imports
 from breakwater.outputs import checkpoint  # importing PETSc is collective: at import
 from breakwater.run import simulation
 from breakwater.run.resumecase import build_to_resume
@@ -541,8 +541,9 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                                len(points) - sum(status.count(s) for s in
                                                  ("finished", "failed", "interrupted")))
         # (matplotlib: a second interrupt there broke it for the rest of the process)
-        sweepplots = import_whole("breakwater.studies.plots")
-        stormstats = import_whole("breakwater.studies.stormstats")
+        with whole_imports():
+            from breakwater.studies import plots as sweepplots
+            from breakwater.studies import stormstats
 
         try:
             drawn = sweepplots.make_figures(folder, study, TABLE)
