@@ -403,6 +403,46 @@ def test_a_case_killed_before_its_record_is_recorded_not_rerun(shared_dir, monke
     assert (case / "snapshot_max_ux.npz").is_file()
 
 
+def test_a_study_interrupted_from_python_says_so_and_goes_on(shared_dir, monkeypatch):
+    """A KeyboardInterrupt in a case's run (a second interrupt in a notebook) came out of
+    ``run_study`` with the case's record left ``running`` and ``sweep.csv`` saying
+    ``pending``. Both now say ``interrupted`` before it goes on; the study run again in
+    the same process resumes the case and gives the table of an uninterrupted study.
+    (One group of every rank: the interrupt is raised on every rank.)"""
+    from breakwater.stepping.gn22 import GN22
+
+    path = study_file(shared_dir, '"output.checkpoint_interval" = 1\n'
+                      '[grid]\n"contact.interface.friction" = [0.5, 0.6]\n')
+    out = shared_dir / "out"
+    solve, steps = GN22.solve, []
+
+    def interrupted(self: GN22) -> int:
+        steps.append(1)
+        if len(steps) == 10:
+            raise KeyboardInterrupt
+        return solve(self)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(GN22, "solve", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            run_study(load_study(path), out, quiet=True, ranks_per_case=COMM.size)
+    rows = read_table(out / TABLE)
+    assert [r["status"] for r in rows] == ["interrupted", "pending"]
+    (case,) = out.glob("case-0000*/")
+    record = json.loads((case / RECORD).read_text())
+    assert record["status"] == "interrupted" and "KeyboardInterrupt" in record["error"]
+    assert json.loads((case / "summary.json").read_text())["status"] == "interrupted"
+    COMM.barrier()
+
+    outcome = run_study(load_study(path), out, quiet=True, ranks_per_case=COMM.size)
+    assert outcome.complete and outcome.finished == 2
+    again = shared_dir / "again"
+    run_study(load_study(path), again, quiet=True, ranks_per_case=COMM.size)
+    for a, b in zip(read_table(out / TABLE), read_table(again / TABLE), strict=True):
+        for key in ("status", "steps", "time_reached", "peak_ux.gauge_top", "residual_slip"):
+            assert a[key] == b[key], key
+
+
 # --- killed studies (a real process) ------------------------------------------------------
 
 def _sweep(path: pathlib.Path, out: pathlib.Path) -> subprocess.Popen:

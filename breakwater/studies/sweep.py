@@ -309,6 +309,7 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
     start = time.perf_counter()
     resume, before = on_rank_zero(comm, prepare)
     status, error, summary = "finished", None, None
+    interrupt: KeyboardInterrupt | None = None
     warnings: list[str] = []
     try:
         with _case_warnings() as warnings:
@@ -323,8 +324,10 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
         error = _one_line(e).replace(simulation.RESUME_HINT.strip(),
                                      "(run the study again to go on)")
         status, summary = "interrupted", e.summary
-    except KeyboardInterrupt:
-        raise
+    except KeyboardInterrupt as e:  # (a second interrupt in a notebook): recorded as
+        interrupt = e  # interrupted, then raised (the record said "running")
+        status, error = "interrupted", "KeyboardInterrupt (run the study again to go on)"
+        summary = on_rank_zero(comm, lambda: files.read_json(folder / files.SUMMARY))
     except Exception as e:  # the study goes on: the case's one-line error is recorded
         status, error = "failed", _one_line(e)
         summary = getattr(e, "summary", None)
@@ -339,7 +342,10 @@ def _run_case(case: Case, point: Point, fingerprint: str, folder: pathlib.Path,
         files.atomic_write_json(folder / RECORD, record)
         return record
 
-    return on_rank_zero(comm, write)
+    record = on_rank_zero(comm, write)
+    if interrupt is not None:
+        raise interrupt
+    return record
 
 
 def _record(point: Point, fingerprint: str, status: str, error: str | None = None,
@@ -509,7 +515,12 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                     break
                 j = todo[k]
                 p = points[j]
-                record = _run_case(cases[j], p, fingerprints[j], folder / p.folder, group)
+                try:
+                    record = _run_case(cases[j], p, fingerprints[j], folder / p.folder, group)
+                except KeyboardInterrupt:  # the table says so too, then it goes on
+                    if group.rank == 0:
+                        write_table(folder, points, keys, fingerprints)
+                    raise
                 if group.rank == 0:
                     write_table(folder, points, keys, fingerprints)
                     tail = f": {record['error']}" if record["error"] else ""
