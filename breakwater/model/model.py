@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common import formcache
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
 from breakwater.model.built import built_parts, gravity_value
@@ -125,6 +126,7 @@ class ContactModel(ModelGroups):
         degree: int = 2,
         surface_pairs: Sequence[SurfacePair] = (),
     ) -> None:
+        formcache.install()  # (an interrupted compilation leaves the JIT cache usable)
         self.mesh_data = mesh_data
         self.mesh = msh = mesh_data.mesh
         self.comm = msh.comm
