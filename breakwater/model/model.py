@@ -49,6 +49,8 @@ from breakwater.model.parts import (
     SurfaceLoad,
 )
 
+formcache.install()  # the forms' compilations, interrupted, leave the JIT cache usable
+
 __all__ = ["Body", "BodyData", "ContactModel", "ContactPair", "Damping", "Fixed", "LoadData",
            "Material", "PairData", "SurfaceLoad", "SurfacePair"]
 
@@ -126,7 +128,6 @@ class ContactModel(ModelGroups):
         degree: int = 2,
         surface_pairs: Sequence[SurfacePair] = (),
     ) -> None:
-        formcache.install()  # (an interrupted compilation leaves the JIT cache usable)
         self.mesh_data = mesh_data
         self.mesh = msh = mesh_data.mesh
         self.comm = msh.comm
