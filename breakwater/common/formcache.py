@@ -30,11 +30,17 @@ def _claiming(get: Callable[..., Any]) -> Callable[..., Any]:
     """FFCx's ``get_cached_module``, noting a module this process claims to compile."""
 
     @functools.wraps(get)
-    def claiming(module_name: str, object_names: Any, cache_dir: Any, timeout: int
-                 ) -> Any:
-        found = get(module_name, object_names, cache_dir, timeout)
-        if found[0] is None:  # the .c file was created here: this process compiles it
-            _claimed.append(pathlib.Path(cache_dir).joinpath(module_name).with_suffix(".c"))
+    def claiming(*args: Any, **kwargs: Any) -> Any:
+        found = get(*args, **kwargs)
+        # FFCx 0.11's (module_name, object_names, cache_dir, timeout); another FFCx's
+        # call passes through untouched.
+        with contextlib.suppress(Exception):
+            module_name = kwargs.get("module_name", args[0] if args else None)
+            cache_dir = kwargs.get("cache_dir", args[2] if len(args) > 2 else None)
+            if found[0] is None and isinstance(module_name, str) and cache_dir is not None:
+                # The .c file was created here: this process compiles it.
+                _claimed.append(pathlib.Path(cache_dir).joinpath(module_name)
+                                .with_suffix(".c"))
         return found
 
     return claiming
@@ -62,9 +68,13 @@ def _releasing(compile_objects: Callable[..., Any]) -> Callable[..., Any]:
 
 def install() -> None:
     """Wrap FFCx's JIT functions once per process (dolfinx calls them through the module)."""
-    import ffcx.codegeneration.jit as jit
-
-    if getattr(jit, "_breakwater_releases_claims", False):
+    try:
+        import ffcx.codegeneration.jit as jit
+    except ImportError:  # another FFCx layout: its own behaviour
+        return
+    names = ("get_cached_module", "compile_forms", "compile_expressions")
+    if getattr(jit, "_breakwater_releases_claims", False) or not all(
+            callable(getattr(jit, n, None)) for n in names):
         return
     jit.get_cached_module = _claiming(jit.get_cached_module)
     jit.compile_forms = _releasing(jit.compile_forms)
