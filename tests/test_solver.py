@@ -43,6 +43,19 @@ def _reason(norms: list[float], ynorm: float = 1.0, **changes: float) -> tuple[i
     return convergence_reason(norms, 1.0, ynorm, **{**TOL, **changes})  # type: ignore[arg-type]
 
 
+
+def _blocks(path: pathlib.Path, friction: float = 0.0, held_top: bool = False
+            ) -> ContactModel:
+    """Block ``a`` (stiff) on ``b`` (soft) under gravity, ``b_bottom`` fixed (and ``a_top``
+    in x where ``held_top``), their conforming pair with the given friction."""
+    mesh = two_rectangles(path, COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
+    fixed = [Fixed("b_bottom")] + ([Fixed("a_top", (0,))] if held_top else [])
+    return ContactModel(read_mesh(mesh, COMM),
+                        [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
+                         Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                        [ContactPair("interface", "a", "b", 5e8, friction=friction)],
+                        fixed, gravity=(0.0, -9.81))
+
 def test_petsc_default_tests() -> None:
     assert _reason([1.0]) == (R.CONVERGED_ITERATING, False)
     assert _reason([1.0, 1e-3]) == (R.CONVERGED_ITERATING, False)
@@ -87,12 +100,7 @@ def test_real_solve_ends_at_its_round_off_floor(folder: pathlib.Path) -> None:
     at ‖F‖ < 1e-9 ‖f‖, so the two differ by that order (times the compliance), far
     below 1e-8.
     """
-    path = two_rectangles(folder / "floor.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _blocks(folder / "floor.msh")
     zero = NewtonOptions(rtol=0.0, atol=0.0, stol=0.0, max_it=40)
     u_floor, its = solve_static(model, options=zero)
     assert its < zero.max_it
@@ -135,12 +143,7 @@ def test_solver_options_leave_petsc_options_database(folder: pathlib.Path) -> No
     stayed in the database for the rest of the process: a notebook that ran a case
     kept them, and the next solver of the same prefix read them again.
     """
-    path = two_rectangles(folder / "options.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _blocks(folder / "options.msh")
     database = PETSc.Options()
     database["user_own_option"] = 3  # (a caller's own: left alone)
     u = model.functions("u")
@@ -166,12 +169,7 @@ def test_solver_interrupted_while_built_leaves_no_error(folder: pathlib.Path,
     Before, dolfinx's ``NonlinearProblem.__del__`` then met a half-built problem:
     ``Exception ignored in ... AttributeError: ... '_snes'`` in the notebook's cell.
     """
-    path = two_rectangles(folder / "halfbuilt.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _blocks(folder / "halfbuilt.msh")
     u = model.functions("u")
     create_vector = fem_petsc.create_vector
 
@@ -198,12 +196,7 @@ def test_destroyed_solver_is_freed(folder: pathlib.Path) -> None:
     cannot see them: the solver, its PETSc objects and their MPI communicators live
     until the process ends.
     """
-    path = two_rectangles(folder / "freed.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _blocks(folder / "freed.msh")
     u = model.functions("u")
     kept, freed = (NewtonSolver(model, model.residual(u), u, "static") for _ in range(2))
     refs = [weakref.ref(kept), weakref.ref(freed)]
@@ -228,12 +221,7 @@ def test_residual_without_the_zero_lifting_is_dolfinx_residual(folder: pathlib.P
     from dolfinx import fem
     from dolfinx.fem import petsc as fem_petsc
 
-    path = two_rectangles(folder / "lifting.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8, friction=0.6)],
-                         [Fixed("b_bottom"), Fixed("a_top", (0,))], gravity=(0.0, -9.81))
+    model = _blocks(folder / "lifting.msh", friction=0.6, held_top=True)
     u = model.functions("u")
     solver = NewtonSolver(model, model.residual(u), u, "static")
     residual, problem = solver.residual, solver.problem
@@ -330,12 +318,7 @@ def test_jacobian_with_its_bulk_assembled_once_is_dolfinx_jacobian(folder: pathl
     """
     from dolfinx.fem import petsc as fem_petsc
 
-    path = two_rectangles(folder / "jacobian.msh", COMM, a=(0.2, 0.1), b=(0.4, 0.1), h=0.05)
-    model = ContactModel(read_mesh(path, COMM),
-                         [Body("a", Material(2314.0, 0.2, shear_modulus=2e9)),
-                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
-                         [ContactPair("interface", "a", "b", 5e8, friction=0.6)],
-                         [Fixed("b_bottom")], gravity=(0.0, -9.81))
+    model = _blocks(folder / "jacobian.msh", friction=0.6)
     u, _ = solve_static(model)  # a state with the interface closed
     solver = NewtonSolver(model, model.residual(u), u, "static")
     jacobian, problem = solver.jacobian, solver.problem
