@@ -96,7 +96,7 @@ from breakwater.stepping.stepsolver import StepSolver
 __all__ = ["GROW_AFTER", "RESUME_HINT", "Monitor", "RunInterrupted", "SimulationFailed",
            "interface_state", "pair_names", "run"]
 
-RESUME_HINT = " (continue with --resume)"
+RESUME_HINT = " (continue with --resume; from Python: run(..., resume=True))"
 """The end of an interrupted run's error when it saved a checkpoint."""
 
 log = logging.getLogger("breakwater.run.simulation")
