@@ -51,3 +51,84 @@ def test_an_interrupted_compilation_gives_its_claim_back(tmp_path: pathlib.Path,
     assert form.rank == 2
     formcache.install()  # once per process: not wrapped twice
     assert ffcx_jit.compile_forms.__wrapped__.__module__ == "ffcx.codegeneration.jit"
+
+
+_KILLED = """
+import os, signal, sys
+import breakwater  # noqa: F401
+import ffcx.codegeneration.jit as ffcx_jit
+import ufl
+from dolfinx import fem, mesh
+from mpi4py import MPI
+from breakwater.common import formcache
+formcache.install()
+ffcx_jit._compile_objects = lambda *a, **k: os.kill(os.getpid(), signal.SIGKILL)
+msh = mesh.create_unit_square(MPI.COMM_SELF, 2, 2)
+V = fem.functionspace(msh, ("Lagrange", 1))
+u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+fem.form(3.0 * u * v * ufl.dx, jit_options={"cache_dir": sys.argv[1], "timeout": 1})
+"""
+
+
+@pytest.mark.serial
+def test_a_killed_compilation_is_compiled_again(tmp_path: pathlib.Path) -> None:
+    # A process killed while it compiles (SIGKILL: a batch system's time limit, the
+    # out-of-memory killer) leaves its claim: the next compilation of the form waited
+    # for it and failed after the timeout, in every later run, until removed by hand.
+    import subprocess
+    import sys
+
+    formcache.install()
+    cache = tmp_path / "cache"
+    child = subprocess.run([sys.executable, "-c", _KILLED, str(cache)], capture_output=True,
+                           text=True, timeout=300, check=False)
+    assert child.returncode == -9, child.stderr
+    claims = [p for p in cache.glob("*.c") if not p.with_suffix(".c.cached").exists()]
+    assert len(claims) == 1 and claims[0].with_suffix(".c.owner").exists()
+    form = _compile(cache, 3.0)  # was: TimeoutError after the 1 s timeout
+    assert form.rank == 2
+    assert claims[0].with_suffix(".c.cached").exists()
+    assert not claims[0].with_suffix(".c.owner").exists()  # removed once compiled
+
+
+def _module_of(tmp: pathlib.Path, coefficient: float) -> str:
+    """The JIT module name of :func:`_compile`'s form (compiled in a scratch cache)."""
+    _compile(tmp / "scratch", coefficient)
+    (name,) = [p.stem for p in (tmp / "scratch").glob("*.c")]
+    return name
+
+
+def test_a_live_claim_is_waited_for(tmp_path: pathlib.Path) -> None:
+    # The claim of a process that is alive (this one) is not taken over: FFCx waits
+    # for it and times out, as without breakwater.
+    import os
+    import socket
+
+    formcache.install()
+    tmp = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
+    claim = (tmp / "cache" / _module_of(tmp, 4.0)).with_suffix(".c")
+    claim.parent.mkdir()
+    claim.touch()
+    claim.with_suffix(".c.owner").write_text(f"{socket.gethostname()} {os.getpid()}")
+    with pytest.raises(TimeoutError):
+        _compile(tmp / "cache", 4.0)
+    assert claim.exists()
+
+
+def test_an_old_claim_of_no_known_owner_is_compiled_again(tmp_path: pathlib.Path) -> None:
+    # Another host's or another program's claim (no owner recorded): taken over once
+    # none of its module's files changed for formcache.STALE_AGE, waited for before.
+    import os
+    import time
+
+    formcache.install()
+    tmp = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
+    claim = (tmp / "cache" / _module_of(tmp, 5.0)).with_suffix(".c")
+    claim.parent.mkdir()
+    claim.touch()
+    with pytest.raises(TimeoutError):  # fresh: it may be compiling
+        _compile(tmp / "cache", 5.0)
+    old = time.time() - formcache.STALE_AGE - 60.0
+    os.utime(claim, (old, old))
+    assert _compile(tmp / "cache", 5.0).rank == 2
+    assert claim.with_suffix(".c.cached").exists()

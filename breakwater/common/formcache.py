@@ -9,38 +9,94 @@ build of that case, in the same notebook and in any later process, fail after 10
 with ``TimeoutError: JIT compilation timed out, probably due to a failed previous
 compile``, until the file was removed by hand. :func:`install` makes an interrupted
 compilation give its claims back as FFCx does on an error.
+
+A process killed while it compiles (SIGKILL: a batch system's time limit, the
+out-of-memory killer) cannot give its claim back, and every later run of the case
+failed the same way (measured). Each claim made here is recorded in an ``.c.owner``
+file (host and process id); a claim found without its mark is taken over (renamed
+``.c.failed``, as FFCx does on an error, and compiled again) where its owner is a
+process of this host that no longer exists, or where none of its module's files has
+changed for :data:`STALE_AGE` (a claim of another host or of another program).
 """
 
 from __future__ import annotations
 
 import contextlib
 import functools
+import logging
 import os
 import pathlib
+import socket
+import time
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["install"]
+__all__ = ["STALE_AGE", "install"]
+
+log = logging.getLogger(__name__)
+
+STALE_AGE = 600.0
+"""Seconds without a change to any file of a claimed module after which its claim is a
+dead process's, whoever made it (a form compiles in seconds to a minute here)."""
 
 _claimed: list[pathlib.Path] = []
 """The ``.c`` files this process has claimed and not yet compiled (in order)."""
 
 
+def _owner() -> str:
+    """The record of the running process in an ``.c.owner`` file: host and PID."""
+    return f"{socket.gethostname()} {os.getpid()}"
+
+
+def _dead_owner(claim: pathlib.Path) -> str | None:
+    """Why ``claim`` (a ``.c`` file without its ``.c.cached`` mark) is a dead process's.
+
+    None where it may be a live one's: its owner is alive, or on another host, or not
+    recorded, and a file of its module changed within :data:`STALE_AGE`.
+    """
+    with contextlib.suppress(OSError, ValueError):
+        host, pid = claim.with_suffix(".c.owner").read_text().split()
+        if host == socket.gethostname():
+            try:
+                os.kill(int(pid), 0)
+            except ProcessLookupError:
+                return f"its process {pid} no longer exists"
+            except PermissionError:
+                pass  # another user's, alive
+    try:
+        changed = max(p.stat().st_mtime for p in claim.parent.glob(claim.stem + ".*"))
+    except (OSError, ValueError):
+        return None
+    age = time.time() - changed
+    return f"none of its files changed for {age:.0f} s" if age > STALE_AGE else None
+
+
 def _claiming(get: Callable[..., Any]) -> Callable[..., Any]:
-    """FFCx's ``get_cached_module``, noting a module this process claims to compile."""
+    """FFCx's ``get_cached_module``: a dead process's claim taken over, ours recorded."""
 
     @functools.wraps(get)
     def claiming(*args: Any, **kwargs: Any) -> Any:
-        found = get(*args, **kwargs)
         # FFCx 0.11's (module_name, object_names, cache_dir, timeout); another FFCx's
         # call passes through untouched.
+        claim = None
         with contextlib.suppress(Exception):
             module_name = kwargs.get("module_name", args[0] if args else None)
             cache_dir = kwargs.get("cache_dir", args[2] if len(args) > 2 else None)
-            if found[0] is None and isinstance(module_name, str) and cache_dir is not None:
-                # The .c file was created here: this process compiles it.
-                _claimed.append(pathlib.Path(cache_dir).joinpath(module_name)
-                                .with_suffix(".c"))
+            if isinstance(module_name, str) and cache_dir is not None:
+                claim = pathlib.Path(cache_dir).joinpath(module_name).with_suffix(".c")
+        if claim is not None and claim.exists() and not claim.with_suffix(".c.cached").exists():
+            why = _dead_owner(claim)
+            if why is not None:
+                with contextlib.suppress(OSError):  # (another process may take it first)
+                    os.replace(claim, claim.with_suffix(".c.failed"))
+                    log.info("the JIT cache's %s was claimed by a compilation that did "
+                             "not finish (%s): compiling it again", claim.name, why)
+        found = get(*args, **kwargs)
+        if claim is not None and found[0] is None:
+            # The .c file was created here: this process compiles it.
+            _claimed.append(claim)
+            with contextlib.suppress(OSError):
+                claim.with_suffix(".c.owner").write_text(_owner())
         return found
 
     return claiming
@@ -61,6 +117,9 @@ def _releasing(compile_objects: Callable[..., Any]) -> Callable[..., Any]:
                         os.replace(claim, claim.with_suffix(".c.failed"))
             raise
         finally:
+            for claim in _claimed[mark:]:
+                with contextlib.suppress(OSError):
+                    claim.with_suffix(".c.owner").unlink()
             del _claimed[mark:]
 
     return releasing
