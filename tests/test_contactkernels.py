@@ -465,6 +465,30 @@ def test_active_system_is_the_dense_product() -> None:
                                atol=1e-13 * np.abs(expected).max())
 
 
+def test_primal_system_is_the_dense_product() -> None:
+    """``primal_system(B, transposed_rows(X_act, act))`` is ``(1 + X_act[act] B)ᵀ``, each
+    entry the sum of the column-wise loop it replaced (k ascending): equal to the bit
+    to the entries summed in that order; to round-off to NumPy's product."""
+    from breakwater.stepping.interfacenewton import primal_system, transposed_rows
+
+    rng = np.random.default_rng(5)
+    n, m = 150, 130  # more than one 64-wide tile of transposed_rows, a partial last one
+    act = np.sort(rng.choice(n, m, replace=False))
+    B = rng.standard_normal((m, m)) * (rng.uniform(size=(m, m)) < 0.05) * 1e10
+    X_act = np.ascontiguousarray(rng.standard_normal((n, m)) * 1e-9)
+    X_aa_t = transposed_rows(X_act, act)
+    np.testing.assert_array_equal(X_aa_t, X_act[act].T)
+    J = primal_system(B, X_aa_t).T
+    ordered = np.zeros((m, m))
+    for k in range(m):
+        for j in np.flatnonzero(B[k]):
+            ordered[:, j] += X_act[act, k] * B[k, j]
+    ordered += np.eye(m)
+    np.testing.assert_array_equal(J, ordered)
+    expected = X_act[act] @ B + np.eye(m)
+    np.testing.assert_allclose(J, expected, rtol=1e-13, atol=1e-13 * np.abs(expected).max())
+
+
 def test_coupled_unknowns_give_the_same_newton_step() -> None:
     """``coupled`` drops the unknowns whose row and column of B are zero (an open
     point's), and the Newton step solved without them is the step solved with them:
