@@ -54,8 +54,8 @@ from breakwater.stepping.reach import NearFactors, Reach
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
 __all__ = ["CYCLE_MAX", "CYCLE_REPEATS", "CYCLE_RTOL", "GROWTH", "HALVINGS", "RESOLVED",
-           "InterfaceNewton", "RoundOff", "active_step", "active_system", "cycle",
-           "damped_step", "primal_system", "transposed_rows"]
+           "Columns", "InterfaceNewton", "RoundOff", "active_step", "active_system", "cycle",
+           "damped_step", "kept_columns", "primal_system", "transposed_rows"]
 
 _R = PETSc.SNES.ConvergedReason
 
@@ -116,8 +116,7 @@ class InterfaceNewton:
         self.floor_accepts = self.rescues = self.halvings = self.flips = 0
         self.continuations = 0
         self.y, self.fc, self.F = np.zeros(n), np.zeros(n), np.zeros(n)
-        self._columns_of: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] \
-            | None = None
+        self._columns_of: Columns | None = None
         # The last evaluation (X_II, S, z_I, y, f_c(y)), for its round-off.
         self._last: tuple[np.ndarray, ...] | None = None
         self.round_off = RoundOff()
@@ -238,14 +237,8 @@ class InterfaceNewton:
         act, B = active
         if not len(act):
             return G.copy()
-        key = self._columns_of
         primal = self.contact.primal
-        if key is None or key[0] is not X_II or not np.array_equal(key[1], act):
-            # X_II's columns act, kept while act stays (the iterations of a step), and
-            # for the primal system their rows act transposed (primal_system).
-            X_act = np.ascontiguousarray(X_II[:, act])
-            self._columns_of = key = (X_II, act, X_act,
-                                      transposed_rows(X_act, act) if primal else None)
+        self._columns_of = key = kept_columns(self._columns_of, X_II, act, primal)
         return active_step(act, B, key[2], G, primal, key[3])
 
     def _residual(self, y: np.ndarray, X_II: np.ndarray, S: np.ndarray, z_I: np.ndarray
@@ -368,6 +361,19 @@ class RoundOff:
             self._magnitudes = m = (X_II, np.abs(X_II), np.abs(S))
         eps = float(np.finfo(float).eps)
         return eps * float(np.linalg.norm(m[2] @ (np.abs(y) + np.abs(z_I) + m[1] @ np.abs(fc))))
+
+
+Columns = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]
+"""X_II, act, X_II's columns act and, for the primal system, their rows act transposed."""
+
+
+def kept_columns(kept: Columns | None, X_II: np.ndarray, act: np.ndarray, primal: bool
+                 ) -> Columns:
+    """:data:`Columns` of X_II and act: ``kept`` while they stay (a step's iterations)."""
+    if kept is not None and kept[0] is X_II and np.array_equal(kept[1], act):
+        return kept
+    X_act = np.ascontiguousarray(X_II[:, act])
+    return X_II, act, X_act, transposed_rows(X_act, act) if primal else None
 
 
 def active_step(act: np.ndarray, B: np.ndarray, X_act: np.ndarray, G: np.ndarray,
