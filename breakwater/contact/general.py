@@ -62,6 +62,7 @@ from breakwater.contact import (
     searchkernels,
     slavepoints,
 )
+from breakwater.contact.conforming import RELEASE
 from breakwater.contact.facing import facing
 from breakwater.contact.penetration import StepCheck, allowed_depth, initial_overlap
 from breakwater.contact.surfaces import SurfacePair
@@ -410,6 +411,23 @@ class SurfaceContact(SurfaceForces):
         if fr is None:
             return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
         return fr["pos_s"], fr["v_T"]
+
+    def start_slip(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`slip_velocities` with those beyond :data:`RELEASE` χ brought down to it.
+
+        A static state's slave nodes start the dynamics with these (the frictional
+        relaxation's ``_creep``). A node that slides in the static state (a caisson's
+        base corner under its Poisson expansion) slips at its static slip over the
+        pseudo time, up to 1e5 χ: started so, one node moving at 9e-6 m/s among nodes
+        at rest, Rayleigh damping's β K v gave it 1.7e5 m/s² at t = 0, the first step
+        stored 0.84 J/m of strain (7.5 times the static state's) and the ledger counted
+        −0.84 J/m of numerical dissipation (the Goda caisson meshed apart, 2026-11-28).
+        At RELEASE χ the law carries μλ to 5e-5 all the same.
+        """
+        pos, v_T = self.slip_velocities()
+        speed = np.linalg.norm(v_T, axis=1)
+        cap = RELEASE * self._law[3]
+        return pos, v_T * (cap / np.maximum(speed, cap))[:, None]
 
     def energies(self) -> tuple[float, float]:
         """The penalty energy and the friction power at the accepted state (the ledger).

@@ -75,7 +75,7 @@ stages 1 and 1b first:
    ``c a₁ = u₁ − u_k`` (the mass term above) and ``v₁ = u₁/τ``, and β₁ = ½β₂Δτ_max/τ (τ
    at c_max; smaller c give a smaller τ, a narrower stick band, until c settles). The
    slave nodes in contact then start with that slip velocity (the law's creep, a
-   fraction of χ), so that the friction of the static state is carried at t = 0.
+   fraction of χ; at most RELEASE χ where a node slides: ``start_slip``): t = 0 carries it.
    The slip is measured from the landing point, not from the meshed position
    (:class:`~breakwater.statics.pseudostep.SlipOrigin`): a body meshed above its
    support does not count its fall as slip.
@@ -344,7 +344,7 @@ def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
     ps.rest()
     y = np.zeros(ps.solver.n)
     for p in ps.providers:
-        pos, v_T = p.slip_velocities()
+        pos, v_T = p.start_slip()
         keep = pos >= 0
         y[pos[keep]] = v_T[keep]
     ps.add_slave_velocities(v, y)
