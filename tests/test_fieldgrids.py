@@ -9,6 +9,7 @@ held exactly by P2).
 from __future__ import annotations
 
 import pathlib
+import re
 
 import dolfinx  # before adios2: the other way round, dolfinx's ADIOS2 library fails to load
 import numpy as np
@@ -172,7 +173,8 @@ def test_a_run_cut_short(shared_dir: pathlib.Path, capsys: pytest.CaptureFixture
     naming the last whole time, the whole times are read as in the whole file, on every
     rank. Before, ADIOS2 retried the read past the file's end for good: the notebook
     hung (measured: still waiting after 60 s). A metadata file cut short is refused too,
-    within ADIOS2's open timeout set to 1 s (10 s by default).
+    in one line naming it, before ADIOS2 opens it (ADIOS2's open timeout, set to 1 s,
+    10 s by default, is the backstop).
 
     The cut lands a quarter of the way into the fourth time's data (of five): after the
     bytes of a run of the same case to its third time (the same data written in the same
@@ -216,6 +218,83 @@ def test_a_run_cut_short(shared_dir: pathlib.Path, capsys: pytest.CaptureFixture
     assert read_fields(cut, "b").field_data["time"][0] == pytest.approx(4e-4, rel=1e-12)
     start = time.perf_counter()
     with pytest.raises(ValueError, match=r"^" + str(shared_dir / "meta" / "fields_a.bp")
-                       + r": cannot be read, its metadata is cut short or damaged \(a copy "):
+                       + r": cannot be read, its md.0 is cut short \(\d+ bytes, md.idx lists "
+                       r"\d+\) \(a copy "):
         field_times(shared_dir / "meta", "a")
     assert time.perf_counter() - start < 5.0  # ADIOS2's default: 10 s
+
+
+_WHY = ("(a copy of a run still running, or a run killed, stopped by a full disk or a power "
+        "loss); copy the folder again once the run has ended, or run the case again")
+
+
+def _damage(path: pathlib.Path, how: str) -> None:
+    size = path.stat().st_size
+    if how == "missing":
+        path.unlink()
+    elif how == "empty":
+        path.write_bytes(b"")
+    elif how == "cut":
+        path.write_bytes(path.read_bytes()[: size // 2])
+    elif how == "zero-filled":
+        path.write_bytes(bytes(size))
+    else:  # zeros mid-file, the file's length kept (a power loss's zero-filled block)
+        data = bytearray(path.read_bytes())
+        data[size // 3: 2 * size // 3] = bytes(2 * size // 3 - size // 3)
+        path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(("name", "how", "problem"), [
+    ("mmd.0", "cut", r"is cut short \(\d+ bytes, its records list \d+ or more\)"),
+    ("mmd.0", "empty", "is empty"),
+    ("mmd.0", "missing", "is missing"),
+    ("mmd.0", "zero-filled", r"is zero-filled \(\d+ bytes of zeros\)"),
+    ("mmd.0", "zeros", r"is damaged \(a run of zeros in the format at byte 0\)"),
+    ("md.idx", "empty", "is empty"),
+    ("md.idx", "missing", "is missing"),
+    ("md.idx", "zero-filled", r"is zero-filled \(\d+ bytes of zeros\)"),
+    ("md.idx", "zeros", r"is damaged \(a record of type b'\\x00' and 0 bytes at byte \d+\)"),
+    ("md.0", "cut", r"is cut short \(\d+ bytes, md.idx lists \d+\)"),
+    ("md.0", "empty", "is empty"),
+    ("md.0", "missing", "is missing"),
+    ("md.0", "zero-filled", r"is zero-filled \(\d+ bytes of zeros\)"),
+])
+def test_a_metadata_file_damaged(folder: pathlib.Path, capfd: pytest.CaptureFixture[str],
+                                 name: str, how: str, problem: str) -> None:
+    """Each metadata file of a ``.bp`` folder missing, empty, cut short or zero-filled:
+    refused in one line naming the file and what to do, nothing on stderr, on
+    ``field_times`` and ``read_fields`` alike. Before, an ``mmd.0`` cut short,
+    zero-filled or with zeros mid-file and an empty ``md.idx`` crashed the process in
+    ADIOS2 (a segmentation fault: PETSc's signal handler's lines, then MPI_Abort), and the
+    others were refused without naming the file."""
+    comm = MPI.COMM_WORLD
+    if comm.rank != 0:
+        return
+    bp = folder / "fields_block.bp"
+    _damage(bp / name, how)
+    capfd.readouterr()
+    for read in (field_times, read_fields):
+        with pytest.raises(ValueError) as refused:
+            read(folder, "block")
+        assert re.fullmatch(re.escape(f"{bp}: cannot be read, its {name} ") + problem
+                            + " " + re.escape(_WHY), str(refused.value)), refused.value
+    assert capfd.readouterr().err == ""
+
+
+def test_a_data_file_zero_filled(folder: pathlib.Path, capfd: pytest.CaptureFixture[str]
+                                 ) -> None:
+    """A ``data.0`` of the right length holding zeros (a power loss): its times are
+    listed (its metadata is whole) and each is refused in one line. Before, pyvista's
+    ``Number of cell types (1) must match the number of cells 8)``."""
+    comm = MPI.COMM_WORLD
+    if comm.rank != 0:
+        return
+    bp = folder / "fields_block.bp"
+    _damage(bp / "data.0", "zero-filled")
+    assert field_times(folder, "block") == pytest.approx([0.0, 0.1, 0.2], abs=0.0)
+    with pytest.raises(ValueError) as refused:
+        read_fields(folder, "block", 0.1)
+    assert str(refused.value) == (
+        f"{bp}: the fields at t = 0.1 s are damaged, its data files hold no cells where its "
+        f"index lists them (zeros: {_WHY.replace('(a copy', 'a copy')}")
+    assert capfd.readouterr().err == ""

@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from breakwater.outputs.bpcheck import BPDamaged, check_bp
+
 __all__ = ["field_names", "field_times", "read_fields"]
 
 _GEOMETRY = ("geometry", "connectivity", "types", "NumberOfNodes", "NumberOfEntities",
@@ -76,10 +78,16 @@ def _files(directory: str | pathlib.Path, name: str) -> list[pathlib.Path]:
 #: Why a file's index can list more than its data files hold.
 _CUT = ("a copy of a run still running, or a run killed, stopped by a full disk or a "
         "power loss")
+#: What to do about a file that cannot be read.
+_AGAIN = "copy the folder again once the run has ended, or run the case again"
 
 
 class _CutShort(Exception):
     """ADIOS2 failed to read what the file's index lists (a data or metadata file cut)."""
+
+
+class _Damaged(Exception):
+    """A data file holds cells that are none (zeros: a power loss's zero-filled blocks)."""
 
 
 def _reader(path: pathlib.Path) -> Any:
@@ -90,7 +98,13 @@ def _reader(path: pathlib.Path) -> Any:
     of a running run, a run killed in a write, a power loss): a notebook hung. The
     ``stdio`` transport for the data files (engine parameter ``DataFileTransport``)
     raises instead; ``OpenTimeoutSecs`` bounds the wait for a metadata file shorter
-    than its index (10 s by default).
+    than its index (10 s by default). The metadata files are checked first
+    (:func:`~breakwater.outputs.bpcheck.check_bp`): ADIOS2 crashed the process on an
+    ``mmd.0`` cut short or zero-filled and on an empty ``md.idx``.
+
+    Raises:
+        _CutShort: ADIOS2 cannot open it.
+        ValueError: A metadata file missing, empty, cut short or damaged, in one line.
     """
     # dolfinx first: with the pip module's ADIOS2 library loaded before it, dolfinx's own
     # (the dolfinx wheel's) fails to load ("undefined symbol ... HDF5Common_MPI_API").
@@ -101,6 +115,11 @@ def _reader(path: pathlib.Path) -> Any:
     except ImportError:
         raise ImportError("reading the .bp fields needs ADIOS2's Python module: "
                           "pip install adios2 (or breakwater's 'viz' extra)") from None
+    try:
+        check_bp(path)
+    except BPDamaged as damaged:
+        raise ValueError(f"{path}: cannot be read, its {damaged} ({_CUT}); {_AGAIN}"
+                         ) from None
     io = adios2.Adios().declare_io(f"breakwater:{path}")
     io.set_parameters({"DataFileTransport": "stdio", "OpenTimeoutSecs": "1"})
     try:
@@ -124,7 +143,7 @@ def _stored(directory: str | pathlib.Path, name: str) -> list[_Stored]:
                     by_time[t] = _Stored(t, path, k)
         except (_CutShort, RuntimeError):
             raise ValueError(f"{path}: cannot be read, its metadata is cut short or damaged "
-                             f"({_CUT})") from None
+                             f"({_CUT}); {_AGAIN}") from None
     return [by_time[t] for t in sorted(by_time)]
 
 
@@ -160,7 +179,12 @@ def _blocks(f: Any, step: int, names: list[str]) -> dict[str, np.ndarray]:
             continue
         x = np.asarray(f.read("geometry", step_selection=[0, 1], block_id=b), float)
         c = np.asarray(f.read("connectivity", step_selection=[0, 1], block_id=b), np.int64)
-        c = c.reshape(len(c), -1) if c.ndim == 2 else c.reshape(-1, int(c[0]) + 1)
+        per = int(c.ravel()[0]) if c.size else 0  # the nodes of a cell
+        if per < 1 or c.size % (per + 1):
+            raise _Damaged
+        c = c.reshape(-1, per + 1)
+        if (c[:, 0] != per).any() or c[:, 1:].min() < 0 or c[:, 1:].max() >= x.size // 3:
+            raise _Damaged
         points.append(x.reshape(-1, 3))
         cells.append(np.column_stack([c[:, 0], c[:, 1:] + offset]))
         offset += len(points[-1])
@@ -176,11 +200,14 @@ def _read_step(stored: _Stored) -> tuple[int, dict[str, np.ndarray]]:
 
     Raises:
         _CutShort: A data file holds fewer bytes than the index lists for this time.
+        _Damaged: Its cells are none (zeros where the index lists them).
     """
     try:
         with _reader(stored.path) as f:
             names = [n for n in f.available_variables() if n not in _GEOMETRY]
             cell_type = int(np.asarray(f.read("types", step_selection=[0, 1])).ravel()[0])
+            if cell_type <= 0:
+                raise _Damaged
             return cell_type, _blocks(f, stored.step, names)
     except RuntimeError as error:  # ADIOS2's: "read size of 600 is not equal to ..."
         raise _CutShort(str(error)) from None
@@ -234,6 +261,10 @@ def read_fields(directory: str | pathlib.Path, name: str, time: float | None = N
         cell_type, joined = _read_step(stored)
     except _CutShort:
         raise ValueError(_cut_message(stored, every)) from None
+    except _Damaged:
+        raise ValueError(f"{stored.path}: the fields at t = {stored.time:g} s are damaged, "
+                         f"its data files hold no cells where its index lists them (zeros: "
+                         f"{_CUT}); {_AGAIN}") from None
     x, cells = joined.pop("geometry"), joined.pop("connectivity")
     # One copy of each cell (a rank's ghost cells are another rank's), by its nodes' mean.
     scale = max(float(np.abs(x).max(initial=0.0)), 1e-300)
