@@ -10,11 +10,12 @@ separately meshed model).
 Format notes:
     * ``.msh`` output is a verbatim copy (meshio's gmsh 4.1 writer loses the
       entity-to-group links of its own input).
-    * XDMF is written with inline XML data (one self-contained file) and without
-      the point (dim-0) groups: meshio cannot read back polyvertex cells in a
-      mixed topology. A case does not read it (no names): ``breakwater mesh --out
-      x.xdmf`` writes dolfinx's XDMF with the names instead
-      (:mod:`breakwater.model.xdmfmesh`), which a case reads.
+    * XDMF (``.xdmf``, ``.xmf``) is breakwater's own, as ``breakwater mesh --out
+      x.xdmf`` writes it (:func:`breakwater.model.xdmfmesh.write_xdmf`): the mesh read
+      with every check a run makes, its meshtags and the physical groups' names, the
+      arrays in ``x.h5`` beside it; a case reads it by group names as its
+      ``mesh.source``, ParaView opens it. Until 2026-11-28 it was meshio's, without
+      the names: a case refused the file this function wrote.
 """
 
 from __future__ import annotations
@@ -106,6 +107,17 @@ def read(path: str | pathlib.Path) -> meshio.Mesh:
         return meshio.read(path, file_format=file_format)
 
 
+def _write_xdmf(src: pathlib.Path, out: pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
+    """Breakwater's XDMF of ``src`` (collective; rank 0's paths on every rank)."""
+    from breakwater.model.mesh import read_mesh
+    from breakwater.model.xdmfmesh import write_xdmf
+
+    data = read_mesh(src, comm)
+    on_rank_zero(comm, lambda: out.parent.mkdir(parents=True, exist_ok=True))
+    write_xdmf(data, out)
+    return out
+
+
 def convert(
     msh_path: str | pathlib.Path,
     out_path: str | pathlib.Path,
@@ -118,7 +130,9 @@ def convert(
 
     Args:
         msh_path: gmsh ``.msh`` file, e.g. from :func:`breakwater.meshes.goda.generate`.
-        out_path: Output file: ``.xdmf``, ``.vtu``, ``.msh``, or any meshio suffix.
+        out_path: Output file: ``.xdmf`` (breakwater's, with the groups' names and an
+            ``.h5`` beside it: a case's ``mesh.source``), ``.vtu``, ``.msh``, or any
+            meshio suffix (without the names: for viewing).
         comm: MPI communicator; ``MPI.COMM_WORLD`` if None.
 
     Returns:
@@ -126,6 +140,8 @@ def convert(
 
     Raises:
         ValueError: For an unknown suffix (checked on all ranks before any work).
+        breakwater.common.errors.MeshError: An XDMF's source refused as a run refuses
+            it (missing, no named physical groups, ...), on every rank.
         Exception: What the conversion raised on rank 0, on every rank (see
             :func:`breakwater.common.parallel.on_rank_zero`).
 
@@ -134,6 +150,8 @@ def convert(
     comm = MPI.COMM_WORLD if comm is None else comm
     paths = on_rank_zero(comm, lambda: (str(msh_path), str(out_path)))  # rank 0's paths
     src, out = (pathlib.Path(p) for p in paths)
+    if out.suffix.lower() in _XDMF_SUFFIXES:
+        return _write_xdmf(src, out, comm)
 
     def write() -> None:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -142,16 +160,7 @@ def convert(
                 shutil.copyfile(src, out)
             return
         mesh = meshio.read(src, file_format="gmsh")
-        if out.suffix.lower() in _XDMF_SUFFIXES:
-            with _h5py_not_required():
-                meshio.write(
-                    out,
-                    _by_cell_type(mesh, skip=("vertex",)),
-                    file_format,
-                    data_format="XML",
-                )
-        else:
-            meshio.write(out, _by_cell_type(mesh), file_format)
+        meshio.write(out, _by_cell_type(mesh), file_format)
 
     on_rank_zero(comm, write)
     return out

@@ -72,6 +72,24 @@ def test_a_curved_second_order_mesh_reads_back_with_every_group(folder):
     assert np.allclose(group_points(xdmf, "centre"), group_points(msh, "centre"), atol=1e-15)
 
 
+def test_the_library_conversion_writes_breakwaters_xdmf(folder, capfd):
+    """``breakwater.meshes.convert(msh, "x.xdmf")`` writes the XDMF ``breakwater mesh
+    --out`` writes: read back by group names (every group, the same measures to
+    round-off, the point group's coordinates), so it serves as a case's mesh.source.
+    Before, it wrote meshio's XDMF without the names, refused as a case's mesh."""
+    from breakwater import meshes  # type: ignore[attr-defined]
+
+    source = mesh_geo(RUNS / "q_cylinder_on_slope.geo", folder / "convert.msh", COMM)
+    out = meshes.convert(source, folder / "sub" / "converted.xdmf", comm=COMM)
+    assert out == folder / "sub" / "converted.xdmf" and out.with_suffix(".h5").is_file()
+    msh, xdmf = read_mesh(source, COMM), read_mesh(out, COMM)
+    assert xdmf.physical_groups == msh.physical_groups
+    assert measures(xdmf) == pytest.approx(measures(msh), rel=1e-12, abs=1e-15)
+    assert np.allclose(group_points(xdmf, "centre"), group_points(msh, "centre"), atol=1e-15)
+    with pytest.raises(MeshError, match=r"mesh file not found: .*missing\.msh$"):
+        meshes.convert(folder / "missing.msh", folder / "missing.xdmf", comm=COMM)
+
+
 def test_a_group_sharing_facets_is_refused_from_the_xdmf_too(folder):
     # dolfinx's facet tags keep one group per facet: the XDMF's record keeps what the
     # .msh reader found, so the group is refused by name as from the .msh.
@@ -86,7 +104,8 @@ def test_a_group_sharing_facets_is_refused_from_the_xdmf_too(folder):
 
 def test_an_xdmf_without_names_is_refused_in_one_line(folder):
     # meshio's conversion (integer gmsh:physical only) and dolfinx's own meshtags.
-    from breakwater import meshes  # type: ignore[attr-defined]
+    import meshio
+    from breakwater.meshes import export  # type: ignore[import-not-found]
 
     source = mesh_geo(RUNS / "q_cylinder_on_slope.geo", folder / "cylinder.msh", COMM)
     data = read_mesh(source, COMM)
@@ -95,7 +114,13 @@ def test_an_xdmf_without_names_is_refused_in_one_line(folder):
         f.write_mesh(data.mesh)
         data.cell_tags.name = "cell_tags"
         f.write_meshtags(data.cell_tags, data.mesh.geometry)
-    foreign = meshes.convert(source, folder / "meshio.xdmf", comm=COMM)
+    foreign = folder / "meshio.xdmf"
+
+    def write() -> None:
+        with export._h5py_not_required():  # (no h5py here: inline XML needs none)
+            meshio.write(foreign, export.read(source), data_format="XML")
+
+    on_rank_zero(COMM, write)
     for path in (bare, foreign):
         with pytest.raises(MeshError, match=FOREIGN) as info:
             read_mesh(path, COMM)
