@@ -155,6 +155,46 @@ def test_an_xdmf_without_its_whole_h5_is_refused_naming_it(folder):
         read_mesh(renamed, COMM)
 
 
+def test_an_h5_damaged_within_its_length_is_refused_in_one_line(folder, capfd):
+    """An ``.h5`` of the right length with bytes overwritten (a bad copy, a disk's
+    damage): refused in one line naming it, on every rank, nothing on stderr. Before,
+    HDF5 read the garbled arrays without a word, or dolfinx aborted every rank
+    (``MPI_Issend ... Invalid rank``), or HDF5 printed its error stack (40-50 lines)
+    before the line. A file of breakwater's before its ``.h5``'s digest was recorded:
+    an error of HDF5's turned into one line naming the ``.h5``, with no stack."""
+    out = folder / "damaged.xdmf"
+    write_xdmf(read_mesh(RUNS / "g_shared_groups.geo", COMM), out)
+    h5 = out.with_suffix(".h5")
+    size = on_rank_zero(COMM, lambda: h5.stat().st_size)
+    whole = on_rank_zero(COMM, h5.read_bytes)
+
+    def damage(at: int, count: int, value: bytes) -> None:
+        data = bytearray(whole)
+        data[at:at + count] = value * count
+        h5.write_bytes(bytes(data))
+
+    again = (r" \(copy it again with damaged.xdmf, or write both again with `python -m "
+             r"breakwater mesh CASE --out damaged.xdmf`\)$")
+    for at, value in ((size // 2, b"\xff"), (size // 4, b"\x00"), (100, b"\x5a")):
+        on_rank_zero(COMM, lambda at=at, value=value: damage(at, 2000, value))
+        capfd.readouterr()
+        with pytest.raises(MeshError, match=r"damaged.xdmf: its data file damaged.h5 is "
+                           r"damaged, its bytes not the ones written with it \(a bad copy, "
+                           r"a disk's damage\)" + again):
+            read_mesh(out, COMM)
+        assert capfd.readouterr().err == ""
+    # Without the digest (a file written before it was recorded): HDF5's error, one line.
+    text = on_rank_zero(COMM, out.read_text)
+    on_rank_zero(COMM, lambda: out.write_text(
+        "".join(line for line in text.splitlines(keepends=True) if "breakwater_h5" not in line)))
+    on_rank_zero(COMM, lambda: damage(100, 2000, b"\x5a"))  # its root group's header
+    capfd.readouterr()
+    with pytest.raises(MeshError, match=r"damaged.xdmf: cannot read the mesh from its data "
+                       r"file damaged.h5 \(.*\): copy it again with damaged.xdmf, or write "):
+        read_mesh(out, COMM)
+    assert capfd.readouterr().err == ""
+
+
 def history(path: pathlib.Path) -> tuple[list[str], np.ndarray]:
     with open(path, newline="") as f:
         rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]

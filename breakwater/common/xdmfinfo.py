@@ -14,6 +14,13 @@ them in an ``<Information Name="breakwater_groups">`` element of the file's doma
   (:class:`breakwater.model.mesh.GroupedMeshData`), refused or reported again when the
   XDMF is read.
 
+A second element, ``<Information Name="breakwater_h5">``, holds the SHA-256 of the
+``.h5`` as written (added once dolfinx has closed the file): an ``.h5`` of the right
+length whose bytes were overwritten (a bad copy, a disk's damage) is refused before
+dolfinx reads it (HDF5 read garbled arrays without a word, or dolfinx aborted every
+rank). A file written before 2026-11-28 has none: its ``.h5`` is checked for its length
+only.
+
 An XDMF without it (meshio's, one written by dolfinx elsewhere, breakwater's before it
 wrote names) is refused: :func:`read_info`. This module reads the XML only (rank 0 or
 every rank), so that a case is checked against its mesh's names before any solver
@@ -22,20 +29,24 @@ library is imported.
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import pathlib
 import xml.etree.ElementTree as ET
 from typing import Any
 
 from breakwater.common.errors import MeshError
 
-__all__ = ["GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "hdf5_problem", "heavy_files",
-           "is_xdmf", "read_info", "xdmf_groups"]
+__all__ = ["DIGEST", "GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "add_digest", "digest_problem",
+           "hdf5_problem", "heavy_files", "is_xdmf", "read_info", "xdmf_groups"]
 
 SUFFIXES = (".xdmf", ".xmf")
 """Suffixes of XDMF files."""
 GROUPS = "breakwater_groups"
 """Name of the ``<Information>`` element holding the physical groups' names."""
+DIGEST = "breakwater_h5"
+"""Name of the ``<Information>`` element holding the SHA-256 of the ``.h5``."""
 MESH_GRID = "mesh"
 """Name of the mesh's grid."""
 TAG_GRIDS = ("cell_tags", "facet_tags", "ridge_tags", "peak_tags")
@@ -147,6 +158,46 @@ def hdf5_problem(h5: pathlib.Path) -> str | None:
     end = int.from_bytes(head[start + 2 * offsets:start + 3 * offsets], "little")
     if at + base + end > size:
         return f"cut short: {size} of its {at + base + end} bytes"
+    return None
+
+
+def _sha256(path: pathlib.Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def add_digest(path: pathlib.Path, h5: pathlib.Path) -> None:
+    """Record the SHA-256 of ``h5`` in ``path`` (rank 0, once dolfinx closed both).
+
+    The element goes on a line of its own after the ``breakwater_groups`` record (the
+    rest of dolfinx's XML is kept as written); the file is replaced atomically.
+    """
+    lines = path.read_text().splitlines(keepends=True)
+    at = next(i for i, line in enumerate(lines) if f'Name="{GROUPS}"' in line)
+    indent = lines[at][:len(lines[at]) - len(lines[at].lstrip())]
+    lines.insert(at + 1, f'{indent}<Information Name="{DIGEST}" Value="sha256:'
+                         f'{_sha256(h5)}" />\n')
+    temporary = path.with_name(f".{path.name}.tmp")
+    temporary.write_text("".join(lines))
+    os.replace(temporary, path)
+
+
+def digest_problem(path: pathlib.Path, h5: pathlib.Path) -> str | None:
+    """What is wrong with ``h5`` if it holds other bytes than those recorded in ``path``.
+
+    Returns:
+        None (the same bytes, or no digest recorded), or the problem ("damaged, ...").
+    """
+    domain = _root(path).find("Domain")
+    info = None if domain is None else domain.find(f"Information[@Name='{DIGEST}']")
+    value = None if info is None else info.get("Value", "")
+    if value is None or not value.startswith("sha256:"):
+        return None
+    if _sha256(h5) != value.removeprefix("sha256:"):
+        return "damaged, its bytes not the ones written with it (a bad copy, a disk's damage)"
     return None
 
 

@@ -23,12 +23,15 @@ from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
 
 from breakwater.common.errors import MeshError
+from breakwater.common.hdf5quiet import hdf5_quiet
 from breakwater.common.parallel import on_rank_zero
 from breakwater.common.xdmfinfo import (
     GROUPS,
     MESH_GRID,
     TAG_GRIDS,
     VERSION,
+    add_digest,
+    digest_problem,
     hdf5_problem,
     heavy_files,
     read_info,
@@ -70,7 +73,9 @@ def write_xdmf(data: gmshio.MeshData, out: pathlib.Path) -> pathlib.Path:
             "shared": getattr(data, "shared", {}), "empty": getattr(data, "empty", {}),
             "ungrouped": int(getattr(data, "ungrouped", 0))}
         f.write_information(GROUPS, json.dumps(record))
-    return out.with_suffix(".h5")
+    h5 = out.with_suffix(".h5")
+    on_rank_zero(msh.comm, lambda: add_digest(out, h5))
+    return h5
 
 
 def _inspect(path: pathlib.Path) -> tuple[dict[str, Any], bool]:
@@ -81,7 +86,7 @@ def _inspect(path: pathlib.Path) -> tuple[dict[str, Any], bool]:
         raise MeshError(f"{path}: its data file {h5.name} is missing (an XDMF keeps its "
                         f"arrays in the .h5 written beside it: copy {h5.name} with "
                         f"{path.name})")
-    problem = None if h5 is None else hdf5_problem(h5)
+    problem = None if h5 is None else hdf5_problem(h5) or digest_problem(path, h5)
     if h5 is not None and problem is not None:
         raise MeshError(f"{path}: its data file {h5.name} is {problem} (copy it again "
                         f"with {path.name}, or write both again with `python -m "
@@ -111,7 +116,7 @@ def read_xdmf(path: pathlib.Path, comm: MPI.Comm, gdim: int | None
         raise MeshError(f"{path}: a {record['gdim']}D mesh, where the model is {gdim}D")
     encoding = XDMFFile.Encoding.ASCII if inline else XDMFFile.Encoding.HDF5
     try:
-        with XDMFFile(comm, str(path), "r", encoding=encoding) as f:
+        with hdf5_quiet(), XDMFFile(comm, str(path), "r", encoding=encoding) as f:
             # Cells ghosted across shared facets, as the .msh reader's partitioner.
             msh = f.read_mesh(ghost_mode=dolfinx.mesh.GhostMode.shared_facet, name=MESH_GRID)
             tdim = msh.topology.dim
@@ -122,7 +127,12 @@ def read_xdmf(path: pathlib.Path, comm: MPI.Comm, gdim: int | None
                     tags[k] = f.read_meshtags(msh, name)
                     tags[k].name = name
     except RuntimeError as e:  # every rank reads the same file: every rank fails
-        raise MeshError(f"{path}: cannot read the mesh ({e})") from e
+        h5 = path.with_suffix(".h5")
+        if inline:
+            raise MeshError(f"{path}: cannot read the mesh ({e})") from e
+        raise MeshError(f"{path}: cannot read the mesh from its data file {h5.name} ({e}): "
+                        f"copy it again with {path.name}, or write both again with "
+                        f"`python -m breakwater mesh CASE --out {path.name}`") from e
     groups = {n: gmshio.PhysicalGroup(d, t) for n, (d, t) in record["groups"].items()}
     if record.get("ungrouped") and comm.rank == 0:
         log.warning("%s: %d cells in no physical group were left out when it was written "
