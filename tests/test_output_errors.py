@@ -358,6 +358,57 @@ def test_fields_that_will_not_fit_are_foreseen(shared_dir, capsys, monkeypatch):
 
 # --- output folders that cannot be written, refused before the run ------------------------
 
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("which", ["running", "final"])
+def test_full_disk_in_a_study_record(which, shared_dir, capsys, monkeypatch):
+    """The record ``sweep_case.json`` of the first case meets a full disk, when the case
+    starts (``running``) or when it ends (``final``): the study stops as a run does, in
+    one line, exit 1, on every rank, its table saying the case failed with that line;
+    a group that runs another case (2 ranks, one rank a case) finishes it. Run again,
+    the study goes on (a case that had finished recorded from its summary).
+
+    Before: the line and exit 1, but sweep.csv said the case was ``pending``; on 2
+    ranks the study hung (the failing rank left the others waiting in its end).
+    """
+    import csv
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    study = shared_dir / "study.toml"
+    if COMM.rank == 0:
+        study.write_text(f'base = "{case.name}"\n[grid]\n"time.dt" = [1e-4, 1.5e-4]\n')
+    COMM.barrier()
+    first = "case-0000_dt=0.0001"
+    record = out / first / "sweep_case.json"
+    replace, seen = os.replace, []
+
+    def full(src: Any, dst: Any) -> None:
+        if str(dst) == str(record):
+            seen.append(dst)  # 1: "running", 2: the final record
+            if len(seen) == {"running": 1, "final": 2}[which]:
+                raise OSError(errno.ENOSPC, FULL)
+        replace(src, dst)
+
+    monkeypatch.setattr(files.os, "replace", full)
+    args = ["sweep", str(study), "--out", str(out), "--ranks-per-case", "1"]
+    code, err = _main(args, capsys)
+    assert code == 1, err
+    reason = f"cannot write {record}: {FULL}"
+    if COMM.rank == 0:
+        assert err == f"breakwater: error: {reason}\n", err
+        with open(out / "sweep.csv", newline="") as f:
+            rows = {r["folder"]: r for r in csv.DictReader(f)}
+        assert rows[first]["status"] == "failed" and rows[first]["error"] == reason, rows
+        other = "finished" if COMM.size > 1 else "pending"
+        assert rows["case-0001_dt=0.00015"]["status"] == other, rows
+    COMM.barrier()
+    monkeypatch.setattr(files.os, "replace", replace)
+    code, err = _main(args, capsys)
+    assert code == 0, err
+    if COMM.rank == 0:
+        with open(out / "sweep.csv", newline="") as f:
+            assert [r["status"] for r in csv.DictReader(f)] == ["finished"] * 2
+
+
 def _commands(case: pathlib.Path, study: pathlib.Path, out: pathlib.Path
               ) -> dict[str, list[str]]:
     return {"run": ["run", str(case), "--out", str(out), "--no-progress"],

@@ -37,9 +37,6 @@ one of them.
 from __future__ import annotations
 
 import contextlib
-import csv
-import fcntl
-import io
 import logging
 import math
 import pathlib
@@ -47,7 +44,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -56,7 +53,7 @@ from mpi4py import MPI
 from breakwater.common import files, liveness
 from breakwater.common.console import StopSignal
 from breakwater.common.cores import core_warning, host_usage
-from breakwater.common.errors import CaseError
+from breakwater.common.errors import CaseError, OutputError
 from breakwater.common.gmshtools import settle_signal_handlers
 from breakwater.common.parallel import on_every_rank, on_rank_zero
 from breakwater.common.wholeimport import whole_imports
@@ -64,7 +61,8 @@ from breakwater.outputs import checkpoint  # importing PETSc is collective: at i
 from breakwater.run import simulation
 from breakwater.run.resumecase import build_to_resume
 from breakwater.studies.columns import headline
-from breakwater.studies.studyfile import Point, Study, check_points, toml_literal
+from breakwater.studies.studyfile import Point, Study, check_points
+from breakwater.studies.sweeptable import RECORD, TABLE, read_records, write_table
 
 if TYPE_CHECKING:
     from breakwater.casefile.case import Case
@@ -72,10 +70,6 @@ if TYPE_CHECKING:
 __all__ = ["RECORD", "TABLE", "StudyOutcome", "headline", "read_records", "run_study",
            "write_table"]
 
-RECORD = "sweep_case.json"
-"""A case's record, written last in its folder."""
-TABLE = "sweep.csv"
-LOCK = ".sweep.lock"
 FIGURES = "figures"
 
 log = logging.getLogger("breakwater.studies.sweep")
@@ -159,73 +153,6 @@ def _record_finished_run(folder: pathlib.Path, point: Point, fingerprint: str
     (folder / files.CHECKPOINT).unlink(missing_ok=True)  # (the run removes it after
     files.atomic_write_json(folder / RECORD, done)       # its summary: a kill between)
     return done
-
-
-def read_records(out: pathlib.Path, points: Sequence[Point]) -> list[dict[str, Any] | None]:
-    """The record of each point's folder (None when it has none)."""
-    return [files.read_json(out / p.folder / RECORD) for p in points]
-
-
-def write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
-                fingerprints: Sequence[str]) -> pathlib.Path:
-    """Write ``sweep.csv`` from the points' records (atomically, under a file lock).
-
-    The lock is held while the records are read: the last writer's table holds every
-    record written before it.
-    """
-    with _locked(out):
-        return _write_table(out, points, keys, fingerprints)
-
-
-def _write_table(out: pathlib.Path, points: Sequence[Point], keys: Sequence[str],
-                 fingerprints: Sequence[str]) -> pathlib.Path:
-    records = read_records(out, points)
-    columns: dict[str, None] = {}
-    for r in records:
-        if r is not None:
-            columns.update(dict.fromkeys(r.get("headline", {})))
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["case", "folder", *keys, "status", "wall_time", *columns, "warnings",
-                     "error"])
-    for p, r, fp in zip(points, records, fingerprints, strict=True):
-        current = r is not None and r.get("fingerprint") == fp
-        rec = r if current else {}
-        assert rec is not None
-        values = [_cell(p.values.get(k)) for k in keys]
-        head = rec.get("headline", {})
-        status = rec.get("status", "pending")
-        if status == "running" and liveness.process_state(rec.get("process")) == "gone":
-            status = liveness.STOPPED  # killed (SIGKILL, a node lost): not running
-        writer.writerow([p.index, p.folder, *values, status,
-                         _cell(rec.get("wall_time")), *(_cell(head.get(c)) for c in columns),
-                         " | ".join(rec.get("warnings") or ()), rec.get("error") or ""])
-    return files.atomic_write_text(out / TABLE, buffer.getvalue())
-
-
-def _cell(value: Any) -> str:
-    if value is None:
-        return ""
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else ""
-    if isinstance(value, str | bool | int):
-        return str(value).lower() if isinstance(value, bool) else str(value)
-    return toml_literal(value)
-
-
-@contextlib.contextmanager
-def _locked(out: pathlib.Path) -> Iterator[None]:
-    """An exclusive lock on ``out/.sweep.lock`` (groups writing sweep.csv in turn)."""
-    with open(out / LOCK, "a") as f:
-        try:
-            fcntl.flock(f, fcntl.LOCK_EX)
-        except OSError:  # a file system without locks: the final table is still whole
-            pass
-        try:
-            yield
-        finally:
-            with contextlib.suppress(OSError):
-                fcntl.flock(f, fcntl.LOCK_UN)
 
 
 # --- one case ----------------------------------------------------------------------------
@@ -503,7 +430,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         print(f"breakwater: warning: {warning}", file=sys.stderr, flush=True)
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
-    signum = 0
+    signum, failure = 0, {}  # failure: the cases whose record could not be written
     settle_signal_handlers()  # gmsh's first initialisation, before the signals are caught
     try:
         with StopSignal(poll=counter.stopped, post=counter.stop) as stop:
@@ -521,6 +448,9 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                     if group.rank == 0:
                         write_table(folder, points, keys, fingerprints)
                     raise
+                except OutputError as e:  # its record not written (a full disk): the
+                    failure = {p.folder: str(e)}  # group stops, the study fails after
+                    break  # the other groups' cases, on every rank
                 if group.rank == 0:
                     write_table(folder, points, keys, fingerprints)
                     tail = f": {record['error']}" if record["error"] else ""
@@ -538,14 +468,17 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     finally:
         comm.Barrier()
         signum = comm.allreduce(signum, op=MPI.MAX)
+        failure = {k: v for f in comm.allgather(failure) for k, v in f.items()}
         counter.free()
         group.Free()
 
     def finish() -> StudyOutcome:
-        write_table(folder, points, keys, fingerprints)
+        write_table(folder, points, keys, fingerprints, failure)
         records = read_records(folder, points)
         status = [r.get("status") if r is not None and r.get("fingerprint") == fp else None
                   for r, fp in zip(records, fingerprints, strict=True)]
+        status = ["failed" if p.folder in failure else s for p, s in zip(points, status,
+                                                                          strict=True)]
         outcome = StudyOutcome(len(points), status.count("finished"),
                                len(points) - len(todo), status.count("failed"),
                                status.count("interrupted"),
@@ -589,5 +522,8 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
             + f" -> {folder / TABLE}" + (f" and {len(drawn)} figures" if drawn else ""))
         return outcome
 
-    return on_rank_zero(comm, finish)
+    outcome = on_rank_zero(comm, finish)
+    if failure:  # as a run's full disk: the study stops in one line, exit 1
+        raise OutputError(next(iter(failure.values())))
+    return outcome
 
