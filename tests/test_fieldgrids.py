@@ -298,3 +298,19 @@ def test_a_data_file_zero_filled(folder: pathlib.Path, capfd: pytest.CaptureFixt
         f"{bp}: the fields at t = 0.1 s are damaged, its data files hold no cells where its "
         f"index lists them (zeros: {_WHY.replace('(a copy', 'a copy')}")
     assert capfd.readouterr().err == ""
+
+
+def test_a_bp4_folder_is_left_to_adios2(tmp_path: pathlib.Path) -> None:
+    """A folder of ADIOS2's BP4 format (no ``mmd.0``, an index of another layout) is not
+    refused by the BP5 checks: its times and fields read as a BP5 folder's."""
+    comm = MPI.COMM_SELF
+    msh = dolfinx.mesh.create_unit_square(comm, NX, NY)
+    s = fem.Function(fem.functionspace(msh, ("Discontinuous Lagrange", 2)), name="von_mises")
+    with dolfinx.io.VTXWriter(comm, tmp_path / "fields_b.bp", [s], engine="BP4") as writer:
+        for t, c in ((0.0, 1.0), (0.5, 2.0)):
+            s.interpolate(lambda x, c=c: _s(x, c))
+            writer.write(t)
+    assert not (tmp_path / "fields_b.bp" / "mmd.0").exists()
+    assert field_times(tmp_path, "b").tolist() == [0.0, 0.5]
+    grid = read_fields(tmp_path, "b")
+    assert np.allclose(grid.point_data["von_mises"], _s(grid.points.T, 2.0), atol=1e-14)

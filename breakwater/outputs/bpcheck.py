@@ -9,7 +9,8 @@ so that such a folder is refused in one line naming the file.
 
 The layouts read (ADIOS2's BP5 engine, ``source/adios2/toolkit/format/bp5``):
 
-* ``md.idx``: a 64-byte header (``ADIOS-BP v...``), then records of a type byte
+* ``md.idx``: a 64-byte header (``ADIOS-BP v...``, byte 37 the format's version: a
+  folder of another than BP5 is left to ADIOS2), then records of a type byte
   (``w``: the writers' map, ``s``: a step), a little-endian ``uint64`` length and that
   many bytes; a step's first two ``uint64`` are its position and size in ``md.0``.
   A trailing record cut short is a step a running writer has not finished listing:
@@ -29,6 +30,7 @@ import struct
 __all__ = ["BPDamaged", "check_bp"]
 
 _HEADER = 64
+_BP_VERSION = 37  # the header's byte of the BP format's version (4: BP4, 5: BP5)
 _RECORD_TYPES = (b"w", b"s")
 #: A run of zeros no format holds (at most 20 in the VTX files of 2-D and 3-D runs): a
 #: power loss's zero-filled blocks.
@@ -40,6 +42,10 @@ class BPDamaged(Exception):
 
     ``args[0]`` is the file's name and what is wrong with it (``mmd.0 is cut short``).
     """
+
+
+class _NotBP5(Exception):
+    """Another BP format (BP4: no mmd.0, records of another layout): left to ADIOS2."""
 
 
 def _read(folder: pathlib.Path, name: str) -> bytes:
@@ -61,6 +67,8 @@ def _steps(index: bytes) -> list[tuple[int, int]]:
                         f"{_HEADER})")
     if not index.startswith(b"ADIOS-BP v"):
         raise BPDamaged("md.idx is damaged (no ADIOS-BP header)")
+    if index[_BP_VERSION] != 5:
+        raise _NotBP5
     steps, at = [], _HEADER
     while at + 9 <= len(index):
         kind, (length,) = index[at:at + 1], struct.unpack_from("<Q", index, at + 1)
@@ -107,7 +115,10 @@ def check_bp(folder: pathlib.Path) -> None:
     """
     if not folder.is_dir():
         raise BPDamaged(f"{folder.name} is not a folder (a .bp output is one)")
-    steps = _steps(_read(folder, "md.idx"))
+    try:
+        steps = _steps(_read(folder, "md.idx"))
+    except _NotBP5:
+        return
     if not steps:
         return  # no step written yet: ADIOS2 reads none
     metadata = _read(folder, "md.0")
