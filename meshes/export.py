@@ -10,12 +10,11 @@ separately meshed model).
 Format notes:
     * ``.msh`` output is a verbatim copy (meshio's gmsh 4.1 writer loses the
       entity-to-group links of its own input).
-    * XDMF (``.xdmf``, ``.xmf``) is breakwater's own, as ``breakwater mesh --out
-      x.xdmf`` writes it (:func:`breakwater.model.xdmfmesh.write_xdmf`): the mesh read
-      with every check a run makes, its meshtags and the physical groups' names, the
-      arrays in ``x.h5`` beside it; a case reads it by group names as its
-      ``mesh.source``, ParaView opens it. Until 2026-11-28 it was meshio's, without
-      the names: a case refused the file this function wrote.
+    * XDMF (``.xdmf``, ``.xmf``) is refused, naming the way to breakwater's own:
+      :func:`breakwater.model.mesh.convert_to_xdmf` or ``breakwater mesh --out
+      x.xdmf`` write it with the physical groups' names, which a case reads it by
+      (its ``mesh.source``). Until 2026-11-28 this function wrote meshio's XDMF,
+      without the names: a case refused the file it wrote.
 """
 
 from __future__ import annotations
@@ -107,17 +106,6 @@ def read(path: str | pathlib.Path) -> meshio.Mesh:
         return meshio.read(path, file_format=file_format)
 
 
-def _write_xdmf(src: pathlib.Path, out: pathlib.Path, comm: MPI.Comm) -> pathlib.Path:
-    """Breakwater's XDMF of ``src`` (collective; rank 0's paths on every rank)."""
-    from breakwater.model.mesh import read_mesh
-    from breakwater.model.xdmfmesh import write_xdmf
-
-    data = read_mesh(src, comm)
-    on_rank_zero(comm, lambda: out.parent.mkdir(parents=True, exist_ok=True))
-    write_xdmf(data, out)
-    return out
-
-
 def convert(
     msh_path: str | pathlib.Path,
     out_path: str | pathlib.Path,
@@ -130,28 +118,30 @@ def convert(
 
     Args:
         msh_path: gmsh ``.msh`` file, e.g. from :func:`breakwater.meshes.goda.generate`.
-        out_path: Output file: ``.xdmf`` (breakwater's, with the groups' names and an
-            ``.h5`` beside it: a case's ``mesh.source``), ``.vtu``, ``.msh``, or any
-            meshio suffix (without the names: for viewing).
+        out_path: Output file: ``.vtu``, ``.msh``, or any meshio suffix but XDMF's
+            (the names are lost but in ``.msh``: for viewing).
         comm: MPI communicator; ``MPI.COMM_WORLD`` if None.
 
     Returns:
         The output path.
 
     Raises:
-        ValueError: For an unknown suffix (checked on all ranks before any work).
-        breakwater.common.errors.MeshError: An XDMF's source refused as a run refuses
-            it (missing, no named physical groups, ...), on every rank.
+        ValueError: For an unknown suffix, or XDMF's (one line naming
+            :func:`breakwater.model.mesh.convert_to_xdmf`), on all ranks before any work.
         Exception: What the conversion raised on rank 0, on every rank (see
             :func:`breakwater.common.parallel.on_rank_zero`).
 
     """
     file_format = _file_format(pathlib.Path(out_path))
+    if pathlib.Path(out_path).suffix.lower() in _XDMF_SUFFIXES:
+        raise ValueError(
+            f"{out_path}: meshio's XDMF holds no physical group names, which a case reads "
+            "its mesh by: write breakwater's with breakwater.model.mesh.convert_to_xdmf"
+            f"(msh, out) or `python -m breakwater mesh CASE --out {pathlib.Path(out_path).name}`"
+        )
     comm = MPI.COMM_WORLD if comm is None else comm
     paths = on_rank_zero(comm, lambda: (str(msh_path), str(out_path)))  # rank 0's paths
     src, out = (pathlib.Path(p) for p in paths)
-    if out.suffix.lower() in _XDMF_SUFFIXES:
-        return _write_xdmf(src, out, comm)
 
     def write() -> None:
         out.parent.mkdir(parents=True, exist_ok=True)

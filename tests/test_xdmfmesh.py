@@ -72,22 +72,32 @@ def test_a_curved_second_order_mesh_reads_back_with_every_group(folder):
     assert np.allclose(group_points(xdmf, "centre"), group_points(msh, "centre"), atol=1e-15)
 
 
-def test_the_library_conversion_writes_breakwaters_xdmf(folder, capfd):
-    """``breakwater.meshes.convert(msh, "x.xdmf")`` writes the XDMF ``breakwater mesh
-    --out`` writes: read back by group names (every group, the same measures to
-    round-off, the point group's coordinates), so it serves as a case's mesh.source.
-    Before, it wrote meshio's XDMF without the names, refused as a case's mesh."""
+def test_the_library_conversion_writes_breakwaters_xdmf(folder):
+    """``breakwater.model.mesh.convert_to_xdmf(msh, "x.xdmf")`` writes the XDMF
+    ``breakwater mesh --out`` writes: read back by group names (every group, the same
+    measures to round-off, the point group's coordinates), so it serves as a case's
+    mesh.source. ``breakwater.meshes.convert(msh, "x.xdmf")`` wrote meshio's XDMF
+    without the names, refused as a case's mesh: it now refuses in one line naming the
+    way that writes the names."""
     from breakwater import meshes  # type: ignore[attr-defined]
+    from breakwater.model.mesh import convert_to_xdmf
 
     source = mesh_geo(RUNS / "q_cylinder_on_slope.geo", folder / "convert.msh", COMM)
-    out = meshes.convert(source, folder / "sub" / "converted.xdmf", comm=COMM)
+    out = convert_to_xdmf(source, folder / "sub" / "converted.xdmf", COMM)
     assert out == folder / "sub" / "converted.xdmf" and out.with_suffix(".h5").is_file()
     msh, xdmf = read_mesh(source, COMM), read_mesh(out, COMM)
     assert xdmf.physical_groups == msh.physical_groups
     assert measures(xdmf) == pytest.approx(measures(msh), rel=1e-12, abs=1e-15)
     assert np.allclose(group_points(xdmf, "centre"), group_points(msh, "centre"), atol=1e-15)
     with pytest.raises(MeshError, match=r"mesh file not found: .*missing\.msh$"):
-        meshes.convert(folder / "missing.msh", folder / "missing.xdmf", comm=COMM)
+        convert_to_xdmf(folder / "missing.msh", folder / "missing.xdmf", COMM)
+    meshio_xdmf = folder / "meshio.xdmf"
+    with pytest.raises(ValueError, match=r"^" + str(meshio_xdmf) + r": meshio's XDMF holds "
+                       r"no physical group names, which a case reads its mesh by: write "
+                       r"breakwater's with breakwater.model.mesh.convert_to_xdmf\(msh, "
+                       r"out\) or `python -m breakwater mesh CASE --out meshio.xdmf`$"):
+        meshes.convert(source, meshio_xdmf, comm=COMM)
+    assert not meshio_xdmf.exists()
 
 
 def test_a_group_sharing_facets_is_refused_from_the_xdmf_too(folder):

@@ -545,3 +545,35 @@ def group_points(data: gmshio.MeshData, name: str) -> np.ndarray:
     x = msh.geometry.x[dolfinx.mesh.entities_to_geometry(msh, 0, vertices).ravel()]
     allx = msh.comm.allgather(x.reshape(-1, 3))
     return np.unique(np.vstack(allx), axis=0)
+
+
+def convert_to_xdmf(source: str | pathlib.Path, out: str | pathlib.Path,
+                    comm: MPI.Comm = MPI.COMM_WORLD) -> pathlib.Path:
+    """Write breakwater's XDMF of a gmsh mesh, as ``breakwater mesh --out x.xdmf`` does.
+
+    The mesh is read with every check a run makes (:func:`read_mesh`) and written with
+    its meshtags and the physical groups' names (:func:`.xdmfmesh.write_xdmf`), the
+    arrays in ``x.h5`` beside it: a case reads it by group names as its
+    ``mesh.source``, on any number of ranks; ParaView opens it. (meshio's XDMF,
+    :func:`breakwater.meshes.export.convert`'s until 2026-11-28, holds no names.)
+
+    Args:
+        source: The gmsh ``.msh`` (or ``.geo``, meshed first).
+        out: The ``.xdmf`` file; rank 0's path is used on every rank.
+        comm: The ranks (collective).
+
+    Returns:
+        The ``.xdmf`` written (rank 0's path, on every rank).
+
+    Raises:
+        MeshError: The mesh is refused as a run refuses it, on every rank.
+    """
+    from breakwater.model.xdmfmesh import write_xdmf
+
+    src, path = (pathlib.Path(p) for p in on_rank_zero(comm, lambda: (str(source), str(out))))
+    if not is_xdmf(path):
+        raise MeshError(f"{path}: not an XDMF file name (.xdmf, .xmf)")
+    data = read_mesh(src, comm)
+    on_rank_zero(comm, lambda: path.parent.mkdir(parents=True, exist_ok=True))
+    write_xdmf(data, path)
+    return path
