@@ -42,6 +42,7 @@ from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
 from breakwater.outputs.bodysizes import body_sizes, size_warning
 from breakwater.statics.initial import unsupported, velocity_conflict
+from breakwater.statics.rigidmodes import loose_modes
 from breakwater.stepping.stepsize import resolved_step
 
 if TYPE_CHECKING:
@@ -206,6 +207,17 @@ def calibrate(case: CaseSettings, data: gmshio.MeshData, target: float | None = 
     from breakwater.statics.calibrate import calibrate_shear_modulus
 
     cal = case.calibration
+    k = _calibration_target(case, target)
+    model = build_model(case, data, {cal.body: cal.initial_guess}, dynamic=False)
+    return calibrate_shear_modulus(model, cal.body, cal.structure,
+                                   cal.per_metre(k, case.out_of_plane_length), cal.tolerance,
+                                   cal.initial_guess, cal.tangential_penalty,
+                                   cal.max_iterations)
+
+
+def _calibration_target(case: CaseSettings, target: float | None = None) -> float:
+    """The calibration's target stiffness, its bodies checked (a :class:`CaseError`)."""
+    cal = case.calibration
     names = [b.name for b in case.bodies]
     for key in ("body", "structure"):  # checked by the case only when enabled
         if getattr(cal, key) not in names:
@@ -216,11 +228,38 @@ def calibrate(case: CaseSettings, data: gmshio.MeshData, target: float | None = 
         raise CaseError("calibration.stiffness: missing (the target stiffness, N/m)")
     if not k > 0:
         raise CaseError(f"calibration target stiffness must be > 0 (got {k:g})")
-    model = build_model(case, data, {cal.body: cal.initial_guess}, dynamic=False)
-    return calibrate_shear_modulus(model, cal.body, cal.structure,
-                                   cal.per_metre(k, case.out_of_plane_length), cal.tolerance,
-                                   cal.initial_guess, cal.tangential_penalty,
-                                   cal.max_iterations)
+    return k
+
+
+def _checked_model(case: CaseSettings, data: gmshio.MeshData,
+                   guess: str | None = None) -> ContactModel:
+    """The case's dynamic model, refused in one line if it cannot run (collective).
+
+    Every check of the model that its moduli do not change: the bodies' supports and
+    free rigid modes, gravity's direction (:func:`~breakwater.statics.initial.
+    unsupported`), a body strained by its own weight, a load that applies nothing, two
+    storms. With ``guess`` (the body to calibrate, then at its initial guess) they run
+    before the calibration (a goda3d case with gravity up calibrated 24 s before its
+    refusal): its own weight's strain is checked after, with its calibrated modulus.
+    """
+    moduli = {} if guess is None else {guess: case.calibration.initial_guess}
+    try:
+        model = build_model(case, data, moduli, dynamic=True)
+    except MeshError as e:
+        raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
+    strained = _self_weight_problem(model, skip=guess)
+    if strained is not None:
+        raise CaseError(strained)
+    for ld in case.loads:
+        if ld.enabled:
+            error, _ = face_problems(ld, model)
+            if error is not None:
+                raise CaseError(error)
+    storms = [ld.name for ld in case.loads if ld.enabled and ld.storm is not None]
+    if len(storms) > 1:
+        raise CaseError(f"loads.{storms[1]}.storm: one storm per case (loads.{storms[0]} "
+                        "is one): waves.csv records one")
+    return model
 
 
 def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
@@ -247,16 +286,15 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
     probes, pair_probes = _probe_points(case, data)  # checked before the heavy work
     if case.calibration.enabled:
+        _calibration_target(case)
+        _checked_model(case, data, guess=case.calibration.body)  # before the calibration
         result = calibrate(case, data)
         case = case.calibrated(result.body, result.shear_modulus)
         extra["calibration"] = result.summary()
-    try:
-        model = build_model(case, data, dynamic=True)
-    except MeshError as e:
-        raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
-    strained = _self_weight_problem(model)
-    if strained is not None:
-        raise CaseError(strained)
+    model = _checked_model(case, data)
+    loose = loose_modes(model)  # rigid modes only contact holds: logged when the run starts
+    if loose:
+        extra["mesh"].setdefault("warnings", []).extend(loose)
     extra["mesh"]["bodies"] = body_sizes(model)
     large = size_warning(extra["mesh"]["bodies"])
     if large is not None:
@@ -266,9 +304,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     for ld in case.loads:
         if not ld.enabled:
             continue
-        error, warning = face_problems(ld, model)
-        if error is not None:
-            raise CaseError(error)
+        _, warning = face_problems(ld, model)  # its error: refused in _checked_model
         t = case.time
         dt = t.dt  # the step inside a pulse: adaptive steps resolve its segments
         if t.adaptive and ld.kind == "pulse":
@@ -298,10 +334,6 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 
-    storms = [ld.name for ld in case.loads if ld.enabled and ld.storm is not None]
-    if len(storms) > 1:
-        raise CaseError(f"loads.{storms[1]}.storm: one storm per case (loads.{storms[0]} "
-                        "is one): waves.csv records one")
     for ld in case.loads:  # a storm's record: probes at the ends of the caisson's base
         if ld.enabled and ld.storm is not None:
             more, info = storm_outputs(case, data, ld, model)
@@ -416,16 +448,19 @@ def _outside(data: gmshio.MeshData, body: str, x: tuple[float, ...]) -> str | No
 SELF_WEIGHT_STRAIN = 0.1
 
 
-def _self_weight_problem(model: ContactModel) -> str | None:
+def _self_weight_problem(model: ContactModel, skip: str | None = None) -> str | None:
     """Why a body's own weight would strain it beyond small strains, or None (collective).
 
-    The strain of a column of the body's height H along g under its weight, ρ g H / E.
+    The strain of a column of the body's height H along g under its weight, ρ g H / E
+    (not of the body ``skip``, whose modulus is not known yet).
     """
     g = np.asarray(model.gravity.value, dtype=float)
     norm = float(np.linalg.norm(g))
     if norm == 0:
         return None
     for body in model.bodies:
+        if body.spec.name == skip:
+            continue
         along = body.submesh.geometry.x[:, :len(g)] @ (g / norm)
         lo = model.comm.allreduce(float(along.min()) if along.size else np.inf, op=MPI.MIN)
         hi = model.comm.allreduce(float(along.max()) if along.size else -np.inf, op=MPI.MAX)

@@ -48,6 +48,7 @@ class ModelGroups(ModelForms):
     _by_name: dict[str, BodyData]
     _cell_body: np.ndarray
     _fixed: list[tuple[str, int, tuple[int, ...]]]  # group, body, components
+    bcs: list[fem.DirichletBC]  # the fixed entries' components, in their order
     _fixed_sizes: list[float]  # each entry of _fixed: its area (3D), length or points
     _load_data: list[tuple[int, np.ndarray]]
 
@@ -150,6 +151,24 @@ class ModelGroups(ModelForms):
         """The fixed boundaries on a body: (facet or point group, components held)."""
         index = self.body(body).index
         return [(group, comps) for group, i, comps in self._fixed if i == index]
+
+    def fixed_nodes(self) -> list[tuple[str, int, tuple[int, ...], np.ndarray]]:
+        """Each fixed entry's group, body, components, and its nodes' coordinates here.
+
+        The nodes (owned by this rank, not ghosts) whose components the entry holds:
+        :mod:`breakwater.statics.rigidmodes` finds from them the rigid modes left free.
+        """
+        out, k = [], 0
+        for group, index, comps in self._fixed:
+            V = self.bodies[index].V
+            if not comps:
+                continue
+            dofs = self.bcs[k].dof_indices()[0] // V.dofmap.index_map_bs
+            k += len(comps)
+            nodes = np.unique(dofs[dofs < V.dofmap.index_map.size_local])
+            x = V.tabulate_dof_coordinates()[nodes, :self.gdim]
+            out.append((group, index, comps, x))
+        return out
 
     def fixed_summary(self) -> dict[str, dict[str, object]]:
         """What the fixed groups hold (the summary's ``fixed``), by group name.

@@ -81,6 +81,7 @@ from breakwater.contact.conforming import (
 from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
 from breakwater.statics.relaxation import FALLBACK, no_state_advice, relax
+from breakwater.statics.rigidmodes import free_mode, joined, static_needed
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
 
@@ -158,31 +159,23 @@ def unsupported(model: ContactModel) -> str | None:
     or the initial state's loads (its static Newton failed after 40 iterations, and the
     run advised starting undeformed without saying why). With ``[initial] undeformed``
     or nothing loading it, it starts at rest (a free body may then fall or be struck).
+    A group whose fixed groups leave a rigid mode free (rollers in x only): refused by
+    :func:`~breakwater.statics.rigidmodes.free_mode`, naming the mode.
     """
-    spec = model.initial
-    loaded = (spec.loads is None and bool(model.loads)) or bool(spec.loads)
-    if spec.undeformed or not (np.any(model.gravity.value) or loaded):
+    if not static_needed(model):
         return None
-    group = list(range(len(model.bodies)))
-
-    def root(i: int) -> int:
-        while group[i] != i:
-            i = group[i]
-        return i
-
-    for s, m, _ in model.pair_bodies():
-        group[root(s)] = root(m)
-    held = {root(b.index) for b in model.bodies if model.fixed_on(b.spec.name)}
+    root = joined(model)
+    held = {root[b.index] for b in model.bodies if model.fixed_on(b.spec.name)}
     for b in model.bodies:
-        if root(b.index) not in held:
+        if root[b.index] not in held:
             touching = [o.spec.name for o in model.bodies
-                        if o is not b and root(o.index) == root(b.index)]
+                        if o is not b and root[o.index] == root[b.index]]
             on = f" or on the bodies it touches ({', '.join(touching)})" if touching else ""
             return (f"bodies.{b.spec.name}: the body is held by nothing: no [fixed] group on "
                     f"it{on}, so it has no static state under gravity and the initial "
                     "loads (add its contact pair or a [fixed] group, or start it at rest "
                     "undeformed: [initial] undeformed = true)")
-    return _nothing_beneath(model)
+    return free_mode(model) or _nothing_beneath(model)
 
 
 LEVEL = 1e-3

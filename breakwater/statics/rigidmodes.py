@@ -1,0 +1,220 @@
+"""The rigid-body modes that a case's ``[fixed]`` groups leave free.
+
+A body's rigid modes are its translations along x, y (and z) and its rotations (about z
+in plane strain; about x, y and z in 3D). A fixed group holds a mode when some node it
+holds moves along a held component in it: rollers ``components = [0]`` on a base hold
+the translation along x and the rotations that move the base along x, not the
+translation along y or z. With G = Σ rᵀr over the held (node, component) pairs (r the
+modes' displacement there, rotations scaled by the bodies' extent), a mode is free
+when it is in G's null space.
+
+Two checks, on the bodies that contact pairs join into groups (as
+:func:`~breakwater.statics.initial.unsupported` joins them, which refuses a group with
+no fixed group at all):
+
+- :func:`free_mode` — a group free in some mode even were its pairs bonded: nothing
+  holds it there, and the static stiffness is singular (rollers in x only on the Goda
+  mound's base: its static Newton had nothing to factorise along y). Refused when the
+  run needs a static state, warned by :func:`loose_modes` when it does not (the
+  dynamics' mass holds it: it drifts).
+- :func:`loose_modes` — a body whose own fixed groups leave a mode free that the group
+  holds: only its contact holds it there, by friction along the interface and the
+  normal contact across it (a frictionless or detached body drifts): warned.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from mpi4py import MPI
+
+if TYPE_CHECKING:
+    from breakwater.model.model import ContactModel
+
+__all__ = ["FREE", "free_mode", "joined", "loose_modes", "static_needed"]
+
+FREE = 1e-9
+"""A mode is free when G's eigenvalue along it is below this times G's largest (G counts
+held nodes: a held mode's eigenvalue is of the order of one node's, ≥ 1e-3 of the largest
+on the meshes measured)."""
+
+_AXES = "xyz"
+
+
+def static_needed(model: ContactModel) -> bool:
+    """Whether the run solves for a static state (gravity or initial loads, not undeformed)."""
+    spec = model.initial
+    loaded = (spec.loads is None and bool(model.loads)) or bool(spec.loads)
+    return not spec.undeformed and bool(np.any(model.gravity.value) or loaded)
+
+
+def joined(model: ContactModel) -> list[int]:
+    """Each body's group: the index of one body of the bodies its contact pairs join."""
+    group = list(range(len(model.bodies)))
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    for s, m, _ in model.pair_bodies():
+        group[root(s)] = root(m)
+    return [root(i) for i in range(len(group))]
+
+
+def _names(gdim: int) -> list[str]:
+    rotations = ["rotation about z"] if gdim == 2 else [f"rotation about {a}" for a in _AXES]
+    return [f"translation along {_AXES[c]}" for c in range(gdim)] + rotations
+
+
+def _modes(x: np.ndarray, centre: np.ndarray, scale: float) -> np.ndarray:
+    """The rigid modes' displacements at points x: (points, modes, components)."""
+    n, gdim = x.shape
+    d = (x - centre) / scale
+    if gdim == 2:
+        r = np.zeros((n, 3, 2))
+        r[:, 0, 0] = r[:, 1, 1] = 1.0
+        r[:, 2, 0], r[:, 2, 1] = -d[:, 1], d[:, 0]
+        return r
+    r = np.zeros((n, 6, 3))
+    for c in range(3):
+        r[:, c, c] = 1.0
+    r[:, 3, 1], r[:, 3, 2] = -d[:, 2], d[:, 1]  # about x
+    r[:, 4, 0], r[:, 4, 2] = d[:, 2], -d[:, 0]  # about y
+    r[:, 5, 0], r[:, 5, 1] = -d[:, 1], d[:, 0]  # about z
+    return r
+
+
+def _free(model: ContactModel, bodies: set[int],
+          fixed: list[tuple[str, int, tuple[int, ...], np.ndarray]]) -> list[str]:
+    """The rigid modes of ``bodies`` (moving as one) that their fixed groups leave free.
+
+    Collective: every rank returns the same names.
+    """
+    gdim = model.gdim
+    x = np.vstack([np.zeros((0, gdim))] + [b.V.tabulate_dof_coordinates()[:, :gdim]
+                                           for b in model.bodies if b.index in bodies])
+    lo = x.min(axis=0) if len(x) else np.full(gdim, np.inf)
+    hi = x.max(axis=0) if len(x) else np.full(gdim, -np.inf)
+    model.comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)  # elementwise over the ranks
+    model.comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+    centre, scale = 0.5 * (lo + hi), max(float(np.max(hi - lo)), 1e-300)
+    names = _names(gdim)
+    g = np.zeros((len(names), len(names)))
+    for _, index, comps, points in fixed:
+        if index in bodies and len(points):
+            r = _modes(points, centre, scale)
+            for c in comps:
+                g += r[:, :, c].T @ r[:, :, c]
+    g = model.comm.allreduce(g, op=MPI.SUM)
+    values, vectors = np.linalg.eigh(g)
+    null = vectors[:, values <= FREE * max(float(values.max()), 1.0)]
+    if not null.shape[1]:
+        return []
+    share = np.sum(null ** 2, axis=1)  # each mode's part in the null space (sums to its rank)
+    order = np.argsort(-share, kind="stable")[:null.shape[1]]
+    return [names[k] for k in sorted(order)]
+
+
+def _groups(model: ContactModel, bodies: set[int]) -> list[tuple[str, tuple[int, ...]]]:
+    """The fixed groups on ``bodies`` and the components each holds."""
+    return [(group, comps) for i in sorted(bodies)
+            for group, comps in model.fixed_on(model.bodies[i].spec.name)]
+
+
+def _held(model: ContactModel, bodies: set[int]) -> str:
+    """What the fixed groups on ``bodies`` hold: ``"base: x; mound_sides: z"``."""
+    return "; ".join(f"{group}: {''.join(_AXES[c] for c in comps)}"
+                     for group, comps in _groups(model, bodies))
+
+
+def _fix(model: ContactModel, bodies: set[int], mode: str) -> str:
+    """How to hold a free mode: which component to add to which fixed group."""
+    gdim = model.gdim
+    if mode.startswith("translation"):
+        need = [_AXES.index(mode[-1])]
+    else:  # a rotation about an axis: the components across it
+        axis = 2 if gdim == 2 else _AXES.index(mode[-1])
+        need = [c for c in range(gdim) if c != axis]
+    groups = _groups(model, bodies)
+    lacking = [(g, [c for c in need if c not in comps]) for g, comps in groups]
+    lacking = [(g, cs) for g, cs in lacking if cs]
+    if mode.startswith("translation"):
+        where = f" (add {need[0]} to fixed.{lacking[0][0]}.components)" if lacking else ""
+        return f"hold {_AXES[need[0]]} on a [fixed] group{where}"
+    parts = " or ".join(_AXES[c] for c in need)
+    where = (f" (add {', '.join(str(c) for c in lacking[0][1])} to fixed.{lacking[0][0]}."
+             "components, if it does not lie on the axis)" if lacking else "")
+    return f"hold {parts} on a [fixed] group away from the axis{where}"
+
+
+def _and(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
+def _line(model: ContactModel, body: int, bodies: set[int], modes: list[str]) -> str:
+    """One line: the body (and those it touches), what is held, the free modes, the fix."""
+    name = model.bodies[body].spec.name
+    others = ", ".join(model.bodies[i].spec.name for i in sorted(bodies) if i != body)
+    who = (f"bodies.{name} and the bodies it touches ({others}): their" if others
+           else f"bodies.{name}: its")
+    return (f"{who} [fixed] groups ({_held(model, bodies)}) leave the rigid "
+            f"{_and(modes)} free: {_fix(model, bodies, modes[0])}")
+
+
+def free_mode(model: ContactModel) -> str | None:
+    """Why the static state cannot exist: a group of bodies left free in a rigid mode.
+
+    Only groups with some fixed group (:func:`~breakwater.statics.initial.unsupported`
+    refuses the others), and only when the run needs a static state
+    (:func:`static_needed`). Collective.
+    """
+    if not static_needed(model):
+        return None
+    fixed, roots = model.fixed_nodes(), joined(model)
+    for root in sorted(set(roots)):
+        bodies = {i for i, r in enumerate(roots) if r == root}
+        first = [i for i in sorted(bodies) if model.fixed_on(model.bodies[i].spec.name)]
+        if not first:
+            continue
+        modes = _free(model, bodies, fixed)
+        if modes:
+            return (_line(model, first[0], bodies, modes) + " (nothing holds it there, and "
+                    "the static stiffness is singular; or start it at rest undeformed: "
+                    "[initial] undeformed = true)")
+    return None
+
+
+def loose_modes(model: ContactModel) -> list[str]:
+    """One warning per body whose own fixed groups leave a rigid mode free (collective).
+
+    A mode its group holds only through its contact pairs (named, with their friction):
+    friction along the interface and the normal contact across it hold it, a
+    frictionless or detached body drifts. A group free in a mode where the run needs no
+    static state (:func:`free_mode` refuses it otherwise): the dynamics' mass alone
+    holds it, and it drifts.
+    """
+    out: list[str] = []
+    fixed, roots = model.fixed_nodes(), joined(model)
+    static = static_needed(model)
+    for root in sorted(set(roots)):
+        bodies = {i for i, r in enumerate(roots) if r == root}
+        with_fixed = [i for i in sorted(bodies) if model.fixed_on(model.bodies[i].spec.name)]
+        if not with_fixed:
+            continue
+        group_free = _free(model, bodies, fixed)
+        if group_free and not static:
+            out.append(_line(model, with_fixed[0], bodies, group_free)
+                       + " (nothing holds it there: it may drift)")
+            continue
+        for i in with_fixed:
+            own = [m for m in _free(model, {i}, fixed) if m not in group_free]
+            if not own:
+                continue
+            pairs = [p for p in model.pairs if i in (p.slave, p.master)]
+            law = ", ".join(f"'{p.spec.interface}' μ = {float(p.law.friction.μ.value):g}"
+                            for p in pairs) or "its general contact pairs"
+            out.append(_line(model, i, {i}, own) + f": only its contact ({law}) holds it "
+                       "there (a frictionless or detached body drifts)")
+    return out
