@@ -511,3 +511,17 @@ def test_every_example_file_reads(path: pathlib.Path, tmp_path: pathlib.Path) ->
         assert points and len(points) == len(cases)
     else:
         assert isinstance(load_case(path), Case)
+
+
+def test_case_file_a_spreadsheet_saved(tmp_path: pathlib.Path) -> None:
+    """A case file with a byte-order mark and CRLF lines (Notepad's or Excel's "UTF-8")
+    reads as without them (it was refused: "invalid TOML: Invalid statement (at line 1,
+    column 1)"); saved as UTF-16, it is refused naming the encoding."""
+    text = 'extends = "goda3d"\r\nname = "sheet"\r\n[time]\r\ndt = 2.0e-5\r\n'
+    path = tmp_path / "sheet.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    case = load_case(path)
+    assert (case.name, case.time.dt, len(case.gravity)) == ("sheet", 2.0e-5, 3)
+    path.write_bytes(text.encode("utf-16"))
+    with pytest.raises(CaseError, match="UTF-16 text .* save the file as UTF-8"):
+        load_case(path)

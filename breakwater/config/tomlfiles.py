@@ -9,6 +9,8 @@ messages), :func:`display` (a path as the messages name it).
 
 from __future__ import annotations
 
+import codecs
+
 import pathlib
 import tomllib
 from collections.abc import Mapping
@@ -30,10 +32,14 @@ def display(path: pathlib.Path) -> str:
 
 
 def read_toml(path: pathlib.Path) -> dict[str, Any]:
-    """The data of a TOML file, or a one-line CaseError naming it."""
+    """The data of a TOML file (UTF-8, with or without a byte-order mark), or a one-line CaseError."""
     try:
         raw = path.read_bytes()
-        data = tomllib.loads(raw.decode("utf-8"))
+        if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+            raise CaseError(f"{display(path)}: UTF-16 text (a spreadsheet's \"Unicode "
+                            "text\"?): save the file as UTF-8")
+        # A byte-order mark (Notepad's or Excel's "UTF-8"): read, as the tables are.
+        data = tomllib.loads(raw.decode("utf-8-sig"))
     except UnicodeDecodeError as e:
         line = raw.count(b"\n", 0, e.start) + 1
         column = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
