@@ -523,5 +523,5 @@ def test_case_file_a_spreadsheet_saved(tmp_path: pathlib.Path) -> None:
     case = load_case(path)
     assert (case.name, case.time.dt, len(case.gravity)) == ("sheet", 2.0e-5, 3)
     path.write_bytes(text.encode("utf-16"))
-    with pytest.raises(CaseError, match="UTF-16 text .* save the file as UTF-8"):
+    with pytest.raises(CaseError, match=r"UTF-16 text .* save the file as UTF-8"):
         load_case(path)

@@ -10,7 +10,6 @@ messages), :func:`display` (a path as the messages name it).
 from __future__ import annotations
 
 import codecs
-
 import pathlib
 import tomllib
 from collections.abc import Mapping
@@ -32,7 +31,7 @@ def display(path: pathlib.Path) -> str:
 
 
 def read_toml(path: pathlib.Path) -> dict[str, Any]:
-    """The data of a TOML file (UTF-8, with or without a byte-order mark), or a one-line CaseError."""
+    """A TOML file's data (UTF-8, a byte-order mark or not), or a one-line CaseError."""
     try:
         raw = path.read_bytes()
         if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
