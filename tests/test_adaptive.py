@@ -106,10 +106,23 @@ def test_sliding_block_adaptive(folder: pathlib.Path) -> None:
               f"fixed T/40 {reference:.6e} m, rigid {rigid:.6e} m")
     assert slide == pytest.approx(reference, rel=0.01)  # issue 24's bound
     assert slide == pytest.approx(rigid, rel=0.02)  # test_friction's bound for the model
-    # A plain function as the history: refused before a step is taken.
+
+
+def test_history_without_breakpoints(folder: pathlib.Path,
+                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    # A plain function as the history: refused before the static state (it was refused
+    # after it), so before a step is taken.
+    from breakwater.run import begin
+
+    def never(*args: object) -> None:
+        raise AssertionError("the static state was solved before the refusal")
+
+    monkeypatch.setattr(begin, "initial_state", never)
+    path = two_rectangles(folder / "refused_block.msh", COMM, a=(W, H), b=(W, H), h=0.1)
+    pulse = Pulse(3.0 * μ_F * N * T_PULSE / 2, T_PULSE, "triangular")
     with pytest.raises(CaseError, match="does not give its breakpoints"):
         _block(path, folder / "block_refused",
-               TimeSpec(dt=T_PULSE / 4, end_time=end, adaptive=True),
+               TimeSpec(dt=T_PULSE / 4, end_time=2 * T_PULSE, adaptive=True),
                lambda t: float(pulse(t)))
 
 

@@ -56,6 +56,8 @@ def start(r: Session) -> None:
         line = meshed_overlap(m, spec)
         if line is not None:
             log.warning("%s", line)
+    if st.step.adaptive:  # a history without breakpoints: refused before the static state
+        load_breakpoints(m)
     m.set_time(0.0)
     init = initial_state(m)
     st.static_iterations = init.iterations
@@ -86,8 +88,8 @@ def start(r: Session) -> None:
     out.write_fields(0.0, s.u, s.v)
 
 
-def adaptive_start(step: StepSize, model: ContactModel, u: Sequence[fem.Function]) -> None:
-    """The loads' breakpoints and the first displacement scale of adaptive steps (collective).
+def load_breakpoints(model: ContactModel) -> list[float]:
+    """The loads' breakpoints, for adaptive steps.
 
     Raises:
         CaseError: A load's history does not name its breakpoints (a plain Python
@@ -102,7 +104,16 @@ def adaptive_start(step: StepSize, model: ContactModel, u: Sequence[fem.Function
                             "steps could step over it (use fixed steps, or a Pulse, Ramp, "
                             "Constant or Table history)")
         times.update(float(t) for t in bp)
-    step.breakpoints = sorted(times)
+    return sorted(times)
+
+
+def adaptive_start(step: StepSize, model: ContactModel, u: Sequence[fem.Function]) -> None:
+    """The loads' breakpoints and the first displacement scale of adaptive steps (collective).
+
+    Raises:
+        CaseError: A load's history does not name its breakpoints (:func:`load_breakpoints`).
+    """
+    step.breakpoints = load_breakpoints(model)
     largest = max((float(np.max(np.abs(f.x.array))) if f.x.array.size else 0.0 for f in u),
                   default=0.0)
     largest = model.comm.allreduce(largest, op=MPI.MAX)
