@@ -40,7 +40,7 @@ from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
-from breakwater.outputs.bodysizes import body_sizes, size_warning
+from breakwater.outputs.bodysizes import body_sizes, gravity_warning, size_warning
 from breakwater.statics.initial import unsupported, velocity_conflict
 from breakwater.statics.rigidmodes import loose_modes
 from breakwater.stepping.stepsize import resolved_step
@@ -296,9 +296,9 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     if loose:
         extra["mesh"].setdefault("warnings", []).extend(loose)
     extra["mesh"]["bodies"] = body_sizes(model)
-    large = size_warning(extra["mesh"]["bodies"])
-    if large is not None:
-        extra["mesh"].setdefault("warnings", []).append(large)
+    for line in (size_warning(extra["mesh"]["bodies"]), gravity_warning(case.gravity)):
+        if line is not None:
+            extra["mesh"].setdefault("warnings", []).append(line)
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:
