@@ -438,9 +438,17 @@ def test_a_study_interrupted_from_python_says_so_and_goes_on(shared_dir, monkeyp
     assert outcome.complete and outcome.finished == 2
     again = shared_dir / "again"
     run_study(load_study(path), again, quiet=True, ranks_per_case=COMM.size)
+    # Bit for bit on one rank. On two, MUMPS's distributed solves round off in an order
+    # of their own: the resumed case's peak differed from the uninterrupted one's in the
+    # 12th digit on a loaded machine (2026-11-28; equal in other runs): 1e-9 relative.
     for a, b in zip(read_table(out / TABLE), read_table(again / TABLE), strict=True):
-        for key in ("status", "steps", "time_reached", "peak_ux.gauge_top", "residual_slip"):
+        for key in ("status", "steps", "time_reached"):
             assert a[key] == b[key], key
+        for key in ("peak_ux.gauge_top", "residual_slip"):
+            if COMM.size == 1:
+                assert a[key] == b[key], key
+            else:
+                assert float(a[key]) == pytest.approx(float(b[key]), rel=1e-9), key
 
 
 # --- killed studies (a real process) ------------------------------------------------------
