@@ -44,7 +44,7 @@ from breakwater.config.runspec import InitialSpec
 from breakwater.contact.general import SurfaceContact
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import read_mesh
-from breakwater.model.model import Body, ContactModel, Fixed, Material
+from breakwater.model.model import Body, ContactModel, Damping, Fixed, Material
 from breakwater.statics.initial import InitialState, initial_state
 from breakwater.stepping.gn22 import GN22
 
@@ -264,3 +264,32 @@ def _nodal(model: ContactModel, state: InitialState) -> list[np.ndarray]:
         key = np.round(rows[:, :2], 10)  # the same order whatever the coordinates' round-off
         out.append(rows[np.lexsort((key[:, 1], key[:, 0]))])
     return out
+
+
+def test_frictional_state_on_a_soft_base_starts_in_equilibrium(mesh_path: pathlib.Path) -> None:
+    """The Goda case's materials on the blocks (a stiff block, E = 4.8e9, on a soft base,
+    5.7e6; ε_n = 5e8, μ = 0.65, Rayleigh damping 0.023/0.023), frictional loading: at
+    t = 0 the pair carries no net horizontal force and the bodies do not accelerate.
+
+    The block's corners and middle sit on base vertices, where the master's tangent has
+    a kink. The static stage's slip u/τ includes the penalty's overlap, and its friction
+    there depends on which facet's tangent it takes: re-projected at the state for
+    t = 0, the other one gave a net friction of 7.3 N/m (3 % of the weight) and
+    265 m/s² at t = 0 (measured). The slip velocities now carry the last step's
+    friction (``contact.general.start_slip``): 3e-8 N/m and 0.08 m/s² (measured).
+    Bounds: 1e-6 of the weight (the existing test's), 1 m/s²."""
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", 5e8, friction=0.65,
+                       regularisation=χ)
+    model = ContactModel(read_mesh(mesh_path, COMM),
+                         [Body("base", Material(1650.0, 0.25, young_modulus=5.7e6)),
+                          Body("block", Material(2314.0, 0.2, young_modulus=4.8e9))],
+                         fixed=[Fixed("base_bottom")], gravity=(0.0, -g),
+                         surface_pairs=[pair], damping=Damping(alpha=0.023, beta=0.023))
+    model.initial = InitialSpec(loading="frictional")
+    state, _ = _static(model)
+    assert state.kind == "frictional"
+    rest = _run(model, state, 1e-4, 3)
+    weight = model.weight()[1]
+    _print(f"soft base: net force at t = 0 {rest['force']} N/m, |a0| {float(rest['a0']):.2e}")
+    assert abs(rest["force"][0]) < 1e-6 * weight
+    assert float(rest["a0"]) < 1.0

@@ -73,7 +73,8 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces", "nodal_friction"]
+__all__ = ["QUANTITIES", "SurfaceContact", "SurfaceEnergy", "SurfaceForces", "nodal_friction",
+           "start_slip"]
 
 QUANTITIES = ("force_x", "force_y", "contact_length", "penetration")
 """The history quantities of a general pair (columns ``<name>_<quantity>``)."""
@@ -412,23 +413,6 @@ class SurfaceContact(SurfaceForces):
             return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
         return fr["pos_s"], fr["v_T"]
 
-    def start_slip(self) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`slip_velocities` with those beyond :data:`RELEASE` χ brought down to it.
-
-        A static state's slave nodes start the dynamics with these (the frictional
-        relaxation's ``_creep``). A node that slides in the static state (a caisson's
-        base corner under its Poisson expansion) slips at its static slip over the
-        pseudo time, up to 1e5 χ: started so, one node moving at 9e-6 m/s among nodes
-        at rest, Rayleigh damping's β K v gave it 1.7e5 m/s² at t = 0, the first step
-        stored 0.84 J/m of strain (7.5 times the static state's) and the ledger counted
-        −0.84 J/m of numerical dissipation (the Goda caisson meshed apart, 2026-11-28).
-        At RELEASE χ the law carries μλ to 5e-5 all the same.
-        """
-        pos, v_T = self.slip_velocities()
-        speed = np.linalg.norm(v_T, axis=1)
-        cap = RELEASE * self._law[3]
-        return pos, v_T * (cap / np.maximum(speed, cap))[:, None]
-
     def energies(self) -> tuple[float, float]:
         """The penalty energy and the friction power at the accepted state (the ledger).
 
@@ -515,6 +499,54 @@ class SurfaceContact(SurfaceForces):
             out["slave_facet"][i] = p["slave_facet"]
         self._state_of = (p, out)
         return out
+
+
+def start_slip(pair: SurfaceContact,
+               frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Slip velocities that carry a static state's friction into the dynamics.
+
+    At the pair's current state, the static state at rest (the frictional relaxation's
+    ``_creep``), whose last step's projection was ``frozen`` (None: the state's
+    own): per slave node in contact, the speed where the law gives the friction
+    of that step (the inverse law ``χ f/sqrt(1 − f²)``, f = |F|/(μλ)), at most
+    :data:`RELEASE` χ, along the tangent of the state's own projection (the one
+    the dynamics starts with), against F; :meth:`SurfaceContact.slip_velocities` where frozen is
+    None and no node is faster than RELEASE χ.
+
+    Measured on the Goda caisson meshed apart (2026-11-28): a node that slides in
+    the static state (a base corner under its Poisson expansion) kept its static
+    slip over the pseudo time, 9e-6 m/s (1e5 χ) among nodes at rest; Rayleigh
+    damping's β K v gave it 1.7e5 m/s² at t = 0, the first step stored 0.84 J/m of
+    strain over the static state's 0.112 and the ledger counted −0.84 J/m of
+    numerical dissipation. At RELEASE χ the law carries μλ to 5e-5. And a slave
+    node on a master vertex takes the other facet's tangent when its projection
+    is made again at the state itself: the static stage's slip u/τ includes the
+    penalty's overlap, whose share along a tangent 2e-6 rad off gave that node
+    4.15 N/m of friction instead of −0.05.
+
+    Returns:
+        Their interface positions ``(k, gdim)`` and slip velocities ``(k, 2)``.
+    """
+    pos, v_T = pair.slip_velocities()
+    _, _, mu, chi = pair._law
+    if frozen is None or not len(v_T):
+        speed = np.linalg.norm(v_T, axis=1)
+        cap = RELEASE * chi
+        return pos, v_T * (cap / np.maximum(speed, cap))[:, None]
+    u0, u1, v1 = pair._state()
+    lam = pair._normal(u1)["lam"]
+    now = pair._friction(u0, v1, lam)
+    assert now is not None  # (v_T has rows)
+    λ_f, _ = newtonaids.friction_normals(lam, frozen[0])
+    k, _, F_k, _ = forcekernels.friction(λ_f, *frozen, pair._node_pos, pair._pm, v1, mu,
+                                         chi, pair.crawl.none)
+    force = np.zeros((len(pair.node_pos), 2))
+    force[k] = F_k
+    F = force[now["k"]]
+    f = np.minimum(np.linalg.norm(F, axis=1) / (mu * now["lam"][now["k"]]), 1.0)
+    speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
+    return pos, (-np.sign(np.einsum("kd,kd->k", F, now["t"])) * speed)[:, None] * now["t"]
 
 
 class SurfaceEnergy:

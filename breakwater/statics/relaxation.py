@@ -74,8 +74,7 @@ stages 1 and 1b first:
    velocity is set up for it: with u₀ = u_k, the GN22 start (v₀, a₀) is chosen so that
    ``c a₁ = u₁ − u_k`` (the mass term above) and ``v₁ = u₁/τ``, and β₁ = ½β₂Δτ_max/τ (τ
    at c_max; smaller c give a smaller τ, a narrower stick band, until c settles). The
-   slave nodes in contact then start with that slip velocity (the law's creep, a
-   fraction of χ; at most RELEASE χ where a node slides: ``start_slip``): t = 0 carries it.
+   slave nodes in contact start with the slip velocity carrying that friction (``start_slip``).
    The slip is measured from the landing point, not from the meshed position
    (:class:`~breakwater.statics.pseudostep.SlipOrigin`): a body meshed above its
    support does not count its fall as slip.
@@ -126,6 +125,7 @@ from dolfinx import fem
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import ConvergenceError
 from breakwater.contact.conforming import RELEASE, creep_velocities
+from breakwater.contact.general import start_slip
 from breakwater.model.model import ContactModel, Damping
 from breakwater.model.pairs import SurfacePair
 from breakwater.statics.pseudostep import FALL, GROWTH, LANDING, RATIO, PseudoStepper
@@ -341,12 +341,12 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
 def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
     """Add the slave nodes' slip velocity of the frictional state to ``v``."""
     s = ps.stepper
+    frozen = [p._step_frozen for p in ps.providers]  # the last step's, before rest()
     ps.rest()
     y = np.zeros(ps.solver.n)
-    for p in ps.providers:
-        pos, v_T = p.start_slip()
-        keep = pos >= 0
-        y[pos[keep]] = v_T[keep]
+    for p, step in zip(ps.providers, frozen, strict=True):
+        pos, v_T = start_slip(p, step)
+        y[pos[pos >= 0]] = v_T[pos >= 0]
     ps.add_slave_velocities(v, y)
     if ps.model.pairs:
         u = [fem.Function(f.function_space) for f in s.u]
