@@ -293,3 +293,35 @@ def test_frictional_state_on_a_soft_base_starts_in_equilibrium(mesh_path: pathli
     _print(f"soft base: net force at t = 0 {rest['force']} N/m, |a0| {float(rest['a0']):.2e}")
     assert abs(rest["force"][0]) < 1e-6 * weight
     assert float(rest["a0"]) < 1.0
+
+
+def test_a_frictionless_state_that_moves_a_body_sideways_is_warned(
+        mesh_path: pathlib.Path) -> None:
+    """``rigidmodes.frictionless_drift``: the block (no fixed group) moved sideways more
+    than DRIFT times its sinking is named in one line; the base (fixed) never is, nor a
+    model without friction. (The Goda caisson meshed in quadrilaterals moved 0.90 mm,
+    5.9 times its sinking, in its frictionless state: the gauges' peaks read 1.54 mm for
+    2.44; in triangles 1e-9 m.)"""
+    from breakwater.statics.rigidmodes import DRIFT, frictionless_drift
+
+    model = _model(mesh_path, 0.0, loading="frictionless")
+    u = [fem.Function(b.V) for b in model.bodies]
+    sink = 1.5e-4
+    for side, warned in ((0.9e-3, True), (0.5 * DRIFT * sink, False)):
+        for f in u:
+            f.x.array.reshape(-1, 2)[:] = (side, -sink)  # both bodies: only the block is free
+        lines = frictionless_drift(model, u)
+        assert len(lines) == int(warned), lines
+        if warned:
+            assert lines[0].startswith("bodies.block: the frictionless static state moved it "
+                                       "0.0009 m sideways, 6 times as far as it sank")
+    smooth = ContactModel(read_mesh(mesh_path, COMM),
+                          [Body("base", Material(ρ, ν, young_modulus=E)),
+                           Body("block", Material(ρ, ν, young_modulus=E))],
+                          fixed=[Fixed("base_bottom")], gravity=(0.0, -g),
+                          surface_pairs=[SurfacePair("c", "block", "base", "block_bottom",
+                                                     "base_top", PENALTY)])
+    w = [fem.Function(b.V) for b in smooth.bodies]
+    for f in w:
+        f.x.array.reshape(-1, 2)[:] = (0.9e-3, -sink)
+    assert frictionless_drift(smooth, w) == []

@@ -28,6 +28,7 @@ from breakwater.outputs.staticsummary import resolution_warnings, static_summary
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
+from breakwater.statics.rigidmodes import frictionless_drift
 from breakwater.stepping.stepsize import StepSize
 
 __all__ = ["restore", "start"]
@@ -62,6 +63,9 @@ def start(r: Session) -> None:
     init = initial_state(m)
     st.static_iterations = init.iterations
     log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
+    if init.kind == "frictionless":
+        for line in frictionless_drift(m, init.u):
+            log.warning("%s", line)
     r.stepped = x = Stepped(m, r.time, r.output, r.directory)
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files

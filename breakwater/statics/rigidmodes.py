@@ -30,14 +30,21 @@ import numpy as np
 from mpi4py import MPI
 
 if TYPE_CHECKING:
+    from dolfinx import fem
+
     from breakwater.model.model import ContactModel
 
-__all__ = ["FREE", "free_mode", "joined", "loose_modes", "static_needed"]
+__all__ = ["DRIFT", "FREE", "free_mode", "frictionless_drift", "joined", "loose_modes",
+           "static_needed"]
 
 FREE = 1e-9
 """A mode is free when G's eigenvalue along it is below this times G's largest (G counts
 held nodes: a held mode's eigenvalue is of the order of one node's, ≥ 1e-3 of the largest
 on the meshes measured)."""
+
+DRIFT = 0.1
+"""A body held by contact alone that a frictionless static state moves sideways by more
+than this times its sinking is warned about (:func:`frictionless_drift`)."""
 
 _AXES = "xyz"
 
@@ -217,4 +224,41 @@ def loose_modes(model: ContactModel) -> list[str]:
                             for p in pairs) or "its general contact pairs"
             out.append(_line(model, i, {i}, own) + f": only its contact ({law}) holds it "
                        "there (a frictionless or detached body drifts)")
+    return out
+
+
+def frictionless_drift(model: ContactModel, u: list[fem.Function]) -> list[str]:
+    """One warning per body with no fixed group that a frictionless static state moved sideways.
+
+    Only where some pair has friction (the case could have had the frictional state).
+    A body held by contact alone, frictionless, is held along the interface by nothing
+    but the shape of its support: its state is nearly indeterminate there, and the
+    discretisation's tangential out-of-balance moves it. Measured: the Goda caisson
+    meshed apart (``examples/goda_apart``) moved 1e-9 m; the same ``.geo`` meshed in
+    quadrilaterals moved it 0.90 mm, six times its sinking, and its gauges' peaks read
+    1.54 mm for 2.44 (2026-11-28). Sideways is across gravity (none: no warning); the
+    move is the mean of the body's nodal displacements (owned nodes, every rank).
+    """
+    g = np.asarray(model.gravity.value, dtype=float)
+    rough = any(float(p.law.friction.μ.value) > 0 for p in model.pairs) or any(
+        s.friction for s in model.surface_pairs)
+    if not rough or not np.linalg.norm(g) > 0:
+        return []
+    down = g / np.linalg.norm(g)
+    out = []
+    for body, f in zip(model.bodies, u, strict=True):
+        if model.fixed_on(body.spec.name):
+            continue
+        owned = f.x.array.reshape(-1, model.gdim)[:f.function_space.dofmap.index_map.size_local]
+        mean = model.comm.allreduce(owned.sum(axis=0)) / max(model.comm.allreduce(len(owned)), 1)
+        sink = float(mean @ down)
+        side = float(np.linalg.norm(mean - sink * down))
+        if side > DRIFT * abs(sink) and side > 0:
+            out.append(f"bodies.{body.spec.name}: the frictionless static state moved it "
+                       f"{side:.3g} m sideways, {side / max(abs(sink), 1e-300):.3g} times as "
+                       f"far as it sank ({sink:.3g} m): held by contact alone, its "
+                       "frictionless equilibrium is nearly indeterminate along the "
+                       "interface, and the dynamics starts where the mesh's asymmetry left "
+                       "it (its probes' displacements include the move); [initial] loading "
+                       "= \"frictional\" (the default) keeps it in place")
     return out
