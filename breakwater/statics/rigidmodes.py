@@ -24,6 +24,7 @@ no fixed group at all):
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -170,6 +171,19 @@ def _line(model: ContactModel, body: int, bodies: set[int], modes: list[str]) ->
             f"{_and(modes)} free: {_fix(model, bodies, modes[0])}")
 
 
+def _held_groups(model: ContactModel) -> Iterator[tuple[set[int], list[int]]]:
+    """The groups of bodies joined by contact pairs that some fixed group holds.
+
+    Each as (its bodies, those of them with a fixed group, in order).
+    """
+    roots = joined(model)
+    for root in sorted(set(roots)):
+        bodies = {i for i, r in enumerate(roots) if r == root}
+        held = [i for i in sorted(bodies) if model.fixed_on(model.bodies[i].spec.name)]
+        if held:
+            yield bodies, held
+
+
 def free_mode(model: ContactModel) -> str | None:
     """Why the static state cannot exist: a group of bodies left free in a rigid mode.
 
@@ -179,12 +193,8 @@ def free_mode(model: ContactModel) -> str | None:
     """
     if not static_needed(model):
         return None
-    fixed, roots = model.fixed_nodes(), joined(model)
-    for root in sorted(set(roots)):
-        bodies = {i for i, r in enumerate(roots) if r == root}
-        first = [i for i in sorted(bodies) if model.fixed_on(model.bodies[i].spec.name)]
-        if not first:
-            continue
+    fixed = model.fixed_nodes()
+    for bodies, first in _held_groups(model):
         modes = _free(model, bodies, fixed)
         if modes:
             return (_line(model, first[0], bodies, modes) + " (nothing holds it there, and "
@@ -203,13 +213,8 @@ def loose_modes(model: ContactModel) -> list[str]:
     holds it, and it drifts.
     """
     out: list[str] = []
-    fixed, roots = model.fixed_nodes(), joined(model)
-    static = static_needed(model)
-    for root in sorted(set(roots)):
-        bodies = {i for i, r in enumerate(roots) if r == root}
-        with_fixed = [i for i in sorted(bodies) if model.fixed_on(model.bodies[i].spec.name)]
-        if not with_fixed:
-            continue
+    fixed, static = model.fixed_nodes(), static_needed(model)
+    for bodies, with_fixed in _held_groups(model):
         group_free = _free(model, bodies, fixed)
         if group_free and not static:
             out.append(_line(model, with_fixed[0], bodies, group_free)
