@@ -98,17 +98,23 @@ def _module_of(tmp: pathlib.Path, coefficient: float) -> str:
     return name
 
 
+def _claimed(tmp_path: pathlib.Path, coefficient: float) -> tuple[pathlib.Path, pathlib.Path]:
+    """This rank's folder and a claim of :func:`_compile`'s form in its ``cache`` (no mark)."""
+    formcache.install()
+    tmp = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
+    claim = (tmp / "cache" / _module_of(tmp, coefficient)).with_suffix(".c")
+    claim.parent.mkdir()
+    claim.touch()
+    return tmp, claim
+
+
 def test_a_live_claim_is_waited_for(tmp_path: pathlib.Path) -> None:
     # The claim of a process that is alive (this one) is not taken over: FFCx waits
     # for it and times out, as without breakwater.
     import os
     import socket
 
-    formcache.install()
-    tmp = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
-    claim = (tmp / "cache" / _module_of(tmp, 4.0)).with_suffix(".c")
-    claim.parent.mkdir()
-    claim.touch()
+    tmp, claim = _claimed(tmp_path, 4.0)
     claim.with_suffix(".c.owner").write_text(f"{socket.gethostname()} {os.getpid()}")
     with pytest.raises(TimeoutError):
         _compile(tmp / "cache", 4.0)
@@ -121,11 +127,7 @@ def test_an_old_claim_of_no_known_owner_is_compiled_again(tmp_path: pathlib.Path
     import os
     import time
 
-    formcache.install()
-    tmp = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
-    claim = (tmp / "cache" / _module_of(tmp, 5.0)).with_suffix(".c")
-    claim.parent.mkdir()
-    claim.touch()
+    tmp, claim = _claimed(tmp_path, 5.0)
     with pytest.raises(TimeoutError):  # fresh: it may be compiling
         _compile(tmp / "cache", 5.0)
     old = time.time() - formcache.STALE_AGE - 60.0

@@ -528,16 +528,18 @@ def start_slip(pair: SurfaceContact,
     Returns:
         Their interface positions ``(k, gdim)`` and slip velocities ``(k, 2)``.
     """
-    pos, v_T = pair.slip_velocities()
-    _, _, mu, chi = pair._law
-    if frozen is None or not len(v_T):
-        speed = np.linalg.norm(v_T, axis=1)
-        cap = RELEASE * chi
-        return pos, v_T * (cap / np.maximum(speed, cap))[:, None]
+    if not pair.spec.friction:
+        return pair.slip_velocities()  # (none)
     u0, u1, v1 = pair._state()
     lam = pair._normal(u1)["lam"]
     now = pair._friction(u0, v1, lam)
-    assert now is not None  # (v_T has rows)
+    if now is None:
+        return pair.slip_velocities()  # (none in contact)
+    _, _, mu, chi = pair._law
+    if frozen is None:
+        speed = np.linalg.norm(now["v_T"], axis=1)
+        cap = RELEASE * chi
+        return now["pos_s"], now["v_T"] * (cap / np.maximum(speed, cap))[:, None]
     λ_f, _ = newtonaids.friction_normals(lam, frozen[0])
     k, _, F_k, _ = forcekernels.friction(λ_f, *frozen, pair._node_pos, pair._pm, v1, mu,
                                          chi, pair.crawl.none)
@@ -546,7 +548,8 @@ def start_slip(pair: SurfaceContact,
     F = force[now["k"]]
     f = np.minimum(np.linalg.norm(F, axis=1) / (mu * now["lam"][now["k"]]), 1.0)
     speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
-    return pos, (-np.sign(np.einsum("kd,kd->k", F, now["t"])) * speed)[:, None] * now["t"]
+    against = -np.sign(np.einsum("kd,kd->k", F, now["t"]))
+    return now["pos_s"], (against * speed)[:, None] * now["t"]
 
 
 class SurfaceEnergy:
