@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import fnmatch
+import hashlib
 import io
 import json
 import math
@@ -55,6 +56,7 @@ __all__ = [
     "read_history",
     "read_json",
     "remove_temporaries",
+    "sha256_of",
     "temporary_path",
     "to_jsonable",
     "writing",
@@ -410,3 +412,16 @@ def read_history(path: str | pathlib.Path) -> dict[str, np.ndarray]:
     data = (np.loadtxt(lines, delimiter=",", ndmin=2) if lines
             else np.zeros((0, len(header))))
     return {name: data[:, j] for j, name in enumerate(header)}
+
+
+def sha256_of(path: str | pathlib.Path) -> str:
+    """The SHA-256 of a file's bytes (hex), read in blocks of 1 MiB.
+
+    Raises:
+        OSError: It cannot be read.
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

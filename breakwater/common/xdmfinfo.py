@@ -29,7 +29,6 @@ library is imported.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import pathlib
@@ -37,6 +36,7 @@ import xml.etree.ElementTree as ET
 from typing import Any
 
 from breakwater.common.errors import MeshError
+from breakwater.common.files import sha256_of
 
 __all__ = ["DIGEST", "GROUPS", "MESH_GRID", "SUFFIXES", "TAG_GRIDS", "add_digest", "digest_problem",
            "hdf5_problem", "heavy_files", "is_xdmf", "read_info", "xdmf_groups"]
@@ -161,14 +161,6 @@ def hdf5_problem(h5: pathlib.Path) -> str | None:
     return None
 
 
-def _sha256(path: pathlib.Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def add_digest(path: pathlib.Path, h5: pathlib.Path) -> None:
     """Record the SHA-256 of ``h5`` in ``path`` (rank 0, once dolfinx closed both).
 
@@ -179,7 +171,7 @@ def add_digest(path: pathlib.Path, h5: pathlib.Path) -> None:
     at = next(i for i, line in enumerate(lines) if f'Name="{GROUPS}"' in line)
     indent = lines[at][:len(lines[at]) - len(lines[at].lstrip())]
     lines.insert(at + 1, f'{indent}<Information Name="{DIGEST}" Value="sha256:'
-                         f'{_sha256(h5)}" />\n')
+                         f'{sha256_of(h5)}" />\n')
     temporary = path.with_name(f".{path.name}.tmp")
     temporary.write_text("".join(lines))
     os.replace(temporary, path)
@@ -196,7 +188,7 @@ def digest_problem(path: pathlib.Path, h5: pathlib.Path) -> str | None:
     value = None if info is None else info.get("Value", "")
     if value is None or not value.startswith("sha256:"):
         return None
-    if _sha256(h5) != value.removeprefix("sha256:"):
+    if sha256_of(h5) != value.removeprefix("sha256:"):
         return "damaged, its bytes not the ones written with it (a bad copy, a disk's damage)"
     return None
 

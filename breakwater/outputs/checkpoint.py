@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from breakwater.common.errors import BreakwaterError
-from breakwater.common.files import CHECKPOINT, SUMMARY, atomic_write_bytes, read_json
+from breakwater.common.files import CHECKPOINT, SUMMARY, atomic_write_bytes, read_json, sha256_of
 from breakwater.common.xdmfinfo import is_xdmf
 
 if TYPE_CHECKING:  # light at import: the command line catches CheckpointError early
@@ -187,7 +187,7 @@ def _file_digest(path: str) -> str:
         stat = pathlib.Path(path).stat()
         key = (path, stat.st_size, stat.st_mtime_ns)
         if key not in _DIGESTS:
-            _DIGESTS[key] = hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
+            _DIGESTS[key] = sha256_of(path)
         return _DIGESTS[key]
     except OSError:
         return "missing"
