@@ -309,6 +309,17 @@ class NodalContactForces:
                        *self._law, *self._coefficients, self._W)
         return tangent_block(self._W, self._run_slave, self._run_master, self.n)
 
+    def jump_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """∂f_c/∂y at y as the node tangents: ``(W, slave, master)`` (a copy of W).
+
+        ∂f_c/∂y = −Dᵀ W D with D the jumps of the nodes' unknowns
+        (:mod:`breakwater.stepping.jumpsystem`; the blocks of :meth:`active_jacobian`).
+        """
+        nodal_state(y, self._pos, self._base, *self._coefficients, self._U, self._V)
+        nodal_tangents(self._U, self._V, self._node, self._weight, self._normal, self._runs,
+                       *self._law, *self._coefficients, self._W)
+        return self._W.copy(), self._run_slave, self._run_master
+
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:
         """The pair's slip guard on the interface unknowns; the nodes corrected.

@@ -404,6 +404,22 @@ class ContactSum:
                 A[np.ix_(at, at)] += block
             return coupled(act, A)
 
+    def jump_jacobian(self, y: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """∂f_c/∂y as node tangents ``(W, slave, master)`` of every provider's nodes.
+
+        :mod:`breakwater.stepping.jumpsystem`'s form; None if a provider has none.
+        """
+        if not self.providers or not all(getattr(c, "primal", False)
+                                         and hasattr(c, "jump_jacobian")
+                                         for c in self.providers):
+            return None
+        with self.timings("interface_assembly"):
+            parts = [c.jump_jacobian(y) for c in self.providers]  # type: ignore[attr-defined]
+        if len(parts) == 1:
+            return parts[0]
+        return tuple(np.concatenate(p) for p in zip(*parts, strict=True))  # type: ignore
+
     def reach(self) -> np.ndarray | None:
         """The interface unknowns the providers' forces may touch in this step.
 

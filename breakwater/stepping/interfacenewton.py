@@ -11,10 +11,11 @@ It is the iteration of the reference path's PETSc SNES (``newtonls`` with the ``
 line search and the slip guards as its pre-check) written out, so that a step makes no
 Python callback per iteration from PETSc: per iteration, the contact forces and their
 Jacobian from the providers (compiled kernels for the conforming pairs,
-:mod:`breakwater.contact.nodalkernels`), a dense LU solve of size n_I (LAPACK) and the
-guards. Every rank solves the same small system from the same data, so every rank takes
-the same decisions; there is no communication inside the iteration unless a provider
-needs it (the general pairs' state).
+:mod:`breakwater.contact.nodalkernels`), a dense LU solve (LAPACK: of the conforming
+pairs' closed nodes' jumps, :mod:`breakwater.stepping.jumpsystem`; of the unknowns the
+contact couples, or of all n_I) and the guards. Every rank solves the same small system
+from the same data, so every rank takes the same decisions; there is no communication
+inside the iteration unless a provider needs it (the general pairs' state).
 
 Two rescues the SNES does not have. Where a general pair has friction, a solve that does
 not converge is done again by stages of a larger regularisation χ down to the law's own
@@ -50,6 +51,7 @@ from breakwater.common.timings import Timings
 from breakwater.stepping import continuation
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
+from breakwater.stepping.jumpsystem import JumpSystem
 from breakwater.stepping.reach import NearFactors, Reach
 from breakwater.stepping.solver import NewtonOptions, convergence_reason
 
@@ -113,10 +115,10 @@ class InterfaceNewton:
         self.atol = options.atol * force_scale
         self.floor = options.floor_atol * force_scale
         self.guarded = guarded
-        self.floor_accepts = self.rescues = self.halvings = self.flips = 0
-        self.continuations = 0
+        self.floor_accepts = self.rescues = self.halvings = self.flips = self.continuations = 0
         self.y, self.fc, self.F = np.zeros(n), np.zeros(n), np.zeros(n)
         self._columns_of: Columns | None = None
+        self._jumps = JumpSystem()
         # The last evaluation (X_II, S, z_I, y, f_c(y)), for its round-off.
         self._last: tuple[np.ndarray, ...] | None = None
         self.round_off = RoundOff()
@@ -223,12 +225,15 @@ class InterfaceNewton:
     def _step(self, x: np.ndarray, X_II: np.ndarray, G: np.ndarray) -> np.ndarray:
         """Newton's step δ: ``(1 + X_II ∂f_c/∂y) δ = G``.
 
-        On the unknowns ∂f_c/∂y couples where the providers say which
-        (:func:`active_step`), else the whole matrix.
+        On the conforming pairs' jumps (:mod:`~breakwater.stepping.jumpsystem`), else on
+        the unknowns ∂f_c/∂y couples (:func:`active_step`), else the whole matrix.
 
         Raises:
             np.linalg.LinAlgError: A singular system.
         """
+        jumps = self.contact.jump_jacobian(x)
+        if jumps is not None:
+            return self._jumps.step(X_II, G, *jumps)
         active = self.contact.active_jacobian(x)
         if active is None:
             J = self.contact.left_jacobian(x, X_II)

@@ -196,6 +196,10 @@ class NearContact:
             raise OutOfReach
         return at, A
 
+    def jump_jacobian(self, y: np.ndarray) -> None:
+        """None: the near unknowns are a general pair's (no conforming pairs' jumps)."""
+        return None
+
     def left_jacobian(self, y: np.ndarray, X: np.ndarray) -> np.ndarray:
         """Not on the near unknowns: the providers have no active form."""
         raise OutOfReach
