@@ -16,6 +16,7 @@ from blocks import two_rectangles
 from breakwater.casefile.case import load_case
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.statics import calibrate as calibrate_module
 from breakwater.statics.calibrate import (
     CalibrationError,
     HorizontalStiffness,
@@ -61,6 +62,25 @@ def test_stiffness_of_a_shear_layer(layer_model):
         # Tolerance: the problem is linear and its solution exact in P2, so one LU solve
         # gives K to round-off (observed 4e-12 with the k_t = 1e10 penalty): 1e-9.
         assert problem.stiffness("b", G) == pytest.approx(layer_stiffness(G), rel=1e-9)
+
+
+def test_solves_on_a_kept_factorisation(layer_model, monkeypatch):
+    # Within REUSE_RATIO of the factorised G, K comes from CG preconditioned by the kept
+    # LU factors; the closed form holds to the same 1e-9 as for a direct solve (CG's
+    # rtol 1e-13 on an operator of condition ≤ 4). A G farther off factorises again, and
+    # so does a CG that fails (one iteration allowed: it cannot reach 1e-13).
+    problem = HorizontalStiffness(layer_model, "a", tangential_penalty=K_T_FACTOR)
+    try:
+        for G in (1e7, 1.5e7, 3.9e7, 3e6):  # within 4 of 1e7
+            assert problem.stiffness("b", G) == pytest.approx(layer_stiffness(G), rel=1e-9)
+        assert problem.factorised_at == 1e7 and problem.reused == 3
+        assert problem.stiffness("b", 5e5) == pytest.approx(layer_stiffness(5e5), rel=1e-9)
+        assert problem.factorised_at == 5e5 and problem.reused == 3
+        monkeypatch.setattr(calibrate_module, "REUSE_MAX_IT", 1)
+        assert problem.stiffness("b", 1e6) == pytest.approx(layer_stiffness(1e6), rel=1e-9)
+        assert problem.factorised_at == 1e6 and problem.reused == 3
+    finally:
+        problem.destroy()
 
 
 def test_calibration_of_a_shear_layer(layer_model):
