@@ -357,3 +357,36 @@ def test_jacobian_with_its_bulk_assembled_once_is_dolfinx_jacobian(folder: pathl
     assert same(ours(), dolfinx_jacobian())
     assert same(ours(), dolfinx_jacobian())
     solver.destroy()
+
+
+def test_an_unchanged_jacobian_keeps_its_factorisation(folder: pathlib.Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """A frictionless static solve: where the interface and load integrals are those of
+    the last iteration (the closed points stay), the Jacobian is left as it is and its
+    LU factors are kept (PETSc's MatLUFactorNum counted: one per Jacobian assembled).
+    The state and the iterations are those of the solve that assembles and factorises
+    every Jacobian, bit for bit (the same matrices, the same factors)."""
+    from breakwater.stepping import snesassembly
+
+    PETSc.Log.begin()
+    factorisations = PETSc.Log.Event("MatLUFactorNum")
+    kept = []
+    unchanged = snesassembly.ConstantBulk._unchanged
+
+    def counted(self: snesassembly.ConstantBulk) -> bool:
+        kept.append(unchanged(self))
+        return kept[-1]
+
+    def solve(model: ContactModel) -> tuple[np.ndarray, int, int]:
+        before = factorisations.getPerfInfo()["count"]
+        u, its = solve_static(model)
+        state = np.concatenate([f.x.array for f in u])
+        return state, its, factorisations.getPerfInfo()["count"] - before
+
+    monkeypatch.setattr(snesassembly.ConstantBulk, "_unchanged", counted)
+    state, its, factored = solve(_blocks(folder / "kept.msh"))
+    monkeypatch.setattr(snesassembly.ConstantBulk, "_unchanged", lambda self: False)
+    state_all, its_all, factored_all = solve(_blocks(folder / "kept.msh"))
+    assert its == its_all and np.array_equal(state, state_all)
+    assert sum(kept) >= 2 and factored_all == its  # every iteration factorised
+    assert factored == its - sum(kept)
