@@ -115,39 +115,12 @@ def test_left_product_is_the_dense_product() -> None:
         stepper.destroy()
 
 
-def test_jump_jacobian_is_the_matrix_on_the_jumps() -> None:
-    # (W, slave, master): ∂f_c/∂y = −Dᵀ W D, D the nodes' jumps (−1 on the slave
-    # unknown, +1 on the master's; a Dirichlet side, −1, none): the dense matrix to
-    # round-off (each entry one ± W term, as tangent_block scatters it).
-    model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
-    stepper = GN22(model, 1e-4)
-    try:
-        _random_state(stepper, 5)
-        provider = stepper.solver.providers[0]
-        provider.begin()
-        y = _interface_values(stepper)
-        W, slave, master = provider.jump_jacobian(y)
-        dense = provider.matrix(y)
-        n, gdim = provider.n, W.shape[1]
-        D = np.zeros((len(W) * gdim, n))
-        for r in range(len(W)):
-            for i in range(gdim):
-                for side, sign in ((slave, -1.0), (master, 1.0)):
-                    if side[r, i] >= 0:
-                        D[r * gdim + i, side[r, i]] = sign
-        blocks = np.zeros((len(D), len(D)))
-        for r in range(len(W)):
-            blocks[r * gdim:(r + 1) * gdim, r * gdim:(r + 1) * gdim] = W[r]
-        np.testing.assert_allclose(-D.T @ blocks @ D, dense, rtol=0,
-                                   atol=1e-14 * np.abs(dense).max())
-        assert (W != 0).any() and not W.reshape(len(W), -1).any(axis=1).all()  # open nodes
-    finally:
-        stepper.destroy()
-
-
-def test_active_jacobian_is_the_matrix_on_the_closed_nodes() -> None:
+def test_active_and_jump_jacobians_are_the_matrix_on_the_closed_nodes() -> None:
     # (act, A): the dense ∂f_c/∂y is A on act × act and zero elsewhere; act holds the
     # unknowns of the closed nodes only (the random state opens some: gaps of both signs).
+    # (W, slave, master): ∂f_c/∂y = −Dᵀ W D, D the nodes' jumps (−1 on the slave
+    # unknown, +1 on the master's; a Dirichlet side, −1, none), to round-off (each entry
+    # one ± W term, as tangent_block scatters it).
     model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
     stepper = GN22(model, 1e-4)
     try:
@@ -164,6 +137,19 @@ def test_active_jacobian_is_the_matrix_on_the_closed_nodes() -> None:
         coupled = np.flatnonzero((dense != 0).any(axis=0) | (dense != 0).any(axis=1))
         np.testing.assert_array_equal(act, coupled)
         assert 0 < len(act) < provider.n
+        W, slave, master = provider.jump_jacobian(y)
+        n, gdim = provider.n, W.shape[1]
+        D = np.zeros((len(W) * gdim, n))
+        for r in range(len(W)):
+            for i in range(gdim):
+                for side, sign in ((slave, -1.0), (master, 1.0)):
+                    if side[r, i] >= 0:
+                        D[r * gdim + i, side[r, i]] = sign
+        blocks = np.zeros((len(D), len(D)))
+        for r in range(len(W)):
+            blocks[r * gdim:(r + 1) * gdim, r * gdim:(r + 1) * gdim] = W[r]
+        np.testing.assert_allclose(-D.T @ blocks @ D, dense, rtol=0,
+                                   atol=1e-14 * np.abs(dense).max())
     finally:
         stepper.destroy()
 

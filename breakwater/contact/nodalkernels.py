@@ -31,7 +31,7 @@ import numpy as np
 from breakwater.common.jit import kernel
 from breakwater.contact.guardkernels import land
 
-__all__ = ["guard_steps", "nodal_left_product", "nodal_residual", "nodal_state",
+__all__ = ["closed_nodes", "guard_steps", "nodal_left_product", "nodal_residual", "nodal_state",
            "nodal_tangents", "tangent_block", "tangent_left_product"]
 
 
@@ -181,6 +181,18 @@ def tangent_left_product(X: np.ndarray, W: np.ndarray, slave: np.ndarray,
 
 
 @kernel
+def closed_nodes(W: np.ndarray) -> np.ndarray:
+    """The nodes whose tangent W_r is not zero (closed; an open node's is)."""
+    live = np.zeros(W.shape[0], np.bool_)
+    for r in range(W.shape[0]):
+        for i in range(W.shape[1]):
+            for j in range(W.shape[2]):
+                if W[r, i, j] != 0.0:
+                    live[r] = True
+    return live
+
+
+@kernel
 def tangent_block(W: np.ndarray, slave: np.ndarray, master: np.ndarray,
                   n: int) -> tuple[np.ndarray, np.ndarray]:
     """∂f_c/∂y from the node tangents W on the unknowns it couples: ``(act, A[act, act])``.
@@ -191,12 +203,8 @@ def tangent_block(W: np.ndarray, slave: np.ndarray, master: np.ndarray,
     """
     gdim = W.shape[1]
     where = np.full(n, -1, np.int64)
-    live = np.zeros(W.shape[0], np.bool_)
+    live = closed_nodes(W)
     for r in range(W.shape[0]):
-        for i in range(gdim):
-            for j in range(gdim):
-                if W[r, i, j] != 0.0:
-                    live[r] = True
         if live[r]:
             for i in range(gdim):
                 for c in (slave[r, i], master[r, i]):

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.nodalkernels import closed_nodes
 
 __all__ = ["JumpSystem", "jump_compliance", "jump_rows", "jump_system"]
 
@@ -42,13 +43,7 @@ def jump_rows(W, slave, master):  # type: ignore[no-untyped-def]
         master unknown, ``(closed · gdim,)`` each (node-major).
     """
     gdim = W.shape[1]
-    live = np.zeros(W.shape[0], np.bool_)
-    for r in range(W.shape[0]):
-        for i in range(gdim):
-            for j in range(gdim):
-                if W[r, i, j] != 0.0:
-                    live[r] = True
-    closed = np.flatnonzero(live)
+    closed = np.flatnonzero(closed_nodes(W))
     Wh = np.empty((len(closed), gdim, gdim))
     s = np.empty(len(closed) * gdim, np.int64)
     m = np.empty(len(closed) * gdim, np.int64)
