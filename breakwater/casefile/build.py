@@ -137,7 +137,7 @@ def read_mesh(case: CaseSettings, comm: MPI.Comm, directory: str | pathlib.Path 
 
 def build_model(case: CaseSettings, data: gmshio.MeshData,
                 shear_moduli: Mapping[str, float] | None = None,
-                dynamic: bool = True) -> ContactModel:
+                dynamic: bool = True, calibrating: bool = False) -> ContactModel:
     """The contact model of the case on a mesh.
 
     Args:
@@ -147,6 +147,9 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
             calibrated body gives none: it must be here).
         dynamic: Include the loads, gravity and damping (False: the bare elastic
             bodies, contact pairs and fixed boundaries, for the calibration).
+        calibrating: A shear modulus is calibrated on the case first: bodies held by
+            nothing and free rigid modes are refused whatever the initial state
+            (:func:`~breakwater.statics.initial.unsupported`).
 
     """
     moduli = shear_moduli or {}
@@ -186,7 +189,7 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
                 if any(b.initial_velocity) else None
             if why is not None:
                 raise CaseError(f"bodies.{b.name}.initial_velocity: {why}")
-        why = unsupported(model)
+        why = unsupported(model, calibrating)
         if why is not None:
             raise CaseError(why)
     return model
@@ -195,6 +198,11 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
 def calibrate(case: CaseSettings, data: gmshio.MeshData, target: float | None = None
               ) -> CalibrationResult:
     """Calibrate the shear modulus of ``calibration.body`` (see :mod:`.calibrate`).
+
+    The case is checked first, as the run checks it (:func:`_checked_model`, which
+    ``python -m breakwater calibrate`` and a run that calibrates share): a body held by
+    nothing or a free rigid mode (whose stiffness is singular) is refused in one line
+    before any solve.
 
     Args:
         case: The case.
@@ -208,6 +216,7 @@ def calibrate(case: CaseSettings, data: gmshio.MeshData, target: float | None = 
 
     cal = case.calibration
     k = _calibration_target(case, target)
+    _checked_model(case, data, guess=cal.body)
     model = build_model(case, data, {cal.body: cal.initial_guess}, dynamic=False)
     return calibrate_shear_modulus(model, cal.body, cal.structure,
                                    cal.per_metre(k, case.out_of_plane_length), cal.tolerance,
@@ -240,11 +249,12 @@ def _checked_model(case: CaseSettings, data: gmshio.MeshData,
     unsupported`), a body strained by its own weight, a load that applies nothing, two
     storms. With ``guess`` (the body to calibrate, then at its initial guess) they run
     before the calibration (a goda3d case with gravity up calibrated 24 s before its
-    refusal): its own weight's strain is checked after, with its calibrated modulus.
+    refusal), with the calibration's own (a free rigid mode whatever the initial state):
+    its own weight's strain is checked after, with its calibrated modulus.
     """
     moduli = {} if guess is None else {guess: case.calibration.initial_guess}
     try:
-        model = build_model(case, data, moduli, dynamic=True)
+        model = build_model(case, data, moduli, dynamic=True, calibrating=guess is not None)
     except MeshError as e:
         raise CaseError(f"{'mesh' if case.mesh.generated else case.mesh.source}: {e}") from e
     strained = _self_weight_problem(model, skip=guess)
@@ -286,9 +296,7 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     extra: dict[str, Any] = {"mesh": _mesh_summary(case, data)}
     probes, pair_probes = _probe_points(case, data)  # checked before the heavy work
     if case.calibration.enabled:
-        _calibration_target(case)
-        _checked_model(case, data, guess=case.calibration.body)  # before the calibration
-        result = calibrate(case, data)
+        result = calibrate(case, data)  # the case checked first, as the calibrate command
         case = case.calibrated(result.body, result.shear_modulus)
         extra["calibration"] = result.summary()
     model = _checked_model(case, data)

@@ -151,7 +151,7 @@ def _initial_loads(model: ContactModel) -> Iterator[None]:
 _AXES = "xyz"
 
 
-def unsupported(model: ContactModel) -> str | None:
+def unsupported(model: ContactModel, calibrating: bool = False) -> str | None:
     """Why the static state cannot exist: a body held by nothing (None: every body is).
 
     The bodies that contact pairs join form groups; a group none of whose bodies has a
@@ -160,9 +160,12 @@ def unsupported(model: ContactModel) -> str | None:
     run advised starting undeformed without saying why). With ``[initial] undeformed``
     or nothing loading it, it starts at rest (a free body may then fall or be struck).
     A group whose fixed groups leave a rigid mode free (rollers in x only): refused by
-    :func:`~breakwater.statics.rigidmodes.free_mode`, naming the mode.
+    :func:`~breakwater.statics.rigidmodes.free_mode`, naming the mode. With
+    ``calibrating`` (a shear modulus to calibrate first) both are refused whatever the
+    initial state: the calibration's stiffness is singular then.
     """
-    if not static_needed(model):
+    static = static_needed(model)
+    if not (static or calibrating):
         return None
     root = joined(model)
     held = {root[b.index] for b in model.bodies if model.fixed_on(b.spec.name)}
@@ -171,11 +174,13 @@ def unsupported(model: ContactModel) -> str | None:
             touching = [o.spec.name for o in model.bodies
                         if o is not b and root[o.index] == root[b.index]]
             on = f" or on the bodies it touches ({', '.join(touching)})" if touching else ""
-            return (f"bodies.{b.spec.name}: the body is held by nothing: no [fixed] group on "
-                    f"it{on}, so it has no static state under gravity and the initial "
-                    "loads (add its contact pair or a [fixed] group, or start it at rest "
-                    "undeformed: [initial] undeformed = true)")
-    return free_mode(model) or _nothing_beneath(model)
+            why = ("so the calibration's stiffness is singular (add its contact pair or a "
+                   "[fixed] group)" if calibrating else "so it has no static state under "
+                   "gravity and the initial loads (add its contact pair or a [fixed] group, "
+                   "or start it at rest undeformed: [initial] undeformed = true)")
+            return (f"bodies.{b.spec.name}: the body is held by nothing: no [fixed] group "
+                    f"on it{on}, {why}")
+    return free_mode(model, calibrating) or (_nothing_beneath(model) if static else None)
 
 
 LEVEL = 1e-3

@@ -184,22 +184,27 @@ def _held_groups(model: ContactModel) -> Iterator[tuple[set[int], list[int]]]:
             yield bodies, held
 
 
-def free_mode(model: ContactModel) -> str | None:
-    """Why the static state cannot exist: a group of bodies left free in a rigid mode.
+def free_mode(model: ContactModel, calibrating: bool = False) -> str | None:
+    """Why the static state (or the calibration) cannot exist: a group left free in a mode.
 
     Only groups with some fixed group (:func:`~breakwater.statics.initial.unsupported`
     refuses the others), and only when the run needs a static state
-    (:func:`static_needed`). Collective.
+    (:func:`static_needed`) or, with ``calibrating``, the shear modulus is to be
+    calibrated: the calibration's stiffness (:mod:`breakwater.statics.calibrate`, its
+    pairs bonded, which join the bodies as here) is singular in that mode, whatever the
+    run's initial state (a 3-D case with rollers in x only failed its first stiffness
+    solve, after the mesh and the model were built). Collective.
     """
-    if not static_needed(model):
+    if not (calibrating or static_needed(model)):
         return None
     fixed = model.fixed_nodes()
     for bodies, first in _held_groups(model):
         modes = _free(model, bodies, fixed)
         if modes:
-            return (_line(model, first[0], bodies, modes) + " (nothing holds it there, and "
-                    "the static stiffness is singular; or start it at rest undeformed: "
-                    "[initial] undeformed = true)")
+            why = ("the stiffness the calibration solves, its interfaces bonded, is singular"
+                   if calibrating else "the static stiffness is singular; or start it at "
+                   "rest undeformed: [initial] undeformed = true")
+            return _line(model, first[0], bodies, modes) + f" (nothing holds it there, and {why})"
     return None
 
 
