@@ -25,6 +25,7 @@ must agree to 1e-10 of its scale, or to the positions' round-off. E = 1e11 and
 
 from __future__ import annotations
 
+import itertools
 import logging
 import pathlib
 import time
@@ -295,33 +296,47 @@ def test_frictional_state_on_a_soft_base_starts_in_equilibrium(mesh_path: pathli
     assert float(rest["a0"]) < 1.0
 
 
-def test_a_frictionless_state_that_moves_a_body_sideways_is_warned(
-        mesh_path: pathlib.Path) -> None:
-    """``rigidmodes.frictionless_drift``: the block (no fixed group) moved sideways more
-    than DRIFT times its sinking is named in one line; the base (fixed) never is, nor a
-    model without friction. (The Goda caisson meshed in quadrilaterals moved 0.90 mm,
-    5.9 times its sinking, in its frictionless state: the gauges' peaks read 1.54 mm for
-    2.44; in triangles 1e-9 m.)"""
-    from breakwater.statics.rigidmodes import DRIFT, frictionless_drift
+def test_a_frictionless_state_that_moves_a_body_sideways(mesh_path: pathlib.Path) -> None:
+    """``rigidmodes.sideways`` and ``drift``: the block (no fixed group) moved sideways
+    more than DRIFT times its sinking in a frictionless state is refused in one line
+    where its pair has friction (the frictional loading would hold it), warned where
+    μ = 0; the base (fixed) is never measured; a smaller move passes. (The Goda caisson
+    meshed in quadrilaterals moved 0.90 mm, 5.9 times its sinking, in its frictionless
+    state: the gauges' peaks read 1.54 mm for 2.44; in triangles 1.4e-9 m.) Each body's
+    nodes are all moved by (side, −sink): its mean move is exactly that."""
+    from breakwater.statics.rigidmodes import DRIFT, drift, sideways
 
-    model = _model(mesh_path, 0.0, loading="frictionless")
-    u = [fem.Function(b.V) for b in model.bodies]
     sink = 1.5e-4
-    for side, warned in ((0.9e-3, True), (0.5 * DRIFT * sink, False)):
-        for f in u:
-            f.x.array.reshape(-1, 2)[:] = (side, -sink)  # both bodies: only the block is free
-        lines = frictionless_drift(model, u)
-        assert len(lines) == int(warned), lines
-        if warned:
-            assert lines[0].startswith("bodies.block: the frictionless static state moved it "
-                                       "0.0009 m sideways, 6 times as far as it sank")
+    rough = _model(mesh_path, 0.0, loading="frictionless")
     smooth = ContactModel(read_mesh(mesh_path, COMM),
                           [Body("base", Material(ρ, ν, young_modulus=E)),
                            Body("block", Material(ρ, ν, young_modulus=E))],
                           fixed=[Fixed("base_bottom")], gravity=(0.0, -g),
                           surface_pairs=[SurfacePair("c", "block", "base", "block_bottom",
                                                      "base_top", PENALTY)])
-    w = [fem.Function(b.V) for b in smooth.bodies]
-    for f in w:
-        f.x.array.reshape(-1, 2)[:] = (0.9e-3, -sink)
-    assert frictionless_drift(smooth, w) == []
+    smooth.initial = InitialSpec(loading="frictionless")
+    for model, side in itertools.product((rough, smooth), (0.9e-3, 0.5 * DRIFT * sink)):
+        u = [fem.Function(b.V) for b in model.bodies]
+        for f in u:
+            f.x.array.reshape(-1, 2)[:] = (side, -sink)  # both bodies: only the block is free
+        moved = sideways(model, u)
+        assert list(moved) == ["block"]
+        assert moved["block"] == pytest.approx((side, sink), rel=1e-12)
+        refusal, warnings = drift(model, moved)
+        if side < DRIFT * sink:
+            assert (refusal, warnings) == (None, [])
+        elif model is rough:
+            assert warnings == [] and refusal is not None and "\n" not in refusal
+            assert refusal.startswith("bodies.block: the frictionless static state moved it "
+                                      "0.9 mm sideways, 6 times as far as it sank (0.15 mm)")
+            assert refusal.endswith('[initial] loading = "frictional" (the default with '
+                                    "friction: 'c' μ = 0.3) gives the state friction holds")
+        else:
+            assert refusal is None and len(warnings) == 1
+            assert warnings[0].startswith("bodies.block: the frictionless static state moved "
+                                          "it 0.9 mm sideways")
+            assert "without friction ('c' μ = 0)" in warnings[0]
+    # The frictional loading: not judged (with friction its state is never frictionless).
+    rough.initial = InitialSpec(loading="frictional")
+    refusal, warnings = drift(rough, {"block": (0.9e-3, sink)})
+    assert refusal is None and warnings == []

@@ -28,7 +28,7 @@ from breakwater.outputs.staticsummary import resolution_warnings, static_summary
 from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
-from breakwater.statics.rigidmodes import frictionless_drift
+from breakwater.statics.rigidmodes import DriftError, drift, sideways
 from breakwater.stepping.stepsize import StepSize
 
 __all__ = ["restore", "start"]
@@ -63,9 +63,12 @@ def start(r: Session) -> None:
     init = initial_state(m)
     st.static_iterations = init.iterations
     log.info("static: %d Newton iterations (%s)", st.static_iterations, init.kind)
-    if init.kind == "frictionless":
-        for line in frictionless_drift(m, init.u):
-            log.warning("%s", line)
+    moved = sideways(m, init.u) if init.kind == "frictionless" else {}
+    refusal, warnings = drift(m, moved)
+    if refusal is not None:  # friction would hold it there: the frictional loading
+        raise DriftError(refusal)
+    for line in warnings:
+        log.warning("%s", line)
     r.stepped = x = Stepped(m, r.time, r.output, r.directory)
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
@@ -78,6 +81,9 @@ def start(r: Session) -> None:
     interface = interface_state(s.contacts, s.u)
     st.static = static_summary(m, row, interface, st.static_iterations, s.contacts)
     st.static.update(init.summary())
+    if moved:  # bodies held by contact alone in a frictionless state: (sideways, sinking)
+        st.static["sideways_drift"] = {k: {"sideways": a, "sinking": b}
+                                       for k, (a, b) in moved.items()}
     st.contact = sm.quality_inputs(s.contacts, s.u)
     if m.pairs:  # a tetrahedral interface's pressure along its mid z, for the figure
         key = f"contact_{s.contacts[0].name}"

@@ -20,6 +20,10 @@ no fixed group at all):
 - :func:`loose_modes` — a body whose own fixed groups leave a mode free that the group
   holds: only its contact holds it there, by friction along the interface and the
   normal contact across it (a frictionless or detached body drifts): warned.
+
+And one on a static state: :func:`drift` — a body held by contact alone that a
+frictionless state moved sideways (nearly indeterminate there): refused where friction
+would hold it (the frictional loading), warned where μ = 0.
 """
 
 from __future__ import annotations
@@ -30,13 +34,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 from mpi4py import MPI
 
+from breakwater.common.errors import BreakwaterError
+
 if TYPE_CHECKING:
     from dolfinx import fem
 
     from breakwater.model.model import ContactModel
 
-__all__ = ["DRIFT", "FREE", "free_mode", "frictionless_drift", "joined", "loose_modes",
-           "static_needed"]
+__all__ = ["DRIFT", "FREE", "DriftError", "drift", "free_mode", "joined", "loose_modes",
+           "sideways", "static_needed"]
 
 FREE = 1e-9
 """A mode is free when G's eigenvalue along it is below this times G's largest (G counts
@@ -45,7 +51,8 @@ on the meshes measured)."""
 
 DRIFT = 0.1
 """A body held by contact alone that a frictionless static state moves sideways by more
-than this times its sinking is warned about (:func:`frictionless_drift`)."""
+than this times its sinking is refused where friction would hold it, else warned about
+(:func:`drift`; the shipped frictionless cases move by 1e-4 of it or less)."""
 
 _AXES = "xyz"
 
@@ -237,38 +244,78 @@ def loose_modes(model: ContactModel) -> list[str]:
     return out
 
 
-def frictionless_drift(model: ContactModel, u: list[fem.Function]) -> list[str]:
-    """One warning per body with no fixed group that a frictionless static state moved sideways.
+class DriftError(BreakwaterError):
+    """A frictionless static state moved a body that friction would hold (:func:`drift`)."""
 
-    Only where some pair has friction (the case could have had the frictional state).
-    A body held by contact alone, frictionless, is held along the interface by nothing
-    but the shape of its support: its state is nearly indeterminate there, and the
-    discretisation's tangential out-of-balance moves it. Measured: the Goda caisson
-    meshed apart (``examples/goda_apart``) moved 1e-9 m; the same ``.geo`` meshed in
-    quadrilaterals moved it 0.90 mm, six times its sinking, and its gauges' peaks read
-    1.54 mm for 2.44 (2026-11-28). Sideways is across gravity (none: no warning); the
-    move is the mean of the body's nodal displacements (owned nodes, every rank).
+
+def sideways(model: ContactModel, u: list[fem.Function]) -> dict[str, tuple[float, float]]:
+    """Each body with no fixed group: its sideways move and sinking (m) in a state (collective).
+
+    Sideways is across gravity, sinking along it; the move is the mean of the body's
+    nodal displacements (owned nodes, every rank). Empty without gravity.
     """
     g = np.asarray(model.gravity.value, dtype=float)
-    rough = any(float(p.law.friction.μ.value) > 0 for p in model.pairs) or any(
-        s.friction for s in model.surface_pairs)
-    if not rough or not np.linalg.norm(g) > 0:
-        return []
+    if not np.linalg.norm(g) > 0:
+        return {}
     down = g / np.linalg.norm(g)
-    out = []
+    out = {}
     for body, f in zip(model.bodies, u, strict=True):
         if model.fixed_on(body.spec.name):
             continue
         owned = f.x.array.reshape(-1, model.gdim)[:f.function_space.dofmap.index_map.size_local]
         mean = model.comm.allreduce(owned.sum(axis=0)) / max(model.comm.allreduce(len(owned)), 1)
         sink = float(mean @ down)
-        side = float(np.linalg.norm(mean - sink * down))
-        if side > DRIFT * abs(sink) and side > 0:
-            out.append(f"bodies.{body.spec.name}: the frictionless static state moved it "
-                       f"{side:.3g} m sideways, {side / max(abs(sink), 1e-300):.3g} times as "
-                       f"far as it sank ({sink:.3g} m): held by contact alone, its "
-                       "frictionless equilibrium is nearly indeterminate along the "
-                       "interface, and the dynamics starts where the mesh's asymmetry left "
-                       "it (its probes' displacements include the move); [initial] loading "
-                       "= \"frictional\" (the default) keeps it in place")
+        out[body.spec.name] = (float(np.linalg.norm(mean - sink * down)), sink)
     return out
+
+
+def _friction(model: ContactModel, name: str) -> list[tuple[str, float]]:
+    """The contact pairs of a body and their friction coefficients μ."""
+    i = model.body(name).index
+    pairs = [(p.spec.interface, float(p.law.friction.μ.value)) for p in model.pairs
+             if i in (p.slave, p.master)]
+    return pairs + [(s.name, float(s.friction)) for s in model.surface_pairs
+                    if i in (model.body(s.slave).index, model.body(s.master).index)]
+
+
+def drift(model: ContactModel, moved: dict[str, tuple[float, float]]
+          ) -> tuple[str | None, list[str]]:
+    """Bodies a frictionless static state moved sideways by more than DRIFT of their sinking.
+
+    ``moved`` is :func:`sideways` of the state. A body held by contact alone,
+    frictionless, is held along the interface by nothing but the shape of its support:
+    its state is nearly indeterminate there, and the discretisation's tangential
+    out-of-balance moves it. Measured (2026-11-28): the Goda caisson meshed apart
+    (``examples/goda_apart``, triangles) moved 1.4e-9 m, 9.3e-6 of its sinking; the
+    same ``.geo`` meshed in quadrilaterals moved 0.90 mm, 5.9 times its 0.15 mm
+    sinking, and its gauges' peaks read 1.54 mm for 2.44. Where one of the body's pairs
+    has friction and the case asked for ``[initial] loading = "frictionless"``, the
+    frictional state would hold it: refused (the run would start from a state the case
+    could have had right). Where none has (μ = 0), the drift is the physics (no
+    frictionless equilibrium holds it better): warned.
+
+    Returns:
+        The refusal (one line, or None) and the warnings (one line each).
+    """
+    refusal, warnings = None, []
+    for name, (side, sink) in moved.items():
+        if not (side > DRIFT * abs(sink) and side > 0):
+            continue
+        pairs = _friction(model, name)
+        rough = [(p, mu) for p, mu in pairs if mu > 0]
+        what = (f"bodies.{name}: the frictionless static state moved it {side * 1e3:.3g} mm "
+                f"sideways, {side / max(abs(sink), 1e-300):.3g} times as far as it sank "
+                f"({sink * 1e3:.3g} mm): held by contact alone")
+        if rough and model.initial.loading == "frictionless":
+            law = ", ".join(f"'{p}' μ = {mu:g}" for p, mu in rough)
+            refusal = refusal or (
+                f"{what}, its frictionless equilibrium is nearly indeterminate along the "
+                "interface, and the run would start from where the mesh's asymmetry left "
+                f"it; [initial] loading = \"frictional\" (the default with friction: {law}) "
+                "gives the state friction holds")
+        elif not rough:
+            law = ", ".join(f"'{p}'" for p, _ in pairs)
+            warnings.append(f"{what}, without friction ({law} μ = 0) nothing but the shape "
+                            "of its support holds it along the interface: the run starts "
+                            "from there (its probes' displacements include the move)")
+    return refusal, warnings
