@@ -154,7 +154,6 @@ class ConstantBulk:
         self.problem, self.bcs = problem, list(bcs)
         self._bulk: PETSc.Mat | None = None
         self._fresh = True  # the next Jacobian is a solve's first
-        self.skipped = 0  # Jacobians left as the last (their factorisation kept)
         self._kept = False  # the kept matrix holds this solve's cell part
         cell = [i for i in F.integrals() if i.integral_type() == "cell"]
         rest = [i for i in F.integrals() if i.integral_type() != "cell"]
@@ -227,7 +226,6 @@ class ConstantBulk:
         if self._unchanged():
             # The same Jacobian (a frictionless contact whose closed points stay): J left
             # as it is keeps its LU factors (PETSc's PCSetUp sees an unchanged matrix).
-            self.skipped += 1
             return
         if not self._kept:
             self._keep(J)
