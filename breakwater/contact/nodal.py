@@ -304,10 +304,14 @@ class NodalContactForces:
         the Newton then solves on the nodes in contact alone (a rocking caisson lifts a
         part of its base), instead of the whole ``1 + X ∂f_c/∂y``.
         """
+        return tangent_block(self._node_tangents(y), self._run_slave, self._run_master, self.n)
+
+    def _node_tangents(self, y: np.ndarray) -> np.ndarray:
+        """The node tangents W at y (:func:`nodal_tangents`, into the kept array)."""
         nodal_state(y, self._pos, self._base, *self._coefficients, self._U, self._V)
         nodal_tangents(self._U, self._V, self._node, self._weight, self._normal, self._runs,
                        *self._law, *self._coefficients, self._W)
-        return tangent_block(self._W, self._run_slave, self._run_master, self.n)
+        return self._W
 
     def jump_jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """∂f_c/∂y at y as the node tangents: ``(W, slave, master)`` (a copy of W).
@@ -315,10 +319,7 @@ class NodalContactForces:
         ∂f_c/∂y = −Dᵀ W D with D the jumps of the nodes' unknowns
         (:mod:`breakwater.stepping.jumpsystem`; the blocks of :meth:`active_jacobian`).
         """
-        nodal_state(y, self._pos, self._base, *self._coefficients, self._U, self._V)
-        nodal_tangents(self._U, self._V, self._node, self._weight, self._normal, self._runs,
-                       *self._law, *self._coefficients, self._W)
-        return self._W.copy(), self._run_slave, self._run_master
+        return self._node_tangents(y).copy(), self._run_slave, self._run_master
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
                  dv_dx: float) -> int:

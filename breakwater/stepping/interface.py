@@ -410,9 +410,7 @@ class ContactSum:
 
         :mod:`breakwater.stepping.jumpsystem`'s form; None if a provider has none.
         """
-        if not self.providers or not all(getattr(c, "primal", False)
-                                         and hasattr(c, "jump_jacobian")
-                                         for c in self.providers):
+        if not self.providers or not all(hasattr(c, "jump_jacobian") for c in self.providers):
             return None
         with self.timings("interface_assembly"):
             parts = [c.jump_jacobian(y) for c in self.providers]  # type: ignore[attr-defined]
