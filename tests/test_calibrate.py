@@ -22,6 +22,7 @@ from breakwater.statics.calibrate import (
     HorizontalStiffness,
     calibrate_shear_modulus,
 )
+from breakwater.stepping.snesassembly import ConstantBulk
 
 COMM = MPI.COMM_WORLD
 
@@ -79,6 +80,43 @@ def test_solves_on_a_kept_factorisation(layer_model, monkeypatch):
         monkeypatch.setattr(calibrate_module, "REUSE_MAX_IT", 1)
         assert problem.stiffness("b", 1e6) == pytest.approx(layer_stiffness(1e6), rel=1e-9)
         assert problem.factorised_at == 1e6 and problem.reused == 3
+    finally:
+        problem.destroy()
+
+
+def test_the_scaled_stiffness_is_the_assembled_one(layer_model, monkeypatch):
+    # After the first factorisation K(G) is K(G₀) + (G/G₀ − 1) K_b, not assembled: equal
+    # to dolfinx's assembly at G to round-off. Its only error is the round-off of the
+    # interface springs in K_b = K(G₀) − K(0) (1e-16 of k_t = 1e10 on the rows they
+    # share with the layer), times |G/G₀ − 1| ≤ 99: 1e-13 of ‖K‖ (observed ≤ 2e-16, at G/G₀ = 99).
+    # A calibration then assembles the cells twice (K(G₀) and K(0)), not once a solve.
+    wholes = []
+    whole = ConstantBulk.assemble_whole
+    monkeypatch.setattr(ConstantBulk, "assemble_whole",
+                        lambda self, J: (wholes.append(1), whole(self, J)))
+    problem = HorizontalStiffness(layer_model, "a", tangential_penalty=K_T_FACTOR)
+    try:
+        problem.stiffness("b", 1e7)
+        scaled = problem.scaled
+        assert scaled is not None and scaled.G0 == 1e7 and len(wholes) == 2
+        A = problem.solver.problem.A
+        assembled, taken = A.duplicate(), A.duplicate()
+        assembled.setLGMap(*A.getLGMap())
+        for G in (3e6, 4e7, 1.01e5, 9.9e8):
+            problem.set_shear_modulus("b", G)
+            problem.solver.jacobian.assemble_whole(assembled)
+            scaled.shear_modulus = G
+            scaled(None, None, taken, None)
+            taken.axpy(-1.0, assembled)
+            assert taken.norm() <= 1e-13 * assembled.norm()
+        problem.set_shear_modulus("b", 1e7)
+        wholes.clear()
+        for G in (3e6, 4e7, 5e5, 2e6):  # reused, reused, factorised again, reused
+            assert problem.stiffness("b", G) == pytest.approx(layer_stiffness(G), rel=1e-9)
+        assert problem.reused == 3 and problem.factorised_at == 5e5 and not wholes
+        assert problem.scaled is scaled  # 5e5 is within its RATIO of G₀
+        for M in (assembled, taken):
+            M.destroy()
     finally:
         problem.destroy()
 

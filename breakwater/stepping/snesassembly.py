@@ -209,16 +209,11 @@ class ConstantBulk:
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         fem_petsc.assign(x, p.u)
         if self._fresh:
-            # A solve's first Jacobian: the cell part and the rest assembled into J, each
-            # entry summed as dolfinx sums it (a linear solve takes no other). A second
-            # iteration keeps the cell part from then on (_keep). J's first assembly
-            # also fixes its nonzero pattern, which the kept part's matrix shares (PETSc
-            # drops the preallocated entries a final assembly leaves unused).
-            J.zeroEntries()
-            fem_petsc.assemble_matrix(J, self.a_cell, self.bcs, diag=1.0)
-            J.assemble(PETSc.Mat.AssemblyType.FLUSH)  # the diagonal was set: now adds
-            fem_petsc.assemble_matrix(J, self.a_rest, self.bcs, diag=1.0)
-            J.assemble()
+            # A solve's first Jacobian: assembled whole (a linear solve takes no other).
+            # A second iteration keeps the cell part from then on (_keep). J's first
+            # assembly also fixes its nonzero pattern, which the kept part's matrix
+            # shares (PETSc drops the preallocated entries a final assembly leaves unused).
+            self.assemble_whole(J)
             self._fresh, self._kept = False, False
             self._rest_values = None
             self._unchanged()  # the other integrals' values now, for the next iteration
@@ -231,6 +226,21 @@ class ConstantBulk:
             self._keep(J)
         assert self._bulk is not None
         self._bulk.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)  # type: ignore[arg-type]
+        fem_petsc.assemble_matrix(J, self.a_rest, self.bcs, diag=1.0)
+        J.assemble()
+
+    def assemble_whole(self, J: PETSc.Mat) -> None:
+        """The Jacobian at the problem's current unknowns into J, each entry as dolfinx sums it.
+
+        The cell part, then the other integrals, with the Dirichlet rows and columns.
+        """
+        J.zeroEntries()
+        if not self.split:
+            fem_petsc.assemble_matrix(J, self.problem.J, self.bcs, diag=1.0)
+            J.assemble()
+            return
+        fem_petsc.assemble_matrix(J, self.a_cell, self.bcs, diag=1.0)
+        J.assemble(PETSc.Mat.AssemblyType.FLUSH)  # the diagonal was set: now adds
         fem_petsc.assemble_matrix(J, self.a_rest, self.bcs, diag=1.0)
         J.assemble()
 
