@@ -53,8 +53,13 @@ class Elimination:
     #: built whole: E, X and the copy kept, three N × n_I arrays of 8 bytes per rank.
     X_MEMORY = 0.5
     #: Bytes per rank of one chunk's right-hand sides and solutions when X is built in
-    #: chunks (at least one column).
-    CHUNK_BYTES = 2.0**28
+    #: chunks (at least one column): 104 columns of ``goda3d`` at refinement 2.3.
+    CHUNK_BYTES = 2.0**29
+    #: MUMPS's ICNTL(27), right-hand sides solved together (each block reads the factors
+    #: once), at most: X_II of ``goda3d`` at refinement 1.5 (2108 columns, 105 084 rows)
+    #: took 11.9 s in chunks of 52 with MUMPS's default block, 9.0 s in chunks of 208
+    #: with blocks of 128 (2026-11-28).
+    RHS_BLOCK = 128
     #: X of at least this many entries (N × n_I) is announced before its solves: the 3D
     #: Goda case's at refinement 1.5 (2.2e8) took 40 s of a first step.
     ANNOUNCE = 5e7
@@ -163,6 +168,7 @@ class Elimination:
             F.matSolve(E, X)
             E.destroy()
             return X
+        F.setMumpsIcntl(27, min(hi - lo, self.RHS_BLOCK))
         host = comm.rank == 0
         Et = PETSc.Mat().createAIJ(((hi - lo if host else 0, hi - lo), (n if host else 0, n)),
                                    nnz=(1, 1), comm=comm)  # type: ignore[arg-type]
