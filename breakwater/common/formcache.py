@@ -96,7 +96,7 @@ def _claiming(get: Callable[..., Any]) -> Callable[..., Any]:
         claim = key = None
         with contextlib.suppress(Exception):
             module_name = kwargs.get("module_name", args[0] if args else None)
-            names = kwargs.get("object_names", args[1] if len(args) > 1 else None)
+            names = kwargs.get("object_names", args[1] if len(args) > 1 else ())
             cache_dir = kwargs.get("cache_dir", args[2] if len(args) > 2 else None)
             if isinstance(module_name, str) and cache_dir is not None:
                 claim = pathlib.Path(cache_dir).joinpath(module_name).with_suffix(".c")
