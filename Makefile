@@ -33,14 +33,14 @@ run: $(STAMP)
 test: test-serial test-mpi
 
 test-serial: $(STAMP)
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q --durations=25 tests
 
 # Each test has its own time limit (tests/mpi_harness.py: a rank left waiting or a hang
 # stops every rank with the test's name); the whole run's limit is only a backstop.
 test-mpi: $(STAMP)
-	timeout 3600 $(BIN)/mpiexec -n $(NP) $(BIN)/python -m pytest -q -m "not serial" tests
+	timeout 3600 $(BIN)/mpiexec -n $(NP) $(BIN)/python -m pytest -q --durations=25 -m "not serial" tests
 	# 3D on 4 ranks (oversubscribed on a 2-core machine): partition independence.
-	timeout 900 $(BIN)/mpiexec -n 4 $(BIN)/python -m pytest -q -m "not serial" tests/test_threed.py
+	timeout 900 $(BIN)/mpiexec -n 4 $(BIN)/python -m pytest -q --durations=25 -m "not serial" tests/test_threed.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check breakwater forms meshes tests docs/conf.py
