@@ -600,3 +600,75 @@ def test_a_second_run_in_a_locked_folder_is_refused(shared_dir, capsys):
     if COMM.rank == 0:
         assert _summary(out)["status"] == "finished"
         assert not (out / folderlock.LOCK).exists()  # given back, the file removed
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("where", ["start", "case", "lock", "end"])
+def test_full_disk_in_the_study_table(where, shared_dir, capsys, monkeypatch):
+    """``sweep.csv`` (or its lock file) meets a full disk on one rank: before the cases
+    (``start``, rank 0), after a case (``case``: the last rank's group's table; the lock
+    file ``lock``, there too) or at the end (``end``, rank 0). Every rank stops with exit
+    1 and one line naming the file and the cause; no rank is left in a collective (the
+    harness's time limit fails a hang). Run again with room, the study goes on.
+
+    Before: after a case on 2 ranks, the failing rank left the loop with the error while
+    the other went on to the end's broadcast (exit 0 on rank 0, 1 on rank 1, no line);
+    the lock file's error was a bare ``OSError`` line.
+    """
+    from breakwater.studies import sweep, sweeptable
+
+    case, out = _case(shared_dir), shared_dir / "out"
+    study = shared_dir / "study.toml"
+    if COMM.rank == 0:
+        study.write_text(f'base = "{case.name}"\n[grid]\n"time.dt" = [1e-4, 1.5e-4]\n')
+    COMM.barrier()
+    table, lock = out / "sweep.csv", out / ".sweep.lock"
+    rank = {"start": 0, "end": 0}.get(where, COMM.size - 1)  # the rank that fails
+    state = {"calls": 0, "end": False, "done": False}
+    write_table, replace, opened = sweep.write_table, os.replace, open
+
+    def tracked(*args: Any) -> Any:
+        state["end"] = len(args) == 5  # finish() passes the failures
+        state["calls"] += 1
+        return write_table(*args)
+
+    def due() -> bool:
+        """Whether this call is the one that fails (once)."""
+        if state["done"] or COMM.rank != rank:
+            return False
+        due = {"start": state["calls"] == 1, "end": state["end"],
+               "case": state["calls"] == (1 if COMM.rank else 2) and not state["end"],
+               "lock": state["calls"] == (1 if COMM.rank else 2) and not state["end"]}
+        state["done"] = due[where]
+        return due[where]
+
+    def full_replace(src: Any, dst: Any) -> None:
+        if str(dst) == str(table) and where != "lock" and due():
+            raise OSError(errno.ENOSPC, FULL)
+        replace(src, dst)
+
+    def full_open(path: Any, *args: Any, **kwargs: Any) -> Any:
+        if str(path) == str(lock) and where == "lock" and due():
+            raise OSError(errno.ENOSPC, FULL, str(path))
+        return opened(path, *args, **kwargs)
+
+    monkeypatch.setattr(sweep, "write_table", tracked)
+    monkeypatch.setattr(files.os, "replace", full_replace)
+    monkeypatch.setattr(sweeptable, "open", full_open, raising=False)
+    args = ["sweep", str(study), "--out", str(out), "--ranks-per-case", "1"]
+    code, err = _main(args, capsys)
+    codes = COMM.allgather(code)
+    assert codes == [1] * COMM.size, (codes, err)
+    assert state["done"] == (COMM.rank == rank)
+    name = lock if where == "lock" else table
+    if COMM.rank == 0:
+        assert err == f"breakwater: error: cannot write {name}: {FULL}\n", err
+    COMM.barrier()
+    monkeypatch.undo()
+    code, err = _main(args, capsys)
+    assert code == 0, err
+    if COMM.rank == 0:
+        import csv
+
+        with open(table, newline="") as f:
+            assert [r["status"] for r in csv.DictReader(f)] == ["finished"] * 2

@@ -44,7 +44,7 @@ import shutil
 import signal
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -431,6 +431,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     group = comm.Split(comm.rank // ranks_per_case, comm.rank)
     counter = _Counter(comm)
     signum, failure = 0, {}  # failure: the cases whose record could not be written
+    unwritten: list[str] = []  # the table's write that failed (a full disk), its line
     settle_signal_handlers()  # gmsh's first initialisation, before the signals are caught
     try:
         with StopSignal(poll=counter.stopped, post=counter.stop) as stop:
@@ -446,13 +447,16 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
                     record = _run_case(cases[j], p, fingerprints[j], folder / p.folder, group)
                 except KeyboardInterrupt:  # the table says so too, then it goes on
                     if group.rank == 0:
-                        write_table(folder, points, keys, fingerprints)
+                        with contextlib.suppress(OutputError):  # (the interrupt first)
+                            write_table(folder, points, keys, fingerprints)
                     raise
                 except OutputError as e:  # its record not written (a full disk): the
                     failure = {p.folder: str(e)}  # group stops, the study fails after
                     break  # the other groups' cases, on every rank
+                if not _table_written(group, folder, points, keys, fingerprints,
+                                      unwritten):
+                    break  # (as a record's full disk: the study fails after the others)
                 if group.rank == 0:
-                    write_table(folder, points, keys, fingerprints)
                     tail = f": {record['error']}" if record["error"] else ""
                     say(f"  {p.folder}: {record['status']} in {record['wall_time']:.1f} s"
                         f"{tail}")
@@ -469,6 +473,7 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         comm.Barrier()
         signum = comm.allreduce(signum, op=MPI.MAX)
         failure = {k: v for f in comm.allgather(failure) for k, v in f.items()}
+        unwritten = [line for u in comm.allgather(unwritten) for line in u]
         counter.free()
         group.Free()
 
@@ -523,7 +528,29 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         return outcome
 
     outcome = on_rank_zero(comm, finish)
-    if failure:  # as a run's full disk: the study stops in one line, exit 1
-        raise OutputError(next(iter(failure.values())))
+    if failure or unwritten:  # as a run's full disk: the study stops in one line, exit 1
+        raise OutputError(next(iter(failure.values())) if failure else unwritten[0])
     return outcome
+
+
+def _table_written(group: MPI.Comm, folder: pathlib.Path, points: Sequence[Point],
+                   keys: Sequence[str], fingerprints: Sequence[str], unwritten: list[str]
+                   ) -> bool:
+    """Rewrite ``sweep.csv`` after a group's case (its rank 0); whether it was written.
+
+    A write that fails (a full disk, on ``sweep.csv`` or its lock file) appends its line
+    to ``unwritten`` and stops the group (every rank of it agrees: collective on
+    ``group``); the study then fails in that line, after the other groups' cases. It
+    used to leave the loop on the failing rank alone, the others waiting for it.
+    """
+    line = None
+    if group.rank == 0:
+        try:
+            write_table(folder, points, keys, fingerprints)
+        except OutputError as e:
+            line = str(e)
+    line = group.bcast(line, root=0)
+    if line is not None:
+        unwritten.append(line)
+    return line is None
 

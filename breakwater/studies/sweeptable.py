@@ -94,8 +94,14 @@ def _cell(value: Any) -> str:
 
 @contextlib.contextmanager
 def _locked(out: pathlib.Path) -> Iterator[None]:
-    """An exclusive lock on ``out/.sweep.lock`` (groups writing sweep.csv in turn)."""
-    with open(out / LOCK, "a") as f:
+    """An exclusive lock on ``out/.sweep.lock`` (groups writing sweep.csv in turn).
+
+    Raises:
+        OutputError: The lock file cannot be created (``cannot write <path>: ...``).
+    """
+    with files.writing(out / LOCK):
+        f = open(out / LOCK, "a")  # (closed below)
+    with f:
         try:
             fcntl.flock(f, fcntl.LOCK_EX)
         except OSError:  # a file system without locks: the final table is still whole
