@@ -105,10 +105,10 @@ def _overrides(args: argparse.Namespace) -> list[str]:
     return out
 
 
-def _load(args: argparse.Namespace) -> Case:
+def _load(args: argparse.Namespace, static: bool = False) -> Case:
     from breakwater.casefile.case import load_case
 
-    return load_case(args.case, _overrides(args))
+    return load_case(args.case, _overrides(args), static=static)
 
 
 def _inputs(args: argparse.Namespace, case: Case) -> list[pathlib.Path]:
@@ -266,7 +266,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from breakwater.statics.calibrate import HorizontalStiffness
 
     comm = MPI.COMM_WORLD
-    case = _load(args)
+    case = _load(args, static=True)  # (no [time] needed: a static solve)
     cal = case.calibration
     if not cal.body or not cal.structure:
         raise CaseError("calibration.body/calibration.structure: the case does not say "

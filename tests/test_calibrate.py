@@ -207,3 +207,32 @@ def test_a_long_calibration_reports_its_solves(layer_model, monkeypatch, caplog)
     G, K = r.history[-1]
     assert f"solve {r.iterations}, G = {G:.6g} Pa: K = {K:.6g} N/m" in solves[-1]
     assert any(m.startswith("Newton of calibration: iteration 1, residual") for m in lines)
+
+
+def test_a_case_without_time_calibrates(goda, shared_dir, capsys):
+    """Goda's case without its ``[time]`` table (a case written for a calibration):
+    ``calibrate`` takes it (exit 0), to the same G as the whole case (rel 1e-12: the
+    same mesh, model and solves; the time step and the loads are not used), while
+    ``show-case`` and ``run`` refuse it in one line as before.
+
+    Before: ``calibrate`` refused it too, ``time: missing required key``.
+    """
+    from breakwater import cli
+    from breakwater.casefile.case import builtin_case
+
+    case, data = goda
+    text = builtin_case("goda").read_text()
+    path = shared_dir / "calibration.toml"
+    if COMM.rank == 0:
+        path.write_text(text[:text.index("[time]\n")] + text[text.index("[output]\n"):])
+    COMM.barrier()
+    for command in ("show-case", "run"):
+        assert cli.main([command, str(path)]) == 2
+        err = capsys.readouterr().err
+        if COMM.rank == 0:
+            assert err == f"breakwater: error: {path}: time: missing required key\n", err
+    assert cli.main(["calibrate", str(path), "--quiet"]) == 0
+    static = load_case(path, static=True)
+    assert not static.loads
+    G = static.calibrate(static.read_mesh(COMM)).shear_modulus
+    assert G == pytest.approx(case.calibrate(data).shear_modulus, rel=1e-12)

@@ -279,13 +279,18 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
 
 # --- the entry point --------------------------------------------------------------------
 
-def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] = ()) -> Case:
+def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] = (),
+              *, static: bool = False) -> Case:
     """Read, override and validate a case.
 
     Args:
         path: A case file; a built-in case name (``"goda"``); None for the default
             (Goda) case.
         overrides: ``key=value`` strings (dotted paths, TOML values).
+        static: For a static solve alone (``calibrate``): a case without ``[time]``
+            is read with :data:`STATIC_TIME` and without its loads (neither is used;
+            the loads' checks against the time step would refuse it). A run refuses
+            it: ``time: missing required key``.
 
     Returns:
         The validated case.
@@ -295,8 +300,20 @@ def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] =
 
     """
     case: Case = _SCHEMA.load(_case_file(path), overrides,
-                              check=lambda c: _check_groups(c, _mesh_groups(c.mesh)))
+                              check=lambda c: _check_groups(c, _mesh_groups(c.mesh)),
+                              prepare=_static_time if static else None)
     return case
+
+
+STATIC_TIME = {"dt": 0.5, "end_time": 1.0}
+"""The ``[time]`` of a case read for a static solve alone, when it has none (unused)."""
+
+
+def _static_time(raw: dict[str, Any]) -> None:
+    """A case without ``[time]`` read for a static solve: :data:`STATIC_TIME`, no loads."""
+    if "time" not in raw:
+        raw["time"] = dict(STATIC_TIME)
+        raw["loads"] = {}
 
 
 def _case_file(path: str | pathlib.Path | None) -> pathlib.Path:

@@ -67,7 +67,8 @@ class Schema:
     name_key: str | None = "name"
 
     def load(self, file: pathlib.Path, overrides: Sequence[str] = (),
-             check: Callable[[Any], None] | None = None) -> Any:
+             check: Callable[[Any], None] | None = None,
+             prepare: Callable[[dict[str, Any]], None] | None = None) -> Any:
         """Read ``file`` (and what it extends), apply the overrides, build the root.
 
         Args:
@@ -75,6 +76,8 @@ class Schema:
             overrides: ``key=value`` strings (dotted paths, TOML values).
             check: Further checks of the built object (raising :class:`InvalidField`
                 with a path from the root).
+            prepare: Changes the file's table (with what it extends) before the
+                overrides (``calibrate``: a ``[time]`` it does not use, when none).
 
         Raises:
             CaseError: One line naming the file (or ``--set``), the field and the problem
@@ -82,14 +85,17 @@ class Schema:
 
         """
         try:
-            return self._load(file, overrides, check)
+            return self._load(file, overrides, check, prepare)
         except CaseError as e:
             raise CaseError(printable(str(e))) from None
 
     def _load(self, file: pathlib.Path, overrides: Sequence[str],
-              check: Callable[[Any], None] | None) -> Any:
+              check: Callable[[Any], None] | None,
+              prepare: Callable[[dict[str, Any]], None] | None) -> Any:
         origins: dict[str, str] = {}
         raw = self._load_raw(file, (), origins)
+        if prepare is not None:
+            prepare(raw)
         merged: list[str] = []
         for spec in overrides:
             apply_override(self.root, self.paths, raw, spec, origins, merged)
