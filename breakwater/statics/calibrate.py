@@ -262,18 +262,16 @@ class ScaledStiffness:
         A = solver.problem.A
         self.G0 = self.shear_modulus = shear_modulus
         self._K0 = A.copy()
-        zero = A.duplicate()
-        zero.setLGMap(*A.getLGMap())
+        #: The operator of a reused factorisation's solves (A's pattern); K(0) first.
+        self.operator = A.duplicate()
+        self.operator.setLGMap(*A.getLGMap())
         set_shear_modulus(0.0)
         try:
-            solver.jacobian.assemble_whole(zero)
+            solver.jacobian.assemble_whole(self.operator)
         finally:
             set_shear_modulus(shear_modulus)
         self._Kb = A.copy()
-        self._Kb.axpy(-1.0, zero, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-        zero.destroy()
-        #: The operator of a reused factorisation's solves (A's pattern).
-        self.operator = A.duplicate()
+        self._Kb.axpy(-1.0, self.operator, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
 
     def holds(self, shear_modulus: float) -> bool:
         """Whether K at ``shear_modulus`` is taken from K(G₀) (within :attr:`RATIO`)."""
