@@ -41,6 +41,7 @@ from breakwater.model.model import (
 from breakwater.statics.initial import initial_state
 from breakwater.stepping.gn22 import GN22, GN22Parameters
 from breakwater.stepping.solver import NewtonOptions
+from breakwater.stepping.stateproducts import StateProducts
 
 COMM = MPI.COMM_WORLD
 RTOL = 1e-10  # of the ledger's energy scale (see the module docstring)
@@ -137,19 +138,23 @@ def test_source_is_checked(folder: pathlib.Path) -> None:
     reference.destroy()
 
 
-def _abs_form(csr: list[np.ndarray], which: int, x: np.ndarray, y: np.ndarray) -> float:
-    """|x|ᵀ|A||y| for A = M (which 2) or K (3) of CSR arrays ``csr``."""
-    ptr, col, values = csr[0], csr[1], csr[which]
+def _abs_form(products: StateProducts, which: int, x: np.ndarray, y: np.ndarray) -> float:
+    """|x|ᵀ|A||y| for A = M (which 2) or K (3) of the products' CSR arrays, this rank's rows.
+
+    Collective on several ranks (y's ghosts).
+    """
+    ptr, col, values = products.csr[0], products.csr[1], products.csr[which]
     rows = np.repeat(np.arange(len(ptr) - 1), np.diff(ptr))
-    return float(np.abs(x) @ np.bincount(rows, np.abs(values) * np.abs(y[col]),
-                                         minlength=len(x)))
+    return float(np.abs(x) @ np.bincount(rows, np.abs(values) * np.abs(
+        products.with_ghosts(y)[col]), minlength=len(x)))
 
 
 def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
-    # On one rank the ledger's bulk terms come from the state's products, formed once
+    # The ledger's bulk terms come from the state's products (on any number of ranks:
+    # each rank's rows, their ghost columns scattered), formed once
     # per accepted step for the predictor too (MatrixTerms._local_sums: ledger_sums,
     # Mv̄ = ½(Mv₀ + Mv₁), ...); MatMatMult of the combined vectors and NumPy's dot
-    # products (MatrixTerms.local_products, the path on several ranks) are the
+    # products (MatrixTerms.local_products, PETSc's products) are the
     # reference, at the first record and along the pendulum pulse (work, damping,
     # numerical dissipation all nonzero). Both are round-off of the same quadratic
     # forms: each row's product x·(A y) rounds by at most about n_row ε Σ_j |A_ij||y_j|
@@ -169,8 +174,8 @@ def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
     bulk = ledger.bulk
     assert type(bulk).__name__ == "MatrixTerms"
     sums = bulk._sums  # type: ignore[union-attr]
-    assert (sums is not None) == (COMM.size == 1)  # several ranks: MatMatMult (ghosts)
-    csr = sums.products.csr if sums is not None else []
+    assert sums is not None  # on any number of ranks (the rows' ghosts scattered)
+    P = sums.products
     d = model.damping
     bound = 10 * 2 * 40 * np.finfo(float).eps
     v0 = None
@@ -180,26 +185,23 @@ def test_goda_compiled_sums_equal_products(shared_dir: pathlib.Path) -> None:
         got, ref = bulk.local(k > 0), bulk.local_products(k > 0)  # type: ignore[union-attr]
         if k > 0:
             assert np.all(np.abs(ref) > 0)
-        if csr:
-            x = sums.x  # u₁, u₀, v₁, v₀, a₁, Δa
-            u, v, a, da = x[0], x[2], x[4], x[5]
-            scale = [_abs_form(csr, 2, v, v), _abs_form(csr, 3, u, u)]
-            if k > 0:
-                assert v0 is not None and np.array_equal(x[3], v0)
-                vb = 0.5 * (v0 + v)
-                k1, k2, k3, k4 = numerical.bulk_coefficients(
-                    float(stepper.dt.value), spec.beta1, spec.beta2, d.alpha, d.beta)
-                scale += [d.alpha * _abs_form(csr, 2, vb, vb) + d.beta * _abs_form(
-                    csr, 3, vb, vb), 0.0, abs(k1) * _abs_form(csr, 2, da, vb)
-                    + _abs_form(csr, 2, np.abs(k2 * a) + np.abs(k3 * da), da)
-                    + abs(k4) * _abs_form(csr, 3, da, vb)]
-                assert abs(got[3] - ref[3]) <= 1e-12 * abs(ref[3])
-            v0 = v.copy()
-            for term, (g, r, c) in enumerate(zip(got, ref, scale, strict=False)):
-                if term != 3:
-                    assert abs(g - r) <= bound * c, (k, TERMS[term], g, r, c)
-        else:
-            np.testing.assert_allclose(got, ref, rtol=1e-12, atol=0)
+        x = sums.x  # u₁, u₀, v₁, v₀, a₁, Δa
+        u, v, a, da = x[0], x[2], x[4], x[5]
+        scale = [_abs_form(P, 2, v, v), _abs_form(P, 3, u, u)]
+        if k > 0:
+            assert v0 is not None and np.array_equal(x[3], v0)
+            vb = 0.5 * (v0 + v)
+            k1, k2, k3, k4 = numerical.bulk_coefficients(
+                float(stepper.dt.value), spec.beta1, spec.beta2, d.alpha, d.beta)
+            scale += [d.alpha * _abs_form(P, 2, vb, vb) + d.beta * _abs_form(
+                P, 3, vb, vb), 0.0, abs(k1) * _abs_form(P, 2, da, vb)
+                + _abs_form(P, 2, np.abs(k2 * a) + np.abs(k3 * da), da)
+                + abs(k4) * _abs_form(P, 3, da, vb)]
+            assert abs(got[3] - ref[3]) <= 1e-12 * abs(ref[3])
+        v0 = v.copy()
+        for term, (g, r, c) in enumerate(zip(got, ref, scale, strict=False)):
+            if term != 3:
+                assert abs(g - r) <= bound * c, (k, TERMS[term], g, r, c)
         ledger.record()
     ledger.destroy()
     stepper.destroy()

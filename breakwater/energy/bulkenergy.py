@@ -18,13 +18,13 @@ quadrature, summed in another order):
 - :class:`MatrixTerms`: the fast solver's M, K and load vectors
   (:class:`~breakwater.stepping.bulk.BulkOperators`, assembled once). Per step two sparse
   products, each a batch of columns in one pass over the matrix (``MatMatMult`` with a
-  dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries. On one
-  rank, from the state's products [Mv, Ma, Ku, Kv, Ka]
-  (:mod:`breakwater.stepping.stateproducts`: one compiled pass over the matrices' CSR
-  arrays per accepted step, which the next step's predictor uses too) and the start
-  state's, kept from the last record (:func:`ledger_sums`: Mv̄ = ½(Mv₀ + Mv₁), ...; no
-  pass of its own), equal to the MatMatMult products to round-off; where the start state
-  is not the last record's, the MatMatMult products.
+  dense block): M [v₁, v̄, Δa] and K [u₁, v̄], then dot products of owned entries. Where
+  M and K share their pattern (always; on any number of ranks), from the state's
+  products [Mv, Ma, Ku, Kv, Ka] (:mod:`breakwater.stepping.stateproducts`: one compiled
+  pass over the matrices' CSR arrays per accepted step, which the next step's predictor
+  uses too) and the start state's, kept from the last record (:func:`ledger_sums`:
+  Mv̄ = ½(Mv₀ + Mv₁), ...; no pass of its own), equal to the MatMatMult products to
+  round-off; where the start state is not the last record's, the MatMatMult products.
   BulkOperators assembles M and K without the Dirichlet conditions (only the step
   matrix A has its fixed rows and columns replaced), so their quadratic forms are the
   integrals above; the fixed DOFs are zero anyway.
@@ -180,7 +180,7 @@ def ledger_sums(x: np.ndarray, P1: np.ndarray, P0: np.ndarray, loads: np.ndarray
 
 
 class StateSums:
-    """:class:`MatrixTerms`' sums on one rank, from the state's products.
+    """:class:`MatrixTerms`' sums from the state's products (this rank's share).
 
     The end state's products P₁ (:class:`~breakwater.stepping.stateproducts.StateProducts`,
     formed once per accepted step, the next step's predictor uses them too) and the start
@@ -189,7 +189,7 @@ class StateSums:
     (:meth:`MatrixTerms.local` takes the MatMatMult products then).
 
     Args:
-        products: The bulk's state products (on: one rank, one sparsity pattern).
+        products: The bulk's state products (on: one sparsity pattern).
         rows: The Functions (one per body) of u₁, u₀, v₁, v₀, a₁ and Δa.
         offsets: The bodies' ranges in the stacked vector.
         loads: The load vectors' columns (n, loads) (the caller's, refreshed in place).
@@ -237,7 +237,7 @@ class StateSums:
         x = self.x
         P1 = self.products.of(x[0], x[2], x[4])
         u0, v0, P0 = self._start
-        known = not step or (equal(u0, x[1]) and equal(v0, x[3]))
+        known = self.products.all(not step or (equal(u0, x[1]) and equal(v0, x[3])))
         out = ledger_sums(x, P1, P0, self.loads, amplitudes, k2, k3, step) if known else None
         self._keep(P1)
         return out
@@ -293,7 +293,7 @@ class MatrixTerms:
         # The loads whose field changes at given times: their columns taken again when
         # their stage changes.
         self._watch = StageWatch(m.loads)
-        # One rank: the sums from the state's products (else PETSc's products).
+        # The sums from the state's products (else PETSc's products).
         self._sums = StateSums(bulk.products, (stepper.u, u0, stepper.v, v0, stepper.a,
                                                stepper.da), self.layout.offsets,
                                self._loads) if bulk.products.on else None
@@ -354,7 +354,7 @@ class MatrixTerms:
     def sync(self) -> None:
         """The staged loads' columns taken at their current stage, without correction.
 
-        On one rank the state's products kept as the next step's start
+        The state's products kept as the next step's start
         (:meth:`StateSums.restart`).
         """
         self._refresh()
@@ -373,7 +373,7 @@ class MatrixTerms:
         return old
 
     def _local_sums(self, step: bool) -> np.ndarray:
-        """:meth:`local` on one rank: :meth:`StateSums.sums`."""
+        """:meth:`local` from the state's products: :meth:`StateSums.sums`."""
         s = self.stepper
         assert self._sums is not None
         numerical_on = "Δa" in self._columns["M"]
@@ -401,7 +401,7 @@ class MatrixTerms:
         return out
 
     def local_products(self, step: bool) -> np.ndarray:
-        """:meth:`local` from ``MatMatMult`` products and NumPy dot products (any ranks)."""
+        """:meth:`local` from ``MatMatMult`` products and NumPy dot products."""
         s = self.stepper
         x, Mx, Kx = self._products()
         u, v = x["u"], x["v"]

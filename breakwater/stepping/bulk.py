@@ -166,8 +166,8 @@ class BulkOperators:
                            out: PETSc.Vec) -> None:
         """r₀ = f(t₁) − M a₀ − C ṽ − K ũ, zero on Dirichlet rows.
 
-        With C = αM + βK this is f − M (a₀ + α ṽ) − K (ũ + β ṽ): on one rank from the
-        state's products (:attr:`products`, one pass per state), else two products.
+        With C = αM + βK this is f − M (a₀ + α ṽ) − K (ũ + β ṽ): from the state's
+        products (:attr:`products`, one pass per state), else two products.
         """
         with self.timings("bulk_products"):
             self._predictor_residual(u, v, a, dt, out)
@@ -204,7 +204,7 @@ class BulkOperators:
         """
         rows, products = self.bc_rows, self.products
         d, x, r, w = da.array, a.array, r0.array, out.array
-        if not (products.on and is_start(d, x, beta1) and not x[rows].any()):
+        if not (products.on and products.all(is_start(d, x, beta1) and not x[rows].any())):
             A.mult(da, out)
             out.axpy(-1.0, r0)
             return
@@ -218,6 +218,7 @@ class BulkOperators:
         for obj in (self.M, self.K, *self._work, *(v for _, v in self._loads)):
             if obj is not None:
                 obj.destroy()
+        self.products.destroy()
 
 
 @kernel
