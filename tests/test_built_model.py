@@ -20,7 +20,8 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.common.errors import CaseError
+from breakwater.config.runspec import InitialSpec, OutputSpec, TimeSpec
 from breakwater.model.built import REBUILD
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import (
@@ -116,3 +117,37 @@ def test_frozen_settings_say_what_to_do(obj: object, name: str, hint: str) -> No
         setattr(obj, name, 1.0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         delattr(obj, name)
+
+
+def test_initial_set_on_a_built_model(model: ContactModel) -> None:
+    """``model.initial`` is checked against the model when set, in one line.
+
+    Before, an initial velocity of a body the model does not have (a misspelt name) was
+    taken and ignored: the run started at rest; a load index beyond ``model.loads`` left
+    every load out of the static state; a velocity of 3 components on a 2D model failed
+    the run with NumPy's broadcast error.
+    """
+    kept = model.initial
+    try:
+        good = InitialSpec(velocities=(("a", (0.5, 0.0)),), loads=(0,))
+        model.initial = good
+        assert model.initial is good
+        refused = {
+            r"^initial\.velocities: no body named 'aa' \(did you mean 'a'\?\) "
+            r"\(bodies: a, b\)$": InitialSpec(velocities=(("aa", (0.5, 0.0)),)),
+            r"^initial\.velocities: body 'a' given twice$":
+                InitialSpec(velocities=(("a", (0.5, 0.0)), ("a", (0.0, 0.1)))),
+            r"^initial\.velocities: 'a': expected 2 components \(a 2D model\), got "
+            r"\[0\.5, 0\.0, 0\.0\]$": InitialSpec(velocities=(("a", (0.5, 0.0, 0.0)),)),
+            r"^initial\.loads: no load 1 in model\.loads \(indices 0 to 0\)$":
+                InitialSpec(loads=(0, 1)),
+            r"^initial\.loads: no load -1 in model\.loads": InitialSpec(loads=(-1,)),
+        }
+        for message, spec in refused.items():
+            with pytest.raises(CaseError, match=message):
+                model.initial = spec
+            assert model.initial is good  # unchanged
+        with pytest.raises(TypeError, match=r"^initial: expected an InitialSpec, got dict$"):
+            model.initial = {"undeformed": True}  # type: ignore[assignment]
+    finally:
+        model.initial = kept

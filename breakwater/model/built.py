@@ -8,7 +8,11 @@ was taken without a word and changed nothing (measured: the run's numbers those 
 μ = 0.65 to the last digit, and ``case.toml`` said 0.65), as would replacing an item of
 ``model.pairs``. Now each is refused with one line saying what to do instead
 (:data:`REBUILD`): change the case and build it again. The damping and the gravity are
-the model's settings that may change (``model.damping``, ``model.gravity``).
+the model's settings that may change (``model.damping``, ``model.gravity``), and its
+initial state (``model.initial``), checked against the model when set
+(:class:`initial_setting`): before, an initial velocity of a body the model does not
+have (``"Caisson"``) or a load index beyond ``model.loads`` was taken and ignored (the
+run started at rest, its numbers those of no velocity).
 """
 
 from __future__ import annotations
@@ -18,11 +22,17 @@ from typing import Any, ClassVar, NoReturn, overload
 
 import numpy as np
 
-__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "built_parts", "gravity_value"]
+from breakwater.common.errors import CaseError
+from breakwater.config.fields import suggest
+from breakwater.config.runspec import InitialSpec
+
+__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "built_parts", "check_initial",
+           "gravity_value", "initial_setting"]
 
 REBUILD = ("a built model's bodies, contact pairs and loads are fixed: change the case (e.g. "
            "load_case(None, ['contact.interface.friction=0.3'])), or what ContactModel is "
-           "given, and build it again (model.damping and model.gravity may be set)")
+           "given, and build it again (model.damping, model.gravity and model.initial may "
+           "be set)")
 """What to do instead of changing a part of a built model."""
 
 
@@ -111,3 +121,61 @@ def gravity_value(g: Any, gdim: int) -> np.ndarray:
             or not np.all(np.isfinite(value)):
         raise ValueError(f"gravity: expected {gdim} finite numbers (m/s²), got {g!r}")
     return value
+
+
+def check_initial(spec: Any, bodies: list[str], gdim: int, loads: int) -> InitialSpec:
+    """An initial state set on a built model (``model.initial``), checked against it.
+
+    Args:
+        spec: What was assigned.
+        bodies: The model's body names.
+        gdim: Its geometric dimension (the components of a velocity).
+        loads: Its number of loads (``InitialSpec.loads`` holds their indices).
+
+    Raises:
+        TypeError: Not an :class:`~breakwater.config.runspec.InitialSpec`.
+        CaseError: A velocity of a body the model does not have, of a body given twice
+            or not of ``gdim`` components, or a load index not in ``model.loads``
+            (one line naming the field).
+    """
+    if not isinstance(spec, InitialSpec):
+        raise TypeError(f"initial: expected an InitialSpec, got {type(spec).__name__}")
+    seen: set[str] = set()
+    for body, vector in spec.velocities:
+        if body not in bodies:
+            raise CaseError(f"initial.velocities: no body named '{body}'"
+                            f"{suggest(body, bodies)} (bodies: {', '.join(bodies)})")
+        if body in seen:
+            raise CaseError(f"initial.velocities: body '{body}' given twice")
+        seen.add(body)
+        if len(vector) != gdim:
+            raise CaseError(f"initial.velocities: '{body}': expected {gdim} components "
+                            f"(a {gdim}D model), got {list(vector)}")
+    wrong = [k for k in spec.loads or () if not 0 <= k < loads]
+    if wrong:
+        raise CaseError(f"initial.loads: no load {wrong[0]} in model.loads ("
+                        + (f"indices 0 to {loads - 1})" if loads else "the model has none)"))
+    return spec
+
+
+class initial_setting:  # a descriptor, used like a property
+    """A model's ``initial``: an InitialSpec, checked by :func:`check_initial` when set."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.private = f"_{name}"
+
+    @overload
+    def __get__(self, obj: None, owner: type) -> initial_setting: ...
+
+    @overload
+    def __get__(self, obj: object, owner: type) -> InitialSpec: ...
+
+    def __get__(self, obj: object | None, owner: type) -> initial_setting | InitialSpec:
+        if obj is None:
+            return self
+        spec: InitialSpec = getattr(obj, self.private)
+        return spec
+
+    def __set__(self, obj: Any, spec: InitialSpec) -> None:  # a ContactModel
+        names = [b.spec.name for b in obj.bodies]
+        setattr(obj, self.private, check_initial(spec, names, obj.gdim, len(obj.loads)))

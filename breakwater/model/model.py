@@ -35,7 +35,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common import formcache
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
-from breakwater.model.built import built_parts, gravity_value
+from breakwater.model.built import built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.pairs import ContactPair, PairData, SurfacePair
@@ -104,17 +104,17 @@ class ContactModel(ModelGroups):
             (:mod:`breakwater.contact.general`; the fast solver only).
 
     Attributes:
-        initial: The initial state of a run (initial velocities, the loads of the
-            static state; :mod:`breakwater.statics.initial`); set it before running.
+        initial: The initial state of a run (:mod:`breakwater.statics.initial`), set
+            before running and checked then (:func:`~breakwater.model.built.check_initial`).
         bodies, pairs, surface_pairs, loads: What was built of each (tuples; their
             settings fixed: :mod:`breakwater.model.built`).
-
     """
 
     bodies = built_parts[BodyData]()
     pairs = built_parts[PairData]()
     surface_pairs = built_parts[SurfacePair]()
     loads = built_parts[LoadData]()
+    initial = initial_setting()
 
     def __init__(
         self,
