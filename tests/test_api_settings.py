@@ -137,6 +137,22 @@ def test_the_user_path_findings() -> None:
         OutputSpec(pathlib.Path("out"), field_interval=-1)
 
 
+@pytest.mark.parametrize(("name", "why"), [
+    ("a,b", "it holds ','"), ('say "x"', """it holds '"'"""), ("a\nb", "it holds '\\n'"),
+    ("", "empty")])
+def test_a_probe_name_that_breaks_the_history_is_refused(name: str, why: str) -> None:
+    """A probe's name heads history.csv columns: a comma in it split the header (one column
+    more than the rows: read_history failed with an IndexError), a quote or a line break
+    broke the CSV, and an empty name gave ``caisson@(x, y)_ux``, a comma too."""
+    for make in (lambda: ProbeSpec(name, "caisson", (0.0, 0.1)),
+                 lambda: PairProbeSpec(name, 0, (0.0, 0.1))):
+        with pytest.raises(InvalidField, match=r"^name: ") as e:
+            make()
+        assert "cannot name history.csv columns (" + why in str(e.value)
+        assert "\n" not in str(e.value)
+    ProbeSpec("gauge top-1 é", "caisson", (0.0, 0.1))  # spaces, letters of any script
+
+
 def test_the_same_rule_as_the_reader() -> None:
     # The case file's message, the path prefixed: the one rule from both sides.
     with pytest.raises(CaseError, match=r"time\.adaptive: expected true or false, got 'no'$"):

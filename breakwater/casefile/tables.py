@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal, get_args
 
-from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.fields import InvalidField, column_name, positive, setting
 from breakwater.config.runspec import TimeSpec
 from breakwater.config.typecheck import check_fields
 from breakwater.meshes.goda import GodaGeometry
@@ -336,7 +336,8 @@ def _one_location(obj: ProbeCase | PairProbeCase) -> None:
 class ProbeCase:
     """``[output.probes.<name>]``: displacement history of a point of a body."""
 
-    name: str = setting(key=True, doc="probe name (output column prefix)")
+    name: str = setting(key=True, doc="probe name (output column prefix: no comma, double "
+                        "quote or control character)")
     body: str = setting(doc="body the point belongs to")
     group: str | None = setting(None, doc="point (0D) physical group holding the point")
     point: tuple[float, ...] | None = setting(None, unit="m", doc="coordinates of the point "
@@ -344,6 +345,7 @@ class ProbeCase:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)
         _one_location(self)
 
 
@@ -351,7 +353,8 @@ class ProbeCase:
 class PairProbeCase:
     """``[output.pair_probes.<name>]``: slip and opening of an interface point."""
 
-    name: str = setting(key=True, doc="probe name (output column prefix)")
+    name: str = setting(key=True, doc="probe name (output column prefix: no comma, double "
+                        "quote or control character)")
     pair: str = setting(doc="contact pair (its interface name; for a general pair the "
                         "point lies on its slave surface)")
     group: str | None = setting(None, doc="point (0D) physical group holding the point")
@@ -360,6 +363,7 @@ class PairProbeCase:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)
         _one_location(self)
 
 

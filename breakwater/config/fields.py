@@ -25,9 +25,9 @@ from typing import Any, Literal
 
 from breakwater.common.errors import CaseError
 
-__all__ = ["InvalidField", "alternatives", "describe", "key_field", "keyed_item", "optional",
-           "positive", "printable", "schema_keys", "setting", "suggest", "suggest_key",
-           "to_toml", "type_hints", "type_name"]
+__all__ = ["InvalidField", "alternatives", "column_name", "describe", "key_field", "keyed_item",
+           "optional", "positive", "printable", "schema_keys", "setting", "suggest",
+           "suggest_key", "to_toml", "type_hints", "type_name"]
 
 
 class InvalidField(CaseError):
@@ -57,6 +57,22 @@ def positive(value: float, name: str, strict: bool = True) -> None:
     """Raise :class:`InvalidField` unless ``value`` > 0 (``strict``) or >= 0."""
     if not (value > 0 if strict else value >= 0):
         raise InvalidField(name, f"must be {'>' if strict else '>='} 0 (got {value:g})")
+
+
+def column_name(name: str, field_path: str = "name") -> None:
+    """Raise :class:`InvalidField` unless ``name`` can head ``history.csv`` columns.
+
+    A probe's name prefixes its columns (``<name>_ux``): a comma, a double quote or a
+    line break in it split or broke the CSV header (one column more in the header
+    than in the rows: ``read_history`` failed, other readers shifted the columns);
+    an empty name gave ``body@(x, y)``, a comma too.
+    """
+    bad = sorted({c for c in name if c in ',"' or not c.isprintable()})
+    if not name or bad:
+        why = (f"it holds {printable(' '.join(repr(c) for c in bad))}: no comma, double "
+               "quote or control character" if bad else "empty")
+        raise InvalidField(field_path, f"{printable(repr(name))} cannot name history.csv "
+                           f"columns ({why})")
 
 
 def printable(text: str) -> str:

@@ -12,7 +12,7 @@ import pathlib
 from dataclasses import dataclass
 from typing import Literal
 
-from breakwater.config.fields import InvalidField, positive, setting
+from breakwater.config.fields import InvalidField, column_name, positive, setting
 from breakwater.config.frozen import assignment_hint
 from breakwater.config.typecheck import check_fields
 
@@ -47,6 +47,7 @@ class ProbeSpec:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)
 
 
 @assignment_hint("make another, dataclasses.replace(probe, {name}=...)")
@@ -68,6 +69,7 @@ class PairProbeSpec:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)
 
 
 MAX_NEWTON_IT = 10_000
