@@ -20,6 +20,7 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
+from breakwater.casefile.case import load_case
 from breakwater.common.errors import CaseError
 from breakwater.config.runspec import InitialSpec, OutputSpec, TimeSpec
 from breakwater.model.built import REBUILD
@@ -33,6 +34,8 @@ from breakwater.model.model import (
     Material,
     SurfaceLoad,
 )
+from breakwater.run.asrun import checked_arguments
+from breakwater.run.simulation import run
 
 COMM = MPI.COMM_WORLD
 
@@ -151,3 +154,31 @@ def test_initial_set_on_a_built_model(model: ContactModel) -> None:
             model.initial = {"undeformed": True}  # type: ignore[assignment]
     finally:
         model.initial = kept
+
+
+def test_run_arguments_of_another_type(model: ContactModel, folder: pathlib.Path) -> None:
+    """``run``'s arguments are checked first, in one line naming the argument.
+
+    ``resolved_case=built.case`` ("the case as run", Running: From Python) failed from
+    inside the run with ``TypeError: 'Case' object is not iterable``; it is taken for its
+    ``resolved()``. A dict for ``time`` failed with ``AttributeError: 'dict' object has
+    no attribute 'dt'``.
+    """
+    time, out = TimeSpec(dt=1e-4, end_time=1e-3), folder / "never_written"
+    output = OutputSpec(out)
+    case = load_case("goda")
+    assert checked_arguments(model, time, output, case) == case.resolved()
+    assert checked_arguments(model, time, output, None) is None
+    for args, message in (
+            ((model, {"dt": 1e-4, "end_time": 1e-3}, output),
+             "run: time: expected TimeSpec (built.time, or TimeSpec(dt=..., end_time=...)), "
+             "got dict"),
+            ((model, time, None), "run: output: expected OutputSpec (built.output, or "
+                                  "OutputSpec(directory=...)), got NoneType"),
+            ((None, time, output), "run: model: expected ContactModel (built.model), got "
+                                   "NoneType")):
+        with pytest.raises(TypeError, match=f"^{re.escape(message)}$"):
+            run(*args, report=False)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"^run: resolved_case: expected a case's resolved\(\)"):
+        run(model, time, output, resolved_case=["goda"], report=False)  # type: ignore[arg-type]
+    assert not out.exists()  # refused before anything is written

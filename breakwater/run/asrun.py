@@ -26,7 +26,37 @@ from breakwater.config.runspec import OutputSpec, TimeSpec
 if TYPE_CHECKING:
     from breakwater.model.parts import Damping
 
-__all__ = ["case_as_run", "changed_line"]
+__all__ = ["case_as_run", "changed_line", "checked_arguments"]
+
+
+def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
+                      ) -> Mapping[str, Any] | None:
+    """:func:`~breakwater.run.simulation.run`'s arguments checked; the case as a mapping.
+
+    A :class:`~breakwater.casefile.case.Case` given as ``resolved_case`` (``built.case``,
+    "the case as run") is taken for its ``resolved()``: it failed with ``TypeError:
+    'Case' object is not iterable`` from inside the run, as a ``dict`` given for
+    ``time`` did with ``AttributeError: 'dict' object has no attribute 'dt'``.
+
+    Raises:
+        TypeError: An argument of another type (one line naming it).
+    """
+    from breakwater.model.model import ContactModel
+
+    for name, value, cls, hint in (
+            ("model", model, ContactModel, "built.model"),
+            ("time", time, TimeSpec, "built.time, or TimeSpec(dt=..., end_time=...)"),
+            ("output", output, OutputSpec, "built.output, or OutputSpec(directory=...)")):
+        if not isinstance(value, cls):
+            raise TypeError(f"run: {name}: expected {cls.__name__} ({hint}), got "
+                            f"{type(value).__name__}")
+    if resolved_case is None or isinstance(resolved_case, Mapping):
+        return resolved_case
+    resolved = getattr(resolved_case, "resolved", None)
+    if callable(resolved):
+        return resolved()  # type: ignore[no-any-return]
+    raise TypeError("run: resolved_case: expected a case's resolved() (a mapping, e.g. "
+                    f"built.case.resolved()), got {type(resolved_case).__name__}")
 
 
 def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec,
