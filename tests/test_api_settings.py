@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
+import re
 import typing
 from typing import Any, Literal
 
@@ -169,3 +170,23 @@ def test_python_forms_of_the_same_value_are_stored_as_the_reader_stores_them() -
     assert probe.point == (0.0, 0.1) and all(type(x) is float for x in probe.point)
     output = OutputSpec("out")  # type: ignore[arg-type]  (a str for a path)
     assert output.directory == pathlib.Path("out")
+
+
+def test_load_case_overrides_not_a_list() -> None:
+    """``load_case``'s overrides from a script: a list or a tuple of strings, or None.
+
+    A single string was read character by character (``--set t: expected key=value``),
+    a dict by its keys, and None failed with ``'NoneType' object is not iterable``.
+    """
+    assert load_case("goda", None) == load_case("goda")
+    assert load_case("goda", ("time.end_time=0.05",)).time.end_time == 0.05
+    assert load_case("goda", (o for o in ["time.end_time=0.05"])).time.end_time == 0.05
+    expected = (r"^overrides: expected a list of 'key=value' strings \(e\.g\. load_case\(None, "
+                r"\['time\.end_time=0\.05', 'contact\.interface\.friction=0\.5'\]\)\), got ")
+    for overrides, got in (("time.end_time=0.05", "str 'time.end_time=0.05'"),
+                           ({"time.end_time": 0.05}, "a dict"),
+                           (0.05, "float 0.05"),
+                           ([b"time.end_time=0.05"], "an item bytes b'time.end_time=0.05'"),
+                           ([pathlib.Path("x")], "an item PosixPath PosixPath('x')")):
+        with pytest.raises(CaseError, match=expected + re.escape(got) + "$"):
+            load_case("goda", overrides)  # type: ignore[arg-type]

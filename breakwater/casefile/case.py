@@ -37,7 +37,7 @@ type, unit and default.
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from breakwater.casefile.dimension import dimension, general_in_3d, mesh_problem
@@ -68,7 +68,7 @@ from breakwater.common.gmshtools import (
     unsupported_format,
 )
 from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
-from breakwater.config.fields import InvalidField, suggest
+from breakwater.config.fields import InvalidField, printable, suggest
 from breakwater.config.schema import Schema
 
 if TYPE_CHECKING:
@@ -104,6 +104,7 @@ __all__ = [
     "case_sources",
     "is_file_value",
     "load_case",
+    "override_list",
 ]
 
 
@@ -279,14 +280,15 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
 
 # --- the entry point --------------------------------------------------------------------
 
-def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] = (),
+def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] | None = (),
               *, static: bool = False) -> Case:
     """Read, override and validate a case.
 
     Args:
         path: A case file; a built-in case name (``"goda"``); None for the default
             (Goda) case.
-        overrides: ``key=value`` strings (dotted paths, TOML values).
+        overrides: ``key=value`` strings (dotted paths, TOML values), a list or a
+            tuple (None: none; a single string is refused, see :func:`override_list`).
         static: For a static solve alone (``calibrate``): a case without ``[time]``
             is read with :data:`STATIC_TIME` and without its loads (neither is used;
             the loads' checks against the time step would refuse it). A run refuses
@@ -299,10 +301,37 @@ def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] =
         CaseError: One line naming the file (or ``--set``), the field and the problem.
 
     """
-    case: Case = _SCHEMA.load(_case_file(path), overrides,
+    case: Case = _SCHEMA.load(_case_file(path), override_list(overrides),
                               check=lambda c: _check_groups(c, _mesh_groups(c.mesh)),
                               prepare=_static_time if static else None)
     return case
+
+
+def override_list(overrides: Any) -> list[str]:
+    """``load_case``'s overrides as a list of strings (None: none).
+
+    A single string was read character by character (``load_case(None,
+    "time.end_time=0.05")`` said ``--set t: expected key=value``), a dict by its keys
+    (``--set time.end_time: expected key=value``), and None failed with ``TypeError:
+    'NoneType' object is not iterable``.
+
+    Raises:
+        CaseError: Not a list (or tuple) of strings, in one line saying what is.
+    """
+    if overrides is None:
+        return []
+    example = "e.g. load_case(None, ['time.end_time=0.05', 'contact.interface.friction=0.5'])"
+    if isinstance(overrides, str | bytes | Mapping) or not isinstance(overrides, Iterable):
+        what = "a dict" if isinstance(overrides, Mapping) else \
+            f"{type(overrides).__name__} {printable(repr(overrides))[:60]}"
+        raise CaseError(f"overrides: expected a list of 'key=value' strings ({example}), "
+                        f"got {what}")
+    items = list(overrides)
+    wrong = next((o for o in items if not isinstance(o, str)), None)
+    if wrong is not None:
+        raise CaseError(f"overrides: expected a list of 'key=value' strings ({example}), "
+                        f"got an item {type(wrong).__name__} {printable(repr(wrong))[:60]}")
+    return items
 
 
 STATIC_TIME = {"dt": 0.5, "end_time": 1.0}
