@@ -440,7 +440,7 @@ def _outside(data: gmshio.MeshData, body: str, x: tuple[float, ...]) -> str | No
     if comm.allreduce(len(locate_point(msh, cells, point, comm)), op=MPI.MAX):
         return None
     gdim = msh.geometry.dim
-    nodes = msh.geometry.x[msh.geometry.dofmap[cells].ravel(), :gdim]
+    nodes = msh.geometry.x[msh.geometry.dofmaps[0][cells].ravel(), :gdim]
     lo = np.min(comm.allgather(nodes.min(axis=0) if len(nodes) else np.full(gdim, np.inf)),
                 axis=0)
     hi = np.max(comm.allgather(nodes.max(axis=0) if len(nodes) else np.full(gdim, -np.inf)),
