@@ -97,6 +97,25 @@ def test_a_new_named_entry():
         in message
 
 
+def test_quoted_parts_of_a_key_name_entries_as_toml_does(tmp_path: pathlib.Path) -> None:
+    """An entry whose name holds a space or a dot (a TOML quoted key in the case file) is
+    addressed by quoting that part, as TOML writes it; before, the quotes were part of
+    the name and the entry was not found (a quoted key with '=' split at its '=')."""
+    case_file = tmp_path / "quoted.toml"
+    case_file.write_text('extends = "goda"\n[output.probes."top gauge"]\nbody = "caisson"\n'
+                         'group = "gauge_top"\n')
+    case = load_case(case_file, ['output.probes."top gauge".group=gauge_bottom',
+                                 'time."dt"=2e-4',
+                                 "output.probes.'v1.2=x'={body=\"caisson\", "
+                                 'group="gauge_top"}'])
+    probes = {p.name: p for p in case.output.probes}
+    assert probes["top gauge"].group == "gauge_bottom"
+    assert probes["v1.2=x"].group == "gauge_top"
+    assert case.time.dt == 2e-4
+    with pytest.raises(CaseError, match="did you mean 'group'"):
+        load_case(case_file, ['output.probes."top gauge".grup=gauge_bottom'])
+
+
 def test_a_path_in_a_table_value_is_relative_to_the_working_directory(tmp_path,
                                                                        monkeypatch):
     """``mesh={source="m.msh"}`` as ``mesh.source=m.msh`` (before: left relative)."""

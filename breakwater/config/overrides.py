@@ -1,7 +1,8 @@
 """``--set key=value`` overrides: a dotted key path checked against the schema, a TOML value.
 
 :func:`apply_override` changes the raw data of a file before it is built: the key is
-checked table by table (unknown keys refused with the closest valid one), an entry of
+checked table by table (unknown keys refused with the closest valid one; its parts bare
+or quoted as in TOML, ``contact."a b".friction``), an entry of
 a named collection is given by its name or its index, a table value is merged into the
 case's table key by key (as ``extends`` merges files; a new entry of a named collection
 is given whole, as a table), a path value is resolved against the working directory;
@@ -32,6 +33,36 @@ __all__ = ["OVERRIDE", "apply_override", "parse_value", "path_key"]
 
 OVERRIDE = "--set"
 """Origin of a value given as a ``key=value`` override."""
+
+
+def _split(spec: str) -> tuple[str, str] | None:
+    """``key=value`` split at the first ``=`` outside the key's quotes (None: no ``=``)."""
+    quote = ""
+    for i, c in enumerate(spec):
+        if quote:
+            quote = "" if c == quote else quote
+        elif c in "\"'":
+            quote = c
+        elif c == "=":
+            return spec[:i].strip(), spec[i + 1:].strip()
+    return None
+
+
+def key_parts(key: str) -> list[str]:
+    """The parts of a dotted key, each bare or quoted as in TOML (``contact."a b".friction``).
+
+    A key TOML does not read as a dotted key is split at its dots (the schema's checks
+    then name what is wrong in it).
+    """
+    try:
+        data: Any = tomllib.loads(f"{key} = 0")
+    except tomllib.TOMLDecodeError:
+        return key.split(".")
+    parts = []
+    while isinstance(data, dict) and len(data) == 1:
+        ((k, data),) = data.items()
+        parts.append(k)
+    return parts if data == 0 and not isinstance(data, dict) else key.split(".")
 
 
 def parse_value(text: str) -> Any:
@@ -83,10 +114,11 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
     Raises:
         CaseError: A malformed override, or a key path the schema does not have.
     """
-    if "=" not in spec:
+    split = _split(spec)
+    if split is None:
         raise CaseError(f"{OVERRIDE} {spec}: expected key=value")
-    key, text = (s.strip() for s in spec.split("=", 1))
-    parts = key.split(".")
+    key, text = split
+    parts = key_parts(key)
     if not key or not all(parts):
         raise CaseError(f"{OVERRIDE} {spec}: empty key")
     value = parse_value(text)
