@@ -139,6 +139,10 @@ def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monke
     ("time.dt=abc", "--set: time.dt: expected a number, got 'abc'"),
     ("bodies.mound.poisson=0.5", "--set: bodies.mound.poisson: Poisson's ratio"),
     ("dt=1e-4", "did you mean 'time.dt'?"),
+    # A check of two keys blames the --set of either (not the case file whose dt it is).
+    ("time.end_time=5e-5", "--set: time.dt: must be smaller than end_time"),
+    ("time.max_steps=10", "--set: time.end_time: end_time / dt"),
+    ("time.beta1=0.7", "--set: time.beta2: beta2 = 0.605 < beta1 = 0.7"),
 ])
 def test_bad_overrides(override, phrase):
     with pytest.raises(CaseError) as info:

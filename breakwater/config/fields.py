@@ -31,20 +31,30 @@ __all__ = ["InvalidField", "alternatives", "column_name", "describe", "key_field
 
 
 class InvalidField(CaseError):
-    """A field's value is invalid; ``field`` is relative to the object that raised."""
+    """A field's value is invalid; ``field`` is relative to the object that raised.
 
-    def __init__(self, field_path: str, problem: str) -> None:
+    ``others``: the sibling fields the problem involves too (``dt`` against
+    ``end_time``), so that a message blames a ``--set`` of any of them.
+    """
+
+    def __init__(self, field_path: str, problem: str, others: tuple[str, ...] = ()) -> None:
         super().__init__(f"{field_path}: {problem}" if field_path else problem)
         self.field = field_path
         self.problem = problem
+        self.others = others
 
     def __reduce__(self) -> tuple[Any, ...]:
-        return type(self), (self.field, self.problem)
+        return type(self), (self.field, self.problem, self.others)
 
     def within(self, prefix: str) -> InvalidField:
         """The same error with the field path prefixed."""
         path = ".".join(p for p in (prefix, self.field) if p)
-        return InvalidField(path, self.problem)
+        return InvalidField(path, self.problem, self.others)
+
+    def fields(self) -> list[str]:
+        """The dotted paths of the field and of the others it involves."""
+        parent = self.field.rsplit(".", 1)[0] if "." in self.field else ""
+        return [self.field, *(f"{parent}.{o}" if parent else o for o in self.others)]
 
 
 def setting(default: Any = MISSING, *, unit: str = "-", doc: str = "", key: bool = False

@@ -132,7 +132,7 @@ class TimeSpec:
         positive(self.end_time, "end_time")
         if self.dt >= self.end_time:
             raise InvalidField("dt", f"must be smaller than end_time ({self.dt:g} >= "
-                               f"{self.end_time:g})")
+                               f"{self.end_time:g})", others=("end_time",))
         positive(self.beta1, "beta1")
         positive(self.beta2, "beta2")
         if not self.allow_conditional:
@@ -143,7 +143,8 @@ class TimeSpec:
             if self.beta2 < self.beta1:
                 raise InvalidField("beta2", f"beta2 = {self.beta2:g} < beta1 = "
                                    f"{self.beta1:g} is not unconditionally stable (set "
-                                   "time.allow_conditional = true to insist)")
+                                   "time.allow_conditional = true to insist)",
+                                   others=("beta1",))
         positive(self.max_cutbacks, "max_cutbacks", strict=False)
         if self.max_cutbacks > MAX_CUTBACKS:
             raise InvalidField("max_cutbacks", f"must be <= {MAX_CUTBACKS} (got "
@@ -153,18 +154,19 @@ class TimeSpec:
             positive(self.min_dt, "min_dt")
             if self.min_dt > self.dt:
                 raise InvalidField("min_dt", f"must be <= dt ({self.min_dt:g} > "
-                                   f"{self.dt:g})")
+                                   f"{self.dt:g})", others=("dt",))
         positive(self.tolerance, "tolerance")
         if self.min_dt is not None and self.adaptive and self.min_dt < self.dt / 2**MAX_LEVELS:
             raise InvalidField("min_dt", f"adaptive steps: at most {MAX_LEVELS} halvings "
                                f"of dt (min_dt >= dt / {2**MAX_LEVELS:g} = "
-                               f"{self.dt / 2**MAX_LEVELS:.3g} s; got {self.min_dt:g})")
+                               f"{self.dt / 2**MAX_LEVELS:.3g} s; got {self.min_dt:g})",
+                               others=("dt", "adaptive"))
         positive(self.max_steps, "max_steps")
         if self.planned_steps > self.max_steps:
             raise InvalidField("end_time", f"end_time / dt = {self.end_time:g} / "
                                f"{self.dt:g} = {self.planned_steps:.4g} steps, above the "
                                f"limit time.max_steps = {self.max_steps} (raise "
-                               "time.max_steps to run it)")
+                               "time.max_steps to run it)", others=("dt", "max_steps"))
         if not 0 < self.newton_rtol < 1:
             raise InvalidField("newton_rtol", f"must be in (0, 1): the residual must "
                                f"decrease (got {self.newton_rtol:g})")

@@ -105,7 +105,9 @@ class Schema:
             if check is not None:
                 check(obj)
         except InvalidField as e:
-            where = origin(e.field, origins, label)
+            # The --set of any field the problem involves is the one to blame.
+            where = next((w for w in (origin(f, origins, label) for f in e.fields())
+                          if w == OVERRIDE), origin(e.field, origins, label))
             if where not in (label, OVERRIDE):  # a key of a file this one extends
                 where = f"{label} (extends {where})"
             table = next((t for t in merged if e.field == t or e.field.startswith(t + ".")),
