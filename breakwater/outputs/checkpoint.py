@@ -59,7 +59,10 @@ not lists of its JSON metadata.
 
 4: the stepper's state holds ``memory``, the general pairs' last slip velocities at
 their slave nodes (Newton's start of the next step:
-:meth:`breakwater.contact.general.SurfaceForces.predict`).
+:meth:`breakwater.contact.general.SurfaceForces.predict`); since 2026-11-28 with the
+master facets their searches use, each pair's ``{"slip": [...], "facets": [...]}``
+(:meth:`breakwater.stepping.condensed.GeneralPairs.memory`; a bare list, written
+before, is read as the slip velocities).
 
 3: the ledger's state holds ``friction_power``, every pair's friction power at the
 last record (2 held ``surface_power``, the general pairs' only).

@@ -19,7 +19,7 @@ from breakwater.common.timings import Timings
 from breakwater.model.model import ContactModel
 from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.snesassembly import ConstantBulk, HomogeneousLifting
-from breakwater.stepping.stepsolver import StepSolver
+from breakwater.stepping.stepsolver import PairMemory, StepSolver
 
 log = logging.getLogger("breakwater.stepping.solver")
 
@@ -256,11 +256,11 @@ class NewtonSolver(StepSolver):
     def accept(self) -> None:
         """Nothing to keep: the step's state is all in the Functions."""
 
-    def memory(self) -> list[list[float | None] | None]:
+    def memory(self) -> list[PairMemory]:
         """Nothing beyond the state Functions (no general pairs on this path)."""
         return []
 
-    def restore(self, memory: list[list[float | None] | None]) -> None:
+    def restore(self, memory: list[PairMemory]) -> None:
         """Nothing to set."""
 
     def destroy(self) -> None:

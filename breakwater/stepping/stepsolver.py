@@ -14,13 +14,17 @@ acceleration adds :meth:`StepSolver.add_surface_forces`; the run counts
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 from petsc4py import PETSc
 
 from breakwater.common.timings import Timings
 
-__all__ = ["StepSolver"]
+__all__ = ["PairMemory", "StepSolver"]
+
+type PairMemory = dict[str, Any] | list[float | None] | None
+"""A general pair's state beyond u, v, a in a checkpoint (JSON): ``{"slip": [...],
+"facets": [...]}``; a bare list of slip velocities in checkpoints of before 2026-11-28."""
 
 
 class StepSolver(Protocol):
@@ -50,11 +54,11 @@ class StepSolver(Protocol):
         """The step just solved is accepted (GN22 updates the state from its Δa)."""
         ...
 
-    def memory(self) -> list[list[float | None] | None]:
+    def memory(self) -> list[PairMemory]:
         """What the next step depends on beyond the state Functions (a checkpoint's)."""
         ...
 
-    def restore(self, memory: list[list[float | None] | None]) -> None:
+    def restore(self, memory: list[PairMemory]) -> None:
         """Set what :meth:`memory` returned, on resuming a run."""
         ...
 
