@@ -37,6 +37,17 @@ GODA3D = "goda3d"
 """``mesh.source`` value selecting the built-in 3D Goda mesh generator (hexahedra)."""
 
 
+MAX_POINTS = 20
+"""Gauss points per integration segment of a general pair at most: on a segment the
+integrand is smooth (a P2 shape function times the penalty of a quadratic gap), which 3
+points integrate to degree 5; 20000 points took 6.5 GB and 20 minutes before the first
+time step of a block on a base (1e9: a MemoryError of leggauss's 1e9 x 1e9 matrix)."""
+REGULARISATION_RANGE = (1e-100, 1e100)
+"""Regularisation velocities χ (m/s) the friction law's arithmetic takes: its Jacobian and
+the slip guard use χ² and χ³, which underflow below 3e-103 and overflow above 6e102 (χ =
+1e-300 stopped a run with "ZeroDivisionError: division by zero", χ = 1e300 a conforming
+pair's with an OverflowError's traceback). The paper's χ is 1e-10 m/s."""
+
 _GODA_GEOMETRY = GodaGeometry()
 _GODA3D_GEOMETRY = Goda3DGeometry()
 
@@ -172,7 +183,7 @@ class ContactCase:
     master_surface: str | tuple[str, ...] | None = setting(
         None, doc="general pair: facet group on the master's boundary, or an array of "
         "them (one surface, e.g. a shared interface and the crest beyond it)")
-    points: int = setting(3, doc="general pair: Gauss points per integration segment (>= 2)")
+    points: int = setting(3, doc="general pair: Gauss points per integration segment (2 to 20)")
     integration: Literal["segments", "gauss", "nodes"] = setting(
         "segments", doc="general pair: the slave's integration points: segments "
         "(segment-to-segment, `points` Gauss points per segment), gauss (`points` per "
@@ -195,11 +206,20 @@ class ContactCase:
         if self.points < 2:  # at one point (a segment's middle) the P2 end nodes' N is 0
             raise InvalidField("points", f"must be >= 2 (got {self.points}): one Gauss point "
                                "per segment gives the facets' end nodes no contact force")
+        if self.points > MAX_POINTS:
+            raise InvalidField("points", f"must be <= {MAX_POINTS} (got {self.points}): "
+                               "the integrand is smooth on each segment, where 3 points "
+                               "integrate it to degree 5")
         if self.master_surface == ():
             raise InvalidField("master_surface", "needs at least one facet group")
         positive(self.penalty, "penalty")
         positive(self.friction, "friction", strict=False)
         positive(self.regularisation, "regularisation")
+        low, high = REGULARISATION_RANGE
+        if not low <= self.regularisation <= high:
+            raise InvalidField("regularisation", f"must be between {low:g} and {high:g} m/s "
+                               f"(got {self.regularisation:g}): the friction law's χ² and "
+                               "χ³ under- or overflow (the paper's χ is 1e-10 m/s)")
         if self.slave == self.master:
             raise InvalidField("master", "slave and master must be different bodies")
 
