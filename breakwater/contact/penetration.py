@@ -165,10 +165,16 @@ def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
         # No master surface point within the radius: measure the distance to it.
         master = gather_surface(model, None, spec.master, spec.master_groups)
         far = _distance(nodes[worst], master.X)
+        # Inside or on the master's boundary: on it where master_surface leaves out
+        # the part of the boundary under the node (a group forgotten from its list).
+        groups = ", ".join(spec.master_groups)
         return (f"contact '{spec.name}': slave node at {where} starts inside the master "
-                f"'{spec.master}', {far:.3g} m from its contact surface, beyond the "
+                f"'{spec.master}' or on its boundary, {far:.3g} m from its contact "
+                f"surface (master_surface: {groups}), with no projection on it within the "
                 f"contact search radius {radius:.3g} m: the meshes of the two bodies "
-                "overlap (move the slave body out of the master)")
+                "overlap (move the slave body out of the master), or master_surface "
+                "leaves out the part of the master's boundary under it (add its facet "
+                "group)")
     return (f"contact '{spec.name}': slave node at {where} starts {depth[worst]:.3g} m "
             f"inside the master '{spec.master}', deeper than the contact sees "
             f"({limit[worst]:.3g} m: the search radius or the master's element under it): "
