@@ -298,3 +298,23 @@ def test_a_cycle_is_a_failure_named_so(monkeypatch: pytest.MonkeyPatch) -> None:
         [2.0, 1.0] * 3, [2.0, 1.0] * 2, [3.0, 2.0, 1.0] * 3, [2.0, 1.0, 0.5, 0.25, 2.0, 1.0],
             [4.0, 2.0, 1.0, 0.5, 0.25, 0.125])] == [2, 0, 3, 0, 0]
     assert interfacenewton.cycle([9.0, *[2.0, 1.0] * 3], 1.5) == 0  # at the floor: stall test
+
+
+def test_an_overflowing_residual_fails_without_numpy_warnings() -> None:
+    # A general pair with μ = 1e300 (or ε_n = 1e300): f_c ~ 1e300, whose square
+    # overflows in the residual's norm. The solve fails as a Newton that did not converge
+    # (residual inf: one line); numpy's RuntimeWarnings ("overflow encountered in dot",
+    # four lines on each rank under mpiexec) were printed before it.
+    import warnings
+
+    class Huge(CubeRootLaw):
+        def g(self, y: float) -> float:
+            return 1e300 * (1.0 + y * y)
+
+        def dg(self, y: float) -> float:
+            return 2e300 * y
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        with pytest.raises(ConvergenceError, match=r"residual (inf|nan)"):
+            _solve(_newton(Huge()), 1.0)

@@ -189,11 +189,11 @@ class InterfaceNewton:
         self.contact.true_law(crawl=not damped)  # the rescue: Newton without crawl points
         x = read_only(np.array(y0, dtype=float))  # each iterate read-only: its evaluations'
         fc, G, F = self._residual(x, X_II, S, z_I)  # caches know it by identity
-        fnorm = float(np.linalg.norm(F))
-        # ‖F₀‖ of the relative test is the whole residual at Newton's start, bulk rows
-        # included, as for the reference Newton: ‖R(Δa₀)‖² = ‖w‖² − ‖w_I‖² +
-        # ‖w_I + f_c(y₀)‖² with w = A Δa₀ − r₀ (the bulk rows' residual).
-        whole = w_norm2 - w_I @ w_I + np.sum((w_I + fc) ** 2)
+        with np.errstate(over="ignore", invalid="ignore"):  # μ = 1e300: inf, a failure
+            fnorm = float(np.linalg.norm(F))  # (not numpy's warnings, 4 lines per rank)
+            # ‖F₀‖ of the relative test: the whole residual at Newton's start (as the
+            # reference Newton's): ‖w‖² − ‖w_I‖² + ‖w_I + f_c(y₀)‖², w = A Δa₀ − r₀.
+            whole = w_norm2 - w_I @ w_I + np.sum((w_I + fc) ** 2)
         norms = [math.sqrt(max(float(whole), fnorm**2))]
         reason, stalled = self._test(norms, 0.0, 0.0, x)
         while reason == _R.CONVERGED_ITERATING:
