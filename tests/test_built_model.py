@@ -104,6 +104,32 @@ def test_gravity_set_on_a_built_model(model: ContactModel) -> None:
         model.gravity = (0.0, -9.81)  # type: ignore[assignment]
 
 
+def test_a_misspelt_setting_of_a_built_model_is_refused(model: ContactModel) -> None:
+    """An attribute the built model does not have is refused when set, in one line.
+
+    Before, ``model.dampng = Damping(...)`` made a new attribute nothing read: the run
+    went on with the old damping (α, β still 0), as ``model.gravty`` with the old gravity.
+    """
+    damping, gravity = model.damping, model.gravity.value.tolist()
+    tail = ", so setting it would change nothing (model.damping, model.gravity and " \
+           "model.initial may be set)"
+    for name, value, closest in (("dampng", Damping(alpha=20.0), "damping"),
+                                 ("gravty", (0.0, -1.0), "gravity"),
+                                 ("intial", InitialSpec(undeformed=True), "initial")):
+        with pytest.raises(AttributeError, match=re.escape(
+                f"model.{name}: a built ContactModel has no attribute '{name}' (did you "
+                f"mean '{closest}'?){tail}") + "$"):
+            setattr(model, name, value)
+        assert name not in vars(model)
+    assert model.damping is damping and model.gravity.value.tolist() == gravity
+    assert (float(model.α.value), float(model.β.value)) == (0.0, 0.0)
+    # The model's own attributes, public and private, are set as before.
+    model.degree = model.degree
+    model._solvers += 1
+    model._scratch = 1
+    del model._scratch
+
+
 @pytest.mark.parametrize(("obj", "name", "hint"), [
     (TimeSpec(dt=1e-4, end_time=1e-3), "dt",
      "of TimeSpec: make another, dataclasses.replace(time, dt=...), and pass it to run"),

@@ -12,7 +12,9 @@ the model's settings that may change (``model.damping``, ``model.gravity``), and
 initial state (``model.initial``), checked against the model when set
 (:class:`initial_setting`): before, an initial velocity of a body the model does not
 have (``"Caisson"``) or a load index beyond ``model.loads`` was taken and ignored (the
-run started at rest, its numbers those of no velocity).
+run started at rest, its numbers those of no velocity). An attribute the model does not
+have is refused when set (:class:`KnownAttributes`): ``model.dampng = Damping(...)`` was
+taken and the run went on with the old damping.
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ from breakwater.common.errors import CaseError
 from breakwater.config.fields import suggest
 from breakwater.config.runspec import InitialSpec
 
-__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "built_parts", "check_initial",
-           "gravity_value", "initial_setting"]
+__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "KnownAttributes", "built_parts",
+           "check_initial", "gravity_value", "initial_setting"]
 
 REBUILD = ("a built model's bodies, contact pairs and loads are fixed: change the case (e.g. "
            "load_case(None, ['contact.interface.friction=0.3'])), or what ContactModel is "
@@ -61,6 +63,29 @@ class BuiltPart:
         if name in self.FIXED:
             _refuse(f"{self.WHERE}.{name}")
         object.__delattr__(self, name)
+
+
+class KnownAttributes:
+    """A built model's attributes: setting a public one it does not have is refused.
+
+    A misspelt setting (``model.dampng = Damping(alpha=20.0)``, ``model.gravty = ...``)
+    was a new attribute nothing read: the run went on with the old value. Once the
+    model is built (``_built`` set, the last step of its ``__init__``), a public name
+    that is neither the model's nor its class's is refused (``AttributeError``, one
+    line, with the closest name); private ``_x`` names and the model's own attributes
+    are set as before.
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name.startswith("_") or "_built" not in vars(self) or name in vars(self) \
+                or hasattr(type(self), name):
+            object.__setattr__(self, name, value)
+            return
+        names = sorted(n for n in {*dir(type(self)), *vars(self)} if not n.startswith("_"))
+        raise AttributeError(f"model.{name}: a built {type(self).__name__} has no attribute "
+                             f"'{name}'{suggest(name, names)}, so setting it would change "
+                             "nothing (model.damping, model.gravity and model.initial may "
+                             "be set)")
 
 
 class BuiltParts[T](tuple[T, ...]):

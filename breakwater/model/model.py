@@ -35,7 +35,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common import formcache
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
-from breakwater.model.built import built_parts, gravity_value, initial_setting
+from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.pairs import ContactPair, PairData, SurfacePair
@@ -87,7 +87,7 @@ def interface_quadrature(msh: dolfinx.mesh.Mesh, degree: int = 2) -> dict[str, A
     return {"quadrature_rule": "GLL", "quadrature_degree": 3}
 
 
-class ContactModel(ModelGroups):
+class ContactModel(KnownAttributes, ModelGroups):
     """N deformable bodies in frictional contact, from a gmsh mesh with named groups.
 
     Args:
@@ -107,7 +107,7 @@ class ContactModel(ModelGroups):
         initial: The initial state of a run (:mod:`breakwater.statics.initial`), set
             before running and checked then (:func:`~breakwater.model.built.check_initial`).
         bodies, pairs, surface_pairs, loads: What was built of each (tuples; their
-            settings fixed: :mod:`breakwater.model.built`).
+            settings fixed, unknown attributes refused: :mod:`breakwater.model.built`).
     """
 
     bodies = built_parts[BodyData]()
@@ -181,12 +181,12 @@ class ContactModel(ModelGroups):
             raise MeshError("general contact pairs (non-matching surfaces) are plane strain "
                             "only for now: in 3D the bodies must share their interface's nodes")
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
-        self._fixed, self._fixed_sizes = [], []
+        self._fixed, self._fixed_sizes, self._load_data = [], [], []
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
-        self._load_data = []
         self.loads = [self._build_load(k, ld) for k, ld in enumerate(loads)]
         self._solvers = 0  # solvers built on this model (see options_prefix)
         self.initial = InitialSpec()
+        self._built = True  # now an unknown public attribute is refused (KnownAttributes)
 
     @property
     def gravity(self) -> fem.Constant:
