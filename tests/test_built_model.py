@@ -148,6 +148,27 @@ def test_frozen_settings_say_what_to_do(obj: object, name: str, hint: str) -> No
         delattr(obj, name)
 
 
+def test_damping_checks_its_fields_as_every_setting() -> None:
+    """``Damping`` takes NumPy numbers and stores floats; the rest is refused in one line.
+
+    Before, ``Damping(np.float32(1e-3))`` was refused ("must be a number >= 0 (got
+    np.float32(0.001))"), ``Damping(np.float64(0.5))`` kept a NumPy number and
+    ``Damping(1)`` an int, where the other settings (``check_fields``) store floats.
+    """
+    for given, stored in ((np.float32(0.5), 0.5), (np.float64(1e-3), 1e-3), (1, 1.0),
+                          (np.int64(2), 2.0)):
+        damping = Damping(alpha=given, beta=given)  # type: ignore[arg-type]
+        assert type(damping.alpha) is float and damping.alpha == stored
+        assert type(damping.beta) is float and damping.beta == stored
+    for value, problem in ((True, ": expected a number, got true"),
+                           ("0.1", ": expected a number, got '0.1'"),
+                           (np.nan, ": must be finite (got nan)"),
+                           (-1.0, " must be a number >= 0 (got -1.0)"),
+                           (np.float32(-1.0), " must be a number >= 0 (got -1.0)")):
+        with pytest.raises(ValueError, match=f"^damping beta{re.escape(problem)}$"):
+            Damping(beta=value)  # type: ignore[arg-type]
+
+
 def test_initial_set_on_a_built_model(model: ContactModel) -> None:
     """``model.initial`` is checked against the model when set, in one line.
 

@@ -18,7 +18,9 @@ import ufl
 from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.config.fields import InvalidField
 from breakwater.config.frozen import assignment_hint
+from breakwater.config.typecheck import check_fields
 from breakwater.loads.fields import StagedField, TractionField
 from breakwater.model.built import REBUILD, BuiltPart
 
@@ -166,12 +168,16 @@ class Damping:
 
     def __post_init__(self) -> None:
         # As the case's [damping] (a negative coefficient feeds energy in): from Python,
-        # model.damping = Damping(-1.0) ran.
+        # model.damping = Damping(-1.0) ran. The types as every setting's (check_fields):
+        # a NumPy number is taken, stored as a float (np.float32 was refused, 1 kept as int).
+        try:
+            check_fields(self)
+        except InvalidField as e:
+            raise ValueError(f"damping {e}") from None
         for name in ("alpha", "beta"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) \
-                    or not math.isfinite(value) or value < 0:
-                raise ValueError(f"damping {name} must be a number >= 0 (got {value!r})")
+            if getattr(self, name) < 0:
+                raise ValueError(f"damping {name} must be a number >= 0 "
+                                 f"(got {getattr(self, name)!r})")
 
 
 @dataclass
