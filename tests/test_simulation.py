@@ -430,7 +430,7 @@ def test_probes_of_one_name_are_refused(tmp_path: pathlib.Path) -> None:
                       pair_probes=(pair,)).probes[0].name == "corner"
 
 
-def test_a_probe_of_an_unknown_body_is_refused(mesh_path: pathlib.Path,
+def test_a_probe_of_an_unknown_body_or_pair_is_refused(mesh_path: pathlib.Path,
                                                shared_dir: pathlib.Path) -> None:
     # From Python (a case file's probes are checked against its bodies): a KeyError
     # whose message was quoted (found by a user). One line, on every rank.
@@ -439,6 +439,18 @@ def test_a_probe_of_an_unknown_body_is_refused(mesh_path: pathlib.Path,
                         progress=False)
     with pytest.raises(CaseError, match=r"^probe 'top': no body named 'aa' \(did you mean "
                        r"'a'\?\) \(bodies: a, b\)$"):
+        simulation.run(_model(mesh_path), time, output)
+    # A pair probe naming a pair the model does not have: the run started and failed
+    # (SimulationFailed "ValueError: pair probe 'q': no contact pair 5"), a crash.
+    output = OutputSpec(shared_dir, pair_probes=(PairProbeSpec("q", 5, (0.0, 0.0)),),
+                        progress=False)
+    with pytest.raises(CaseError, match=r"^pair probe 'q': no contact pair 5 in model\.pairs "
+                       r"\(indices 0 to 0\)$"):
+        simulation.run(_model(mesh_path), time, output)
+    output = OutputSpec(shared_dir, pair_probes=(PairProbeSpec("q", "interfac", (0.0, 0.0)),),
+                        progress=False)
+    with pytest.raises(CaseError, match=r"^pair probe 'q': no general contact pair 'interfac' "
+                       r"\(the model has none\)$"):
         simulation.run(_model(mesh_path), time, output)
 
 

@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
+from breakwater.common.errors import CaseError
+from breakwater.config.fields import suggest
 from breakwater.config.frozen import assignment_hint
 from breakwater.model.built import REBUILD, BuiltPart
 
@@ -392,16 +394,19 @@ def probed_pair(probe: str, pair: int | str, conforming: int, general: Sequence[
         general: The names of the general pairs.
 
     Raises:
-        ValueError: No such pair.
+        CaseError: No such pair (one line, as a probe's unknown body: a ``ValueError``
+            before, which the run reported as a crash, ``SimulationFailed``).
     """
     if isinstance(pair, str):
         if pair not in general:
-            raise ValueError(f"pair probe '{probe}': no general contact pair '{pair}' "
-                             f"(the model has {', '.join(general) or 'none'})")
+            raise CaseError(f"pair probe '{probe}': no general contact pair '{pair}'"
+                            f"{suggest(pair, general)} (the model has "
+                            f"{', '.join(general) or 'none'})")
         return conforming + list(general).index(pair)
     if not 0 <= pair < conforming:
-        raise ValueError(f"pair probe '{probe}': no contact pair {pair} "
-                         f"(the model has {conforming})")
+        raise CaseError(f"pair probe '{probe}': no contact pair {pair} in model.pairs ("
+                        + (f"indices 0 to {conforming - 1})" if conforming
+                           else "the model has no conforming pair)"))
     return pair
 
 
