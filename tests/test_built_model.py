@@ -34,7 +34,7 @@ from breakwater.model.model import (
     Material,
     SurfaceLoad,
 )
-from breakwater.run.asrun import checked_arguments
+from breakwater.run.asrun import checked_arguments, checked_extra
 from breakwater.run.simulation import run
 
 COMM = MPI.COMM_WORLD
@@ -228,4 +228,30 @@ def test_run_arguments_of_another_type(model: ContactModel, folder: pathlib.Path
             run(*args, report=False)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match=r"^run: resolved_case: expected a case's resolved\(\)"):
         run(model, time, output, resolved_case=["goda"], report=False)  # type: ignore[arg-type]
+    assert not out.exists()  # refused before anything is written
+
+
+def test_extra_summary_that_json_cannot_hold(model: ContactModel, folder: pathlib.Path) -> None:
+    """A value of ``extra_summary`` that ``summary.json`` cannot hold is refused first.
+
+    A set or an object failed at the first summary write with ``json``'s traceback
+    (``TypeError: Object of type set is not JSON serializable``), once an earlier run's
+    outputs in the folder had been cleared. NumPy numbers and arrays are written as
+    numbers and lists (:func:`~breakwater.common.files.to_jsonable`): taken.
+    """
+    time, out = TimeSpec(dt=1e-4, end_time=1e-3), folder / "never_written_extra"
+    output = OutputSpec(out)
+    numbers = {"g": np.float32(0.5), "x": np.arange(3), "note": "trial", "n": None}
+    assert checked_extra(numbers) is numbers and checked_extra(None) is None
+    tail = "): give numbers, strings, bools, None, lists and dicts of them (NumPy numbers " \
+           "and arrays are converted)"
+    for extra, message in (
+            ({"g": 1.0, "tags": {"a"}}, "run: extra_summary['tags']: summary.json cannot "
+             "hold it (Object of type set is not JSON serializable" + tail),
+            ({"model": {"m": model}}, "run: extra_summary['model']: summary.json cannot "
+             "hold it (Object of type ContactModel is not JSON serializable" + tail),
+            ([("g", 1.0)], "run: extra_summary: expected a mapping (e.g. {'note': "
+             "'trial 3'}), got list")):
+        with pytest.raises(TypeError, match=f"^{re.escape(message)}$"):
+            run(model, time, output, extra_summary=extra, report=False)  # type: ignore[arg-type]
     assert not out.exists()  # refused before anything is written

@@ -16,17 +16,19 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import MISSING
 from typing import TYPE_CHECKING, Any
 
+from breakwater.common.files import to_jsonable
 from breakwater.config.fields import to_toml
 from breakwater.config.runspec import OutputSpec, TimeSpec
 
 if TYPE_CHECKING:
     from breakwater.model.parts import Damping
 
-__all__ = ["case_as_run", "changed_line", "checked_arguments"]
+__all__ = ["case_as_run", "changed_line", "checked_arguments", "checked_extra"]
 
 
 def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
@@ -57,6 +59,33 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
         return resolved()  # type: ignore[no-any-return]
     raise TypeError("run: resolved_case: expected a case's resolved() (a mapping, e.g. "
                     f"built.case.resolved()), got {type(resolved_case).__name__}")
+
+
+def checked_extra(extra_summary: Any) -> Mapping[str, Any] | None:
+    """``run``'s ``extra_summary`` checked: a mapping that ``summary.json`` can hold.
+
+    NumPy numbers and arrays are written as numbers and lists
+    (:func:`~breakwater.common.files.to_jsonable`); a value JSON cannot hold (a set, an
+    object) failed with ``json``'s traceback at the first summary write, once the
+    outputs of an earlier run in the folder had been cleared.
+
+    Raises:
+        TypeError: Not a mapping, or a value of a key JSON cannot hold (one line naming
+            the key; nothing is written).
+    """
+    if extra_summary is None:
+        return None
+    if not isinstance(extra_summary, Mapping):
+        raise TypeError("run: extra_summary: expected a mapping (e.g. {'note': 'trial 3'}), "
+                        f"got {type(extra_summary).__name__}")
+    for key, value in extra_summary.items():
+        try:
+            json.dumps(to_jsonable(value))
+        except (TypeError, ValueError) as e:  # (ValueError: a circular reference)
+            raise TypeError(f"run: extra_summary[{key!r}]: summary.json cannot hold it ({e}): "
+                            "give numbers, strings, bools, None, lists and dicts of them "
+                            "(NumPy numbers and arrays are converted)") from None
+    return extra_summary
 
 
 def case_as_run(resolved_case: Mapping[str, Any], time: TimeSpec, output: OutputSpec,

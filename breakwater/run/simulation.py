@@ -87,7 +87,7 @@ from breakwater.outputs.rotation import rotation_warning
 from breakwater.outputs.sliding import sliding_warnings
 from breakwater.outputs.summary import balance_warning, format_report
 from breakwater.run import begin
-from breakwater.run.asrun import case_as_run, changed_line, checked_arguments
+from breakwater.run.asrun import case_as_run, changed_line, checked_arguments, checked_extra
 from breakwater.run.session import Session
 from breakwater.stepping.gn22 import local_error
 from breakwater.stepping.stepsize import GROW_AFTER
@@ -337,7 +337,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             (:func:`~breakwater.run.asrun.case_as_run`: a warning names the time,
             damping and gravity keys that differed); a ``Case`` (``built.case``) is
             taken for its ``resolved()``.
-        extra_summary: Merged into the summary (e.g. calibration results).
+        extra_summary: Merged into the summary (e.g. calibration results): values
+            JSON can hold, NumPy numbers and arrays (written as numbers and lists).
         report: Print a short report of the results at the end (rank 0).
         resume: Continue the run of ``output.directory`` from its checkpoint.
         fingerprint: Identifies the case in checkpoints; a checkpoint is resumed only
@@ -350,14 +351,16 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         The summary, also written to ``summary.json`` (the same on every rank).
 
     Raises:
-        TypeError: ``model``, ``time``, ``output`` or ``resolved_case`` of another type
-            (one line naming it; nothing is written).
+        TypeError: ``model``, ``time``, ``output`` or ``resolved_case`` of another type,
+            or a value of ``extra_summary`` that JSON cannot hold (one line naming it;
+            nothing is written).
         SimulationFailed: The run stopped before ``time.end_time``; the outputs up to
             the last accepted step are written, with ``finished: false``.
         RunInterrupted: (a SimulationFailed) The run stopped on SIGTERM or SIGINT.
         CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
     resolved_case = checked_arguments(model, time, output, resolved_case)
+    extra_summary = checked_extra(extra_summary)
     as_run: list[tuple[str, Any, Any]] = []
     if resolved_case is not None:  # case.toml says what runs (the specs given here)
         resolved_case, as_run = case_as_run(resolved_case, time, output, model.damping,
