@@ -9,7 +9,9 @@ and sand fill), μ = 0.6, under a storm of H_1/3 = 8 m, T_1/3 = 14 s and 1000 wa
 1.24 (the usual design criterion is 1.2).
 
 Usage: ``python examples/storm_rigid.py [STORMS] [OUTDIR]`` (default 200 storms, the
-CSV and the figure in ``results/storm_rigid/``); about 2 s of CPU per 100 storms.
+CSV and the figure in ``results/storm_rigid/``); about 2 s of CPU per 100 storms. A bad
+argument (``abc``, ``0``, a third one, an OUTDIR that cannot be made) is refused in one
+line, exit status 2.
 """
 
 from __future__ import annotations
@@ -29,11 +31,36 @@ CAISSON = Caisson(mass=2100.0 * B * (H1 + HC), base_width=B, toe_depth=H1, frict
 SEA = SeaState(significant_height=8.0, significant_period=14.0, waves=1000)
 
 
-def main(argv: list[str]) -> None:
-    """Run the Monte Carlo and print the result."""
-    storms = int(argv[0]) if argv else 200
+USAGE = "usage: python examples/storm_rigid.py [STORMS] [OUTDIR]"
+
+
+def arguments(argv: list[str]) -> tuple[int, pathlib.Path]:
+    """The number of storms and the output folder (made) from the command line.
+
+    Raises:
+        ValueError: Not a whole number >= 1 of storms, more than two arguments, or a
+            folder that cannot be made (one line; a traceback before).
+    """
+    if len(argv) > 2:
+        raise ValueError(f"expected at most 2 arguments, got {len(argv)}")
+    storms = argv[0] if argv else "200"
+    if not storms.isdecimal() or int(storms) < 1:
+        raise ValueError(f"STORMS: expected a whole number >= 1, got '{storms}'")
     out = pathlib.Path(argv[1] if len(argv) > 1 else "results/storm_rigid")
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"OUTDIR: cannot make '{out}' ({e.strerror})") from None
+    return int(storms), out
+
+
+def main(argv: list[str]) -> None:
+    """Run the Monte Carlo and print the result (exit 2 on a bad argument)."""
+    try:
+        storms, out = arguments(argv)
+    except ValueError as e:
+        print(f"storm_rigid.py: {e} ({USAGE})", file=sys.stderr)
+        raise SystemExit(2) from None
     design = goda_pressure(1.8 * SEA.significant_height, SEA.significant_period, H, H1, D,
                            HC)
     safety = CAISSON.friction * (CAISSON.submerged_weight - design.uplift_force(B)) \

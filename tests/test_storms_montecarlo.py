@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import math
+import pathlib
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -61,3 +64,24 @@ def test_refused():
         expected_sliding(sea, site, caisson, storms=1, limits=(-0.1,))
     with pytest.raises(ValueError, match=r"^confidence"):
         MonteCarlo((0,), np.zeros(1), ()).storms_needed(confidence=1.0)
+
+
+@pytest.mark.serial
+def test_storm_rigid_example_refuses_a_bad_argument(tmp_path):
+    """``examples/storm_rigid.py abc`` (or ``0``) failed with a traceback (int()'s, or
+    expected_sliding's ValueError); now one line naming the argument, exit status 2,
+    before any storm is run."""
+    script = pathlib.Path(__file__).parents[1] / "examples" / "storm_rigid.py"
+    (tmp_path / "afile").touch()
+    usage = " (usage: python examples/storm_rigid.py [STORMS] [OUTDIR])\n"
+    for args, message in ((["abc"], "STORMS: expected a whole number >= 1, got 'abc'"),
+                          (["0"], "STORMS: expected a whole number >= 1, got '0'"),
+                          (["-3"], "STORMS: expected a whole number >= 1, got '-3'"),
+                          (["2", "out", "x"], "expected at most 2 arguments, got 3"),
+                          (["2", "afile/sub"], "OUTDIR: cannot make 'afile/sub' (Not a "
+                                               "directory)")):
+        done = subprocess.run([sys.executable, str(script), *args], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=120, check=False)
+        assert (done.returncode, done.stdout, done.stderr) == \
+            (2, "", f"storm_rigid.py: {message}{usage}"), args
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]  # nothing made
