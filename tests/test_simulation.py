@@ -433,7 +433,14 @@ def test_probes_of_one_name_are_refused(tmp_path: pathlib.Path) -> None:
 def test_a_probe_of_an_unknown_body_or_pair_is_refused(mesh_path: pathlib.Path,
                                                shared_dir: pathlib.Path) -> None:
     # From Python (a case file's probes are checked against its bodies): a KeyError
-    # whose message was quoted (found by a user). One line, on every rank.
+    # whose message was quoted (found by a user). One line, on every rank, before the
+    # folder is touched: an earlier run's outputs there were cleared first.
+    earlier = {"summary.json": '{"status": "finished", "finished": true, "process": {}}',
+               "history.csv": "t\n0.0\n"}
+    if COMM.rank == 0:
+        for name, text in earlier.items():
+            (shared_dir / name).write_text(text)
+    COMM.barrier()
     time = TimeSpec(dt=DT, end_time=2 * DT)
     output = OutputSpec(shared_dir, probes=(ProbeSpec("top", "aa", (0.0, 0.1)),),
                         progress=False)
@@ -452,6 +459,9 @@ def test_a_probe_of_an_unknown_body_or_pair_is_refused(mesh_path: pathlib.Path,
     with pytest.raises(CaseError, match=r"^pair probe 'q': no general contact pair 'interfac' "
                        r"\(the model has none\)$"):
         simulation.run(_model(mesh_path), time, output)
+    left = COMM.bcast({name: (shared_dir / name).read_text() if (shared_dir / name).exists()
+                       else None for name in earlier} if COMM.rank == 0 else None)
+    assert left == earlier  # the earlier run's outputs, as they were
 
 
 def test_case_toml_holds_the_time_and_output_settings_run(

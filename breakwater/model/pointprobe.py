@@ -19,7 +19,7 @@ from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.fields import suggest
 from breakwater.model.model import ContactModel
 
-__all__ = ["TOUCH", "PointProbe", "locate_point"]
+__all__ = ["TOUCH", "PointProbe", "check_body", "locate_point"]
 
 
 TOUCH = 1e-5
@@ -70,6 +70,18 @@ def locate_point(msh: dolfinx.mesh.Mesh, owned: np.ndarray, x: np.ndarray, comm:
     return local
 
 
+def check_body(probe: str, body: str, names: Sequence[str]) -> None:
+    """A probe's body checked against the model's body names.
+
+    Raises:
+        CaseError: No body of that name (one line naming the bodies; model.body's
+            KeyError quoted its message, from Python).
+    """
+    if body not in names:
+        raise CaseError(f"probe '{probe}': no body named '{body}'{suggest(body, names)} "
+                        f"(bodies: {', '.join(names)})")
+
+
 class PointProbe:
     """Evaluate a body's fields at a fixed point of the reference configuration.
 
@@ -93,10 +105,7 @@ class PointProbe:
                  name: str | None = None) -> None:
         self.model = model
         self.name = name or f"{body}@{tuple(point)}"
-        names = [b.spec.name for b in model.bodies]
-        if body not in names:  # model.body's KeyError quoted its message (from Python)
-            raise CaseError(f"probe '{self.name}': no body named '{body}'"
-                            f"{suggest(body, names)} (bodies: {', '.join(names)})")
+        check_body(self.name, body, [b.spec.name for b in model.bodies])
         self.body = b = model.body(body)
         x = np.zeros(3)
         x[: len(point)] = point

@@ -40,10 +40,17 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
     'Case' object is not iterable`` from inside the run, as a ``dict`` given for
     ``time`` did with ``AttributeError: 'dict' object has no attribute 'dt'``.
 
+    The probes are checked against the model here, before the output folder is
+    touched: a probe naming a body or a pair the model does not have was refused only
+    once the run had cleared the earlier run's outputs in the folder.
+
     Raises:
         TypeError: An argument of another type (one line naming it).
+        CaseError: A probe naming a body or a pair the model does not have (one line).
     """
     from breakwater.model.model import ContactModel
+    from breakwater.model.pairs import probed_pair
+    from breakwater.model.pointprobe import check_body
 
     for name, value, cls, hint in (
             ("model", model, ContactModel, "built.model"),
@@ -52,6 +59,11 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
         if not isinstance(value, cls):
             raise TypeError(f"run: {name}: expected {cls.__name__} ({hint}), got "
                             f"{type(value).__name__}")
+    for p in output.probes:
+        check_body(p.name, p.body, [b.spec.name for b in model.bodies])
+    general = [p.name for p in model.surface_pairs]
+    for q in output.pair_probes:
+        probed_pair(q.name, q.pair, len(model.pairs), general)
     if resolved_case is None or isinstance(resolved_case, Mapping):
         return resolved_case
     resolved = getattr(resolved_case, "resolved", None)
