@@ -22,7 +22,7 @@ import pytest
 from blocks import two_rectangles
 from mpi4py import MPI
 
-from breakwater.common.errors import BreakwaterError, CaseError, ConvergenceError
+from breakwater.common.errors import BreakwaterError, CaseError, ConvergenceError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
 from breakwater.energy.ledger import FIELDS
 from breakwater.model.mesh import read_mesh
@@ -458,6 +458,12 @@ def test_a_probe_of_an_unknown_body_or_pair_is_refused(mesh_path: pathlib.Path,
                         progress=False)
     with pytest.raises(CaseError, match=r"^pair probe 'q': no general contact pair 'interfac' "
                        r"\(the model has none\)$"):
+        simulation.run(_model(mesh_path), time, output)
+    # A point outside its body: refused once the run had cleared the folder.
+    output = OutputSpec(shared_dir, probes=(ProbeSpec("top", "a", (0.0, 5.0)),),
+                        progress=False)
+    with pytest.raises(MeshError, match=r"^probe 'top': point \(0\.0, 5\.0\) is not in "
+                       r"body 'a'$"):
         simulation.run(_model(mesh_path), time, output)
     left = COMM.bcast({name: (shared_dir / name).read_text() if (shared_dir / name).exists()
                        else None for name in earlier} if COMM.rank == 0 else None)

@@ -82,6 +82,24 @@ def check_body(probe: str, body: str, names: Sequence[str]) -> None:
                         f"(bodies: {', '.join(names)})")
 
 
+def check_point(model: ContactModel, probe: str, body: str, point: Sequence[float]) -> None:
+    """A probe's point checked to lie in its body (collective: each rank its cells).
+
+    Raises:
+        MeshError: The point is in none of the body's cells (one line, every rank).
+    """
+    x = np.zeros(3)
+    x[: len(point)] = point
+    msh = model.body(body).submesh
+    owned = np.arange(msh.topology.index_map(msh.topology.dim).size_local, dtype=np.int32)
+    if not model.comm.allreduce(len(locate_point(msh, owned, x, model.comm)), op=MPI.MAX):
+        raise MeshError(_not_in_body(probe, point, body))
+
+
+def _not_in_body(probe: str, point: Sequence[float], body: str) -> str:
+    return f"probe '{probe}': point {tuple(point)} is not in body '{body}'"
+
+
 class PointProbe:
     """Evaluate a body's fields at a fixed point of the reference configuration.
 
@@ -116,8 +134,7 @@ class PointProbe:
         local = locate_point(msh, owned, x, comm)
         self.owner = comm.allreduce(comm.rank if len(local) else comm.size, op=MPI.MIN)
         if self.owner == comm.size:
-            raise MeshError(f"probe '{self.name}': point {tuple(point)} is not in body "
-                            f"'{body}'")
+            raise MeshError(_not_in_body(self.name, point, body))
         self._cell = int(local[0]) if len(local) else -1
         # The value is Σ φ_j(x) u_j over the cell's DOF blocks: the basis functions at
         # the point, found once by evaluating each of them (the owner only).

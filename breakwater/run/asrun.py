@@ -41,16 +41,18 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
     ``time`` did with ``AttributeError: 'dict' object has no attribute 'dt'``.
 
     The probes are checked against the model here, before the output folder is
-    touched: a probe naming a body or a pair the model does not have was refused only
-    once the run had cleared the earlier run's outputs in the folder.
+    touched: a probe naming a body or a pair the model does not have, or a point
+    outside its body, was refused only once the run had cleared the earlier run's
+    outputs in the folder.
 
     Raises:
         TypeError: An argument of another type (one line naming it).
         CaseError: A probe naming a body or a pair the model does not have (one line).
+        MeshError: A probe's point outside its body (one line).
     """
     from breakwater.model.model import ContactModel
     from breakwater.model.pairs import probed_pair
-    from breakwater.model.pointprobe import check_body
+    from breakwater.model.pointprobe import check_body, check_point
 
     for name, value, cls, hint in (
             ("model", model, ContactModel, "built.model"),
@@ -61,6 +63,8 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
                             f"{type(value).__name__}")
     for p in output.probes:
         check_body(p.name, p.body, [b.spec.name for b in model.bodies])
+    for p in output.probes:  # (collective: each rank searches its cells)
+        check_point(model, p.name, p.body, p.point)
     general = [p.name for p in model.surface_pairs]
     for q in output.pair_probes:
         probed_pair(q.name, q.pair, len(model.pairs), general)
