@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["STEP_TOL", "FacetGrid", "closest_point", "curve", "near", "project", "shape"]
+__all__ = ["INSIDE", "STEP_TOL", "FacetGrid", "closest_point", "curve", "near", "project", "shape"]
 
 #: The search's projection Newton stops at a point after a |Δξ| below this. Newton
 #: converges quadratically: after a step below 1e-12 the error is of its square,
@@ -169,8 +169,12 @@ class FacetGrid:
         return point, facet
 
 
+INSIDE = 1e-9
+"""A projection at ``|ξ| ≤ 1 + INSIDE`` is inside its facet (round-off; :func:`project`)."""
+
+
 def project(points: np.ndarray, nodes: np.ndarray, grid: FacetGrid,
-            tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+            tol: float = INSIDE) -> tuple[np.ndarray, np.ndarray]:
     """Closest-point projection of points onto a surface of facets (real arithmetic).
 
     Args:

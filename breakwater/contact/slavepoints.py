@@ -51,7 +51,14 @@ from dolfinx import fem
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import MeshError
 from breakwater.contact import searchkernels
-from breakwater.contact.projection import FacetGrid, closest_point, curve, project, shape
+from breakwater.contact.projection import (
+    INSIDE,
+    FacetGrid,
+    closest_point,
+    curve,
+    project,
+    shape,
+)
 from breakwater.model.pairs import PROBE_KEYS, StaticMeasures, facet_size, settlement
 
 if TYPE_CHECKING:
@@ -59,9 +66,6 @@ if TYPE_CHECKING:
 
 __all__ = ["ROUND_OFF", "SlavePoints", "SurfaceProbe", "nodal_pressure", "snapshot",
            "static_measures", "tributary"]
-
-#: A projection at |ξ| ≤ 1 + this is inside its facet (projection.project's default).
-PROJECTION_TOL = 1e-9
 
 ROUND_OFF = 1e-12
 """A static penetration below this fraction of the surfaces' extent is round-off."""
@@ -230,7 +234,7 @@ class SlavePoints:
         # is none, the master material point X̄₀.
         # (Compiled: projection.project's facets, its ξ to 1e-13, tests/test_contactkernels;
         # 1.1 ms a ParaView write on the separately meshed Goda case in Python.)
-        facet, xi = searchkernels.project(xs, xm, c.radius, PROJECTION_TOL)
+        facet, xi = searchkernels.project(xs, xm, c.radius, INSIDE)
         on = facet >= 0
         facet = np.where(on, facet, self.facet0)
         xi = np.where(on, xi, self.xi0)

@@ -82,8 +82,11 @@ def check_body(probe: str, body: str, names: Sequence[str]) -> None:
                         f"(bodies: {', '.join(names)})")
 
 
-def check_point(model: ContactModel, probe: str, body: str, point: Sequence[float]) -> None:
-    """A probe's point checked to lie in its body (collective: each rank its cells).
+def _located(model: ContactModel, probe: str, body: str, point: Sequence[float]
+             ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The point (3 values), this rank's cells of the body holding it and their owner.
+
+    The owner is the lowest rank holding it (collective).
 
     Raises:
         MeshError: The point is in none of the body's cells (one line, every rank).
@@ -92,12 +95,21 @@ def check_point(model: ContactModel, probe: str, body: str, point: Sequence[floa
     x[: len(point)] = point
     msh = model.body(body).submesh
     owned = np.arange(msh.topology.index_map(msh.topology.dim).size_local, dtype=np.int32)
-    if not model.comm.allreduce(len(locate_point(msh, owned, x, model.comm)), op=MPI.MAX):
-        raise MeshError(_not_in_body(probe, point, body))
+    comm = model.comm
+    local = locate_point(msh, owned, x, comm)
+    owner = comm.allreduce(comm.rank if len(local) else comm.size, op=MPI.MIN)
+    if owner == comm.size:
+        raise MeshError(f"probe '{probe}': point {tuple(point)} is not in body '{body}'")
+    return x, local, owner
 
 
-def _not_in_body(probe: str, point: Sequence[float], body: str) -> str:
-    return f"probe '{probe}': point {tuple(point)} is not in body '{body}'"
+def check_point(model: ContactModel, probe: str, body: str, point: Sequence[float]) -> None:
+    """A probe's point checked to lie in its body (collective: each rank its cells).
+
+    Raises:
+        MeshError: The point is in none of the body's cells (one line, every rank).
+    """
+    _located(model, probe, body, point)
 
 
 class PointProbe:
@@ -125,16 +137,9 @@ class PointProbe:
         self.name = name or f"{body}@{tuple(point)}"
         check_body(self.name, body, [b.spec.name for b in model.bodies])
         self.body = b = model.body(body)
-        x = np.zeros(3)
-        x[: len(point)] = point
-        self.point = x
-        msh = b.submesh
-        owned = np.arange(msh.topology.index_map(msh.topology.dim).size_local, dtype=np.int32)
         comm = model.comm
-        local = locate_point(msh, owned, x, comm)
-        self.owner = comm.allreduce(comm.rank if len(local) else comm.size, op=MPI.MIN)
-        if self.owner == comm.size:
-            raise MeshError(_not_in_body(self.name, point, body))
+        x, local, self.owner = _located(model, self.name, body, point)
+        self.point = x
         self._cell = int(local[0]) if len(local) else -1
         # The value is Σ φ_j(x) u_j over the cell's DOF blocks: the basis functions at
         # the point, found once by evaluating each of them (the owner only).

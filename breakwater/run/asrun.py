@@ -61,9 +61,8 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
         if not isinstance(value, cls):
             raise TypeError(f"run: {name}: expected {cls.__name__} ({hint}), got "
                             f"{type(value).__name__}")
-    for p in output.probes:
+    for p in output.probes:  # (the point: collective, each rank searches its cells)
         check_body(p.name, p.body, [b.spec.name for b in model.bodies])
-    for p in output.probes:  # (collective: each rank searches its cells)
         check_point(model, p.name, p.body, p.point)
     general = [p.name for p in model.surface_pairs]
     for q in output.pair_probes:

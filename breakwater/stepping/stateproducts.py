@@ -33,6 +33,8 @@ products to round-off, not to the bit.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -213,9 +215,9 @@ class StateProducts:
         same = equal(s[0], u) and equal(s[1], v) and equal(s[2], a)
         if not self.all(same):
             ptr, col, m_val, k_val = self._csr
-            x = self._x
-            for k, y in enumerate((u, v, a)):
-                self.with_ghosts(y, x[k])
+            x: Sequence[np.ndarray] = (u, v, a)  # no ghosts (one rank): the state itself
+            if self._scatter is not None:
+                x = [self.with_ghosts(y, row) for y, row in zip(x, self._x, strict=True)]
             self._P.setflags(write=True)
             state_products(ptr, col, m_val, k_val, x[0], x[1], x[2], self._P)
             self._P.setflags(write=False)
