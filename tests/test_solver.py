@@ -365,7 +365,13 @@ def test_an_unchanged_jacobian_keeps_its_factorisation(folder: pathlib.Path,
     the last iteration (the closed points stay), the Jacobian is left as it is and its
     LU factors are kept (PETSc's MatLUFactorNum counted: one per Jacobian assembled).
     The state and the iterations are those of the solve that assembles and factorises
-    every Jacobian, bit for bit (the same matrices, the same factors)."""
+    every Jacobian: bit for bit on one rank (the same matrices, the same factors); on
+    several, to 1e-13 of the largest displacement. There MUMPS's OpenMP threads (two
+    per rank by default here) make factorising the same matrix again round off
+    differently now and then: 3 of 80 two-rank solves differed by 1e-19 m of 3.7e-5 m,
+    none of 80 with ``OMP_NUM_THREADS=1`` (2026-11-28). A Jacobian kept where it
+    changed would converge to the solution only within Newton's tolerance (1e-10 and
+    more of it) and in other iterations."""
     from breakwater.stepping import snesassembly
 
     PETSc.Log.begin()
@@ -387,6 +393,12 @@ def test_an_unchanged_jacobian_keeps_its_factorisation(folder: pathlib.Path,
     state, its, factored = solve(_blocks(folder / "kept.msh"))
     monkeypatch.setattr(snesassembly.ConstantBulk, "_unchanged", lambda self: False)
     state_all, its_all, factored_all = solve(_blocks(folder / "kept.msh"))
-    assert its == its_all and np.array_equal(state, state_all)
+    assert its == its_all
+    if COMM.size == 1:
+        assert np.array_equal(state, state_all)
+    else:
+        scale = COMM.allreduce(np.abs(state_all).max(), op=MPI.MAX)
+        difference = COMM.allreduce(np.abs(state - state_all).max(), op=MPI.MAX)
+        assert difference <= 1e-13 * scale
     assert sum(kept) >= 2 and factored_all == its  # every iteration factorised
     assert factored == its - sum(kept)
