@@ -123,8 +123,16 @@ def test_a_misspelt_setting_of_a_built_model_is_refused(model: ContactModel) -> 
         assert name not in vars(model)
     assert model.damping is damping and model.gravity.value.tolist() == gravity
     assert (float(model.α.value), float(model.β.value)) == (0.0, 0.0)
-    # The model's own attributes, public and private, are set as before.
-    model.degree = model.degree
+    # What it was built from is refused too (before: model.degree = 1 was taken and the
+    # spaces stayed quadratic); its private attributes are set as before.
+    for name, value in (("degree", 1), ("mesh", model.mesh), ("bcs", [])):
+        before = getattr(model, name)
+        with pytest.raises(AttributeError, match=re.escape(
+                f"cannot change model.{name}: the built model's spaces, forms and "
+                f"conditions were made from it; give ContactModel the new {name}") +
+                ".*build it again"):
+            setattr(model, name, value)
+        assert getattr(model, name) is before
     model._solvers += 1
     model._scratch = 1
     del model._scratch

@@ -14,7 +14,8 @@ initial state (``model.initial``), checked against the model when set
 have (``"Caisson"``) or a load index beyond ``model.loads`` was taken and ignored (the
 run started at rest, its numbers those of no velocity). An attribute the model does not
 have is refused when set (:class:`KnownAttributes`): ``model.dampng = Damping(...)`` was
-taken and the run went on with the old damping.
+taken and the run went on with the old damping; so is one it built from
+(``model.degree = 1``, ``model.mesh = ...``): taken, and the run went on with the old.
 """
 
 from __future__ import annotations
@@ -66,21 +67,29 @@ class BuiltPart:
 
 
 class KnownAttributes:
-    """A built model's attributes: setting a public one it does not have is refused.
+    """A built model's attributes: only its settings may be set.
 
     A misspelt setting (``model.dampng = Damping(alpha=20.0)``, ``model.gravty = ...``)
-    was a new attribute nothing read: the run went on with the old value. Once the
-    model is built (``_built`` set, the last step of its ``__init__``), a public name
-    that is neither the model's nor its class's is refused (``AttributeError``, one
-    line, with the closest name); private ``_x`` names and the model's own attributes
-    are set as before.
+    was a new attribute nothing read: the run went on with the old value; so was a new
+    value of one the model was built from (``model.degree = 1``: the spaces, forms and
+    conditions stayed quadratic). Once the model is built (``_built`` set, the last
+    step of its ``__init__``), a public name that is neither the model's nor its
+    class's is refused (``AttributeError``, one line, with the closest name), and so is
+    the model's own public attribute (build it again instead); the class's settings
+    (properties and checked descriptors: damping, gravity, initial) and private ``_x``
+    names are set as before.
     """
 
     def __setattr__(self, name: str, value: Any) -> None:
-        if name.startswith("_") or "_built" not in vars(self) or name in vars(self) \
-                or hasattr(type(self), name):
+        if name.startswith("_") or "_built" not in vars(self) or hasattr(type(self), name):
             object.__setattr__(self, name, value)
             return
+        if name in vars(self):
+            raise AttributeError(
+                f"cannot change model.{name}: the built model's spaces, forms and conditions "
+                f"were made from it; give ContactModel the new {name} (or change the case) "
+                "and build it again (model.damping, model.gravity and model.initial may be "
+                "set)")
         names = sorted(n for n in {*dir(type(self)), *vars(self)} if not n.startswith("_"))
         raise AttributeError(f"model.{name}: a built {type(self).__name__} has no attribute "
                              f"'{name}'{suggest(name, names)}, so setting it would change "
