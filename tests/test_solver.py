@@ -366,10 +366,11 @@ def test_an_unchanged_jacobian_keeps_its_factorisation(folder: pathlib.Path,
     LU factors are kept (PETSc's MatLUFactorNum counted: one per Jacobian assembled).
     The state and the iterations are those of the solve that assembles and factorises
     every Jacobian: bit for bit on one rank (the same matrices, the same factors); on
-    several, to 1e-13 of the largest displacement. There MUMPS's OpenMP threads (two
-    per rank by default here) make factorising the same matrix again round off
-    differently now and then: 3 of 80 two-rank solves differed by 1e-19 m of 3.7e-5 m,
-    none of 80 with ``OMP_NUM_THREADS=1`` (2026-11-28). A Jacobian kept where it
+    several, to 1e-13 of the largest displacement. There MUMPS's factorisation and
+    solve of the same matrix and residual round off differently now and then: the
+    solve that factorises every Jacobian differed from run to run in 5 of 260 two-rank
+    runs, by 1e-19 m of 3.7e-5 m, the Jacobians, residuals and iterates before hashed
+    equal, with one BLAS thread per rank too (2026-11-28). A Jacobian kept where it
     changed would converge to the solution only within Newton's tolerance (1e-10 and
     more of it) and in other iterations."""
     from breakwater.stepping import snesassembly
