@@ -36,10 +36,17 @@ OVERRIDE = "--set"
 
 
 def _split(spec: str) -> tuple[str, str] | None:
-    """``key=value`` split at the first ``=`` outside the key's quotes (None: no ``=``)."""
-    quote = ""
+    r"""``key=value`` split at the first ``=`` outside the key's quotes (None: no ``=``).
+
+    In a double-quoted part a backslash escapes the next character (TOML's ``"a\"b"``).
+    """
+    quote, escaped = "", False
     for i, c in enumerate(spec):
-        if quote:
+        if escaped:
+            escaped = False
+        elif quote == '"' and c == "\\":
+            escaped = True
+        elif quote:
             quote = "" if c == quote else quote
         elif c in "\"'":
             quote = c
