@@ -40,7 +40,12 @@ from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
-from breakwater.outputs.bodysizes import body_sizes, gravity_warning, size_warning
+from breakwater.outputs.bodysizes import (
+    body_sizes,
+    density_warnings,
+    gravity_warning,
+    size_warning,
+)
 from breakwater.statics.initial import unsupported, velocity_conflict
 from breakwater.statics.rigidmodes import loose_modes
 from breakwater.stepping.stepsize import resolved_step
@@ -304,7 +309,9 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     if loose:
         extra["mesh"].setdefault("warnings", []).extend(loose)
     extra["mesh"]["bodies"] = body_sizes(model)
-    for line in (size_warning(extra["mesh"]["bodies"]), gravity_warning(case.gravity)):
+    densities = {b.name: b.density for b in case.bodies}
+    for line in (size_warning(extra["mesh"]["bodies"]), gravity_warning(case.gravity),
+                 *density_warnings(densities)):
         if line is not None:
             extra["mesh"].setdefault("warnings", []).append(line)
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)

@@ -16,7 +16,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["LARGEST_EXTENT", "LARGEST_VOLUME", "body_sizes", "gravity_warning", "size_warning"]
+__all__ = ["DENSITY_RANGE", "LARGEST_EXTENT", "LARGEST_VOLUME", "body_sizes",
+           "density_warnings", "gravity_warning", "size_warning"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
@@ -28,6 +29,14 @@ LARGEST_VOLUME = 1e7
 drawn in mm spans less than :data:`LARGEST_EXTENT` (Goda's 1.16 m mound: 1160 m) but its
 volume is 1e9 times its own (the mound's 0.03 m³: 3e7 m³); a prototype mound 100 m wide
 and 15 m high is 1e7 m³ over 7 km of breakwater."""
+
+
+DENSITY_RANGE = (10.0, 23000.0)
+"""kg/m³: a body's density outside this is warned about. The lightest fill a
+breakwater or an embankment is built of, EPS geofoam, is 10-40 kg/m³; osmium, the
+densest element, 22 590. A density typed in g/cm³ or t/m³ (concrete 2.4, sand 1.6-2.1)
+is 1000 times too small: the run took a 2.3 kg/m³ caisson without a word (its weight,
+the contact's pressure and its inertia 1000 times too small)."""
 
 
 def body_sizes(model: ContactModel) -> dict[str, dict[str, Any]]:
@@ -68,6 +77,21 @@ def size_warning(sizes: dict[str, dict[str, Any]]) -> str | None:
             f"(a mesh drawn in mm is 1000 times too large; scale it, e.g. gmsh's "
             f"Mesh.ScalingFactor = 0.001); the bodies' sizes and masses: summary.json, "
             f"mesh.bodies")
+
+
+def density_warnings(densities: dict[str, float]) -> list[str]:
+    """One line per body whose density is outside :data:`DENSITY_RANGE` (kg/m³ by name)."""
+    lo, hi = DENSITY_RANGE
+    lines = []
+    for name, ρ in densities.items():
+        if ρ < lo:
+            lines.append(f"bodies.{name}: density {ρ:g} kg/m³, below any solid's (EPS "
+                         f"geofoam, the lightest fill: 10-40): in g/cm³ or t/m³? breakwater "
+                         f"reads kg/m³ ({ρ:g} g/cm³ = {1000 * ρ:g} kg/m³)")
+        elif ρ > hi:
+            lines.append(f"bodies.{name}: density {ρ:g} kg/m³, above any material's "
+                         f"(osmium: 22 590): in g/m³? breakwater reads kg/m³")
+    return lines
 
 
 def gravity_warning(gravity: tuple[float, ...]) -> str | None:
