@@ -40,12 +40,7 @@ from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
-from breakwater.outputs.bodysizes import (
-    body_sizes,
-    density_warnings,
-    gravity_warning,
-    size_warning,
-)
+from breakwater.outputs.bodysizes import unit_checks
 from breakwater.statics.initial import unsupported, velocity_conflict
 from breakwater.statics.rigidmodes import loose_modes
 from breakwater.stepping.stepsize import resolved_step
@@ -308,12 +303,11 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     loose = loose_modes(model)  # rigid modes only contact holds: logged when the run starts
     if loose:
         extra["mesh"].setdefault("warnings", []).extend(loose)
-    extra["mesh"]["bodies"] = body_sizes(model)
-    densities = {b.name: b.density for b in case.bodies}
-    for line in (size_warning(extra["mesh"]["bodies"]), gravity_warning(case.gravity),
-                 *density_warnings(densities)):
-        if line is not None:
-            extra["mesh"].setdefault("warnings", []).append(line)
+    units = unit_checks(model)
+    extra["mesh"]["bodies"] = units["bodies"]
+    extra["mesh"].setdefault("warnings", []).extend(units.get("warnings", ()))
+    if not extra["mesh"]["warnings"]:
+        del extra["mesh"]["warnings"]
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
 __all__ = ["DENSITY_RANGE", "LARGEST_EXTENT", "LARGEST_VOLUME", "body_sizes",
-           "density_warnings", "gravity_warning", "size_warning"]
+           "density_warnings", "gravity_warning", "size_warning", "unit_checks"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
@@ -106,3 +106,24 @@ def gravity_warning(gravity: tuple[float, ...]) -> str | None:
     return (f"gravity: |g| = {g:g} m/s², 1000 times the Earth's: g in mm/s²? breakwater "
             "reads SI units (m, kg, s, Pa): gravity = [0.0, -9.81"
             + (", 0.0]" if len(gravity) == 3 else "]"))
+
+
+def unit_checks(model: ContactModel) -> dict[str, Any]:
+    """The bodies' sizes and the lines of a case whose units look off (collective).
+
+    What a case file's build adds to the summary's ``mesh`` entry, for any model (one
+    built in Python too: its mesh in mm, g in mm/s² or a density in g/cm³ ran without a
+    word).
+
+    Returns:
+        ``bodies`` (:func:`body_sizes`) and, where any, ``warnings``: the lines of
+        :func:`size_warning`, :func:`gravity_warning` and :func:`density_warnings`.
+    """
+    sizes = body_sizes(model)
+    gravity = tuple(float(g) for g in model.gravity.value)
+    lines = [size_warning(sizes), gravity_warning(gravity),
+             *density_warnings({b.spec.name: b.spec.material.density for b in model.bodies})]
+    out: dict[str, Any] = {"bodies": sizes}
+    if any(lines):
+        out["warnings"] = [line for line in lines if line]
+    return out

@@ -30,6 +30,7 @@ from breakwater.energy.ledger import EnergyLedger
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
+from breakwater.outputs.bodysizes import unit_checks
 from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.monitor import Monitor, interface_state
 from breakwater.outputs.stormrecord import write_storm_record
@@ -154,6 +155,8 @@ class Session:
         self.fingerprint = fingerprint
         self.extra = dict(extra_summary or {})
         self.extra.setdefault("fixed", model.fixed_summary())  # what holds the bodies
+        if "mesh" not in self.extra:  # a model built in Python: a case file's unit checks
+            self.extra["mesh"] = unit_checks(model)
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
