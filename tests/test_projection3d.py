@@ -1,0 +1,254 @@
+"""The closest-point projection onto triangular faces (breakwater.contact.projection3d).
+
+Shape functions (partition of unity, interpolation, derivatives against a complex step),
+the projection onto a flat face (the foot of the perpendicular) and onto a quadratic face
+on a sphere, the projection's complex-step derivative against finite differences, the
+candidate search against a brute-force loop, and the node order of dolfinx's P2
+tetrahedron facets. Pure array tests (dolfinx on COMM_SELF): under ``mpiexec -n 2``
+every rank runs them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+from breakwater.contact.projection3d import (
+    GMSH_TO_BASIX,
+    NODES,
+    FacetGrid,
+    closest_point,
+    inside,
+    project,
+    residual,
+    shape,
+    surface,
+    unit_normal,
+)
+
+H = 1e-30  # complex step: exact derivatives to round-off, no cancellation
+
+
+@pytest.mark.parametrize("nn", [3, 6])
+def test_shape_functions(nn: int) -> None:
+    """Partition of unity, N_k(node j) = δ_kj, reproduction of the coordinates, and the
+    first and second derivatives against complex steps of N and ∂N."""
+    rng = np.random.default_rng(0)
+    xi = rng.uniform(-0.3, 1.0, (20, 2))
+    N, dN, d2N = shape(xi, nn)
+    np.testing.assert_allclose(N.sum(axis=1), 1.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dN.sum(axis=1), 0.0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(N @ NODES[nn], xi, rtol=0, atol=1e-15)  # x = Σ N_k x_k
+    np.testing.assert_allclose(shape(NODES[nn], nn)[0], np.eye(nn), rtol=0, atol=1e-15)
+    for a in range(2):
+        z = xi.astype(complex)
+        z[:, a] += 1j * H
+        Nz, dNz, _ = shape(z, nn)
+        np.testing.assert_allclose(dN[..., a], Nz.imag / H, rtol=0, atol=1e-14)
+        # ∂/∂a of (∂N/∂ξ, ∂N/∂η): columns (ξξ, ξη) for a = ξ, (ξη, ηη) for a = η.
+        np.testing.assert_allclose(d2N[..., [a, a + 1]], dNz.imag / H, rtol=0, atol=1e-13)
+    if nn == 6:  # a quadratic: interpolates ξ² + 3ξη − η² exactly
+        f = NODES[6][:, 0] ** 2 + 3 * NODES[6][:, 0] * NODES[6][:, 1] - NODES[6][:, 1] ** 2
+        np.testing.assert_allclose(N @ f, xi[:, 0] ** 2 + 3 * xi[:, 0] * xi[:, 1]
+                                   - xi[:, 1] ** 2, rtol=0, atol=1e-14)
+
+
+def test_flat_face_is_the_foot_of_the_perpendicular() -> None:
+    """On a flat face (3 nodes, and 6 with the mid-edge nodes at the edges' midpoints)
+    the projection is the foot of the perpendicular, p − ((p − x₀)·n) n, to 1e-14 of the
+    coordinates (points over the triangle and up to a third of it beyond its edges: the
+    Newton keeps its iterates within a face's width of it)."""
+    rng = np.random.default_rng(1)
+    m = 50
+    corners = rng.normal(size=(m, 3, 3))
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    xi_over = rng.uniform(-0.3, 0.8, (m, 2))
+    points = np.einsum("ma,mad->md", np.column_stack([1 - xi_over.sum(axis=1), xi_over]),
+                       corners) + rng.normal(size=(m, 1)) * n
+    foot = points - np.sum((points - corners[:, 0]) * n, axis=1)[:, None] * n
+    mids = np.stack([0.5 * (corners[:, 1] + corners[:, 2]), 0.5 * (corners[:, 0] + corners[:, 2]),
+                     0.5 * (corners[:, 0] + corners[:, 1])], axis=1)
+    for nodes in (corners, np.concatenate([corners, mids], axis=1)):
+        xi = closest_point(points, nodes)
+        x, dx, _ = surface(nodes, xi)
+        scale = np.abs(corners).max(axis=(1, 2)) + np.abs(points).max(axis=1)
+        assert np.all(np.linalg.norm(x - foot, axis=1) <= 1e-14 * scale)
+        np.testing.assert_allclose(np.abs(np.sum(unit_normal(dx) * n, axis=1)), 1.0,
+                                   rtol=0, atol=1e-14)
+
+
+def _sphere_patch(R: float, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """A 6-node face whose nodes lie on the sphere |x| = R: a flat triangle of size h
+    near the north pole and its edges' midpoints pushed radially onto the sphere."""
+    flat = np.array([[0.0, 0.0], [h, 0.1 * h], [0.2 * h, 0.9 * h]]) - 0.3 * h
+    corners = np.column_stack([flat, np.full(3, R)])
+    mids = np.array([0.5 * (corners[1] + corners[2]), 0.5 * (corners[0] + corners[2]),
+                     0.5 * (corners[0] + corners[1])])
+    nodes = np.concatenate([corners, mids])
+    return R * nodes / np.linalg.norm(nodes, axis=1)[:, None], corners
+
+
+def test_quadratic_face_on_a_sphere() -> None:
+    """Points at distance d outside and inside a sphere of radius R project onto a 6-node
+    face with its nodes on the sphere at distance |d| to within δ, and the closest-point
+    conditions vanish to 1e-12.
+
+    The bound: if every point of the face lies within δ of the sphere (| |x| − R | ≤ δ),
+    then |x̄ − p| ≥ | |p| − |x̄| | ≥ | |p| − R | − δ (triangle inequality), and the
+    face's point x* on the ray from the centre through p (the points are chosen on rays
+    through the face) is within | |p| − R | + δ of p, and so is its closest point: the
+    distance is | |p| − R | to ±δ. δ is the face's radial interpolation error, measured
+    on a lattice of 1/400 of the reference triangle and doubled (the error is a smooth
+    function of ξ, of size h³/R²; between lattice points it changes by far less than
+    itself). h/R = 0.4 makes δ ≈ 1e-4 R, far above the Newton's accuracy, so the test
+    checks the closest point, not the round-off.
+    """
+    R, h = 1.0, 0.4
+    nodes, corners = _sphere_patch(R, h)
+    n = 400
+    i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+    lattice = np.column_stack([i.ravel(), j.ravel()])[(i + j).ravel() <= n] / n
+    radial = np.linalg.norm(surface(np.repeat(nodes[None], len(lattice), 0), lattice)[0],
+                            axis=1) - R
+    delta = 2 * float(np.abs(radial).max())
+    assert 1e-5 < delta < 1e-3
+    rng = np.random.default_rng(2)
+    m = 200
+    bary = rng.dirichlet([3.0, 3.0, 3.0], m)  # rays through the face, away from its edges
+    direction = bary @ corners
+    direction /= np.linalg.norm(direction, axis=1)[:, None]
+    d = np.concatenate([rng.uniform(0.01, 0.5, m // 2), -rng.uniform(0.01, 0.5, m // 2)])
+    points = (R + d)[:, None] * direction
+    face = np.repeat(nodes[None], m, axis=0)
+    xi = closest_point(points, face)
+    assert np.all(inside(xi, 0.0))
+    x = surface(face, xi)[0]
+    dist = np.linalg.norm(x - points, axis=1)
+    err = np.abs(dist - np.abs(d))
+    assert np.all(err <= delta)
+    assert err.max() > 0.01 * delta  # the quadratic face, not a sphere: δ is not slack
+    assert np.abs(residual(points, face, xi)).max() < 1e-12
+    # The distance is a minimum: no lattice point of the face is nearer.
+    lattice_x = surface(np.repeat(nodes[None], len(lattice), 0), lattice)[0]
+    for k in range(0, m, 20):
+        assert dist[k] <= np.linalg.norm(lattice_x - points[k], axis=1).min() + 1e-15
+
+
+def test_projection_derivative_complex_step_against_differences() -> None:
+    """∂ξ/∂p and ∂ξ/∂x_node of the projection onto a curved face by a complex step
+    against central differences (step 1e-6: truncation ≈ 1e-12 · ξ''', round-off
+    ≈ 1e-16 |ξ|/1e-6 = 1e-10 |ξ|; tolerance 1e-8 + 1e-7 of the derivative)."""
+    nodes, _ = _sphere_patch(1.0, 0.4)
+    rng = np.random.default_rng(3)
+    m = 10
+    face = np.repeat(nodes[None], m, 0) + 0.01 * rng.normal(size=(m, 6, 3))
+    points = face[:, :3].mean(axis=1) + rng.normal(scale=0.2, size=(m, 3))
+    eps = 1e-6
+    for which in ("point", "node"):
+        for c in range(3):
+            dp = np.zeros((m, 3))
+            dn = np.zeros((m, 6, 3))
+            if which == "point":
+                dp[:, c] = 1.0
+            else:
+                dn[:, 4, c] = 1.0  # a mid-edge node
+            cs = np.imag(closest_point(points + 1j * H * dp, face + 1j * H * dn)) / H
+            fd = (np.real(closest_point(points + eps * dp, face + eps * dn))
+                  - np.real(closest_point(points - eps * dp, face - eps * dn))) / (2 * eps)
+            np.testing.assert_allclose(cs, fd, rtol=1e-7, atol=1e-8)
+            assert np.abs(cs).max() > 0.1  # the derivative is not trivially zero
+
+
+def _bumpy(n: int, nn: int) -> np.ndarray:
+    """Faces ``(2n², nn, 3)`` of z = 0.1 sin 3x cos 2y over [0, 1]², a structured grid
+    with alternating diagonals, interior vertices jittered, mid-edge nodes on the surface
+    (curved faces)."""
+    rng = np.random.default_rng(4)
+    s = np.linspace(0.0, 1.0, n + 1)
+    X, Y = np.meshgrid(s, s, indexing="ij")
+    jitter = rng.uniform(-0.2, 0.2, (2, n + 1, n + 1)) / n
+    jitter[:, [0, -1], :] = 0
+    jitter[:, :, [0, -1]] = 0
+    X, Y = X + jitter[0], Y + jitter[1]
+
+    def lift(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.stack([x, y, 0.1 * np.sin(3 * x) * np.cos(2 * y)], axis=-1)
+
+    V = lift(X, Y)
+    faces = []
+    for i in range(n):
+        for j in range(n):
+            a, b, c, d = V[i, j], V[i + 1, j], V[i + 1, j + 1], V[i, j + 1]
+            tris = [(a, b, c), (a, c, d)] if (i + j) % 2 else [(a, b, d), (b, c, d)]
+            faces.extend(tris)
+    corners = np.array(faces)
+    if nn == 3:
+        return corners
+    pairs = ((1, 2), (0, 2), (0, 1))
+    mids = np.stack([0.5 * (corners[:, a] + corners[:, b]) for a, b in pairs], axis=1)
+    return np.concatenate([corners, lift(mids[..., 0], mids[..., 1])], axis=1)
+
+
+@pytest.mark.parametrize("nn", [3, 6])
+def test_candidate_search_is_the_brute_force_nearest(nn: int) -> None:
+    """project() (grid candidates, box filter, Newton, nearest inside projection) gives the
+    face and (ξ, η) of a loop over every face (same acceptance), for points above and
+    below a bumpy surface; many points land on a face other than their start's."""
+    faces = _bumpy(8, nn)
+    rng = np.random.default_rng(5)
+    m = 300
+    x, y = rng.uniform(-0.05, 1.05, m), rng.uniform(-0.05, 1.05, m)
+    points = np.column_stack([x, y, 0.1 * np.sin(3 * x) * np.cos(2 * y)
+                              + rng.uniform(-0.06, 0.06, m)])
+    radius = 0.12
+    face, xi = project(points, faces, FacetGrid(faces, radius))
+    expect = np.full(m, -1)
+    expect_xi = np.zeros((m, 2))
+    for k in range(m):
+        p = np.repeat(points[k][None], len(faces), 0)
+        z = np.real(closest_point(p, faces, iterations=10, tol=1e-12))
+        x, dx, _ = surface(faces, z)
+        r = x - p
+        dist = np.sum(r * r, axis=1)
+        stationary = np.all(np.abs(np.einsum("md,mad->ma", r, dx))
+                            <= 1e-10 * np.sum(dx * dx, axis=(1, 2))[:, None], axis=1)
+        ok = np.flatnonzero(inside(z) & (dist <= radius ** 2) & stationary)
+        if len(ok):
+            best = ok[np.argmin(dist[ok])]
+            expect[k], expect_xi[k] = best, z[best]
+    np.testing.assert_array_equal(face, expect)
+    np.testing.assert_allclose(xi, expect_xi, rtol=0, atol=1e-12)
+    assert (face >= 0).sum() > 0.7 * m and (face < 0).sum() > 0  # some off the surface
+    # The nearest of all faces' closest points is the one found: the continuation onto
+    # the neighbouring face where the projection leaves a face.
+    start = np.array([np.argmin(np.linalg.norm(faces[:, :3].mean(axis=1) - p, axis=1))
+                      for p in points])
+    assert np.sum((face >= 0) & (face != start)) > 10
+
+
+def test_dolfinx_p2_tetrahedron_facet_closure_order() -> None:
+    """dolfinx's closure DOFs of a P2 tetrahedron's facet: the three vertices, then the
+    mid-edge nodes of the edges (1, 2), (0, 2), (0, 1), the order of NODES[6], on every
+    facet of every cell of a mesh; a gmsh 6-node triangle (mid-edge nodes (0, 1), (1, 2),
+    (2, 0)) reordered by GMSH_TO_BASIX."""
+    from dolfinx import fem, mesh
+    from mpi4py import MPI
+
+    msh = mesh.create_unit_cube(MPI.COMM_SELF, 2, 2, 1, cell_type=mesh.CellType.tetrahedron)
+    V = fem.functionspace(msh, ("Lagrange", 2, (3,)))
+    closure = V.dofmap.dof_layout.entity_closure_dofs
+    coords = V.tabulate_dof_coordinates()
+    linear = shape(NODES[6], 3)[0]  # the vertices' interpolation at the six nodes
+    for c in range(msh.topology.index_map(3).size_local):
+        cell = V.dofmap.cell_dofs(c)
+        for f in range(4):
+            X = coords[cell[closure(2, f)]]
+            # Straight edges: the nodes are the vertices' interpolation at NODES[6].
+            np.testing.assert_allclose(linear @ X[:3], X, rtol=0, atol=1e-15)
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    gmsh = np.concatenate([corners, 0.5 * (corners[[0, 1, 2]] + corners[[1, 2, 0]])])
+    np.testing.assert_array_equal(gmsh[GMSH_TO_BASIX], NODES[6])
