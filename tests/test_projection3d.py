@@ -230,6 +230,23 @@ def test_candidate_search_is_the_brute_force_nearest(nn: int) -> None:
     assert np.sum((face >= 0) & (face != start)) > 10
 
 
+def test_a_bulging_face_is_a_candidate() -> None:
+    """A 6-node face bulges beyond its nodes' box (flat corners at z = 0, mid-edge nodes
+    at z = ½: the surface reaches z = 2(L₀L₁ + L₁L₂ + L₀L₂) = ⅔ at the centroid): a point
+    0.05 above the top, within the radius 0.1 of it but 0.217 above the nodes' box, is
+    projected (project()'s box filter widens the box by the mid-edge nodes' offsets),
+    onto the centroid, at distance 0.05."""
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    mids = np.array([[0.5, 0.5, 0.5], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+    faces = np.concatenate([corners, mids])[None]
+    point = np.array([[1 / 3, 1 / 3, 2 / 3 + 0.05]])
+    face, xi = project(point, faces, FacetGrid(faces, 0.1))
+    assert face[0] == 0
+    np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(surface(faces, xi)[0][0], [1 / 3, 1 / 3, 2 / 3], rtol=0,
+                               atol=1e-14)
+
+
 def test_dolfinx_p2_tetrahedron_facet_closure_order() -> None:
     """dolfinx's closure DOFs of a P2 tetrahedron's facet: the three vertices, then the
     mid-edge nodes of the edges (1, 2), (0, 2), (0, 1), the order of NODES[6], on every
