@@ -17,6 +17,7 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 
 # isort: split
 from breakwater.contact.projection3d import (
+    FLIP,
     GMSH_TO_BASIX,
     NODES,
     FacetGrid,
@@ -79,6 +80,20 @@ def test_flat_face_is_the_foot_of_the_perpendicular() -> None:
         assert np.all(np.linalg.norm(x - foot, axis=1) <= 1e-14 * scale)
         np.testing.assert_allclose(np.abs(np.sum(unit_normal(dx) * n, axis=1)), 1.0,
                                    rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("nn", [3, 6])
+def test_flipped_face_is_the_same_surface_reversed(nn: int) -> None:
+    """nodes[:, FLIP] is the same (curved) face, (ξ, η) ↦ (η, ξ), with the opposite normal."""
+    nodes, _ = _sphere_patch(1.0, 0.4)
+    nodes = nodes[None, :nn]
+    rng = np.random.default_rng(6)
+    xi = rng.dirichlet([1.0, 1.0, 1.0], 10)[:, 1:]
+    face = np.repeat(nodes, 10, 0)
+    x, dx, _ = surface(face, xi)
+    y, dy, _ = surface(face[:, FLIP[:nn]], xi[:, ::-1])
+    np.testing.assert_allclose(y, x, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(unit_normal(dy), -unit_normal(dx), rtol=0, atol=1e-14)
 
 
 def _sphere_patch(R: float, h: float) -> tuple[np.ndarray, np.ndarray]:

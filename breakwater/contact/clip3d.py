@@ -6,7 +6,10 @@ The 3-D counterpart of the 2-D pair's segments
 master vertices project onto it, Gauss points per segment), not yet used by a pair
 (issue 25). It follows the segmentation of Puso & Laursen (2004), "A mortar
 segment-to-segment contact method for large deformation solid mechanics", Comput.
-Methods Appl. Mech. Engrg. 193, 601-629, §3 (their figs. 3-4), on triangles:
+Methods Appl. Mech. Engrg. 193, 601-629, on triangles. They project the slave and the
+master facet onto a plane through the slave facet's centre along an averaged normal and
+intersect the two there; here the plane is the slave triangle's own (the plane of its
+corners: for a flat slave face the face itself, so the points need no mapping back):
 
 1. the master triangle's corners are projected onto the plane of the slave triangle's
    corners along its unit normal, and expressed in the slave's reference coordinates

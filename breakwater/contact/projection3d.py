@@ -33,11 +33,15 @@ import numpy as np
 
 from breakwater.contact.projection import INSIDE, STEP_TOL, FacetGrid
 
-__all__ = ["GMSH_TO_BASIX", "INSIDE", "NODES", "STEP_TOL", "FacetGrid", "closest_point",
+__all__ = ["FLIP", "GMSH_TO_BASIX", "INSIDE", "NODES", "STEP_TOL", "FacetGrid", "closest_point",
            "inside", "near", "project", "residual", "shape", "surface", "unit_normal"]
 
 GMSH_TO_BASIX = np.array([0, 1, 2, 4, 5, 3])
 """``nodes[:, GMSH_TO_BASIX]`` of a gmsh 6-node triangle are in this module's order."""
+
+FLIP = np.array([0, 2, 1, 3, 5, 4])
+"""``nodes[:, FLIP[:nn]]`` is the same face with the opposite normal (vertices 1 and 2
+swapped, and with them the mid-edge nodes of the edges (0, 2) and (0, 1))."""
 
 NODES = {3: np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
          6: np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5], [0.0, 0.5],
