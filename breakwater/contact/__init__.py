@@ -10,7 +10,8 @@
   :mod:`~breakwater.contact.penetration` (what the search cannot see);
 - 3-D general pairs' building blocks (not yet used by a pair, issue 25):
   :mod:`~breakwater.contact.projection3d` (closest-point projection onto triangular
-  faces), :mod:`~breakwater.contact.clip3d` (mortar segmentation of the slave surface).
+  faces; :mod:`~breakwater.contact.searchkernels3d` compiled),
+  :mod:`~breakwater.contact.clip3d` (mortar segmentation of the slave surface).
 
 The contact law itself is written once, in UFL and NumPy, in :mod:`breakwater.forms.contact`.
 """
