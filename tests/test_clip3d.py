@@ -6,7 +6,8 @@ slave across a gap, the square in a rotated plane): the integration points' weig
 to the square's area and integrate x, y, x², xy exactly (to 1e-12), and each point's
 master face holds its closest-point projection; a slave triangle partly outside the
 master surface gets the overlap's area; coinciding meshes give each slave face its own
-master face. Pure array tests: under ``mpiexec -n 2`` every rank runs them.
+master face; the compiled segmentation (searchkernels3d) gives the same points. Pure
+array tests: under ``mpiexec -n 2`` every rank runs them.
 """
 
 from __future__ import annotations
@@ -14,7 +15,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from breakwater.contact.clip3d import SLIVER, clip, integration_points, rule, segment_points
+from breakwater.contact import searchkernels3d
+from breakwater.contact.clip3d import (
+    ON_LINE,
+    SLIVER,
+    clip,
+    integration_points,
+    rule,
+    segment_points,
+)
 from breakwater.contact.projection3d import closest_point, inside, surface
 
 L = 1.3  # the square's side
@@ -143,3 +152,41 @@ def test_facing_and_clip() -> None:
     tri = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     xi, weight, _ = segment_points(tri, tri[None], degree=5)
     assert abs(np.sum(weight * xi[:, 0] ** 5) - 1 / 42) < 1e-15  # ∫ξ⁵ = 5!·1!/7! = 1/42
+
+
+def test_clip_decides_on_lines_not_round_off() -> None:
+    """A master corner 1e-16 (round-off) or 3e-12 (past ON_LINE) inside or outside the
+    hypotenuse gives the same five vertices (to 1e-11), and a master edge along η = 0
+    whose ends are 1e-16 on either side of it adds no vertex along it: the polygon's
+    vertices, and so its fan, do not depend on round-off (the segmentation of nested
+    meshes, and the compiled one, agree)."""
+    for eps in (1e-16, -1e-16, 3e-12, -3e-12):
+        polygon = clip(np.array([[0.2, 0.8 + eps], [1.9, -0.9], [-1.5, 0.8]]))
+        # The master's edges: η = 0.8, along ξ + η = 1, and η = 0.05 − ξ/2.
+        expect = [[0.0, 0.8], [0.2, 0.8], [1.0, 0.0], [0.1, 0.0], [0.0, 0.05]]
+        assert polygon.shape == (5, 2)
+        np.testing.assert_allclose(polygon[np.lexsort(np.round(polygon, 9).T)],
+                                   np.array(expect)[np.lexsort(np.array(expect).T)],
+                                   rtol=0, atol=1e-11)
+    polygon = clip(np.array([[0.0, 1e-16], [1.5, -1e-16], [1.2, 1.8]]))
+    assert len(polygon) == 3  # (0, 0), (1, 0) and where the third edge meets ξ + η = 1
+    assert sum(abs(p[1]) <= ON_LINE for p in polygon) == 2
+
+
+@pytest.mark.parametrize(("n_slave", "n_master", "jitter", "flip"),
+                         [(6, 4, 0.25, True), (17, 10, 0.25, True), (6, 3, 0.0, False)])
+def test_compiled_segmentation_is_the_reference(n_slave: int, n_master: int, jitter: float,
+                                                flip: bool) -> None:
+    """searchkernels3d.segment_points against integration_points: the same points in the
+    same order (slave and master faces equal), ξ to 1e-13 and weights to 1e-15 (the same
+    arithmetic, the plane's coordinates summed in another order)."""
+    slave = _square(n_slave, 1, False, jitter=jitter)
+    master = _square(n_master, 2, flip, 1e-3, facing_down=True, jitter=jitter)
+    g, w = rule(2)
+    for facing in (True, False):
+        ref = integration_points(slave, master, 0.01, facing=facing)
+        got = searchkernels3d.segment_points(slave, master, 0.01, g, w, SLIVER, facing)
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[3], ref[3])
+        np.testing.assert_allclose(got[1], ref[1], rtol=0, atol=1e-13)
+        np.testing.assert_allclose(got[2], ref[2], rtol=0, atol=1e-15)

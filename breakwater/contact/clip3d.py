@@ -17,7 +17,7 @@ corners: for a flat slave face the face itself, so the points need no mapping ba
    basis of the slave's edges ``x₁ − x₀, x₂ − x₀``);
 2. the projected master triangle is clipped against the reference triangle
    (:func:`clip`, Sutherland–Hodgman: both are convex, so their intersection is one
-   convex polygon);
+   convex polygon; a vertex within :data:`ON_LINE` of a clipping line is on it);
 3. a polygon below ``sliver`` of the slave's reference area is dropped (an edge of the
    master along an edge of the slave leaves a degenerate polygon of round-off area);
 4. each polygon is cut into triangles by a fan from its vertices' mean (inside: the
@@ -46,12 +46,20 @@ import numpy as np
 
 from breakwater.contact.projection import FacetGrid
 
-__all__ = ["SLIVER", "clip", "integration_points", "plane_coordinates", "rule",
+__all__ = ["ON_LINE", "SLIVER", "clip", "integration_points", "plane_coordinates", "rule",
            "segment_points"]
 
 SLIVER = 1e-12
 """A polygon (or one of its triangles) smaller than this fraction of the slave's
 reference area is dropped: round-off, ≈ 1e-16 of the area where edges coincide."""
+
+ON_LINE = 1e-12
+"""A vertex within this of a clipping line (in the reference coordinates) is on it: kept,
+not crossed. Without it, round-off decides: a master corner on a slave edge (nested
+meshes, a shared boundary) was kept or replaced by the crossings of its two edges, and a
+master edge along a slave edge crossed it at a point anywhere along it: the polygon the
+same to round-off, but its vertices, and so its fan (from their mean), not."""
+
 
 # The reference triangle as half-planes a·(ξ, η) + b ≥ 0.
 _HALF_PLANES = ((np.array([1.0, 0.0]), 0.0), (np.array([0.0, 1.0]), 0.0),
@@ -105,6 +113,7 @@ def clip(polygon: np.ndarray) -> np.ndarray:
         if not len(out):
             break
         d = out @ a + b
+        d[np.abs(d) <= ON_LINE] = 0.0  # on the line: kept, not crossed
         nxt = np.roll(np.arange(len(out)), -1)
         kept = []
         for i, j in enumerate(nxt):

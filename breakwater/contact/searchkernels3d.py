@@ -1,4 +1,4 @@
-"""The compiled closest-point projection onto triangular faces (3-D, issue 25).
+"""The compiled 3-D search: projection onto triangular faces and segmentation (issue 25).
 
 The arithmetic of :mod:`breakwater.contact.projection3d` in loops
 (:mod:`breakwater.common.jit`), as :mod:`breakwater.contact.searchkernels` is that of
@@ -6,8 +6,10 @@ The arithmetic of :mod:`breakwater.contact.projection3d` in loops
 :meth:`~breakwater.contact.projection.FacetGrid.candidates` of a grid of the faces (the
 same pairs in the same order), :func:`project` is
 :func:`breakwater.contact.projection3d.project` (the box filter, the Newton from the flat
-start with the same stopping test, the same acceptance and the nearest). Faces of 3 or 6
-nodes. Not yet used by a pair; ``tests/test_searchkernels3d.py`` checks each against its
+start with the same stopping test, the same acceptance and the nearest), and
+:func:`segment_points` is :func:`breakwater.contact.clip3d.integration_points` (the same
+points in the same order). Faces of 3 or 6 nodes, real arithmetic. Not yet used by a
+pair; ``tests/test_projection3d.py`` and ``tests/test_clip3d.py`` check each against its
 reference.
 """
 
@@ -16,9 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.clip3d import ON_LINE
 from breakwater.contact.projection3d import STEP_TOL
 
-__all__ = ["candidates", "closest_points", "face_at", "flat_start", "near", "project"]
+__all__ = ["candidates", "closest_points", "face_at", "flat_start", "near", "project",
+           "segment_points"]
 
 # Newton keeps each coordinate of its iterate in [−1, 2] (projection3d._LO, _HI).
 _LO, _HI = -1.0, 2.0
@@ -262,3 +266,129 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
                 over = max(a + b - 1, 0.0)
                 out[p, 0], out[p, 1] = a - 0.5 * over, b - 0.5 * over
     return face, out
+
+
+@kernel
+def _clip(poly, n):  # type: ignore[no-untyped-def]
+    """:func:`breakwater.contact.clip3d.clip` of ``poly[:n]`` (room for 9 vertices)."""
+    planes = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (-1.0, -1.0, 1.0))
+    out = np.empty((9, 2))
+    d = np.empty(9)
+    for a0, a1, b in planes:
+        if n == 0:
+            break
+        for i in range(n):
+            d[i] = (poly[i, 0] * a0 + poly[i, 1] * a1) + b
+            if abs(d[i]) <= ON_LINE:  # on the line: kept, not crossed
+                d[i] = 0.0
+        c = 0
+        for i in range(n):
+            j = (i + 1) % n
+            if d[i] >= 0:
+                out[c, 0], out[c, 1] = poly[i, 0], poly[i, 1]
+                c += 1
+            if d[i] * d[j] < 0:
+                t = d[i] / (d[i] - d[j])
+                out[c, 0] = poly[i, 0] + t * (poly[j, 0] - poly[i, 0])
+                out[c, 1] = poly[i, 1] + t * (poly[j, 1] - poly[i, 1])
+                c += 1
+        poly[:c] = out[:c]
+        n = c
+    return n
+
+
+@kernel
+def _cross(x, f):  # type: ignore[no-untyped-def]
+    """(x₁ − x₀) × (x₂ − x₀) of face f of ``x`` ``(F, nn, 3)``."""
+    a = x[f, 1] - x[f, 0]
+    b = x[f, 2] - x[f, 0]
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+@kernel
+def segment_points(slave, master, radius, g, w, sliver, facing):  # type: ignore[no-untyped-def]
+    """:func:`breakwater.contact.clip3d.integration_points` with the rule ``(g, w)``.
+
+    Returns:
+        Per point (in the reference's order): its slave face, slave reference
+        coordinates ``(q, 2)``, weight and master face.
+    """
+    S, M, nq = slave.shape[0], master.shape[0], len(w)
+    if S == 0 or M == 0:
+        return (np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0, np.int64))
+    lo_s, hi_s = np.empty((S, 3)), np.empty((S, 3))
+    centre = np.empty((S, 3))
+    extent = 0.0
+    for f in range(S):
+        for d in range(3):
+            a, b, c = slave[f, 0, d], slave[f, 1, d], slave[f, 2, d]
+            lo_s[f, d], hi_s[f, d] = min(a, b, c), max(a, b, c)
+            centre[f, d] = (a + b + c) / 3
+            extent = max(extent, hi_s[f, d] - lo_s[f, d])
+    lo_m, hi_m = np.empty((M, 3)), np.empty((M, 3))
+    for f in range(M):
+        for d in range(3):
+            lo_m[f, d], hi_m[f, d] = master[f, 0, d], master[f, 0, d]
+            for k in range(1, master.shape[1]):
+                lo_m[f, d] = min(lo_m[f, d], master[f, k, d])
+                hi_m[f, d] = max(hi_m[f, d], master[f, k, d])
+    point, cand = candidates(centre, master, radius + extent)
+    size = len(point) * 6 * nq
+    face, m_face = np.empty(size, np.int64), np.empty(size, np.int64)
+    xi, weight = np.empty((size, 2)), np.empty(size)
+    limit = sliver * 0.5
+    poly = np.empty((9, 2))
+    q = 0
+    for j in range(len(point)):
+        s, m = point[j], cand[j]
+        apart = False
+        for d in range(3):
+            if lo_s[s, d] > hi_m[m, d] + radius or lo_m[m, d] > hi_s[s, d] + radius:
+                apart = True
+        if apart:
+            continue
+        n_s = _cross(slave, s)
+        if facing:
+            n_m = _cross(master, m)
+            if n_m[0] * n_s[0] + n_m[1] * n_s[1] + n_m[2] * n_s[2] >= 0:
+                continue
+        # plane_coordinates of the master's corners.
+        g00, g01, g11 = 0.0, 0.0, 0.0
+        for d in range(3):
+            e0, e1 = slave[s, 1, d] - slave[s, 0, d], slave[s, 2, d] - slave[s, 0, d]
+            g00, g01, g11 = g00 + e0 * e0, g01 + e0 * e1, g11 + e1 * e1
+        det = g00 * g11 - g01 * g01
+        for k in range(3):
+            r0, r1 = 0.0, 0.0
+            for d in range(3):
+                e0, e1 = slave[s, 1, d] - slave[s, 0, d], slave[s, 2, d] - slave[s, 0, d]
+                r0 += (master[m, k, d] - slave[s, 0, d]) * e0
+                r1 += (master[m, k, d] - slave[s, 0, d]) * e1
+            poly[k, 0] = (g11 * r0 - g01 * r1) / det
+            poly[k, 1] = (g00 * r1 - g01 * r0) / det
+        n = _clip(poly, 3)
+        if n < 3:
+            continue
+        area, c0, c1 = 0.0, 0.0, 0.0
+        for i in range(n):
+            i1 = (i + 1) % n
+            area += poly[i, 0] * poly[i1, 1] - poly[i, 1] * poly[i1, 0]
+            c0, c1 = c0 + poly[i, 0], c1 + poly[i, 1]
+        if 0.5 * abs(area) < limit:
+            continue
+        c0, c1 = c0 / n, c1 / n
+        for i in range(n):
+            i1 = (i + 1) % n
+            a0, a1 = poly[i, 0] - c0, poly[i, 1] - c1
+            b0, b1 = poly[i1, 0] - c0, poly[i1, 1] - c1
+            tri = 0.5 * abs(a0 * b1 - a1 * b0)
+            if tri < limit:
+                continue
+            for k in range(nq):
+                face[q], m_face[q] = s, m
+                xi[q, 0] = c0 + (g[k, 0] * a0 + g[k, 1] * b0)
+                xi[q, 1] = c1 + (g[k, 0] * a1 + g[k, 1] * b1)
+                weight[q] = 2 * tri * w[k]
+                q += 1
+    return face[:q], xi[:q], weight[:q], m_face[:q]
