@@ -181,6 +181,30 @@ def test_projection_derivative_complex_step_against_differences() -> None:
             assert np.abs(cs).max() > 0.1  # the derivative is not trivially zero
 
 
+def test_unit_normal_complex_step_against_differences() -> None:
+    """The unit normal at the projection, as a function of a node (through ξ̄ too), by a
+    complex step against central differences (step 1e-6, tolerance as above): it is
+    written with sqrt(n·n), analytic, where |n| would drop the imaginary part."""
+    nodes, _ = _sphere_patch(1.0, 0.4)
+    rng = np.random.default_rng(8)
+    m = 10
+    face = np.repeat(nodes[None], m, 0) + 0.01 * rng.normal(size=(m, 6, 3))
+    points = face[:, :3].mean(axis=1) + rng.normal(scale=0.2, size=(m, 3))
+
+    def normal(dn: np.ndarray) -> np.ndarray:
+        f = face + dn
+        return unit_normal(surface(f, closest_point(points + 0 * dn[:, 0], f))[1])
+
+    eps = 1e-6
+    for c in range(3):
+        dn = np.zeros((m, 6, 3))
+        dn[:, 1, c] = 1.0
+        cs = np.imag(normal(1j * H * dn)) / H
+        fd = (np.real(normal(eps * dn)) - np.real(normal(-eps * dn))) / (2 * eps)
+        np.testing.assert_allclose(cs, fd, rtol=1e-7, atol=1e-8)
+        assert np.abs(cs).max() > 0.1
+
+
 def _bumpy(n: int, nn: int) -> np.ndarray:
     """Faces ``(2n², nn, 3)`` of z = 0.1 sin 3x cos 2y over [0, 1]², a structured grid
     with alternating diagonals, interior vertices jittered, mid-edge nodes on the surface
