@@ -28,13 +28,15 @@ The points are in the slave's reference coordinates, their weights in its refere
 area measure (a fully covered slave triangle's sum to ½, its reference area): the
 surface weight of a point is its weight times ``|x_ξ × x_η|`` there
 (:func:`~breakwater.contact.projection3d.surface`). Each polygon lies over one master
-triangle, so the integrand of a flat patch is a polynomial on each (its projection's
-shape functions are linear in ξ, η there) and the rule of degree 2 integrates it
-exactly: the patch test. For curved (6-node) faces the segments' edges are the
-projected chords of the master's, as for Puso & Laursen's linear segments: a point near
-one may project onto the neighbouring master face, so a pair should take each point's
-master face from its closest-point projection (:func:`~breakwater.contact.projection3d.project`)
-and the face here as the candidate. The arithmetic is real: the segmentation is held
+triangle, so the integrand of a flat patch is a polynomial on each (the master's shape
+functions at the projection are polynomials in ξ, η there, of their own degree): the
+products N_s N̄_m of a contact force's work are of degree 2 on 3-node faces, 4 on flat
+6-node faces, and a rule of that degree integrates them exactly: the patch test. For
+curved (6-node) faces the segments' edges are the projected chords of the master's, as
+for Puso & Laursen's linear segments: a point near one may project onto the
+neighbouring master face, so a pair should take each point's master face from its
+closest-point projection (:func:`~breakwater.contact.projection3d.project`) and the face
+here as the candidate. The arithmetic is real: the segmentation is held
 fixed in a linearisation, as the 2-D cuts are (the integrand is continuous across a
 segment's edge, so the derivatives of the edges' positions cancel).
 """
