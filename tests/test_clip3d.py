@@ -24,7 +24,7 @@ from breakwater.contact.clip3d import (
     rule,
     segment_points,
 )
-from breakwater.contact.projection3d import closest_point, inside, surface
+from breakwater.contact.projection3d import closest_point, inside, shape, surface
 
 L = 1.3  # the square's side
 # A rotation of the square's plane: its local axes u, v and normal w in space.
@@ -190,3 +190,31 @@ def test_compiled_segmentation_is_the_reference(n_slave: int, n_master: int, jit
         np.testing.assert_array_equal(got[3], ref[3])
         np.testing.assert_allclose(got[1], ref[1], rtol=0, atol=1e-13)
         np.testing.assert_allclose(got[2], ref[2], rtol=0, atol=1e-15)
+
+
+def test_mortar_products_of_six_node_faces() -> None:
+    """On a flat patch of 6-node faces, ∫ N_s,k Σ_j N̄_m,j f_j over the segments (f = u²
+    at the master's nodes: its P2 interpolant is u² itself) equals ∫ N_s,k u² over each
+    slave face alone (a rule of degree 6 there: exact) to 1e-13: a degree-4 integrand
+    (N_s quadratic, N̄_m quadratic in ξ at the projection), exact with the degree-4 rule,
+    not with the degree-2 one (off by more than 1e-6)."""
+    slave = _square(6, 1, False, 0.0, 6)
+    master = _square(4, 2, True, 1e-3, 6, facing_down=True)
+    g6, w6 = rule(6)
+    S = len(slave)
+    xs = surface(np.repeat(slave, len(w6), 0), np.tile(g6, (S, 1)))
+    jac = np.linalg.norm(np.cross(xs[1][:, 0], xs[1][:, 1]), axis=1)
+    Ns = shape(np.tile(g6, (S, 1)), 6)[0]
+    u2 = _local(xs[0])[:, 0] ** 2
+    exact = (Ns * (np.tile(w6, S) * jac * u2)[:, None]).reshape(S, len(w6), 6).sum(axis=1)
+    f = _local(master)[..., 0] ** 2  # (M, 6): u² at the master's nodes
+    for degree, ok in ((4, True), (2, False)):
+        face, xi, weight, m_face = integration_points(master=master, slave=slave,
+                                                      radius=0.01, degree=degree, facing=True)
+        x, w = _surface_weights(slave, face, xi, weight)
+        zeta = closest_point(x, master[m_face])
+        interpolated = np.sum(shape(zeta, 6)[0] * f[m_face], axis=1)
+        got = np.zeros((S, 6))
+        np.add.at(got, face, shape(xi, 6)[0] * (w * interpolated)[:, None])
+        err = np.abs(got - exact).max() / np.abs(exact).max()
+        assert (err < 1e-13) if ok else (err > 1e-6), (degree, err)
