@@ -26,6 +26,8 @@ from breakwater.contact.clip3d import (
 )
 from breakwater.contact.projection3d import closest_point, inside, shape, surface
 
+pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
+
 L = 1.3  # the square's side
 # A rotation of the square's plane: its local axes u, v and normal w in space.
 _Q, _ = np.linalg.qr(np.array([[0.8, -0.3, 0.5], [0.2, 0.9, -0.4], [0.6, 0.1, 0.7]]))

@@ -5,8 +5,7 @@ the projection onto a flat face (the foot of the perpendicular) and onto a quadr
 on a sphere, the projection's complex-step derivative against finite differences, the
 candidate search against a brute-force loop, the node order of dolfinx's P2
 tetrahedron facets, and the compiled projection (searchkernels3d) against these
-references. Pure array tests (dolfinx on COMM_SELF): under ``mpiexec -n 2`` every rank
-runs them.
+references. Pure array tests (dolfinx on COMM_SELF): serial only.
 """
 
 from __future__ import annotations
@@ -32,6 +31,8 @@ from breakwater.contact.projection3d import (
     surface,
     unit_normal,
 )
+
+pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
 
 H = 1e-30  # complex step: exact derivatives to round-off, no cancellation
 
