@@ -7,7 +7,7 @@ to the square's area and integrate x, y, x², xy exactly (to 1e-12), and each po
 master face holds its closest-point projection; a slave triangle partly outside the
 master surface gets the overlap's area; coinciding meshes give each slave face its own
 master face; the compiled segmentation (searchkernels3d) gives the same points. Pure
-array tests: under ``mpiexec -n 2`` every rank runs them.
+array tests: serial only.
 """
 
 from __future__ import annotations
