@@ -212,8 +212,10 @@ def test_a_long_calibration_reports_its_solves(layer_model, monkeypatch, caplog)
 def test_a_case_without_time_calibrates(goda, shared_dir, capsys):
     """Goda's case without its ``[time]`` table (a case written for a calibration):
     ``calibrate`` takes it (exit 0), to the same G as the whole case (rel 1e-12: the
-    same mesh, model and solves; the time step and the loads are not used), while
-    ``show-case`` and ``run`` refuse it in one line as before.
+    same mesh, model and solves; the time step and the loads are not used; on several
+    ranks 1e-9, as MUMPS's solves there differ from run to run in the last bits:
+    6.4e-12 between the two calibrations in one CI run), while ``show-case`` and
+    ``run`` refuse it in one line as before.
 
     Before: ``calibrate`` refused it too, ``time: missing required key``.
     """
@@ -235,4 +237,5 @@ def test_a_case_without_time_calibrates(goda, shared_dir, capsys):
     static = load_case(path, static=True)
     assert not static.loads
     G = static.calibrate(static.read_mesh(COMM)).shear_modulus
-    assert G == pytest.approx(case.calibrate(data).shear_modulus, rel=1e-12)
+    assert G == pytest.approx(case.calibrate(data).shear_modulus,
+                              rel=1e-12 if COMM.size == 1 else 1e-9)
