@@ -262,8 +262,14 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
                 need(c.master_surface or "", d - 1, f"contact.{c.name}.master_surface")
         else:
             need(c.name, d - 1, f"contact.{c.name}")
+    interfaces = {c.name for c in case.contact if not c.general}
     for f in case.fixed:
         need(f.name, (d - 1, 0), f"fixed.{f.name}")  # a facet group, or points
+        if f.name in interfaces:  # it ran: both sides held, the pair carrying nothing
+            raise InvalidField(f"fixed.{f.name}", f"'{f.name}' is the interface of contact "
+                               f"pair '{f.name}': holding it holds both bodies' faces there "
+                               "and the pair carries nothing; hold a face of one body (the "
+                               "support's bottom), or leave the pair out")
     for ld in case.loads:
         need(ld.group, d - 1, f"loads.{ld.name}.group")
         for k, extra in enumerate(ld.groups):
