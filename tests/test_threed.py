@@ -513,17 +513,20 @@ def test_resume_in_3d(folder: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> 
         assert np.abs(a[c] - b[c]).max() <= rtol * np.abs(a[c]).max(), c
 
 
-def test_pressure_profile_in_3d(folder: pathlib.Path) -> None:
+@pytest.mark.parametrize("axis", ["axis = [0.0, 1.0]\norigin = [0.0, 0.0]",
+                                  "axis = [0.0, 1.0, 0.0]"], ids=["2d_axis", "3d_axis"])
+def test_pressure_profile_in_3d(folder: pathlib.Path, axis: str) -> None:
     # A [profile] load with a 2D axis (the elevation y) on the block's left face
     # (y = 0.05..0.1 m, W = 0.2 m across): p = 1000 Pa uniform over s = y in 0.05..0.15 m,
     # half of it on the face. Applied: p × H × W = 10 N along +x (into the block), to
     # round-off; warned once, as covering 50 % of the profile (the 3D check measures the
     # face's s-range: the 2D one, ∫ |p| |n × a| dS, would have counted the face's width
-    # and said 20 %).
+    # and said 20 %). The same with a 3D axis and no origin: it was refused, "origin:
+    # must have 3 coordinates, as axis (got [0.0, 0.0])", of the default origin.
     from breakwater.casefile.case import load_case
 
     base = _case_file(folder, "profile_base")
-    path = folder / "profile3d.toml"
+    path = folder / f"profile3d_{len(axis)}.toml"
     if COMM.rank == 0:
         path.write_text(f'''extends = "{base}"
 name = "profile3d"
@@ -533,8 +536,7 @@ enabled = false
 group = "a_left"
 [loads.wave.profile]
 points = [[0.05, 1000.0], [0.15, 1000.0]]
-axis = [0.0, 1.0]
-origin = [0.0, 0.0]
+{axis}
 [output]
 directory = "{folder / 'profile3d'}"
 ''')

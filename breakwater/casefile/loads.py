@@ -147,13 +147,16 @@ class ProfileCase:
                                                     "outside")
     axis: tuple[float, ...] = setting((0.0, 1.0), doc="direction along which s is measured "
                                       "(default: the elevation y)")
-    origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0")
+    origin: tuple[float, ...] = setting((0.0, 0.0), unit="m", doc="the point where s = 0 "
+                                        "(with a 3D axis, default [0, 0, 0])")
 
     def __post_init__(self) -> None:
         check_fields(self)
         if len(self.axis) not in (2, 3) or not any(self.axis):
             raise InvalidField("axis", f"must be a non-zero 2- or 3-vector (got "
                                f"{list(self.axis)})")
+        if len(self.axis) == 3 and self.origin == (0.0, 0.0):  # the default, or [0, 0]
+            object.__setattr__(self, "origin", (0.0, 0.0, 0.0))  # (was refused: "got [0, 0]")
         if len(self.origin) != len(self.axis):
             raise InvalidField("origin", f"must have {len(self.axis)} coordinates, as axis "
                                f"(got {list(self.origin)})")
