@@ -70,9 +70,11 @@ from breakwater.statics.calibrate import HorizontalStiffness
 comm = MPI.COMM_WORLD
 
 
-def common(folder, figures=False):
-    # Overrides shared by every run of this notebook.
-    return [f"time.end_time={END_TIME}", f"mesh.refinement={REFINEMENT}",
+def common(folder, figures=False, refine=True):
+    # Overrides shared by every run of this notebook (refine=False: a mesh file, which
+    # berm_mesh refines itself; mesh.refinement refines the built-in mesh only).
+    return [f"time.end_time={END_TIME}",
+            *([f"mesh.refinement={REFINEMENT}"] if refine else []),
             f"output.directory={json.dumps((OUT / folder).as_posix())}",
             f"output.figures={str(figures).lower()}"]
 
@@ -350,7 +352,7 @@ shear_modulus = {G!r}  # Pa: the gravel of the paper's case (calibrated there)
 enabled = false
 ''')
 BERM_END_TIME = min(END_TIME, 0.01)
-berm = load_case(case_file, [*common("berm", figures=True),
+berm = load_case(case_file, [*common("berm", figures=True, refine=False),
                              f"time.end_time={BERM_END_TIME}"])
 print(f"mesh: {berm.mesh.source}")
 print(f"K_x with the berm: {sway_stiffness(berm, G) / 1e3:.1f} kN/m "

@@ -224,7 +224,7 @@ def test_the_goda_case_runs_the_same_from_its_xdmf(shared_dir, capsys):
         assert out.count("\n") == 2 and 'reads it as mesh.source = "goda.xdmf"' in out
     for path in (msh, xdmf):
         assert cli.main(["run", "--out", str(shared_dir / path.suffix[1:]), "--quiet",
-                         "--no-progress", *small, "--set", f"mesh.source={path}", "--set",
+                         "--no-progress", "--set", f"mesh.source={path}", "--set",
                          "time.end_time=0.002"]) == 0
     # Another format from the XDMF: refused (meshio would read it as gmsh's).
     capsys.readouterr()  # the runs' warnings

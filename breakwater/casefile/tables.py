@@ -62,7 +62,8 @@ class MeshCase:
                           '`breakwater mesh --out x.xdmf` wrote (with its .h5), relative to '
                           'the case file')
     refinement: float = setting(1.0, doc="goda, goda3d only: element sizes are divided by "
-                                "this (cell counts grow as refinement², refinement³ in 3D)")
+                                "this (cell counts grow as refinement², refinement³ in 3D; "
+                                "with a mesh file, refused unless 1)")
     degree: int = setting(2, doc="polynomial degree of the displacement (2: six-node "
                           "triangles, as the paper; a .geo with a curved curve is then "
                           "meshed second order, curved cells)")
@@ -85,6 +86,12 @@ class MeshCase:
         if not self.source:
             raise InvalidField("source", 'must be "goda", "goda3d" or a mesh file')
         positive(self.max_elements, "max_elements")
+        if not self.generated and self.refinement != 1.0:  # it was left unused, silently
+            raise InvalidField("refinement", f"{self.refinement:g} refines the built-in goda "
+                               "and goda3d meshes only: a mesh file is used as it is "
+                               f"({self.source}); refine it in gmsh (its MeshSize, or "
+                               f"Mesh.MeshSizeFactor = {1 / self.refinement:g} in a .geo), "
+                               "and leave refinement at 1")
         if self.generated:
             coarse = self.geometry.coarse_elements(self.refinement)
             if coarse is not None:
