@@ -124,7 +124,9 @@ class BodyCase:
     body whose shear modulus ``[calibration]`` finds.
     """
 
-    name: str = setting(key=True, doc="cell (2D) or volume (3D) physical group of the body")
+    name: str = setting(key=True, doc="cell (2D) or volume (3D) physical group of the body "
+                        "(it heads history.csv columns: no comma, double quote or control "
+                        "character)")
     density: float = setting(unit="kg/m³", doc="mass density ρ")
     poisson: float = setting(doc="Poisson's ratio ν, in (−1, 0.5)")
     shear_modulus: float | None = setting(None, unit="Pa", doc="shear modulus G")
@@ -134,6 +136,7 @@ class BodyCase:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)  # <name>_rotation: a comma split history.csv's header
         positive(self.density, "density")
         if len(self.initial_velocity) not in (2, 3) \
                 or not all(map(math.isfinite, self.initial_velocity)):
@@ -177,7 +180,8 @@ class ContactCase:
 
     name: str = setting(key=True, doc="interface facet (1D) physical group, shared by the "
                         "two bodies (conforming); with slave_surface/master_surface, the "
-                        "pair's name")
+                        "pair's name (it heads history.csv columns: no comma, double "
+                        "quote or control character)")
     slave: str = setting(doc="body whose nodes are penalised (the paper: the caisson)")
     master: str = setting(doc="body whose outward normal defines the gap (the mound)")
     penalty: float = setting(unit="N/m³", doc="normal penalty ε_n")
@@ -203,6 +207,7 @@ class ContactCase:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        column_name(self.name)  # <name>_normal_force ...: a comma split history.csv's header
         if (self.slave_surface is None) != (self.master_surface is None):
             raise InvalidField("master_surface" if self.master_surface is None
                                else "slave_surface", "a general pair needs both "
