@@ -97,3 +97,32 @@ def test_a_block_friction_cannot_hold_is_told_in_newtons(
         mass = 2314.0 * 0.3 * 0.2 * 0.25
         assert (f"cannot be held by friction on 'interface' (tangential force "
                 f"{mass * 6.0:.4g} N, μN = {0.6 * mass * 7.76:.4g} N)") in err, err
+
+
+def test_gravity_and_initial_velocity_are_reported(
+        shared_dir: pathlib.Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # summary.json says what the run applied: the gravity vector, and each moving body's
+    # initial velocity and momentum m v beside its mass (neither was in it: only the
+    # input case.toml said them). The kinetic energy at t = 0 is ½ m |v|² of the block
+    # (the slab at rest), m = ρ × 0.3 × 0.2 × 0.25 m³: to round-off.
+    path = shared_dir / "moving.toml"
+    if COMM.rank == 0:
+        path.write_text(CASE)
+    COMM.barrier()
+    out = shared_dir / "out"
+    v = [0.1, 0.0, 0.0]  # (the block's top corner is held in z)
+    code = cli.main(["run", str(path), "--out", str(out), "--quiet", "--no-progress",
+                     "--set", f"bodies.block.initial_velocity={v}"])
+    assert code == 0, capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["gravity"] == [0.0, -9.81, 0.0]
+    block = summary["mesh"]["bodies"]["block"]
+    mass = 2314.0 * 0.3 * 0.2 * 0.25
+    assert block["mass"] == pytest.approx(mass, rel=1e-12)
+    assert block["initial_velocity"] == v
+    assert block["initial_momentum"] == pytest.approx([mass * c for c in v], rel=1e-12)
+    assert "initial_velocity" not in summary["mesh"]["bodies"]["slab"]  # at rest
+    history = (out / "history.csv").read_text().splitlines()
+    names, first = history[0].split(","), history[1].split(",")
+    kinetic = float(first[names.index("kinetic")])
+    assert kinetic == pytest.approx(0.5 * mass * v[0] ** 2, rel=1e-12)

@@ -308,6 +308,12 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     extra["mesh"].setdefault("warnings", []).extend(units.get("warnings", ()))
     if not extra["mesh"]["warnings"]:
         del extra["mesh"]["warnings"]
+    for b in case.bodies:  # what the run applied, beside the mass to check it by hand
+        if any(b.initial_velocity):
+            entry = extra["mesh"]["bodies"][b.name]
+            entry["initial_velocity"] = list(b.initial_velocity)
+            entry["initial_momentum"] = [entry["mass"] * v for v in b.initial_velocity]
+    extra["gravity"] = list(case.gravity)
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:
