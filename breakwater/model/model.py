@@ -237,10 +237,7 @@ class ContactModel(KnownAttributes, ModelGroups):
         facets = data.facet_tags.find(group_tag(data, pair.interface, tdim - 1))
         integration = fem.compute_integration_domains(fem.IntegralType.interior_facet,
                                                       msh.topology, facets)
-        if self.comm.allreduce(len(facets)) == 0 or \
-                self.comm.allreduce(integration.size) == 0:
-            raise _no_interface(pair.interface, data, self.comm)
-        self._check_one_sided(pair, facets)
+        _check_interface(self, pair, facets, integration)
         # Reorder so that '+' is always the slave: unordered data gives wrong numbers.
         d = integration.reshape(-1, 4).copy()
         flip = self._cell_body[d[:, 0]] != s
@@ -263,31 +260,6 @@ class ContactModel(KnownAttributes, ModelGroups):
         n = -ufl.FacetNormal(msh)("+")  # outward normal of the master ('-') side
         c = lambda v: fem.Constant(msh, dolfinx.default_scalar_type(v))  # noqa: E731
         return PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
-
-    def _check_one_sided(self, pair: ContactPair, facets: np.ndarray) -> None:
-        """Refuse an interface group with facets on one body's outer boundary (one line).
-
-        A block overhanging its support, its whole base in the group: the pair's integral
-        dropped the overhang's facets, its node pairing did not, and the run failed in
-        the static stage with "is not conforming: 22 slave nodes, 13 master nodes".
-        """
-        msh = self.mesh
-        outer = np.intersect1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
-        cells = fem.compute_integration_domains(fem.IntegralType.exterior_facet,
-                                                msh.topology, outer).reshape(-1, 2)[:, 0]
-        count = self.comm.allreduce(len(cells))
-        if count == 0:
-            return
-        bodies = set(self._cell_body[cells].tolist())
-        names = sorted({self.bodies[i].spec.name if i >= 0 else "no body"
-                        for part in self.comm.allgather(bodies) for i in part})
-        total = count + self.comm.allreduce(len(fem.compute_integration_domains(
-            fem.IntegralType.interior_facet, msh.topology, facets)) // 4)
-        raise MeshError(f"contact.{pair.interface}: {count} of the {total} facets of its "
-                        f"group lie on the outer boundary of {', '.join(names)} "
-                        f"alone, not between '{pair.slave}' and '{pair.master}': a conforming "
-                        "pair's group is the face the two bodies share; leave the rest (an "
-                        "overhang, the free crest) out of the group")
 
     def _check_surfaces(self, pair: SurfacePair) -> SurfacePair:
         """A general pair whose surfaces lie on its bodies' boundaries.
@@ -313,6 +285,36 @@ class ContactModel(KnownAttributes, ModelGroups):
                                 f"(facet groups on '{body}': "
                                 f"{', '.join(self.facet_groups_on(body)) or 'none'})")
         return pair
+
+
+def _check_interface(model: ContactModel, pair: ContactPair, facets: np.ndarray,
+                     integration: np.ndarray) -> None:
+    """Refuse a conforming pair's group that is not the face its bodies share (one line).
+
+    No facet between two cells: :func:`_no_interface`. Facets on one body's outer
+    boundary (a block overhanging its support, its whole base in the group): the pair's
+    integral dropped the overhang's facets, its node pairing did not, and the run failed
+    in the static stage with "is not conforming: 22 slave nodes, 13 master nodes".
+    """
+    msh, comm, cell_body = model.mesh, model.comm, model._cell_body
+    if comm.allreduce(len(facets)) == 0 or comm.allreduce(integration.size) == 0:
+        raise _no_interface(pair.interface, model.mesh_data, comm)
+    names = [b.spec.name for b in model.bodies]
+    outer = np.intersect1d(facets, dolfinx.mesh.exterior_facet_indices(msh.topology))
+    cells = fem.compute_integration_domains(fem.IntegralType.exterior_facet,
+                                            msh.topology, outer).reshape(-1, 2)[:, 0]
+    count = comm.allreduce(len(cells))
+    if count == 0:
+        return
+    bodies = set(cell_body[cells].tolist())
+    found = sorted({names[i] if i >= 0 else "no body"
+                    for part in comm.allgather(bodies) for i in part})
+    total = count + comm.allreduce(integration.size // 4)
+    raise MeshError(f"contact.{pair.interface}: {count} of the {total} facets of its "
+                    f"group lie on the outer boundary of {', '.join(found)} "
+                    f"alone, not between '{pair.slave}' and '{pair.master}': a conforming "
+                    "pair's group is the face the two bodies share; leave the rest (an "
+                    "overhang, the free crest) out of the group")
 
 
 def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError:
