@@ -57,7 +57,8 @@ def test_a_model_built_in_python_is_checked_as_a_case_file(
         shared_dir: pathlib.Path, caplog: pytest.LogCaptureFixture) -> None:
     """run() on a model built in Python: its density in g/cm³ is warned about and the
     summary's ``mesh`` gives the bodies' sizes and the line, as a case file's build does
-    (before: only a case file's units were checked; the Python path ran silently)."""
+    (before: only a case file's units were checked; the Python path ran silently); its
+    ``gravity`` is the one the run applied."""
     comm = MPI.COMM_WORLD
     mesh = two_rectangles(shared_dir / "blocks.msh", comm, a=(0.2, 0.1), b=(0.4, 0.1),
                           h=0.05)
@@ -66,12 +67,14 @@ def test_a_model_built_in_python_is_checked_as_a_case_file(
                           Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
                          [ContactPair("interface", "a", "b", 5e8)], [Fixed("b_bottom")],
                          gravity=(0.0, -9.81))
+    model.gravity = (0.0, -9.80665)  # set after the build: the summary says this one
     with caplog.at_level(logging.WARNING, logger="breakwater"):
         run(model, TimeSpec(dt=1e-3, end_time=2e-3),
             OutputSpec(directory=shared_dir / "out", figures=False), report=False)
     line = density_warnings({"a": 2.4})[0]
     summary = json.loads((shared_dir / "out" / "summary.json").read_text())
     assert summary["mesh"]["warnings"] == [line]
+    assert summary["gravity"] == [0.0, -9.80665]
     # The block's mass per metre: ρ × its area (0.2 × 0.1 m), to round-off.
     assert summary["mesh"]["bodies"]["a"]["mass"] == pytest.approx(2.4 * 0.02, rel=1e-12)
     if comm.rank == 0:  # rank 0 prints

@@ -157,6 +157,8 @@ class Session:
         self.extra.setdefault("fixed", model.fixed_summary())  # what holds the bodies
         if "mesh" not in self.extra:  # a model built in Python: a case file's unit checks
             self.extra["mesh"] = unit_checks(model)
+        # The gravity applied: the model's now (set after a case's build, or in Python).
+        self.extra["gravity"] = [float(g) for g in model.gravity.value]
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
