@@ -313,7 +313,6 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             entry = extra["mesh"]["bodies"][b.name]
             entry["initial_velocity"] = list(b.initial_velocity)
             entry["initial_momentum"] = [entry["mass"] * v for v in b.initial_velocity]
-    extra["gravity"] = list(case.gravity)
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:

@@ -35,7 +35,7 @@ DENSITY_RANGE = (10.0, 23000.0)
 """kg/m³: a body's density outside this is warned about. The lightest fill a
 breakwater or an embankment is built of, EPS geofoam, is 10-40 kg/m³; osmium, the
 densest element, 22 590. A density typed in g/cm³ or t/m³ (concrete 2.4, sand 1.6-2.1)
-is 1000 times too small: the run took a 2.3 kg/m³ caisson without a word (its weight,
+is 1000 times too small: the run took a 2.4 kg/m³ caisson without a word (its weight,
 the contact's pressure and its inertia 1000 times too small)."""
 
 
