@@ -27,6 +27,7 @@ from breakwater.casefile.loadchecks import (
     face_problems,
     landing_problems,
     late_peak_warning,
+    pulling_warning,
     pulse_warning,
     start_warning,
     table_warning,
@@ -343,8 +344,8 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
             entries, quadrature = goda_quadrature(ld, model, exact[ld.name])
             extra["loads"][ld.name].update(entries)
         # Logged when the run starts (not again when it resumes), kept in the summary.
-        lines = [line for line in (warning, start, pulse, late, landing, quadrature)
-                 if line is not None]
+        lines = [line for line in (warning, start, pulse, late, landing, quadrature,
+                                   pulling_warning(ld, model)) if line is not None]
         if lines:
             extra["loads"][ld.name]["warnings"] = lines
 

@@ -32,7 +32,8 @@ if TYPE_CHECKING:
     from breakwater.storms.waves import WaveLoad
 
 __all__ = ["SAMPLING_TOLERANCE", "face_problems", "landing_problems", "late_peak_warning",
-           "profile_area", "pulse_warning", "sampled_pulse", "start_warning", "storm_warning"]
+           "profile_area", "pulling_warning", "pulse_warning", "sampled_pulse",
+           "start_warning", "storm_warning"]
 
 
 SAMPLING_TOLERANCE = 0.01
@@ -383,3 +384,27 @@ def face_problems(load: loadcase.LoadCase, model: ContactModel) -> tuple[str | N
                           f"(s = {s[0]:g}..{s[-1]:g} m along {list(field.axis)} from "
                           f"{list(field.origin)}) lies on {names}: the rest is not applied")
     return None, None
+
+
+def pulling_warning(load: loadcase.LoadCase, model: ContactModel) -> str | None:
+    """One line if a pulse's direction points out of its struck face, else None.
+
+    A pulse is an impact (the pendulum's, a wave's slam): it pushes the face. With its
+    direction along the face's outward normal (``[-1, 0]`` on the Goda caisson's seaward
+    face) it pulled the face outwards, without a word. The sign of ∫ d·n ds over the
+    load's facets (n the body's outward normal) decides. Collective.
+    """
+    import ufl
+
+    if load.kind != "pulse":
+        return None
+    n = ufl.FacetNormal(model.mesh)
+    d = ufl.as_vector(load.direction)
+    outward = sum(model.assemble(model.form(ufl.dot(d, n) * ld.ds))
+                  for ld in model.loads if ld.spec.name == load.name)
+    if not outward > 0.0:
+        return None
+    into = [-c + 0.0 for c in load.direction]  # (+ 0.0: no -0.0)
+    return (f"loads.{load.name}.direction: {[float(c) for c in load.direction]} points out of "
+            f"'{load.group}' (along its outward normal): the pulse pulls the face outwards; "
+            f"an impact pushes it: direction = {into} (into the body)")
