@@ -306,9 +306,8 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         extra["mesh"].setdefault("warnings", []).extend(loose)
     units = unit_checks(model)
     extra["mesh"]["bodies"] = units["bodies"]
-    extra["mesh"].setdefault("warnings", []).extend(units.get("warnings", ()))
-    if not extra["mesh"]["warnings"]:
-        del extra["mesh"]["warnings"]
+    if "warnings" in units:
+        extra["mesh"].setdefault("warnings", []).extend(units["warnings"])
     for b in case.bodies:  # what the run applied, beside the mass to check it by hand
         if any(b.initial_velocity):
             entry = extra["mesh"]["bodies"][b.name]

@@ -394,12 +394,14 @@ def pulling_warning(load: loadcase.LoadCase, model: ContactModel) -> str | None:
     face) it pulled the face outwards, without a word. The sign of ∫ d·n ds over the
     load's facets (n the body's outward normal) decides. Collective.
     """
+    import numpy as np
     import ufl
+    from dolfinx import fem
 
     if load.kind != "pulse":
         return None
     n = ufl.FacetNormal(model.mesh)
-    d = ufl.as_vector(load.direction)
+    d = fem.Constant(model.mesh, np.array(load.direction))  # one form for any direction
     outward = sum(model.assemble(model.form(ufl.dot(d, n) * ld.ds))
                   for ld in model.loads if ld.spec.name == load.name)
     if not outward > 0.0:

@@ -29,13 +29,15 @@ from breakwater.common.errors import CaseError
 from breakwater.config.fields import suggest
 from breakwater.config.runspec import InitialSpec
 
-__all__ = ["REBUILD", "BuiltPart", "BuiltParts", "KnownAttributes", "built_parts",
+__all__ = ["REBUILD", "SETTABLE", "BuiltPart", "BuiltParts", "KnownAttributes", "built_parts",
            "check_initial", "gravity_value", "initial_setting"]
+
+SETTABLE = "model.damping, model.gravity and model.initial may be set"
+"""What a built model takes: its settings (the rest it was built from)."""
 
 REBUILD = ("a built model's bodies, contact pairs and loads are fixed: change the case (e.g. "
            "load_case(None, ['contact.interface.friction=0.3'])), or what ContactModel is "
-           "given, and build it again (model.damping, model.gravity and model.initial may "
-           "be set)")
+           f"given, and build it again ({SETTABLE})")
 """What to do instead of changing a part of a built model."""
 
 
@@ -88,13 +90,11 @@ class KnownAttributes:
             raise AttributeError(
                 f"cannot change model.{name}: the built model's spaces, forms and conditions "
                 f"were made from it; give ContactModel the new {name} (or change the case) "
-                "and build it again (model.damping, model.gravity and model.initial may be "
-                "set)")
+                f"and build it again ({SETTABLE})")
         names = sorted(n for n in {*dir(type(self)), *vars(self)} if not n.startswith("_"))
         raise AttributeError(f"model.{name}: a built {type(self).__name__} has no attribute "
                              f"'{name}'{suggest(name, names)}, so setting it would change "
-                             "nothing (model.damping, model.gravity and model.initial may "
-                             "be set)")
+                             f"nothing ({SETTABLE})")
 
 
 class BuiltParts[T](tuple[T, ...]):
