@@ -181,3 +181,36 @@ def test_initial_velocity_from_a_case_file(folder: pathlib.Path):
     # and step): two steps on the duration, 1 % on the mean contact stress.
     assert abs(t_last - T_CONTACT) <= 2 * dt
     assert σ[window].mean() == pytest.approx(σ_CONTACT, rel=0.01)
+
+
+def test_the_summary_reports_the_velocities_the_run_applied(folder: pathlib.Path):
+    # summary.json's mesh.bodies.<body>.initial_velocity/initial_momentum are the model's
+    # (model.initial, set after the build in a notebook), not the case file's: before, a
+    # notebook that moved bar b instead of a got a summary saying a moved.
+    import dataclasses
+
+    from breakwater.casefile.case import load_case
+    from breakwater.outputs.writers import read_history
+    from breakwater.run.simulation import run
+
+    path = two_rectangles(folder / "bars_applied.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
+                          layout="side")
+    dt = T_CONTACT / N_STEPS
+    case_file = folder / "applied.toml"
+    if COMM.rank == 0:
+        case_file.write_text(CASE.format(mesh=path, rho=ρ, E=E, v0=v0, penalty=PENALTY, dt=dt,
+                                         end=2 * dt, out=folder / "applied"))
+    COMM.barrier()
+    built = load_case(case_file).build(COMM)
+    model = built.model
+    model.initial = dataclasses.replace(model.initial, velocities=(("b", (-v0, 0.0)),))
+    summary = run(model, built.time, built.output, built.extra, report=False)
+    bodies = summary["mesh"]["bodies"]
+    mass = ρ * L * H  # kg/m (plane strain)
+    assert "initial_velocity" not in bodies["a"] and "initial_momentum" not in bodies["a"]
+    assert bodies["b"]["initial_velocity"] == [-v0, 0.0]
+    # m v with the mesh's mass: the rectangle's area to round-off.
+    assert bodies["b"]["initial_momentum"] == pytest.approx([-mass * v0, 0.0], rel=1e-12)
+    # What the run applied: b's kinetic energy ½ m v0² at t = 0.
+    h = read_history(folder / "applied" / "history.csv")
+    assert h["kinetic"][0] == pytest.approx(0.5 * mass * v0**2, rel=1e-12)

@@ -308,11 +308,6 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     extra["mesh"]["bodies"] = units["bodies"]
     if "warnings" in units:
         extra["mesh"].setdefault("warnings", []).extend(units["warnings"])
-    for b in case.bodies:  # what the run applied, beside the mass to check it by hand
-        if any(b.initial_velocity):
-            entry = extra["mesh"]["bodies"][b.name]
-            entry["initial_velocity"] = list(b.initial_velocity)
-            entry["initial_momentum"] = [entry["mass"] * v for v in b.initial_velocity]
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:

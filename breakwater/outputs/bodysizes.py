@@ -17,7 +17,8 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
 __all__ = ["DENSITY_RANGE", "LARGEST_EXTENT", "LARGEST_VOLUME", "body_sizes",
-           "density_warnings", "gravity_warning", "size_warning", "unit_checks"]
+           "density_warnings", "gravity_warning", "initial_motion", "size_warning",
+           "unit_checks"]
 
 LARGEST_EXTENT = 2000.0
 """m: a mesh wider than this is warned about (drawn in mm?). A breakwater's caisson is
@@ -127,3 +128,25 @@ def unit_checks(model: ContactModel) -> dict[str, Any]:
     if any(lines):
         out["warnings"] = [line for line in lines if line]
     return out
+
+
+def initial_motion(bodies: dict[str, dict[str, Any]],
+                   velocities: tuple[tuple[str, tuple[float, ...]], ...]) -> None:
+    """Put each moving body's ``initial_velocity`` and ``initial_momentum`` m v in its entry.
+
+    The velocities the run applies (its model's ``initial.velocities``, set after a case's
+    build too), not the case's: the entries of bodies at rest lose theirs.
+
+    Args:
+        bodies: :func:`body_sizes`'s entries (updated in place).
+        velocities: ``(body, vector)`` pairs, a body's uniform initial velocity (m/s).
+    """
+    moving = dict(velocities)
+    for name, entry in bodies.items():
+        v = moving.get(name)
+        if v is not None and any(v):
+            entry["initial_velocity"] = [float(c) for c in v]
+            entry["initial_momentum"] = [entry["mass"] * float(c) for c in v]
+        else:
+            entry.pop("initial_velocity", None)
+            entry.pop("initial_momentum", None)

@@ -30,7 +30,7 @@ from breakwater.energy.ledger import EnergyLedger
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads, applied_warnings, compare
-from breakwater.outputs.bodysizes import unit_checks
+from breakwater.outputs.bodysizes import initial_motion, unit_checks
 from breakwater.outputs.historyrows import HistoryRows
 from breakwater.outputs.monitor import Monitor, interface_state
 from breakwater.outputs.stormrecord import write_storm_record
@@ -157,8 +157,12 @@ class Session:
         self.extra.setdefault("fixed", model.fixed_summary())  # what holds the bodies
         if "mesh" not in self.extra:  # a model built in Python: a case file's unit checks
             self.extra["mesh"] = unit_checks(model)
-        # The gravity applied: the model's now (set after a case's build, or in Python).
+        # The gravity and initial velocities applied: the model's now (set after a case's
+        # build, or in Python), beside each body's mass to check the momentum by hand.
         self.extra["gravity"] = [float(g) for g in model.gravity.value]
+        mesh = self.extra["mesh"]
+        if isinstance(mesh, dict) and isinstance(mesh.get("bodies"), dict):
+            initial_motion(mesh["bodies"], model.initial.velocities)
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
