@@ -37,7 +37,7 @@ type, unit and default.
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from breakwater.casefile.dimension import dimension, general_in_3d, mesh_problem
@@ -68,7 +68,8 @@ from breakwater.common.gmshtools import (
     unsupported_format,
 )
 from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
-from breakwater.config.fields import InvalidField, printable, suggest
+from breakwater.config.fields import InvalidField, printable, suggest, to_toml
+from breakwater.config.overrides import OVERRIDE
 from breakwater.config.schema import Schema
 
 if TYPE_CHECKING:
@@ -309,8 +310,41 @@ def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] |
     """
     case: Case = _SCHEMA.load(_case_file(path), override_list(overrides),
                               check=lambda c: _check_groups(c, _mesh_groups(c.mesh)),
-                              prepare=_static_time if static else None)
+                              prepare=_static_time if static else None,
+                              check_raw=_unused_generator)
     return case
+
+
+def _unused_generator(raw: dict[str, Any], where: Callable[[str], str]) -> None:
+    """Refuse a ``[mesh.goda]``/``[mesh.goda3d]`` value that the mesh source leaves unused.
+
+    Such a value (not the default) set where ``mesh.source`` names another mesh (the same
+    file, or ``--set``) ran without a word, the mesh read as it is (a caisson 20 m wide in
+    ``[mesh.goda]`` beside ``source = "my.msh"``). A table inherited from a case the file
+    extends is not refused (``examples/goda_apart``: its own ``.geo`` over
+    ``goda_nonmatching.toml``), nor a default written out (a resolved case's tables).
+
+    Raises:
+        InvalidField: The first such key, naming the source.
+    """
+    mesh = raw.get("mesh")
+    if not isinstance(mesh, dict) or "source" not in mesh:
+        return
+    source = mesh["source"]
+    defaults = to_toml(MeshCase(source=GODA))
+    for table in (GODA, GODA3D):
+        keys = mesh.get(table)
+        if source == table or not isinstance(keys, dict):
+            continue
+        for key, value in keys.items():
+            path = f"mesh.{table}.{key}"
+            if value != defaults[table].get(key, value) \
+                    and where(path) in (OVERRIDE, where("mesh.source")):
+                used = f"the built-in {source} mesh" if source in (GODA, GODA3D) else \
+                    f"the file {pathlib.Path(str(source)).name}"
+                raise InvalidField(path, f"sets the built-in {table} mesh, but mesh.source "
+                                   f"reads {used}, which it does not change: remove it, or "
+                                   f"set mesh.source = \"{table}\"")
 
 
 def override_list(overrides: Any) -> list[str]:

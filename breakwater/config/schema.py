@@ -68,7 +68,9 @@ class Schema:
 
     def load(self, file: pathlib.Path, overrides: Sequence[str] = (),
              check: Callable[[Any], None] | None = None,
-             prepare: Callable[[dict[str, Any]], None] | None = None) -> Any:
+             prepare: Callable[[dict[str, Any]], None] | None = None,
+             check_raw: Callable[[dict[str, Any], Callable[[str], str]], None] | None = None
+             ) -> Any:
         """Read ``file`` (and what it extends), apply the overrides, build the root.
 
         Args:
@@ -78,6 +80,9 @@ class Schema:
                 with a path from the root).
             prepare: Changes the file's table (with what it extends) before the
                 overrides (``calibrate``: a ``[time]`` it does not use, when none).
+            check_raw: Checks of the table after the overrides, given it and where a
+                dotted key was set (the file's label, or ``--set``; a key the file
+                extends: that file's label), raising :class:`InvalidField`.
 
         Raises:
             CaseError: One line naming the file (or ``--set``), the field and the problem
@@ -85,13 +90,15 @@ class Schema:
 
         """
         try:
-            return self._load(file, overrides, check, prepare)
+            return self._load(file, overrides, check, prepare, check_raw)
         except CaseError as e:
             raise CaseError(printable(str(e))) from None
 
     def _load(self, file: pathlib.Path, overrides: Sequence[str],
               check: Callable[[Any], None] | None,
-              prepare: Callable[[dict[str, Any]], None] | None) -> Any:
+              prepare: Callable[[dict[str, Any]], None] | None,
+              check_raw: Callable[[dict[str, Any], Callable[[str], str]], None] | None
+              ) -> Any:
         origins: dict[str, str] = {}
         raw = self._load_raw(file, (), origins)
         if prepare is not None:
@@ -101,6 +108,8 @@ class Schema:
             apply_override(self.root, self.paths, raw, spec, origins, merged)
         label = display(file)
         try:
+            if check_raw is not None:
+                check_raw(raw, lambda key: origin(key, origins, label))
             obj = convert.build(self.root, self.root, raw, "")
             if check is not None:
                 check(obj)
