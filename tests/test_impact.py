@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import pathlib
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -149,22 +150,28 @@ field_interval = 0
 """
 
 
+def _built_bars(folder: pathlib.Path, name: str, end: float) -> Any:
+    """The bars' impact as a case file (bar a at v0), built; its output in folder / name."""
+    from breakwater.casefile.case import load_case
+
+    path = two_rectangles(folder / f"{name}.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
+                          layout="side")
+    case_file = folder / f"{name}.toml"
+    if COMM.rank == 0:
+        case_file.write_text(CASE.format(mesh=path, rho=ρ, E=E, v0=v0, penalty=PENALTY,
+                                         dt=T_CONTACT / N_STEPS, end=end, out=folder / name))
+    COMM.barrier()
+    return load_case(case_file).build(COMM)
+
+
 def test_initial_velocity_from_a_case_file(folder: pathlib.Path):
     # The same impact set up by a case file: bar a's initial velocity is
     # bodies.a.initial_velocity; the run layer starts from it (history.csv).
-    from breakwater.casefile.case import load_case
     from breakwater.outputs.writers import read_history
     from breakwater.run.simulation import run
 
-    path = two_rectangles(folder / "bars_case.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
-                          layout="side")
     dt = T_CONTACT / N_STEPS
-    case_file = folder / "bars.toml"
-    if COMM.rank == 0:
-        case_file.write_text(CASE.format(mesh=path, rho=ρ, E=E, v0=v0, penalty=PENALTY, dt=dt,
-                                         end=1.3 * T_CONTACT, out=folder / "bars"))
-    COMM.barrier()
-    built = load_case(case_file).build(COMM)
+    built = _built_bars(folder, "bars", 1.3 * T_CONTACT)
     summary = run(built.model, built.time, built.output, report=False)
     assert summary["finished"] and summary["static"]["initial_state"] == "frictionless"
     h = read_history(folder / "bars" / "history.csv")
@@ -189,19 +196,10 @@ def test_the_summary_reports_the_velocities_the_run_applied(folder: pathlib.Path
     # notebook that moved bar b instead of a got a summary saying a moved.
     import dataclasses
 
-    from breakwater.casefile.case import load_case
     from breakwater.outputs.writers import read_history
     from breakwater.run.simulation import run
 
-    path = two_rectangles(folder / "bars_applied.msh", COMM, a=(L, H), b=(L, H), h=H_MESH,
-                          layout="side")
-    dt = T_CONTACT / N_STEPS
-    case_file = folder / "applied.toml"
-    if COMM.rank == 0:
-        case_file.write_text(CASE.format(mesh=path, rho=ρ, E=E, v0=v0, penalty=PENALTY, dt=dt,
-                                         end=2 * dt, out=folder / "applied"))
-    COMM.barrier()
-    built = load_case(case_file).build(COMM)
+    built = _built_bars(folder, "applied", 2 * T_CONTACT / N_STEPS)
     model = built.model
     model.initial = dataclasses.replace(model.initial, velocities=(("b", (-v0, 0.0)),))
     summary = run(model, built.time, built.output, built.extra, report=False)
