@@ -51,6 +51,12 @@ def _surface(rng: np.random.Generator, x: np.ndarray, y: float, nn: int, bend: f
     return np.stack([a, b, mid], axis=1)
 
 
+def _facing(p: SimpleNamespace) -> tuple[np.ndarray, np.ndarray]:
+    """The slave facets' orientation (x increasing: (t_y, −t_x) points down, out of it)
+    and the master facets' depths the search sees (beyond every point's)."""
+    return np.ones(len(p.sX)), np.full(len(p.mX), np.inf)
+
+
 def _pair(seed: int, nn: int):  # type: ignore[no-untyped-def]
     """A slave surface above a master (oriented: (t_y, −t_x) up), shared nodes numbered,
     interface positions (some −1), a state pressing and sliding the slave."""
@@ -186,11 +192,11 @@ def test_segment_points(nn: int) -> None:
     empty = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0), np.zeros((0, nn)))
     every = np.ones(len(p.mX), bool)
     got = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, True, *empty, 0.1, 1e-9,
-                               g, w, every)
+                               g, w, every, *_facing(p))
     nodes = _points(p, "nodes", 1e-3)
     fixed = (nodes["point_facet"], nodes["xi_s"], nodes["weight"], nodes["Ns"])
     got_nodes = searchkernels.search(p.sX, p.mX, p.pos_s, p.pos_m, p.u1, False, *fixed, 0.1,
-                                     1e-3, g, w, every)
+                                     1e-3, g, w, every, *_facing(p))
     assert got[-1] and got_nodes[-1]  # every facet in use: "restricted" to all
     got, got_nodes = got[:-1], got_nodes[:-1]
     for r, out in ((ref, got), (nodes, got_nodes)):
@@ -573,7 +579,7 @@ def test_search_restricted_to_the_facets_in_use(nn: int, integration: str) -> No
 
     def search(X: np.ndarray, pos: np.ndarray, mask: np.ndarray) -> tuple:  # type: ignore[type-arg]
         return searchkernels.search(p.sX, X, p.pos_s, pos, p.u1, integration == "segments",
-                                    *fixed, 0.1, edge, g, w, mask)
+                                    *fixed, 0.1, edge, g, w, mask, *_facing(p))
 
     every = np.ones(len(mX), bool)
     whole = search(mX, pos_m, every)

@@ -324,8 +324,16 @@ def step_penetration(spec: SurfacePair, radius: float, allowed: np.ndarray,
     k = np.flatnonzero(has & projected)
     if len(k):
         f = facet[k]
-        x_bar = np.einsum("kn,knd->kd", N0[k], master_X[f] + u1[pos_m[f]])
         n = np.stack([t0[k, 1], -t0[k, 0]], axis=1)
+        # A node that starts the step beyond what the pair sees below its master point
+        # is not under it (by induction no accepted state has one): a node in a concave
+        # master corner, inside neither side's range, projects onto a facet beyond them
+        # (the crest beside a notch, 0.4 m above a wall's shear key; the step was refused).
+        x0 = node_X[k] + u0[node_pos[k]]
+        x_bar0 = np.einsum("kn,knd->kd", N0[k], master_X[f] + u0[pos_m[f]])
+        seen = -np.sum((x0 - x_bar0) * n, axis=1) <= allowed[f]
+        k, f, n = k[seen], f[seen], n[seen]
+        x_bar = np.einsum("kn,knd->kd", N0[k], master_X[f] + u1[pos_m[f]])
         depth[k] = -np.sum((x1[k] - x_bar) * n, axis=1)
         limit[k] = allowed[f]
         deep[k] = depth[k] / limit[k]

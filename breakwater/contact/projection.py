@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["INSIDE", "STEP_TOL", "FacetGrid", "closest_point", "curve", "near", "project", "shape"]
+__all__ = ["FACING", "INSIDE", "STEP_TOL", "FacetGrid", "closest_point", "curve", "near", "project",
+           "shape"]
 
 #: The search's projection Newton stops at a point after a |Δξ| below this. Newton
 #: converges quadratically: after a step below 1e-12 the error is of its square,
@@ -168,6 +169,11 @@ class FacetGrid:
             np.zeros(0, np.int64)
         return point, facet
 
+
+FACING = -0.1
+"""A slave point projects onto a master facet only where their outward normals oppose:
+n_s · n_m below this (within 84° of opposite, as :data:`breakwater.contact.facing.OPPOSED`
+for surfaces)."""
 
 INSIDE = 1e-9
 """A projection at ``|ξ| ≤ 1 + INSIDE`` is inside its facet (round-off; :func:`project`)."""

@@ -16,11 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 from breakwater.common.jit import kernel
-from breakwater.contact.projection import STEP_TOL
+from breakwater.contact.projection import FACING, STEP_TOL
 
 __all__ = ["beyond_reach", "candidates", "closest_points", "current", "curve_at", "frozen",
            "iterate_state", "mark_near", "near", "nearest_end", "project", "search",
-           "segment_points", "shape_values", "slave_points", "used_candidates", "used_project",
+           "segment_points", "shape_values", "slave_normals", "slave_points", "used_candidates",
+           "used_project",
            "used_segment_points"]
 
 
@@ -202,16 +203,21 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     Returns:
         The facet of each point (−1: no projection) and its local coordinate ξ.
     """
-    return used_project(points, nodes, radius, tol, np.ones(nodes.shape[0], np.bool_))
+    return used_project(points, nodes, radius, tol, np.ones(nodes.shape[0], np.bool_),
+                        np.zeros((0, 2)), np.zeros(0))
 
 
 @kernel
-def used_project(points, nodes, radius, tol, use):  # type: ignore[no-untyped-def]
+def used_project(points, nodes, radius, tol, use, normals, deepest):  # type: ignore[no-untyped-def]
     """:func:`project` onto the facets ``use`` marks (:func:`used_candidates`).
 
     The same projections as :func:`project` where the others are beyond the radius of
     every point (:func:`beyond_reach`): each pair's Newton, the filters and the nearest
-    (ties: the lowest facet) do not depend on the other candidates.
+    (ties: the lowest facet) do not depend on the other candidates. With ``normals``
+    (each point's outward unit normal, ``(m, 2)``; none: ``(0, 2)``), only projections
+    whose master normal opposes it (:data:`~breakwater.contact.projection.FACING`) and
+    where the point lies at most ``deepest[f]`` below facet f (what the pair sees,
+    :func:`breakwater.contact.penetration.allowed_depth`).
     """
     m = len(points)
     facet = np.full(m, -1, np.int64)
@@ -229,7 +235,13 @@ def used_project(points, nodes, radius, tol, use):  # type: ignore[no-untyped-de
         r0, r1 = x0 - points[p, 0], x1 - points[p, 1]
         dist = r0 * r0 + r1 * r1
         stationary = abs(r0 * dx0 + r1 * dx1) <= 1e-10 * (dx0 * dx0 + dx1 * dx1)
-        if abs(xi[j]) <= 1 + tol and dist <= radius ** 2 and stationary:
+        facing = True
+        if normals.shape[0]:  # the master's outward normal (dx1, −dx0)/|dx| opposes
+            length = np.sqrt(dx0 * dx0 + dx1 * dx1)
+            facing = normals[p, 0] * dx1 - normals[p, 1] * dx0 < FACING * length
+            # and the point lies no deeper below the facet than the pair sees
+            facing = facing and -(r1 * dx0 - r0 * dx1) <= deepest[f] * length
+        if abs(xi[j]) <= 1 + tol and dist <= radius ** 2 and stationary and facing:
             # The nearest; ties: the lowest facet.
             if dist < best[p] or (dist == best[p] and f < facet[p]):
                 best[p], facet[p] = dist, f
@@ -364,6 +376,26 @@ def slave_points(xs, point_facet, Ns):  # type: ignore[no-untyped-def]
             for k in range(ns):
                 s += Ns[p, k] * xs[f, k, d]
             out[p, d] = s
+    return out
+
+
+@kernel
+def slave_normals(xs, point_facet, xi_s, outward):  # type: ignore[no-untyped-def]
+    """The slave surface's outward unit normal at each integration point, ``(P, 2)``.
+
+    A point presses only on master facets in front of it: at a master surface's convex
+    corner (a notch's edge, a step, the end of a ledge) a slave point pressed into both
+    sides is nearer, by the penetration, to the side that does not face it, and the
+    nearest projection alone alternated between the two from one Newton iterate to the
+    next (an L-shaped wall's shear key in its notch: "no static equilibrium").
+    """
+    P = len(point_facet)
+    out = np.empty((P, 2))
+    for p in range(P):
+        f = point_facet[p]
+        _, _, a, b, _, _ = curve_at(xs, f, xi_s[p])
+        s = outward[f] / np.sqrt(a * a + b * b)
+        out[p, 0], out[p, 1] = b * s, -a * s
     return out
 
 
@@ -515,7 +547,7 @@ def iterate_state(u, v, a, y, dt, c_a, c_u, c_v):  # type: ignore[no-untyped-def
 
 @kernel
 def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weight,
-           fixed_N, radius, edge, g, w, use):  # type: ignore[no-untyped-def]
+           fixed_N, radius, edge, g, w, use, outward, deepest):  # type: ignore[no-untyped-def]
     """A general pair's integration points and their projections at the state u1.
 
     Args:
@@ -536,6 +568,12 @@ def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weig
         use: The master facets the search may be restricted to: it is, where every
             other is beyond the search radius of the slave surface (:func:`beyond_reach`;
             the same points and projections, without the others' grid and cuts).
+        outward: Per slave facet, +1 where ``(t_y, −t_x)`` points out of its body, else
+            −1: a point projects only onto master facets that face it
+            (:func:`slave_normals`, :func:`used_project`).
+        deepest: Per master facet, the deepest a point may lie below it and project
+            onto it (:func:`breakwater.contact.penetration.allowed_depth`; a step that
+            leaves a slave node deeper is cut back).
 
     Returns:
         Every point's slave facet, position and weight; of those with a projection:
@@ -551,9 +589,10 @@ def search(sX, mX, pos_s, pos_m, u1, segments, fixed_facet, fixed_xi, fixed_weig
         point_facet, xi_s, weight = used_segment_points(xs, xm, sX, radius, g, w, use)
         Ns = shape_values(xi_s, sX.shape[1])
     else:
-        point_facet, weight, Ns = fixed_facet, fixed_weight, fixed_N
+        point_facet, xi_s, weight, Ns = fixed_facet, fixed_xi, fixed_weight, fixed_N
     points = slave_points(xs, point_facet, Ns)
-    facet, xi = used_project(points, xm, radius, edge, use)
+    normals = slave_normals(xs, point_facet, xi_s, outward)
+    facet, xi = used_project(points, xm, radius, edge, use, normals, deepest)
     on = np.flatnonzero(facet >= 0)
     return (point_facet, points, weight, on, point_facet[on], facet[on],
             np.ascontiguousarray(Ns[on]), xi[on], weight[on], restricted)

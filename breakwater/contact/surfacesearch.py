@@ -25,16 +25,16 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.arrays import equal_at, key_of, read_only, unchanged
 from breakwater.contact import forcekernels, searchkernels
-from breakwater.contact.penetration import search_radius
+from breakwater.contact.penetration import allowed_depth, search_radius
 from breakwater.contact.projection import FacetGrid, project, shape
-from breakwater.contact.surfaces import SurfacePair, gather_surface, warn_first_order
+from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface, warn_first_order
 
 if TYPE_CHECKING:
     from breakwater.common.timings import Timings
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["InterfaceValues", "SurfaceSearch"]
+__all__ = ["InterfaceValues", "SurfaceSearch", "outward"]
 
 
 # A slave facet's nodes in closure order (the vertices, then the mid-edge node) on
@@ -287,10 +287,12 @@ class SurfaceSearch(InterfaceValues):
         master.X[flip] = master.X[flip][:, swap]
         master.dofs[flip] = master.dofs[flip][:, swap]
         self.slave, self.master = slave, master
+        self._outward = outward(slave)  # the search's facing test
         self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
         # The Gauss rule of each integration segment on [−1, 1].
         self._gauss = np.polynomial.legendre.leggauss(spec.points)
         self.radius = search_radius(spec, master)
+        self._deepest = np.ascontiguousarray(allowed_depth(master, self.radius), dtype=float)
         self.searches = 0
         self.search_seconds = 0.0
         self.timings: Timings | None = None  # the solver's: search time also added there
@@ -384,7 +386,8 @@ class SurfaceSearch(InterfaceValues):
         g, w = self._gauss
         (_, points, weight, on, f_s, f_m, Ns, xi, w_on, restricted) = searchkernels.search(
             self._sX, self._mX, self._ps, self._pm, u1, self._fixed_points is None, f0, xi0,
-            w0, N0, self.radius, self._edge, g, w, self.in_use.mask)
+            w0, N0, self.radius, self._edge, g, w, self.in_use.mask, self._outward,
+            self._deepest)
         self.searches += 1
         elapsed = time.perf_counter() - t0
         self.search_seconds += elapsed
@@ -447,6 +450,14 @@ class SurfaceSearch(InterfaceValues):
             len(self._node_pos))
         self._normal_key, self._normal_points = key_of(u1), p
         return p
+
+
+def outward(surface: Surface) -> np.ndarray:
+    """Per facet, +1 where ``(t_y, −t_x)`` points out of its cell, else −1 (2-D)."""
+    chord = surface.X[:, 1] - surface.X[:, 0]
+    side = np.sum((surface.X.mean(axis=1) - surface.interior)
+                  * np.stack([chord[:, 1], -chord[:, 0]], 1), axis=1)
+    return np.ascontiguousarray(np.where(side >= 0, 1.0, -1.0))
 
 
 class FacetsInUse:
