@@ -32,7 +32,8 @@ from breakwater.stepping.solver import NewtonOptions
 if TYPE_CHECKING:
     from breakwater.contact.surfacesearch import SurfaceSearch
 
-__all__ = ["FALL", "GROWTH", "LANDING", "RATIO", "PseudoStepper", "SlipOrigin"]
+__all__ = ["FALL", "GROWTH", "LANDING", "NONE_HELD", "RATIO", "PseudoStepper", "SlipOrigin",
+           "no_state_advice"]
 
 RATIO = 1e4
 """c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
@@ -406,3 +407,26 @@ def _pair_friction(model: ContactModel) -> list[tuple[float, float, float]]:
              mean_facet_length(model, p)) for p in model.pairs]
     return out
 
+
+NONE_HELD = ("initial state: no frictional static state ({}), and friction holds every body "
+             "(none to hold in place and release at t = 0: the held state would start the "
+             "dynamics out of equilibrium); {}")
+"""The frictional stage failed and friction holds every body: the held state (μ, χ ×100)
+is no equilibrium of the dynamics (a plank across a narrow pedestal, its frictional stage
+stalled at 2e-8 of the load, started vibrating on it: the ledger off by 24 %, a push
+slid it 42 % too far, nothing said; bad run k1)."""
+
+
+def no_state_advice(model: ContactModel) -> str:
+    """What a case without a static state can set: its loads left out of it, or none.
+
+    The static state carries every load of the initial state at its value at t = 0: a
+    load that jumps there (a rectangular pulse, a push) is one that no friction or
+    contact may hold, and the advice was only to start undeformed (which drops the
+    gravity state too; found by a user).
+    """
+    loads = model.initial.loads
+    held = len(model.loads) if loads is None else len(loads)
+    return ((f"leave loads out of it (it carries {held} at t = 0: [initial] loads = [] "
+             "keeps none), or " if held else "")
+            + "set [initial] undeformed = true to start from the undeformed state at rest")

@@ -128,7 +128,15 @@ from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.contact.general import start_slip
 from breakwater.model.model import ContactModel, Damping
 from breakwater.model.pairs import SurfacePair
-from breakwater.statics.pseudostep import FALL, GROWTH, LANDING, RATIO, PseudoStepper
+from breakwater.statics.pseudostep import (
+    FALL,
+    GROWTH,
+    LANDING,
+    NONE_HELD,
+    RATIO,
+    PseudoStepper,
+    no_state_advice,
+)
 from breakwater.stepping.solver import NewtonOptions
 
 __all__ = ["FALLBACK", "FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE",
@@ -469,21 +477,6 @@ class Relaxed:
     seconds: float
 
 
-def no_state_advice(model: ContactModel) -> str:
-    """What a case without a static state can set: its loads left out of it, or none.
-
-    The static state carries every load of the initial state at its value at t = 0: a
-    load that jumps there (a rectangular pulse, a push) is one that no friction or
-    contact may hold, and the advice was only to start undeformed (which drops the
-    gravity state too; found by a user).
-    """
-    loads = model.initial.loads
-    held = len(model.loads) if loads is None else len(loads)
-    return ((f"leave loads out of it (it carries {held} at t = 0: [initial] loads = [] "
-             "keeps none), or " if held else "")
-            + "set [initial] undeformed = true to start from the undeformed state at rest")
-
-
 def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
           options: NewtonOptions | None = None, tolerance: float = TOLERANCE,
           loading: str = "frictional") -> Relaxed:
@@ -551,6 +544,10 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                 _creep(r, v)
             elif kind == "held":
                 held, sliding = _held(r)
+                if not held:  # then the held state is no equilibrium of the dynamics
+                    raise ConvergenceError(NONE_HELD.format("; ".join(failed),
+                                                            no_state_advice(model)),
+                                           -1, its + res.iterations)
                 if sliding and not model.pairs:
                     u_held = [f.x.array.copy() for f in r.stepper.u]
                     try:
