@@ -365,8 +365,8 @@ VECTORS = ("slip", "slip_velocity", "friction_traction")
 """The vector contact fields written for ParaView."""
 
 
-def group_fields(model: ContactModel, group: str, degree: int, nodes: np.ndarray
-                 ) -> tuple[dict[str, fem.Function], np.ndarray]:
+def group_fields(model: ContactModel, group: str, degree: int, nodes: np.ndarray,
+                 body: int | None = None) -> tuple[dict[str, fem.Function], np.ndarray]:
     """The contact fields as P_degree Functions on the submesh of a facet group.
 
     Also returns the index of each of ``nodes`` among their (scalar) dofs. The fields
@@ -377,11 +377,26 @@ def group_fields(model: ContactModel, group: str, degree: int, nodes: np.ndarray
         group: The facet group (gmsh physical name).
         degree: The Lagrange degree of the fields.
         nodes: The points where the contact state is evaluated, shape ``(n, gdim)``.
+        body: The group's facets on this body only (its index; None: all). A general
+            pair's slave surface may be a group on both bodies (the master's side too,
+            ``slave_surface = master_surface``): on meshes apart its master facets'
+            nodes are no slave nodes (the run failed after its static state, "the mesh
+            differs from the checkpoint's: no stored node at ...").
     """
     msh, gdim = model.mesh, model.gdim
     fdim = msh.topology.dim - 1
     assert model.mesh_data.facet_tags is not None
     facets = model.mesh_data.facet_tags.find(group_tag(model.mesh_data, group, fdim))
+    if body is not None:
+        assert model.mesh_data.cell_tags is not None
+        name = model.bodies[body].spec.name
+        cells = model.mesh_data.cell_tags.find(group_tag(model.mesh_data, name, fdim + 1))
+        on = np.zeros(msh.topology.index_map(fdim + 1).size_local
+                      + msh.topology.index_map(fdim + 1).num_ghosts, bool)
+        on[cells] = True
+        msh.topology.create_connectivity(fdim, fdim + 1)
+        f2c = msh.topology.connectivity(fdim, fdim + 1)
+        facets = facets[[bool(on[f2c.links(f)].any()) for f in facets]]
     sub = dolfinx.mesh.create_submesh(msh, fdim, facets)[0]
     S = fem.functionspace(sub, ("Lagrange", degree))
     V = fem.functionspace(sub, ("Lagrange", degree, (gdim,)))
@@ -420,7 +435,8 @@ class PairFields:
         self.pair = pair
         where = pair.field_nodes()
         degree = model.bodies[where.body].V.ufl_element().embedded_superdegree
-        self.values, self._index = group_fields(model, where.group, degree, where.x)
+        self.values, self._index = group_fields(model, where.group, degree, where.x,
+                                                    where.body)
         self.functions = list(self.values.values())
 
     def update(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None = None
