@@ -25,7 +25,7 @@ from breakwater.meshes.hertz import hertz
 from dolfinx import fem
 
 from breakwater.contact.general import SurfaceContact
-from breakwater.contact.surfaces import SurfacePair, chord_sag
+from breakwater.contact.surfaces import Surface, SurfacePair, chord_sag
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, Fixed, Material
 from breakwater.model.pointprobe import PointProbe
@@ -228,3 +228,27 @@ def test_case_geo_is_meshed_to_the_displacement_degree(shared_dir: pathlib.Path)
         COMM.barrier()
         data = load_case(toml).read_mesh(COMM)
         assert data.mesh.geometry.cmaps[0].degree == degree
+
+
+def _polyline(points: np.ndarray) -> Surface:
+    """A surface of P2 facets along a polyline (mid-edge nodes on the chords)."""
+    a, b = points[:-1], points[1:]
+    X = np.stack([a, b, 0.5 * (a + b)], axis=1)
+    ids = np.arange(len(points))
+    vertex = np.stack([ids[:-1], ids[1:], len(points) + ids[:-1]], axis=1)
+    dofs = np.stack([2 * vertex, 2 * vertex + 1], axis=2)
+    return Surface(X, dofs, 0.5 * (a + b) - [0.0, 0.1])
+
+
+def test_corners_are_not_a_curve() -> None:
+    """A first-order soil surface with a notch one facet wide and deep (four right
+    angles in a row) is no curve: before, it was warned about as "curved (its facets
+    turn by up to 90° at 4 nodes) ... up to 8.7e-02 m inside the curve" (an L-shaped
+    wall's shear key, on the user path). A circle in 12 facets (30° turns) still is."""
+    notch = np.array([[-1.5, 0], [-0.2, 0], [-0.2, -0.4], [0.2, -0.4], [0.2, 0], [1.5, 0]])
+    assert chord_sag(_polyline(notch))[0] == 0
+    angle = np.linspace(np.pi, 2 * np.pi, 7)  # a half circle of 6 facets: 30° turns
+    n, turn, sag = chord_sag(_polyline(np.stack([np.cos(angle), np.sin(angle)], axis=1)))
+    assert n == 5 and turn == pytest.approx(np.pi / 6)
+    h = 2 * np.sin(np.pi / 12)
+    assert sag == pytest.approx(h**2 / 8, rel=0.02)  # h²/(8R), R = 1 (the chord as arc: 1 %)

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["INTEGRATIONS", "TURN", "Surface", "SurfacePair", "check_pair_settings",
+__all__ = ["CORNER", "INTEGRATIONS", "TURN", "Surface", "SurfacePair", "check_pair_settings",
            "chord_sag", "gather_surface", "surface_dofs", "warn_first_order"]
 
 log = logging.getLogger("breakwater.contact.surfaces")
@@ -33,6 +33,12 @@ log = logging.getLogger("breakwater.contact.surfaces")
 TURN = 1e-4
 """A surface turning by more than this angle (rad) at consecutive vertices is
 curved (a chord h of a circle turning by θ at its ends sags hθ/8: above 1e-5 h)."""
+
+CORNER = np.pi / 3
+"""A vertex turning by this angle (rad) or more is a corner of the geometry, not a
+curve's (a circle meshed in 6 facets or fewer): a notch one facet wide and deep in a
+first-order soil surface (four right angles in a row) was warned about as "curved",
+its chords sagging 8.7 cm inside a circle that is not there."""
 
 _warned: weakref.WeakKeyDictionary[ContactModel, set[tuple[str, str]]] = \
     weakref.WeakKeyDictionary()
@@ -115,7 +121,7 @@ def chord_sag(surface: Surface) -> tuple[int, float, float]:
 
     The turn θ between the chords of consecutive facets at each shared vertex; a
     vertex is on a curve where it and a neighbouring vertex both turn by more than
-    :data:`TURN`, and the surface is curved where it has three such vertices or
+    :data:`TURN` and less than :data:`CORNER`, and the surface is curved where it has three such vertices or
     more (an isolated corner, or two a facet apart, are the geometry's own). A chord
     h of the circle through such a vertex and its neighbours (facets h₁, h₂) sags
     h²/(8R) = h²θ/(4(h₁ + h₂)) below it.
@@ -144,7 +150,7 @@ def chord_sag(surface: Surface) -> tuple[int, float, float]:
     a, b = at[shared, 0], at[shared, 1]
     turn = np.zeros(len(vertex))
     turn[shared] = np.arccos(np.clip(np.abs(np.sum(t[a] * t[b], axis=1)), 0.0, 1.0))
-    bent = turn > TURN
+    bent = (turn > TURN) & (turn < CORNER)
     # A vertex whose two facets' other ends both turn too.
     v = np.flatnonzero(shared)
     ends_a, ends_b = end[a], end[b]
