@@ -121,8 +121,9 @@ def chord_sag(surface: Surface) -> tuple[int, float, float]:
 
     The turn θ between the chords of consecutive facets at each shared vertex; a
     vertex is on a curve where it and a neighbouring vertex both turn by more than
-    :data:`TURN` and less than :data:`CORNER`, and the surface is curved where it has three such vertices or
-    more (an isolated corner, or two a facet apart, are the geometry's own). A chord
+    :data:`TURN` and less than :data:`CORNER`, and the surface is curved where it has
+    three such vertices or more (an isolated corner, or two a facet apart, are the
+    geometry's own). A chord
     h of the circle through such a vertex and its neighbours (facets h₁, h₂) sags
     h²/(8R) = h²θ/(4(h₁ + h₂)) below it.
 
