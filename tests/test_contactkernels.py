@@ -51,6 +51,9 @@ def _surface(rng: np.random.Generator, x: np.ndarray, y: float, nn: int, bend: f
     return np.stack([a, b, mid], axis=1)
 
 
+ANY = (np.zeros((0, 2)), np.zeros(0))  # frozen: a projection onto any master facet
+
+
 def _facing(p: SimpleNamespace) -> tuple[np.ndarray, np.ndarray]:
     """The slave facets' orientation (x increasing: (t_y, −t_x) points down, out of it)
     and the master facets' depths the search sees (beyond every point's)."""
@@ -144,7 +147,7 @@ def test_start_of_step_projection(nn: int, small: bool) -> None:
     N0, dN0, _ = shape(xi, nn)
     surface = p.mX if small else xm
     t0 = unit_tangent(dN0, surface[np.maximum(facet, 0)])
-    got = searchkernels.frozen(points, xm, surface, radius)
+    got = searchkernels.frozen(points, xm, surface, radius, *ANY)
     np.testing.assert_array_equal(got[0], facet)
     np.testing.assert_array_equal(got[3], projected)
     np.testing.assert_allclose(got[1], N0, rtol=0, atol=1e-14)
@@ -303,7 +306,7 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
     # Friction at the slave nodes' start-of-step projection.
     xm0 = p.mX + p.u1[p.pos_m]
     facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0,
-                                            p.mX if small else xm0, 0.1)
+                                            p.mX if small else xm0, 0.1, *ANY)
     fr = _reference_friction(law, lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1)
     assert len(fr["k"]) > 3
     none = np.full(len(p.node_pos), np.nan)  # no linearisation slips: the law itself
@@ -645,7 +648,7 @@ def test_friction_round_off_is_the_numpy_estimate() -> None:
         p.sX, p.mX, p.pos_s, p.pos_m, p.u1, r["f_s"], r["f_m"], r["Ns_on"], r["xi"], r["w"],
         False, 1e10, 0.0, p.node_of, len(p.node_pos))
     xm0 = p.mX + p.u1[p.pos_m]
-    facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0, xm0, 0.1)
+    facet, N0, t0, _ = searchkernels.frozen(p.node_X + p.u1[p.node_pos], xm0, xm0, 0.1, *ANY)
     mu, chi = 0.5, 1e-3
     k, v_T, _, _ = forcekernels.friction(lam, facet, N0, t0, p.node_pos, p.pos_m, p.v1, mu,
                                          chi, np.full(len(p.node_pos), np.nan))

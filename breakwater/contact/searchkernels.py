@@ -17,9 +17,10 @@ import numpy as np
 
 from breakwater.common.jit import kernel
 from breakwater.contact.projection import FACING, STEP_TOL
+from breakwater.contact.reachkernels import beyond_reach, mark_near
 
 __all__ = ["beyond_reach", "candidates", "closest_points", "current", "curve_at", "frozen",
-           "iterate_state", "mark_near", "near", "nearest_end", "project", "search",
+           "iterate_state", "mark_near", "near", "nearest_end", "node_normals", "project", "search",
            "segment_points", "shape_values", "slave_normals", "slave_points", "used_candidates",
            "used_project",
            "used_segment_points"]
@@ -400,7 +401,25 @@ def slave_normals(xs, point_facet, xi_s, outward):  # type: ignore[no-untyped-de
 
 
 @kernel
-def frozen(points, xm, surface, radius):  # type: ignore[no-untyped-def]
+def node_normals(xs, node_of, outward, n_nodes):  # type: ignore[no-untyped-def]
+    """Each slave node's outward unit normal, the mean of its facets' there, ``(K, 2)``."""
+    out = np.zeros((n_nodes, 2))
+    for f in range(xs.shape[0]):
+        for a in range(xs.shape[1]):
+            xi = -1.0 if a == 0 else (1.0 if a == 1 else 0.0)
+            _, _, dx0, dx1, _, _ = curve_at(xs, f, xi)
+            s = outward[f] / np.sqrt(dx0 * dx0 + dx1 * dx1)
+            out[node_of[f, a], 0] += dx1 * s
+            out[node_of[f, a], 1] -= dx0 * s
+    for k in range(n_nodes):
+        length = np.sqrt(out[k, 0] ** 2 + out[k, 1] ** 2)
+        if length > 0:
+            out[k, 0], out[k, 1] = out[k, 0] / length, out[k, 1] / length
+    return out
+
+
+@kernel
+def frozen(points, xm, surface, radius, normals, deepest):  # type: ignore[no-untyped-def]
     """The slave nodes' start-of-step projection (``SurfaceSearch._frozen``).
 
     Args:
@@ -408,13 +427,20 @@ def frozen(points, xm, surface, radius):  # type: ignore[no-untyped-def]
         xm: The master facets' nodes (current).
         surface: Where the tangent is taken (the current or the reference nodes).
         radius: The search radius.
+        normals: The nodes' outward normals (:func:`node_normals`; ``(0, 2)``: any
+            facet) and
+        deepest: the master facets' depths the pair sees, as in :func:`search`: a node
+            past a master's corner took the facet round it (a block sliding over the
+            end of a base whose end face was in the master surface: its friction
+            along that face, the resultant 0.45 μN).
 
     Returns:
         The master facet (−1: none; a node with no projection takes the nearest end),
         the shape functions at ξ̄₀, the unit tangent there and whether it is a
         projection.
     """
-    facet, xi = project(points, xm, radius, 1e-9)
+    facet, xi = used_project(points, xm, radius, 1e-9, np.ones(xm.shape[0], np.bool_),
+                             normals, deepest)
     projected = facet >= 0
     m = len(points)
     nb = m - projected.sum()
@@ -431,90 +457,6 @@ def frozen(points, xm, surface, radius):  # type: ignore[no-untyped-def]
             s = np.sqrt(a * a + b * b)
             t0[k, 0], t0[k, 1] = a / s, b / s
     return facet, N0, t0, projected
-
-
-@kernel
-def mark_near(xs, xm, reach, near):  # type: ignore[no-untyped-def]
-    """Mark the master facets whose node box comes within ``reach`` of a slave facet's.
-
-    ``xs``, ``xm``: the current nodes; ``near``: the marks (changed in place).
-
-    Returns:
-        How many were newly marked.
-    """
-    s_lo, s_hi = _boxes(xs)
-    m_lo, m_hi = _boxes(xm)
-    added = 0
-    for f in range(xm.shape[0]):
-        if near[f]:
-            continue
-        for s in range(xs.shape[0]):
-            if (m_lo[f, 0] <= s_hi[s, 0] + reach and m_hi[f, 0] >= s_lo[s, 0] - reach
-                    and m_lo[f, 1] <= s_hi[s, 1] + reach and m_hi[f, 1] >= s_lo[s, 1] - reach):
-                near[f] = True
-                added += 1
-                break
-    return added
-
-
-@kernel
-def beyond_reach(xs, xm, use, radius, tol):  # type: ignore[no-untyped-def]
-    """Whether every master facet not in ``use`` is beyond ``radius`` of the slave facets.
-
-    Per coordinate, the node boxes grown to hold the curves (a quadratic facet leaves
-    its node box by at most its sag c = |½(x₀ + x₁) − x₂|; :func:`near`'s margin, with
-    the projections' ``tol`` beyond the master's ends): a facet whose box is more than
-    ``radius`` from every slave facet's can hold no projection of a slave point, and its
-    vertices project onto no slave facet.
-
-    Args:
-        xs: The slave facets' current nodes.
-        xm: The master's.
-        use: The master facets in use.
-        radius: The search radius.
-        tol: A projection at ``|ξ| ≤ 1 + tol`` is inside its master facet.
-    """
-    s_lo, s_hi = _curve_boxes(xs, 1e-9)
-    m_lo, m_hi = _curve_boxes(xm, tol)
-    for f in range(xm.shape[0]):
-        if use[f]:
-            continue
-        for s in range(xs.shape[0]):
-            if (m_lo[f, 0] <= s_hi[s, 0] + radius and m_hi[f, 0] >= s_lo[s, 0] - radius
-                    and m_lo[f, 1] <= s_hi[s, 1] + radius
-                    and m_hi[f, 1] >= s_lo[s, 1] - radius):
-                return False
-    return True
-
-
-@kernel
-def _curve_boxes(x, tol):  # type: ignore[no-untyped-def]
-    """Each facet's box holding its curve for ``|ξ| ≤ 1 + tol`` (:func:`near`'s margin)."""
-    lo, hi = np.empty((x.shape[0], 2)), np.empty((x.shape[0], 2))
-    for f in range(x.shape[0]):
-        for d in range(2):
-            x0, x1 = x[f, 0, d], x[f, 1, d]
-            a, b = min(x0, x1), max(x0, x1)
-            half, c = 0.5 * abs(x1 - x0), 0.0
-            if x.shape[1] == 3:
-                x2 = x[f, 2, d]
-                a, b = min(a, x2), max(b, x2)
-                c = abs(0.5 * (x0 + x1) - x2)
-            margin = c + tol * (half + 3 * c)
-            lo[f, d], hi[f, d] = a - margin, b + margin
-    return lo, hi
-
-
-@kernel
-def _boxes(x):  # type: ignore[no-untyped-def]
-    """Each facet's node box: lower and upper corners, ``(F, 2)`` each."""
-    lo, hi = np.empty((x.shape[0], 2)), np.empty((x.shape[0], 2))
-    for f in range(x.shape[0]):
-        for d in range(2):
-            lo[f, d], hi[f, d] = x[f, 0, d], x[f, 0, d]
-            for a in range(1, x.shape[1]):
-                lo[f, d], hi[f, d] = min(lo[f, d], x[f, a, d]), max(hi[f, d], x[f, a, d])
-    return lo, hi
 
 
 @kernel

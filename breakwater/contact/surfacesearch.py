@@ -287,12 +287,11 @@ class SurfaceSearch(InterfaceValues):
         master.X[flip] = master.X[flip][:, swap]
         master.dofs[flip] = master.dofs[flip][:, swap]
         self.slave, self.master = slave, master
-        self._outward = outward(slave)  # the search's facing test
         self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
         # The Gauss rule of each integration segment on [−1, 1].
         self._gauss = np.polynomial.legendre.leggauss(spec.points)
         self.radius = search_radius(spec, master)
-        self._deepest = np.ascontiguousarray(allowed_depth(master, self.radius), dtype=float)
+        self._outward, self._deepest = outward(slave), allowed_depth(master, self.radius)
         self.searches = 0
         self.search_seconds = 0.0
         self.timings: Timings | None = None  # the solver's: search time also added there
@@ -410,10 +409,11 @@ class SurfaceSearch(InterfaceValues):
         if unchanged(self._frozen_key, u0):  # within a step: the step's (read-only) u₀
             return self._frozen_data
         xm = self._mX + u0[self._pm]
-        points = self.node_X + u0[self._node_pos]
-        surface = self._mX if self.small_rotations else xm
-        facet, N0, t0, self._frozen_projected = searchkernels.frozen(points, xm, surface,
-                                                                     self.radius)
+        normals = searchkernels.node_normals(searchkernels.current(self._sX, self._ps, u0),
+                                             self._node_of, self._outward, len(self.node_X))
+        facet, N0, t0, self._frozen_projected = searchkernels.frozen(
+            self.node_X + u0[self._node_pos], xm, self._mX if self.small_rotations else xm,
+            self.radius, normals, self._deepest)
         self._frozen_key = key_of(u0)
         self._frozen_data = (facet, N0, t0)
         return self._frozen_data

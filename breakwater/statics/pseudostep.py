@@ -35,6 +35,9 @@ if TYPE_CHECKING:
 __all__ = ["FALL", "GROWTH", "LANDING", "NONE_HELD", "RATIO", "PseudoStepper", "SlipOrigin",
            "no_state_advice"]
 
+ANY = (np.zeros((0, 2)), np.zeros(0))
+"""searchkernels.frozen's normals and depths for a projection onto any master facet."""
+
 RATIO = 1e4
 """c_max ω_min²: the contraction of the lowest mode per step at c_max is 1/(1 + RATIO)."""
 
@@ -229,7 +232,7 @@ class PseudoStepper:
             u = p.interface_values(self.stepper.u)
             x = p.node_X + u[p.node_pos]
             xm = np.ascontiguousarray(p.master.X + u[p.pos_m], dtype=float)
-            facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius)
+            facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius, *ANY)
             d = x - np.einsum("kn,knd->kd", N0, xm[np.maximum(facet, 0)])
             gap = d[:, 0] * t[:, 1] - d[:, 1] * t[:, 0]
             out.append(float(gap[on & (facet >= 0)].min(initial=np.inf)))
@@ -285,7 +288,7 @@ class SlipOrigin:
         if self._gaps is None:
             p = self.pair
             X, mX = p.node_X, np.ascontiguousarray(p.master.X, dtype=float)
-            facet, N0, t0, _ = searchkernels.frozen(X, mX, mX, LANDING * p.radius)
+            facet, N0, t0, _ = searchkernels.frozen(X, mX, mX, LANDING * p.radius, *ANY)
             d = X - np.einsum("kn,knd->kd", N0, mX[np.maximum(facet, 0)])
             n = np.stack([t0[:, 1], -t0[:, 0]], axis=1)
             self._gaps = np.where((facet >= 0)[:, None], np.sum(d * n, axis=1)[:, None] * n,
