@@ -440,7 +440,8 @@ def mesh_geo(path: pathlib.Path, target: pathlib.Path, comm: MPI.Comm,
     has a curved curve (:func:`curved_edges`); a geometry of straight lines keeps
     first-order (affine) cells, on which the conforming pairs' compiled path runs
     (:mod:`breakwater.contact.nodal`) and whose P2 nodes are the same points. A
-    script that asks for an order itself (``Mesh.ElementOrder``) keeps it.
+    script that asks for an order of 2 or more (``Mesh.ElementOrder``) keeps it; one that
+    asks for 1, gmsh's default, cannot be told from one that does not ask.
 
     Args:
         path: The script.
