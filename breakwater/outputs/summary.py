@@ -376,8 +376,8 @@ def format_report(summary: Mapping[str, Any], directory: str | pathlib.Path) -> 
                 if summary.get("status") == "interrupted" else
                 f"FAILED at t = {reached} s: {summary.get('error')}")]
     if s:
-        lines.append(f"  static: contact resultant {num(s.get('contact_resultant'))} N{per}, "
-                     f"weight {num(s.get('weight'))} N{per}, mean pressure "
+        lines.append(f"  static: normal contact resultant ∫p dS {num(s.get('contact_resultant'))} "
+                     f"N{per}, weight carried {num(s.get('weight'))} N{per}, mean pressure "
                      f"{num(s.get('mean_contact_pressure'))} Pa (edge "
                      f"{num(s.get('edge_pressure'))}, centre {num(s.get('center_pressure'))})")
     held = []
