@@ -2,7 +2,8 @@
 
 Each body is its own surface with its own element size, so the meshes of two bodies in
 contact need not match (:mod:`breakwater.contact.general`); each side of a body is an
-exterior facet group. Rectangles are structured (transfinite) triangles.
+exterior facet group. Rectangles are structured (transfinite) triangles; boxes (3-D)
+unstructured tetrahedra of a given size.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from mpi4py import MPI
 from breakwater.common.gmshtools import gmsh_session
 from breakwater.common.parallel import on_rank_zero
 
-__all__ = ["Rectangle", "rectangles"]
+__all__ = ["Box", "Rectangle", "boxes", "rectangles"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +89,66 @@ def rectangles(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Rectan
                                                  "top_left"), strict=True):
                         gmsh.model.addPhysicalGroup(0, [point], name=f"{b.name}_{corner}")
             gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+        return str(path)
+
+    return pathlib.Path(on_rank_zero(comm, write))  # rank 0's path, or its error
+
+
+@dataclass(frozen=True)
+class Box:
+    """A box body ``[x0, x0 + size_x] × [y0, y0 + size_y] × [z0, z0 + size_z]`` (3-D, y up).
+
+    Its physical groups: ``name`` (cells) and ``name_bottom`` (y min), ``name_top``,
+    ``name_left`` (x min), ``name_right``, ``name_back`` (z min), ``name_front`` (faces).
+
+    Attributes:
+        name: Body name.
+        corner: ``(x0, y0, z0)`` (m).
+        size: ``(size_x, size_y, size_z)`` (m).
+        h: Element size (m).
+    """
+
+    name: str
+    corner: tuple[float, float, float]
+    size: tuple[float, float, float]
+    h: float
+
+
+def boxes(path: str | pathlib.Path, comm: MPI.Comm, bodies: Sequence[Box], order: int = 2
+          ) -> pathlib.Path:
+    """Write a mesh of separate boxes of tetrahedra (rank 0 writes; collective).
+
+    Args:
+        path: Output ``.msh`` (the same on all ranks).
+        comm: Communicator.
+        bodies: The boxes (each meshed on its own, at its own size).
+        order: Geometric order of the elements.
+
+    Returns:
+        The path.
+    """
+    path = pathlib.Path(path)
+    sides = (("left", 0, 0), ("right", 0, 1), ("bottom", 1, 0), ("top", 1, 1),
+             ("back", 2, 0), ("front", 2, 1))
+
+    def write() -> str:
+        with gmsh_session(model="apart"):
+            occ = gmsh.model.occ
+            made = [(b, occ.addBox(*b.corner, *b.size)) for b in bodies]
+            occ.synchronize()
+            for b, v in made:
+                gmsh.model.addPhysicalGroup(3, [v], name=b.name)
+                faces = [f for _, f in gmsh.model.getBoundary([(3, v)], oriented=False)]
+                for side, axis, end in sides:
+                    at = b.corner[axis] + end * b.size[axis]
+                    tags = [f for f in faces
+                            if abs(occ.getCenterOfMass(2, f)[axis] - at) < 1e-9]
+                    gmsh.model.addPhysicalGroup(2, tags, name=f"{b.name}_{side}")
+                points = gmsh.model.getBoundary([(3, v)], recursive=True)
+                gmsh.model.mesh.setSize(points, b.h)
+            gmsh.model.mesh.generate(3)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))
         return str(path)

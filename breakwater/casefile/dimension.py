@@ -7,9 +7,10 @@ all 3; ``gravity`` sets the case's dimension (its default is 2D). The mesh must 
 of the same dimension (:func:`mesh_problem`, once it is read). In 3D,
 ``out_of_plane_length`` does not apply (nothing is per metre) and must stay 1, and a
 calibration reads its stiffness as the 3D model's (``stiffness_basis = "block"``).
-General (non-matching) pairs are plane strain only for now: a 3D case with one is refused
-in one line (Goda's pressures and storms run in 3D: p(y) the same across the face's
-width).
+General (non-matching) pairs run in 3D frictionless, with ``segments`` or ``gauss``
+integration; friction or ``nodes`` on one is refused in one line
+(:func:`general_in_3d`). Goda's pressures and storms run in 3D: p(y) the same across
+the face's width.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from breakwater.casefile.tables import (
     OutputCase,
 )
 from breakwater.config.fields import InvalidField
+from breakwater.model.pairs import three_d_general
 
 __all__ = ["dimension", "dimension_problem", "general_in_3d", "mesh_problem"]
 
@@ -120,18 +122,21 @@ def dimension_problem(case: _Case) -> None:
 
 
 def general_in_3d(case: _Case) -> None:
-    """Refuse a general pair in a 3D case (once the mesh is known to be 3D).
+    """Refuse what a general pair cannot do in a 3D case (once the mesh is known to be 3D).
+
+    Friction and ``integration = "nodes"``
+    (:func:`breakwater.model.pairs.three_d_general`).
 
     Raises:
-        InvalidField: The first general pair's ``slave_surface``.
+        InvalidField: The first such pair's ``friction`` or ``integration``.
     """
     if dimension(case) == 3:
         for c in case.contact:
             if c.general:
-                raise InvalidField(f"contact.{c.name}.slave_surface", "general pairs "
-                                   "(non-matching surfaces) are plane strain only for now: in "
-                                   "3D the bodies must share their interface's nodes (a "
-                                   "conforming pair)")
+                why = three_d_general(c.friction, c.integration)
+                if why:
+                    key = "friction" if c.friction else "integration"
+                    raise InvalidField(f"contact.{c.name}.{key}", why)
 
 
 def mesh_problem(case: _Case, gdim: int) -> str | None:

@@ -38,7 +38,7 @@ from breakwater.config.runspec import InitialSpec
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
-from breakwater.model.pairs import ContactPair, PairData, SurfacePair
+from breakwater.model.pairs import ContactPair, PairData, SurfacePair, three_d_general
 from breakwater.model.parts import (
     Body,
     BodyData,
@@ -177,9 +177,10 @@ class ContactModel(KnownAttributes, ModelGroups):
         # if all its integrals of a type share one subdomain_data object.
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
-        if surface_pairs and self.gdim == 3:
-            raise MeshError("general contact pairs (non-matching surfaces) are plane strain "
-                            "only for now: in 3D the bodies must share their interface's nodes")
+        for p in surface_pairs if self.gdim == 3 else ():
+            why = three_d_general(p.friction, p.integration)
+            if why:
+                raise MeshError(f"contact '{p.name}': {why}")
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
         self._fixed, self._fixed_sizes, self._load_data = [], [], []
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]

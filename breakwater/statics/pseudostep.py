@@ -16,7 +16,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 from collections.abc import Iterator, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from dolfinx import fem
@@ -25,6 +25,8 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
+from breakwater.contact.general3d import nodal_gaps
+from breakwater.contact.surfacesearch3d import current as current3d
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
@@ -231,6 +233,11 @@ class PseudoStepper:
         for p in self.providers:
             u = p.interface_values(self.stepper.u)
             x = p.node_X + u[p.node_pos]
+            if self.model.gdim == 3:  # (general3d: the slave nodes' gaps, NaN: none)
+                xm = current3d(p._mX, p._pm, u)
+                gaps3d = nodal_gaps(cast(Any, p), x, xm, LANDING * p.radius)[0]
+                out.append(float(np.nan_to_num(gaps3d, nan=np.inf).min(initial=np.inf)))
+                continue
             xm = np.ascontiguousarray(p.master.X + u[p.pos_m], dtype=float)
             facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius, *ANY)
             d = x - np.einsum("kn,knd->kd", N0, xm[np.maximum(facet, 0)])

@@ -47,6 +47,7 @@ its node-by-node structure); :class:`InterfaceAssembler` assembles the UFL of
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import dolfinx
 import numpy as np
@@ -60,6 +61,7 @@ from breakwater.common.errors import PenetrationError
 from breakwater.common.parallel import single_threaded_blas
 from breakwater.common.timings import Timings
 from breakwater.contact.general import SurfaceContact
+from breakwater.contact.general3d import SurfaceContact3D
 from breakwater.model.layout import MonolithicLayout
 from breakwater.model.model import ContactModel
 from breakwater.stepping.bulk import BulkOperators, interface_dofs
@@ -262,8 +264,11 @@ class CondensedNewton(StepSolver):
                     BodyGuard(guard, self.interface, layout, self.da)
                     if guard is not None else None)]
         # General pairs (breakwater.contact.general): one provider each, with its guard.
-        self.surfaces = [SurfaceContact(model, p, layout, self.I,
-                                        (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+        # (In 3-D, :class:`~breakwater.contact.general3d.SurfaceContact3D`, frictionless:
+        # the same provider and Pair interfaces, typed as the 2-D kind here.)
+        kind: Any = SurfaceContact3D if model.gdim == 3 else SurfaceContact
+        self.surfaces: list[SurfaceContact] = [kind(model, p, layout, self.I, (self.u, self.v, self.a, self.da),
+                              dt, beta1, beta2)
                          for p in model.surface_pairs]
         # Frictionless pairs too (inert at μ = 0): the relaxation's held stage sets μ = 100.
         self.providers += [StateForces(sp, self.interface, self.da,

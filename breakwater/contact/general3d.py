@@ -1,0 +1,431 @@
+"""General contact pairs in 3-D: two surfaces of triangles that need not match (frictionless).
+
+The 3-D kind of :mod:`breakwater.contact.general` (issue 25), written the same way: the
+slave's integration points (:class:`~breakwater.contact.surfacesearch3d.SurfaceSearch3D`:
+mortar segments or Gauss points per slave face) are projected onto the master surface in
+the current configuration (closest point, finite sliding), the normal gap is
+``g_n = (x_s − x̄_m)·n̄`` with n̄ the master's unit outward normal ``x_ξ × x_η/|x_ξ × x_η|``
+at the projection, the penalty traction ``t = ε_n⟨−g_n⟩₊ n̄``; the slave receives
+``−∫ t N_s``, the master ``+∫ t N̄_m`` (action and reaction).
+
+The pair is a provider of the fast solver (:mod:`breakwater.stepping.condensed`), as the
+2-D pair: ``vector()`` and ``matrix()`` give f_c and its exact Jacobian on the interface
+unknowns (:mod:`breakwater.contact.forcekernels3d`: a complex step per local DOF, the
+projection's Newton differentiated), every rank evaluating the same points in the same
+order on the gathered state (the result does not depend on the partition).
+
+Friction is not implemented in 3-D: a case with one is refused
+(:func:`breakwater.casefile.dimension.general_in_3d`), and a stage that sets it on the
+pair (the static relaxation's held stage) fails with that reason. The outputs are
+measured at the slave nodes (:class:`SlaveNodes3D`): gap, law pressure
+ε_n⟨−g_n⟩₊ and tangential velocity at their projection, the slip relative to the master
+material point under them as meshed; pair probes are refused in one line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from dolfinx import fem
+
+from breakwater.common.errors import CaseError, ConvergenceError
+from breakwater.contact import forcekernels, forcekernels3d, searchkernels3d
+from breakwater.contact.projection import INSIDE
+from breakwater.contact.projection3d import shape, surface, unit_normal
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.contact.surfacesearch3d import SurfaceSearch3D, current
+from breakwater.model.pairs import FieldNodes, StaticMeasures, facet_size, settlement
+
+if TYPE_CHECKING:
+    from breakwater.model.layout import MonolithicLayout
+    from breakwater.model.model import ContactModel
+
+__all__ = ["QUANTITIES", "SlaveNodes3D", "SurfaceContact3D", "SurfaceForces3D", "nodal_gaps"]
+
+QUANTITIES = ("force_x", "force_y", "force_z", "contact_area", "penetration")
+"""The history quantities of a 3-D general pair (columns ``<name>_<quantity>``)."""
+
+OVERLAP = 1e-3
+"""A slave node meshed deeper inside the master than this fraction of the face under it
+is an overlap of the meshes (as :data:`breakwater.contact.penetration.OVERLAP`)."""
+
+FRICTION = ("friction on a 3-D general pair is not implemented (frictionless only: "
+            "friction = 0)")
+
+
+class _NoSlip:
+    """The slip memory of a frictionless pair (:class:`~.newtonaids.SlipMemory`): none."""
+
+    slip = None
+
+    def predict(self, y: np.ndarray) -> int:
+        return 0
+
+    def converged(self, y: np.ndarray) -> None:
+        """Nothing to keep."""
+
+    def accept(self) -> None:
+        """Nothing to keep."""
+
+    def saved(self) -> None:
+        return None
+
+    def load(self, saved: Any) -> None:
+        """Nothing to load."""
+
+
+class _AllFacets:
+    """The master faces in use (:class:`~.surfacesearch.FacetsInUse`): all, always."""
+
+    def __init__(self, count: int) -> None:
+        self.mask = np.ones(count, bool)
+
+
+class SurfaceForces3D(SurfaceSearch3D):
+    """A 3-D general pair as a provider of the fast solver: f_c and ∂f_c/∂Δa.
+
+    Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
+    """
+
+    def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
+                 interface: np.ndarray,
+                 state: tuple[Sequence[fem.Function], Sequence[fem.Function],
+                              Sequence[fem.Function], Sequence[fem.Function]],
+                 dt: fem.Constant, beta1: float, beta2: float) -> None:
+        super().__init__(model, spec, layout, interface, state, dt, beta1, beta2)
+        self.memory = _NoSlip()
+        self.in_use = _AllFacets(len(self.master.X))
+
+    def _frictionless(self) -> None:
+        if self.spec.friction:
+            raise ConvergenceError(f"contact '{self.spec.name}': {FRICTION}", -1, 0)
+
+    def vector(self, accepted: bool = False) -> np.ndarray:
+        """The contact residual at the interface unknowns (the same on every rank).
+
+        Args:
+            accepted: At the stepper's accepted state (u, v) instead of the iterate.
+        """
+        self._frictionless()
+        _, u1, _ = self._state(accepted=accepted)
+        return np.asarray(self._normal(u1)["out"]).copy()
+
+    def _jacobian(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`matrix` on the unknowns it couples: ``(act, A[act, act])``."""
+        self._frictionless()
+        dt = self.step_dt()
+        _, u1, _ = self._state()
+        p = self._normal(u1)
+        eps, g0, _, _ = self._law
+        return forcekernels3d.jacobian(  # type: ignore[no-any-return]
+            self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"],
+            p["Ns"], p["xi"], p["weight"], p["gap"], self.small_rotations, eps, g0,
+            0.5 * self.beta2 * dt**2)
+
+    def matrix(self) -> np.ndarray:
+        """∂(contact residual)/∂Δa at the interface unknowns, dense."""
+        act, A = self._jacobian()
+        out = np.zeros((self.n, self.n))
+        out[np.ix_(act, act)] = A
+        return out
+
+    def active_jacobian(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`matrix` as ``(act, A)``: the unknowns it couples and its block there."""
+        return self._jacobian()
+
+    def left_product(self, X: np.ndarray) -> np.ndarray:
+        """X @ :meth:`matrix` from the matrix's structure."""
+        act, A = self._jacobian()
+        return forcekernels.left_product(  # type: ignore[no-any-return]
+            np.ascontiguousarray(X, dtype=float), act, A)
+
+    def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
+        """No slip guard (frictionless): nothing changed."""
+        return 0
+
+    def true_law(self, crawl: bool = True) -> bool:
+        """The law is always the law itself (no crawl points without friction)."""
+        return False
+
+    def reach(self) -> np.ndarray | None:
+        """None: the step's contact may touch any interface unknown."""
+        return None
+
+    def resolution(self, y: np.ndarray) -> float:
+        """0: the normal part's round-off stays below the Newton's tolerances."""
+        return 0.0
+
+    def penetration(self, y: np.ndarray) -> str | None:
+        """Why the step's solution Δa = y leaves a slave node deeper than half a search radius.
+
+        Deeper, the node may leave the search (its projection within a radius): the
+        step is refused and retried smaller (None: it does not; every rank the same).
+        """
+        u, v, a, da = self._start(y)
+        dt = self.step_dt()
+        u1 = u + (dt * v + 0.5 * dt**2 * a + 0.5 * self.beta2 * dt**2 * da)
+        x = self.node_X + u1[self.node_pos]
+        gap, _, _ = nodal_gaps(self, x, current(self._mX, self._pm, u1))
+        depth = -np.nan_to_num(gap, nan=0.0)
+        k = int(np.argmax(depth)) if len(depth) else 0
+        if len(depth) and depth[k] > 0.5 * self.radius:
+            where = ", ".join(f"{c:.4g}" for c in self.node_X[k])
+            return (f"contact '{self.spec.name}': slave node at ({where}) m would end the "
+                    f"step {depth[k]:.3g} m inside the master, beyond half the search "
+                    f"radius {self.radius:.3g} m")
+        return None
+
+
+def nodal_gaps(pair: SurfaceSearch3D, x: np.ndarray, xm: np.ndarray,
+               radius: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The gap of points ``x`` to the master surface ``xm``, NaN: no projection.
+
+    Within ``radius`` (None: the pair's search radius), along the master's normal at
+    the closest point (the reference surface's with small rotations).
+
+    Returns:
+        g_n, the master face (−1: none) and (ξ̄, η̄) of each point.
+    """
+    facet, xi = searchkernels3d.project(np.ascontiguousarray(x), xm,
+                                         pair.radius if radius is None else radius, INSIDE)
+    gap = np.full(len(x), np.nan)
+    on = facet >= 0
+    if on.any():
+        nodes = xm[facet[on]]
+        x_bar, dx, _ = surface(nodes, xi[on])
+        ref = pair._mX[facet[on]] if pair.small_rotations else nodes
+        n = unit_normal(surface(ref, xi[on])[1]) if pair.small_rotations else unit_normal(dx)
+        gap[on] = np.sum((x[on] - x_bar) * n, axis=1) + pair._law[1]
+    return gap, facet, xi
+
+
+class SlaveNodes3D:
+    """The contact state at a 3-D general pair's slave nodes (its fields and snapshots).
+
+    Each node's master material point under it as meshed (its closest point on the
+    reference master surface; nodes with none are left without slip) is found once.
+
+    Args:
+        pair: The pair.
+    """
+
+    def __init__(self, pair: SurfaceSearch3D) -> None:
+        self.pair = pair
+        mX = pair._mX
+        self.facet0, self.xi0 = searchkernels3d.project(
+            np.ascontiguousarray(pair.node_X), mX, pair.radius, INSIDE)
+        on = self.facet0 >= 0
+        self.N0 = np.zeros((len(on), mX.shape[1]))
+        self.normal0 = np.zeros((len(on), 3))
+        if on.any():
+            self.N0[on] = shape(self.xi0[on], mX.shape[1])[0]
+            self.normal0[on] = unit_normal(surface(mX[self.facet0[on]], self.xi0[on])[1])
+
+    def evaluate(self, u: np.ndarray, v: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The nodes' state at the interface values ``u``, ``v`` (None: at rest).
+
+        Returns:
+            ``x``, ``u_slave``, ``u_master`` (at the node's master material point as
+            meshed), ``normal`` (the master's at the current projection; 0: none),
+            ``gap`` (NaN: no projection), ``pressure`` ε_n⟨−g_n⟩₊, ``slip``
+            (``(I − n₀⊗n₀)(u_s − u_m(X̄₀))``), ``slip_velocity``
+            (``(I − n̄⊗n̄)(v_s − v̄_m)``) and ``friction_traction`` (0).
+        """
+        p = self.pair
+        v = np.zeros_like(u) if v is None else v
+        us, vs = u[p.node_pos], v[p.node_pos]
+        x = p.node_X + us
+        xm = current(p._mX, p._pm, u)
+        gap, facet, xi = nodal_gaps(p, x, xm)
+        on = facet >= 0
+        normal = np.zeros_like(x)
+        v_T = np.zeros_like(x)
+        if on.any():
+            normal[on] = unit_normal(surface(xm[facet[on]], xi[on])[1])
+            Nm = shape(xi[on], xm.shape[1])[0]
+            v_bar = np.einsum("kn,knd->kd", Nm, v[p.pos_m[facet[on]]])
+            rel = vs[on] - v_bar
+            v_T[on] = rel - np.sum(rel * normal[on], axis=1)[:, None] * normal[on]
+        um0 = np.einsum("kn,knd->kd", self.N0, u[p.pos_m[np.maximum(self.facet0, 0)]])
+        rel0 = us - um0
+        n0 = self.normal0
+        slip = np.where((self.facet0 >= 0)[:, None],
+                        rel0 - np.sum(rel0 * n0, axis=1)[:, None] * n0, 0.0)
+        eps = p._law[0]
+        pressure = np.where(on, eps * np.maximum(-np.nan_to_num(gap, nan=1.0), 0.0), 0.0)
+        return {"x": x, "u_slave": us, "u_master": um0, "normal": normal, "gap": gap,
+                "pressure": pressure, "slip": slip, "slip_velocity": v_T,
+                "friction_traction": np.zeros_like(x)}
+
+
+class SurfaceContact3D(SurfaceForces3D):
+    """One 3-D general pair: the fast solver's provider and what the outputs measure on it.
+
+    The 3-D general kind of :class:`breakwater.model.pairs.Pair`.
+
+    Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
+    """
+
+    _nodes: SlaveNodes3D | None = None
+
+    @property
+    def name(self) -> str:
+        """The pair's name (the case's ``[contact.<name>]``)."""
+        return self.spec.name
+
+    @property
+    def columns(self) -> list[str]:
+        """``<name>_force_x``, ``_force_y``, ``_force_z``, ``_contact_area``, ``_penetration``."""
+        return [f"{self.name}_{q}" for q in QUANTITIES]
+
+    def _record(self, accepted: bool = True) -> np.ndarray:
+        """(penalty energy, contact area, largest ⟨−g_n⟩₊, resultant on the slave (3))."""
+        _, u1, _ = self._state(accepted=accepted)
+        p = self._normal(u1)
+        closed = p["gap"] <= 0.0
+        w = p["weight"][closed]
+        g = p["gap"][closed]
+        eps = self._law[0]
+        ns = self._sX.shape[1]
+        force = -p["forces"][:, :ns].sum(axis=(0, 1)) if len(p["forces"]) else np.zeros(3)
+        return np.array([float(np.sum(w * 0.5 * eps * g * g)), float(w.sum()),
+                         float(-g.min(initial=0.0)), *force])
+
+    def measure(self) -> dict[str, float]:
+        """The pair's history values at the accepted state (collective)."""
+        r = self._record()
+        return dict(zip(self.columns, (float(r[3]), float(r[4]), float(r[5]), float(r[1]),
+                                       float(r[2])), strict=True))
+
+    def resultant(self, accepted: bool = True) -> np.ndarray:
+        """∫ t_s: the force the master exerts on the slave (N)."""
+        return self._record(accepted)[3:6].copy()
+
+    def resultants(self, accepted: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """The normal and friction (zero) parts of :meth:`resultant`."""
+        return self.resultant(accepted), np.zeros(3)
+
+    def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
+        """None without friction: ``(0, 3)`` positions and velocities."""
+        return np.zeros((0, 3), np.int64), np.zeros((0, 3))
+
+    def energies(self) -> tuple[float, float]:
+        """The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊²`` and the friction power (0)."""
+        return float(self._record()[0]), 0.0
+
+    def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
+                     ) -> _Energy:
+        """The pair's ledger terms (``u0``, ``v0`` unused)."""
+        return _Energy(self)
+
+    def state(self, accepted: bool = True) -> dict[str, np.ndarray]:
+        """Every integration point (every rank).
+
+        Returns:
+            ``x``, ``weight`` (reference area), ``gap`` (NaN: no projection),
+            ``pressure``, ``facet`` (−1: none), ``xi`` ``(K, 2)`` and ``slave_facet``
+            (−1: no projection).
+        """
+        _, u1, _ = self._state(accepted=accepted)
+        p = self._normal(u1)
+        total = len(p["all_x"])
+        out: dict[str, Any] = {"x": p["all_x"], "weight": p["all_weight"],
+                               "gap": np.full(total, np.nan), "pressure": np.zeros(total),
+                               "facet": np.full(total, -1), "xi": np.zeros((total, 2)),
+                               "slave_facet": np.full(total, -1)}
+        i = p["index"]
+        out["gap"][i] = p["gap"]
+        out["pressure"][i] = self._law[0] * np.maximum(-p["gap"], 0.0)
+        out["facet"][i] = p["facet"]
+        out["xi"][i] = p["xi_bar"]
+        out["slave_facet"][i] = p["slave_facet"]
+        return out
+
+    def _slave_nodes(self) -> SlaveNodes3D:
+        if self._nodes is None:
+            self._nodes = SlaveNodes3D(self)
+        return self._nodes
+
+    def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
+        """The slave nodes' state (sorted by coordinates): ``x``, ``normal``, ``gap``,
+        ``slip`` (vector), ``pressure`` (the law's at the node) and ``pressure_dual``
+        (the same: a 6-node triangle's vertex functions integrate to zero, no dual
+        basis).
+        """
+        s = self._slave_nodes().evaluate(self.interface_values(u))
+        order = np.lexsort(self.node_X.T[::-1])
+        return {"x": self.node_X[order], "normal": s["normal"][order], "gap": s["gap"][order],
+                "slip": s["slip"][order], "pressure": s["pressure"][order],
+                "pressure_dual": s["pressure"][order]}
+
+    def field_nodes(self) -> FieldNodes:
+        """The slave surface, the slave's degree and the slave surface's nodes."""
+        return FieldNodes(self.spec.slave_surface, self.model.body(self.spec.slave).index,
+                          self.node_X)
+
+    def field_values(self, u: Sequence[fem.Function], v: Sequence[fem.Function] | None
+                     ) -> dict[str, np.ndarray]:
+        """:meth:`SlaveNodes3D.evaluate` at the slave nodes."""
+        return self._slave_nodes().evaluate(self.interface_values(u),
+                                            None if v is None else self.interface_values(v))
+
+    def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
+        """The static measures (as the 2-D pair's, at the slave nodes and faces)."""
+        state = self.state()
+        closed = state["gap"] <= 0
+        penetration = float(-state["gap"][closed].min(initial=0.0))
+        X = np.concatenate([self._sX, self._mX]).reshape(-1, 3)
+        penetration = penetration if penetration > 1e-12 * float(np.ptp(X, axis=0).max()) \
+            else 0.0
+        sizes = facet_size(self._sX[:, :3])
+        nodes = self._slave_nodes()
+        s = nodes.evaluate(self.interface_values(u))
+        E = (self.model.body(self.spec.slave).spec.material.E,
+             self.model.body(self.spec.master).spec.material.E)
+        on = nodes.facet0 >= 0
+        return StaticMeasures(
+            penalty=self.spec.penalty, element_size=float(sizes.mean()) if len(sizes) else 0.0,
+            young_moduli=E, static_penetration=penetration,
+            settlement=settlement(s["u_slave"][on], s["u_master"][on], nodes.normal0[on]),
+            penetration_size=float(sizes.min()) if len(sizes) else None)
+
+    def static_check(self) -> str | None:
+        """Why the pair cannot start from the meshed configuration (None: it can).
+
+        A slave node meshed inside the master deeper than :data:`OVERLAP` of the size
+        of the master face under it (the same on every rank).
+        """
+        X = np.ascontiguousarray(self.node_X)
+        gap, facet, _ = nodal_gaps(self, X, self._mX)
+        on = np.flatnonzero(facet >= 0)
+        if not len(on):
+            return None
+        size = facet_size(self._mX[facet[on], :3])
+        deep = -gap[on] > OVERLAP * size
+        if not deep.any():
+            return None
+        k = on[np.argmax(np.where(deep, -gap[on] / size, -np.inf))]
+        where = ", ".join(f"{c:.4g}" for c in X[k])
+        return (f"contact '{self.spec.name}': slave node at ({where}) m starts "
+                f"{-gap[k]:.3g} m inside the master '{self.spec.master}': the meshes "
+                "overlap; mesh the bodies apart or in contact")
+
+    def probe(self, point: Sequence[float], name: str) -> Any:
+        """Refused: pair probes of a 3-D general pair are not implemented."""
+        raise CaseError(f"pair probe '{name}': pair probes of a 3-D general pair "
+                        f"('{self.spec.name}') are not implemented; use a body probe "
+                        "([output.probes]) on each side")
+
+
+class _Energy:
+    """A 3-D general pair's ledger terms (rank 0's share is the whole, as the 2-D pair's)."""
+
+    def __init__(self, contact: SurfaceContact3D) -> None:
+        self.contact = contact
+
+    def local(self, step: bool) -> np.ndarray:
+        """The rank's share (:meth:`breakwater.model.pairs.EnergyTerms.local`; collective)."""
+        energy, power = self.contact.energies()
+        return np.array([energy, power, 0.0]) if self.contact.comm.rank == 0 else np.zeros(3)

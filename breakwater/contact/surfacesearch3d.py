@@ -1,0 +1,205 @@
+"""The search of a 3-D general contact pair: its faces, integration points and projections.
+
+The 3-D counterpart of :class:`breakwater.contact.surfacesearch.SurfaceSearch` (issue 25):
+the pair's two surfaces are gathered on every rank
+(:func:`~breakwater.contact.surfaces.gather_surface`: triangles of 3 or 6 nodes, a P2
+tetrahedron's facet closure, :mod:`breakwater.contact.projection3d`'s order), each face
+oriented so that ``(x₁ − x₀) × (x₂ − x₀)`` points out of its cell. The slave is cut into
+integration points in the current configuration:
+
+- ``segments`` (mortar segmentation, Puso & Laursen 2004,
+  :mod:`breakwater.contact.clip3d` / :func:`~breakwater.contact.searchkernels3d.segment_points`):
+  each master face's corners projected onto the plane of a slave face's corners and
+  clipped against it, the polygon fanned into triangles, each with a triangle Gauss rule
+  of degree ``2 points − 1`` (that of a line rule of ``points`` points); exact for the
+  flat patch;
+- ``gauss``: that rule on each slave face (Gauss-point-to-segment).
+
+The weight of a point is its rule weight times the slave face's reference area element
+``|X_ξ × X_η|``. Each point's current position is projected onto the master surface
+(closest point, :func:`breakwater.contact.searchkernels3d.project`), which gives its
+master face and (ξ̄, η̄); the forces are :mod:`breakwater.contact.forcekernels3d`'s.
+``nodes`` is refused in 3-D (a quadratic triangle's vertex weights integrate to zero).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from dolfinx import fem
+
+from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.arrays import key_of, unchanged
+from breakwater.common.jit import kernel
+from breakwater.contact import forcekernels3d, searchkernels3d
+from breakwater.contact.clip3d import SLIVER, rule
+from breakwater.contact.projection import INSIDE
+from breakwater.contact.projection3d import FLIP, shape, surface
+from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
+from breakwater.contact.surfacesearch import InterfaceValues
+
+if TYPE_CHECKING:
+    from breakwater.common.timings import Timings
+    from breakwater.model.layout import MonolithicLayout
+    from breakwater.model.model import ContactModel
+
+__all__ = ["SurfaceSearch3D", "current", "orient"]
+
+
+@kernel
+def current(X, pos, u):  # type: ignore[no-untyped-def]
+    """The faces' current nodes ``X + u[pos]`` (position −1: u's trailing entry)."""
+    out = np.empty(X.shape)
+    for f in range(X.shape[0]):
+        for a in range(X.shape[1]):
+            for d in range(3):
+                out[f, a, d] = X[f, a, d] + u[pos[f, a, d]]
+    return out
+
+
+def orient(s: Surface) -> None:
+    """Turn each face so that ``(x₁ − x₀) × (x₂ − x₀)`` points out of its cell (in place)."""
+    if not len(s.X):
+        return
+    n = np.cross(s.X[:, 1] - s.X[:, 0], s.X[:, 2] - s.X[:, 0])
+    flip = np.sum((s.interior - s.X[:, :3].mean(axis=1)) * n, axis=1) > 0
+    order = FLIP[: s.X.shape[1]]
+    s.X[flip] = s.X[flip][:, order]
+    s.dofs[flip] = s.dofs[flip][:, order]
+
+
+def area_element(X: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """``|X_ξ × X_η|`` of faces ``X`` ``(K, nn, 3)`` at ``xi`` ``(K, 2)``."""
+    _, dx, _ = surface(X, xi)
+    return np.linalg.norm(np.cross(dx[:, 0], dx[:, 1]), axis=1)
+
+
+class SurfaceSearch3D(InterfaceValues):
+    """A 3-D general pair's faces, integration points and projections (the module doc).
+
+    Args: those of :class:`breakwater.contact.surfacesearch.SurfaceSearch`.
+    """
+
+    def __init__(self, model: ContactModel, spec: SurfacePair, layout: MonolithicLayout,
+                 interface: np.ndarray,
+                 state: tuple[Sequence[fem.Function], Sequence[fem.Function],
+                              Sequence[fem.Function], Sequence[fem.Function]],
+                 dt: fem.Constant, beta1: float, beta2: float) -> None:
+        super().__init__(model.comm, layout, interface, state, dt, beta1, beta2)
+        self.model, self.spec = model, spec
+        self.small_rotations = spec.rotations == "small"
+        self.law = forms.ContactLaw.of(spec)
+        slave = gather_surface(model, layout, spec.slave, (spec.slave_surface,))
+        master = gather_surface(model, layout, spec.master, spec.master_groups)
+        orient(slave)
+        orient(master)
+        self.slave, self.master = slave, master
+        self.pos_s, self.pos_m = (self._positions(interface, x.dofs) for x in (slave, master))
+        self.radius = search_radius3d(spec, master)
+        self.searches = 0
+        self.search_seconds = 0.0
+        self.timings: Timings | None = None
+        _, first, node_of = np.unique(slave.dofs[..., 0], return_index=True,
+                                      return_inverse=True)
+        self.node_of = node_of.reshape(slave.dofs.shape[:2])
+        self.node_pos = self.pos_s.reshape(-1, 3)[first]
+        self.node_X = slave.X.reshape(-1, 3)[first]
+        self._sX, self._mX = (np.ascontiguousarray(x.X, dtype=float) for x in (slave, master))
+        self._ps, self._pm = (np.ascontiguousarray(p, dtype=np.int64)
+                              for p in (self.pos_s, self.pos_m))
+        self._node_of = np.ascontiguousarray(self.node_of, dtype=np.int64)
+        self._rule = rule(2 * spec.points - 1)
+        self._law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
+        self._fixed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        if spec.integration == "gauss":
+            g, w = self._rule
+            S = len(slave.X)
+            f = np.repeat(np.arange(S), len(w))
+            xi = np.tile(g, (S, 1))
+            self._fixed = (f, xi, np.tile(w, S))
+        self._normal_key: np.ndarray | None = None
+        self._normal_points: dict[str, Any] = {}
+
+    @property
+    def _law(self) -> tuple[float, float, float, float]:
+        """ε_n, g₀, μ and χ of :attr:`law` (which a stage may replace) as floats."""
+        law = self.law
+        if self._law_floats is None or self._law_floats[0] is not law:
+            self._law_floats = (law, tuple(float(x) for x in (  # type: ignore[assignment]
+                law.normal.ε_n, law.normal.g0, law.friction.μ, law.friction.χ)))
+        assert self._law_floats is not None
+        return self._law_floats[1]
+
+    def _points(self, u1: np.ndarray) -> dict[str, Any]:
+        """The integration points at the state u1 and the projections of those that have one.
+
+        Returns:
+            ``index`` (the points with a projection), ``facet`` (their master face),
+            ``slave_facet``, ``Ns``, ``xi`` ((ξ̄, η̄)), ``weight`` (theirs), ``all_x``,
+            ``all_weight`` (every point's current position and weight).
+        """
+        t0 = time.perf_counter()
+        xs = current(self._sX, self._ps, u1)
+        xm = current(self._mX, self._pm, u1)
+        if self._fixed is not None:
+            f_s, xi, w = self._fixed
+        elif len(xs) and len(xm):
+            g, gw = self._rule
+            f_s, xi, w, _ = searchkernels3d.segment_points(xs, xm, self.radius, g, gw,
+                                                           SLIVER, False)
+        else:
+            f_s, xi, w = np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0)
+        weight = w * area_element(self._sX[f_s], xi) if len(f_s) else np.zeros(0)
+        Ns = shape(xi, self._sX.shape[1])[0] if len(f_s) else np.zeros((0, self._sX.shape[1]))
+        x = np.einsum("kn,knd->kd", Ns, xs[f_s])
+        if len(xm):
+            facet, xi_bar = searchkernels3d.project(x, xm, self.radius, INSIDE)
+        else:
+            facet, xi_bar = np.full(len(x), -1, np.int64), np.zeros((len(x), 2))
+        on = np.flatnonzero(facet >= 0)
+        self.searches += 1
+        elapsed = time.perf_counter() - t0
+        self.search_seconds += elapsed
+        if self.timings is not None:
+            self.timings.seconds["contact_search"] += elapsed
+        return {"index": on, "facet": np.ascontiguousarray(facet[on]),
+                "slave_facet": np.ascontiguousarray(f_s[on], dtype=np.int64),
+                "Ns": np.ascontiguousarray(Ns[on]), "xi": np.ascontiguousarray(xi_bar[on]),
+                "weight": np.ascontiguousarray(weight[on]), "all_x": x, "all_weight": weight}
+
+    def normal_forces(self, u1: np.ndarray) -> np.ndarray:
+        """The slave nodes' normal forces λ_k = ∫ p N_k at the state u1 (node order)."""
+        return np.asarray(self._normal(u1)["lam"])
+
+    def _normal(self, u1: np.ndarray) -> dict[str, Any]:
+        """The normal part of the state u1 (cached: the search once per state).
+
+        Returns:
+            :meth:`_points`' dict with ``out`` (f_c), ``lam`` (the slave nodes' normal
+            forces ∫ p N_k), ``forces`` (each point's nodal forces), ``gap`` and
+            ``xi_bar`` (the points' g_n and refined (ξ̄, η̄)).
+        """
+        if unchanged(self._normal_key, u1):
+            return self._normal_points
+        p = self._points(u1)
+        eps, g0, _, _ = self._law
+        p["out"], p["lam"], p["forces"], p["gap"], p["xi_bar"] = forcekernels3d.residual(
+            self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"], p["Ns"],
+            p["xi"], p["weight"], self.small_rotations, eps, g0, self._node_of,
+            len(self.node_pos))
+        self._normal_key, self._normal_points = key_of(u1), p
+        return p
+
+
+def search_radius3d(spec: SurfacePair, master: Surface) -> float:
+    """The pair's search radius: ``spec.radius``, else the longest master face edge."""
+    if spec.radius is not None:
+        return spec.radius
+    if not len(master.X):
+        return 1.0
+    corners = master.X[:, :3]
+    edges = corners - np.roll(corners, 1, axis=1)
+    return float(np.linalg.norm(edges, axis=2).max())
