@@ -349,10 +349,11 @@ class SurfaceContact3D(SurfaceForces3D):
         return self._nodes
 
     def snapshot(self, u: Sequence[fem.Function]) -> dict[str, np.ndarray]:
-        """The slave nodes' state (sorted by coordinates): ``x``, ``normal``, ``gap``,
-        ``slip`` (vector), ``pressure`` (the law's at the node) and ``pressure_dual``
-        (the same: a 6-node triangle's vertex functions integrate to zero, no dual
-        basis).
+        """The slave nodes' state, sorted by coordinates.
+
+        ``x``, ``normal``, ``gap``, ``slip`` (vector), ``pressure`` (the law's at the
+        node) and ``pressure_dual`` (the same: a 6-node triangle's vertex functions
+        integrate to zero, no dual basis).
         """
         s = self._slave_nodes().evaluate(self.interface_values(u))
         order = np.lexsort(self.node_X.T[::-1])

@@ -267,9 +267,9 @@ class CondensedNewton(StepSolver):
         # (In 3-D, :class:`~breakwater.contact.general3d.SurfaceContact3D`, frictionless:
         # the same provider and Pair interfaces, typed as the 2-D kind here.)
         kind: Any = SurfaceContact3D if model.gdim == 3 else SurfaceContact
-        self.surfaces: list[SurfaceContact] = [kind(model, p, layout, self.I, (self.u, self.v, self.a, self.da),
-                              dt, beta1, beta2)
-                         for p in model.surface_pairs]
+        self.surfaces: list[SurfaceContact] = [
+            kind(model, p, layout, self.I, (self.u, self.v, self.a, self.da), dt, beta1, beta2)
+            for p in model.surface_pairs]
         # Frictionless pairs too (inert at μ = 0): the relaxation's held stage sets μ = 100.
         self.providers += [StateForces(sp, self.interface, self.da,
                                        _surface_guard(sp) if surface_guard else None)
