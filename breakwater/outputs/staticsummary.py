@@ -16,6 +16,7 @@ import dolfinx.mesh
 import numpy as np
 
 from breakwater.contact.general import SurfaceContact
+from breakwater.contact.general3d import SurfaceContact3D
 from breakwater.model.mesh import facet_type, group_tag
 from breakwater.model.model import ContactModel
 from breakwater.model.pairs import Pair, pair_names
@@ -203,8 +204,8 @@ def _first_pair(model: ContactModel, row: Mapping[str, float], pairs: Sequence[P
     if not model.surface_pairs:
         return None
     spec = model.surface_pairs[0]
-    contact = next((p for p in pairs if isinstance(p, SurfaceContact) and p.name == spec.name),
-                   None)
+    contact = next((p for p in pairs if isinstance(p, SurfaceContact | SurfaceContact3D)
+                    and p.name == spec.name), None)
     if contact is None:
         return None
     state = contact.state()
@@ -242,7 +243,8 @@ def static_summary(model: ContactModel, row: Mapping[str, float],
     links = _links(model)  # (collective: once)
     upper = _upper_body(model, slave, master, links)
     weight = sum(weights[i] for i in resting_on(model, upper, links))
-    length = row[f"{name}_contact_length"]
+    # (a 3-D general pair's column is <name>_contact_area)
+    length = row.get(f"{name}_contact_length", row.get(f"{name}_contact_area", 0.0))
     pressure = interface[f"contact_{name}_pressure"]
     x = interface[f"contact_{name}_x"]
     first_node, last, centre = edge_centre(x, pressure)
@@ -289,7 +291,7 @@ def resolution_warnings(row: Mapping[str, float], inputs: Sequence[PairInputs], 
     """
     out = []
     for q in inputs:
-        measured = row.get(f"{q.name}_contact_length", 0.0)
+        measured = row.get(f"{q.name}_contact_length", row.get(f"{q.name}_contact_area", 0.0))
         size = measured if gdim == 2 else float(np.sqrt(measured))
         if not size > 0:
             continue

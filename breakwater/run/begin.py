@@ -53,7 +53,8 @@ def start(r: Session) -> None:
     for info in r.extra.get("loads", {}).values():
         for line in info.get("warnings", ()):
             log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
-    for spec in m.surface_pairs:  # meshed into each other (within the search's reach)
+    for spec in m.surface_pairs if m.gdim == 2 else ():  # meshed into each other (within
+        # the search's reach; a 3-D pair refuses an overlap in its static_check)
         line = meshed_overlap(m, spec)
         if line is not None:
             log.warning("%s", line)
