@@ -20,14 +20,16 @@ from typing import Protocol
 
 from breakwater.casefile.loads import LoadCase
 from breakwater.casefile.tables import (
+    GODA3D,
     BodyCase,
     CalibrationCase,
     ContactCase,
     FixedCase,
+    MeshCase,
     OutputCase,
 )
 from breakwater.config.fields import InvalidField
-from breakwater.model.pairs import three_d_general
+from breakwater.model.pairs import HEXAHEDRA, three_d_general
 
 __all__ = ["dimension", "dimension_problem", "general_in_3d", "mesh_problem"]
 
@@ -51,6 +53,8 @@ class _Case(Protocol):
     def output(self) -> OutputCase: ...
     @property
     def calibration(self) -> CalibrationCase: ...
+    @property
+    def mesh(self) -> MeshCase: ...
 
 
 def dimension(case: _Case) -> int:
@@ -125,10 +129,12 @@ def general_in_3d(case: _Case) -> None:
     """Refuse what a general pair cannot do in a 3D case (once the mesh is known to be 3D).
 
     Friction and ``integration = "nodes"``
-    (:func:`breakwater.model.pairs.three_d_general`).
+    (:func:`breakwater.model.pairs.three_d_general`), and the ``goda3d`` generator's
+    hexahedra (the 3D pair's faces are triangles: a tetrahedral mesh).
 
     Raises:
-        InvalidField: The first such pair's ``friction`` or ``integration``.
+        InvalidField: The first such pair's ``friction``, ``integration`` or
+            ``slave_surface``.
     """
     if dimension(case) == 3:
         for c in case.contact:
@@ -137,6 +143,8 @@ def general_in_3d(case: _Case) -> None:
                 if why:
                     key = "friction" if c.friction else "integration"
                     raise InvalidField(f"contact.{c.name}.{key}", why)
+                if case.mesh.source == GODA3D:
+                    raise InvalidField(f"contact.{c.name}.slave_surface", HEXAHEDRA)
 
 
 def mesh_problem(case: _Case, gdim: int) -> str | None:

@@ -38,7 +38,7 @@ from breakwater.config.runspec import InitialSpec
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
-from breakwater.model.pairs import ContactPair, PairData, SurfacePair, three_d_general
+from breakwater.model.pairs import HEXAHEDRA, ContactPair, PairData, SurfacePair, three_d_general
 from breakwater.model.parts import (
     Body,
     BodyData,
@@ -178,7 +178,9 @@ class ContactModel(KnownAttributes, ModelGroups):
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
         for p in surface_pairs if self.gdim == 3 else ():
-            why = three_d_general(p.friction, p.integration)
+            why = three_d_general(p.friction, p.integration) or (
+                None if msh.topology.cell_type == dolfinx.mesh.CellType.tetrahedron
+                else HEXAHEDRA)
             if why:
                 raise MeshError(f"contact '{p.name}': {why}")
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
@@ -330,9 +332,10 @@ def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError
                   fem.IntegralType.interior_facet, msh.topology,
                   data.facet_tags.find(tag)).size) > 0]
     apart = ("for surfaces meshed apart give slave_surface and master_surface" if tdim == 2
-             else "in 3D the bodies must share the interface's nodes (general pairs are plane "
-             "strain only for now): mesh them together, e.g. gmsh's BooleanFragments "
-             "(OpenCASCADE) or one Extrude of both")  # (the 2D advice was refused in 3D)
+             else "in 3D either give slave_surface and master_surface (a general pair: "
+             "tetrahedra, frictionless) or mesh the bodies together so that they share the "
+             "interface's nodes, e.g. gmsh's BooleanFragments (OpenCASCADE) or one Extrude "
+             "of both")
     return MeshError(f"contact.{name}: interface '{name}' has no facet shared by two cells: "
                      "a conforming pair's name is a facet group between its two bodies (such "
                      f"groups here: {', '.join(shared) or 'none'}); {apart}")

@@ -34,10 +34,15 @@ if TYPE_CHECKING:
 
     from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 
-__all__ = ["INTEGRATIONS", "PROBE_KEYS", "PROBE_KEYS_3D", "ContactPair", "EnergyTerms",
+__all__ = ["HEXAHEDRA", "INTEGRATIONS", "PROBE_KEYS", "PROBE_KEYS_3D", "ContactPair", "EnergyTerms",
            "FieldNodes", "Pair", "PairData", "PairProbe", "StaticMeasures", "SurfacePair",
            "check_pair_settings", "facet_size", "max_penetration", "pair_names", "probe_keys",
            "probed_pair", "settlement", "three_d_general"]
+
+HEXAHEDRA = ("a 3D general pair (non-matching surfaces) needs a tetrahedral mesh (its faces "
+             "are triangles); this one has hexahedra (the goda3d generator's): mesh the "
+             "bodies with tetrahedra, or share the interface's nodes (a conforming pair)")
+"""Why a 3-D general pair refuses a hexahedral mesh."""
 
 INTEGRATIONS = ("segments", "gauss", "nodes")
 
