@@ -1,0 +1,241 @@
+"""The 3-D general (non-matching) contact pair (issue 25), frictionless.
+
+- The compiled point kernel and its complex-step Jacobian
+  (:mod:`breakwater.contact.forcekernels3d`) against the NumPy reference
+  (:mod:`breakwater.contact.pointkernels3d`) and central finite differences, on curved
+  6-node faces pressed into each other (pure arrays: every rank runs them).
+- The non-matching patch test in 3-D: two boxes 1 × 0.5 × 1 m of one material meshed
+  apart with tetrahedra of sizes 0.5 and 0.34 m (ratio 1.5), the upper on the lower, a
+  uniform pressure p on the upper's top, rollers on the sides x = 0 and z = 0 and under
+  the lower box, ``integration = "segments"`` (mortar segmentation, :mod:`clip3d`) and
+  ε_n = 1e12 N/m³. The exact solution (σ_yy = −p, the other components 0 in both boxes)
+  is in the P2 space and the segments integrate its uniform pressure exactly, so the
+  static state reproduces it to its residual: 1e-8 p asked at every DG1 node (measured
+  5.7e-11 p), and the pair's resultant equals the load p × 1 m² to 1e-8.
+- A 3-D case with a general pair through the command line: a 0.5 × 0.3 × 0.5 m block
+  meshed apart on a 1 × 0.5 × 1 m slab under gravity, 3 steps: the static contact
+  resultant is the block's weight (to 1e-9: the relaxation's tolerance), the tangential
+  components round-off; serially and on 2 ranks (every rank evaluates the gathered pair:
+  the partition changes the numbers by round-off only).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import pathlib
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
+
+# isort: split
+import ufl
+from breakwater.meshes.apart import Box, boxes
+from dolfinx import fem
+
+from breakwater import cli
+from breakwater.contact import forcekernels3d, pointkernels3d
+from breakwater.contact.projection3d import shape
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, Fixed, Material, SurfaceLoad
+from breakwater.statics.initial import initial_state
+
+COMM = MPI.COMM_WORLD
+P = 1e5
+MATERIAL = Material(density=2000.0, poisson=0.25, young_modulus=1e9)
+ASKED = 1e-8
+
+
+# --- the point kernel ------------------------------------------------------------------
+
+def _face(rng: np.random.Generator, y: float, bend: float, up: bool) -> np.ndarray:
+    """A curved 6-node triangle near the plane y (mid-edge nodes moved by up to bend),
+    its normal along +y if ``up``."""
+    corners = np.array([[0.0, y, 0.0], [1.0, y, 0.0], [0.0, y, 1.0]])
+    corners += 0.005 * rng.normal(size=(3, 3))
+    if up:  # (x₁ − x₀) × (x₂ − x₀) along +y
+        corners = corners[[0, 2, 1]]
+    mids = np.array([0.5 * (corners[a] + corners[b]) for a, b in ((1, 2), (0, 2), (0, 1))])
+    mids[:, 1] += bend * rng.uniform(-1, 1, 3)
+    return np.concatenate([corners, mids])
+
+
+def _points(seed: int) -> tuple[np.ndarray, ...]:
+    """Points of a slave face pressed 0.03 into a master face below it."""
+    rng = np.random.default_rng(seed)
+    K = 6
+    xs = np.stack([_face(rng, -0.03, 0.005, False) for _ in range(K)])
+    xm = np.stack([_face(rng, 0.0, 0.005, True) for _ in range(K)])
+    xi = rng.uniform(0.1, 0.4, (K, 2))
+    Ns = shape(xi, 6)[0]
+    # The projection's start: the point's foot, roughly (two Newton steps refine it).
+    start = xi + 0.01 * rng.normal(size=(K, 2))
+    return Ns, start, xs, xm, rng.uniform(0.5, 1.5, K)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_point_kernel_and_jacobian(seed: int) -> None:
+    """The compiled forces equal the reference's to 1e-12; the complex-step Jacobian equals
+    the reference's to 1e-12 and central differences (h = 1e-7 m, error O(h²) of curvature
+    ~1: 1e-6 of the entries' scale)."""
+    Ns, start, xs, xm, w = _points(seed)
+    eps, cu = 1e10, 0.3
+    ref, gap = pointkernels3d.normal_forces(Ns, start, xs, xm, eps, w)
+    assert np.all(gap < 0)
+    J_ref = pointkernels3d.jacobian(Ns, start, xs, xm, eps, w, cu)
+    K, ns, nm = len(Ns), 6, 6
+    # The compiled kernels on the same points: each point its own faces.
+    pos_s = np.arange(K * ns * 3).reshape(K, ns, 3)
+    pos_m = K * ns * 3 + np.arange(K * nm * 3).reshape(K, nm, 3)
+    n = K * (ns + nm) * 3
+    u1 = np.zeros(n + 1)
+    f = np.arange(K)
+    out, lam, forces, g, _ = forcekernels3d.residual(
+        xs, xm, pos_s, pos_m, u1, f, f, Ns, start, w, False, eps, 0.0,
+        np.arange(K * ns).reshape(K, ns), K * ns)
+    scale = np.abs(ref).max()
+    assert np.abs(forces - ref).max() < 1e-12 * scale
+    assert np.abs(g - gap).max() < 1e-15
+    act, A = forcekernels3d.jacobian(xs, xm, pos_s, pos_m, u1, f, f, Ns, start, w, g, False,
+                                     eps, 0.0, cu)
+    assert np.array_equal(act, np.arange(n))
+    J_scale = np.abs(J_ref).max()
+    for k in range(K):
+        rows = np.concatenate([pos_s[k].ravel(), pos_m[k].ravel()])
+        assert np.abs(A[np.ix_(rows, rows)] - J_ref[k]).max() < 1e-12 * J_scale
+    # Central differences of the reference's forces in each local DOF of point 0.
+    h = 1e-7
+    for j in range(3 * (ns + nm)):
+        a, d = divmod(j, 3)
+        plus, minus = [x.copy() for x in (xs, xm)], [x.copy() for x in (xs, xm)]
+        side = 0 if a < ns else 1
+        node = a if a < ns else a - ns
+        plus[side][:, node, d] += h * cu
+        minus[side][:, node, d] -= h * cu
+        fd = (pointkernels3d.normal_forces(Ns, start, *plus, eps, w)[0]
+              - pointkernels3d.normal_forces(Ns, start, *minus, eps, w)[0]) / (2 * h)
+        assert np.abs(fd[0].ravel() - J_ref[0][:, j]).max() < 1e-6 * J_scale, j
+
+
+# --- the patch test ----------------------------------------------------------------------
+
+def _patch(folder: pathlib.Path, slave: str) -> ContactModel:
+    path = boxes(folder / "patch3d.msh", COMM, [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
+                                                Box("upper", (0, 0.5, 0), (1, 0.5, 1), 0.34)])
+    sides = {"upper": "upper_bottom", "lower": "lower_top"}
+    master = "lower" if slave == "upper" else "upper"
+    pair = SurfacePair("c", slave, master, sides[slave], sides[master], 1e12)
+    fixed = [Fixed("lower_bottom", (1,)), Fixed("lower_left", (0,)), Fixed("lower_back", (2,)),
+             Fixed("upper_left", (0,)), Fixed("upper_back", (2,))]
+    model = ContactModel(read_mesh(path, COMM), [Body("lower", MATERIAL), Body("upper", MATERIAL)],
+                         fixed=fixed,
+                         loads=[SurfaceLoad("upper_top", (0.0, -P, 0.0), lambda t: 1.0)],
+                         surface_pairs=[pair])
+    model.set_time(0.0)
+    return model
+
+
+def _stress_errors(model: ContactModel, u: list[fem.Function]) -> list[float]:
+    """Per body: the largest |σ − σ_exact|/p over the components, at the DG1 nodes."""
+    out = []
+    for i, b in enumerate(model.bodies):
+        Q = fem.functionspace(b.submesh, ("DG", 1))
+        e = ufl.sym(ufl.grad(u[i]))
+        σ = 2 * b.μ * e + b.λ * ufl.tr(e) * ufl.Identity(3)
+        error = 0.0
+        for k, m in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)):
+            q = fem.Function(Q)
+            q.interpolate(fem.Expression(σ[k, m], Q.element.interpolation_points))
+            exact = -P if (k, m) == (1, 1) else 0.0
+            error = max(error, float(np.abs(q.x.array - exact).max(initial=0.0)) / P)
+        out.append(COMM.allreduce(error, op=MPI.MAX))
+    return out
+
+
+@pytest.mark.parametrize("slave", ["upper", "lower"])
+def test_patch_3d_nonmatching(folder: pathlib.Path, slave: str) -> None:
+    """σ uniform in both boxes to 1e-8 p; the resultant on the slave is the load."""
+    from breakwater.stepping.gn22 import GN22
+
+    model = _patch(folder, slave)
+    state = initial_state(model)
+    assert state.kind == "frictionless"
+    errors = _stress_errors(model, state.u)
+    s = GN22(model, 1e-3)
+    s.initialise(state.u, state.v)
+    force = s.surfaces[0].resultant()
+    s.destroy()
+    if COMM.rank == 0:
+        print(f"\n3-D patch (h 0.5/0.34, slave {slave}): max |σ − σ_exact|/p {errors}, "
+              f"resultant {force}")
+    assert max(errors) < ASKED, errors
+    sign = 1.0 if slave == "upper" else -1.0  # the force the master exerts on the slave
+    assert abs(sign * force[1] - P) < ASKED * P, force
+    assert np.abs(force[[0, 2]]).max() < ASKED * P, force
+
+
+# --- through the command line --------------------------------------------------------------
+
+CASE = '''name = "pair3d"
+gravity = [0.0, -9.81, 0.0]
+mesh.source = "{mesh}"
+[bodies.upper]
+density = 2400.0
+poisson = 0.2
+young_modulus = 1.0e9
+[bodies.lower]
+density = 2400.0
+poisson = 0.2
+young_modulus = 1.0e9
+[calibration]
+enabled = false
+[contact.c]
+slave = "upper"
+master = "lower"
+slave_surface = "upper_bottom"
+master_surface = "lower_top"
+penalty = 1.0e11
+[fixed.lower_bottom]
+[fixed.upper_left]
+components = [0]
+[fixed.upper_back]
+components = [2]
+[time]
+dt = 1.0e-3
+end_time = 3.0e-3
+[output]
+figures = false
+field_interval = 1
+'''
+
+
+def test_case_runs_through_the_cli(shared_dir: pathlib.Path,
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """A block meshed apart on a slab, a 3-D general pair: it runs, the static contact
+    carries the block's weight, the pair's columns and fields are written."""
+    mesh = boxes(shared_dir / "block.msh", COMM,
+                 [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
+                  Box("upper", (0.25, 0.5, 0.25), (0.5, 0.3, 0.5), 0.34)])
+    path = shared_dir / "pair3d.toml"
+    if COMM.rank == 0:
+        path.write_text(CASE.format(mesh=mesh))
+    COMM.barrier()
+    out = shared_dir / "out"
+    code = cli.main(["run", str(path), "--out", str(out), "--quiet", "--no-progress"])
+    assert code == 0, capsys.readouterr().err
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    weight = 2400.0 * 9.81 * 0.5 * 0.3 * 0.5
+    for row in rows:
+        assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-9)
+        assert abs(float(row["c_force_x"])) < 1e-6 * weight
+        assert abs(float(row["c_force_z"])) < 1e-6 * weight
+        # The block's base, less the integration points just open at its edges.
+        assert 0.24 < float(row["c_contact_area"]) <= 0.25 + 1e-12
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["static"]["contact_resultant"] == pytest.approx(weight, rel=1e-9)
+    assert (out / "contact_c.bp").exists()
