@@ -100,6 +100,11 @@ def test_point_kernel_and_jacobian(seed: int) -> None:
     scale = np.abs(ref).max()
     assert np.abs(forces - ref).max() < 1e-12 * scale
     assert np.abs(g - gap).max() < 1e-15
+    # f_c gathers each point's forces at its DOFs (here each point's own); λ sums p w.
+    assert np.array_equal(out[pos_s], forces[:, :ns])
+    assert np.array_equal(out[pos_m], forces[:, ns:])
+    pw = np.linalg.norm(forces[:, :ns].sum(axis=1), axis=1)
+    assert lam.sum() == pytest.approx(pw.sum(), rel=1e-12)
     act, A = forcekernels3d.jacobian(xs, xm, pos_s, pos_m, u1, f, f, Ns, start, w, g, False,
                                      eps, 0.0, cu)
     assert np.array_equal(act, np.arange(n))

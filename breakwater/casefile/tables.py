@@ -194,12 +194,13 @@ class ContactCase:
     master_surface: str | tuple[str, ...] | None = setting(
         None, doc="general pair: facet group on the master's boundary, or an array of "
         "them (one surface, e.g. a shared interface and the crest beyond it)")
-    points: int = setting(3, doc="general pair: Gauss points per integration segment (2 to 20)")
+    points: int = setting(3, doc="general pair: Gauss points per integration segment (2 to "
+                          "20; in 3D a triangle rule of degree 2 points - 1 per segment)")
     integration: Literal["segments", "gauss", "nodes"] = setting(
         "segments", doc="general pair: the slave's integration points: segments "
         "(segment-to-segment, `points` Gauss points per segment), gauss (`points` per "
         "slave facet) or nodes (the slave nodes, Simpson weights: the conforming pair's "
-        "quadrature)")
+        "quadrature; refused in 3D, where general pairs are frictionless)")
     rotations: Literal["finite", "small"] = setting(
         "finite", doc="general pair: the normal of the current master surface at the "
         "projection (finite, eq. 7) or of the reference one (small: the linear bodies' "
