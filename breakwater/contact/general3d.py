@@ -42,7 +42,8 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["QUANTITIES", "SlaveNodes3D", "SurfaceContact3D", "SurfaceForces3D", "nodal_gaps"]
+__all__ = ["QUANTITIES", "SlaveNodes3D", "SurfaceContact3D", "SurfaceForces3D", "nodal_gaps",
+           "smallest_gap"]
 
 QUANTITIES = ("force_x", "force_y", "force_z", "contact_area", "penetration")
 """The history quantities of a 3-D general pair (columns ``<name>_<quantity>``)."""
@@ -199,6 +200,12 @@ def nodal_gaps(pair: SurfaceSearch3D, x: np.ndarray, xm: np.ndarray,
         n = unit_normal(surface(ref, xi[on])[1]) if pair.small_rotations else unit_normal(dx)
         gap[on] = np.sum((x[on] - x_bar) * n, axis=1) + pair._law[1]
     return gap, facet, xi
+
+
+def smallest_gap(pair: SurfaceSearch3D, x: np.ndarray, u: np.ndarray, radius: float) -> float:
+    """The smallest gap of the points ``x`` within ``radius`` of the master (inf: none)."""
+    gap = nodal_gaps(pair, x, current(pair._mX, pair._pm, u), radius)[0]
+    return float(np.nan_to_num(gap, nan=np.inf).min(initial=np.inf))
 
 
 class SlaveNodes3D:

@@ -177,12 +177,7 @@ class ContactModel(KnownAttributes, ModelGroups):
         # if all its integrals of a type share one subdomain_data object.
         self._interface_data: list[tuple[int, np.ndarray]] = []
         self.pairs = [self._build_pair(k, p) for k, p in enumerate(pairs)]
-        for p in surface_pairs if self.gdim == 3 else ():
-            why = three_d_general(p.friction, p.integration) or (
-                None if msh.topology.cell_type == dolfinx.mesh.CellType.tetrahedron
-                else HEXAHEDRA)
-            if why:
-                raise MeshError(f"contact '{p.name}': {why}")
+        _three_d_pairs(msh, surface_pairs)
         self.surface_pairs = [self._check_surfaces(p) for p in surface_pairs]
         self._fixed, self._fixed_sizes, self._load_data = [], [], []
         self.bcs = [bc for f in fixed for bc in self._build_fixed(f)]
@@ -318,6 +313,20 @@ def _check_interface(model: ContactModel, pair: ContactPair, facets: np.ndarray,
                     f"alone, not between '{pair.slave}' and '{pair.master}': a conforming "
                     "pair's group is the face the two bodies share; leave the rest (an "
                     "overhang, the free crest) out of the group")
+
+
+def _three_d_pairs(msh: dolfinx.mesh.Mesh, surface_pairs: Sequence[SurfacePair]) -> None:
+    """Refuse what a 3-D general pair cannot do (:func:`~.pairs.three_d_general`, hexahedra).
+
+    Raises:
+        MeshError: The first such pair's reason (one line).
+    """
+    for p in surface_pairs if msh.geometry.dim == 3 else ():
+        why = three_d_general(p.friction, p.integration) or (
+            None if msh.topology.cell_type == dolfinx.mesh.CellType.tetrahedron
+            else HEXAHEDRA)
+        if why:
+            raise MeshError(f"contact '{p.name}': {why}")
 
 
 def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError:

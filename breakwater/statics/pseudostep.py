@@ -25,8 +25,7 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
-from breakwater.contact.general3d import nodal_gaps
-from breakwater.contact.surfacesearch3d import current as current3d
+from breakwater.contact.general3d import smallest_gap
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
@@ -233,16 +232,8 @@ class PseudoStepper:
         for p in self.providers:
             u = p.interface_values(self.stepper.u)
             x = p.node_X + u[p.node_pos]
-            if self.model.gdim == 3:  # (general3d: the slave nodes' gaps, NaN: none)
-                xm = current3d(p._mX, p._pm, u)
-                gaps3d = nodal_gaps(cast(Any, p), x, xm, LANDING * p.radius)[0]
-                out.append(float(np.nan_to_num(gaps3d, nan=np.inf).min(initial=np.inf)))
-                continue
-            xm = np.ascontiguousarray(p.master.X + u[p.pos_m], dtype=float)
-            facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius, *ANY)
-            d = x - np.einsum("kn,knd->kd", N0, xm[np.maximum(facet, 0)])
-            gap = d[:, 0] * t[:, 1] - d[:, 1] * t[:, 0]
-            out.append(float(gap[on & (facet >= 0)].min(initial=np.inf)))
+            out.append(smallest_gap(cast(Any, p), x, u, LANDING * p.radius)
+                       if self.model.gdim == 3 else _smallest_gap(p, x, u))
         return out
 
     def _max(self, x: np.ndarray) -> float:
@@ -258,6 +249,15 @@ class PseudoStepper:
     def add_slave_velocities(self, v: list[fem.Function], y: np.ndarray) -> None:
         """V += y, y given at the interface unknowns (every entry this rank holds)."""
         self.solver.interface.add(v, y)
+
+
+def _smallest_gap(p: SurfaceSearch, x: np.ndarray, u: np.ndarray) -> float:
+    """:meth:`PseudoStepper.gaps` of a 2-D pair's slave nodes at ``x`` (state ``u``)."""
+    xm = np.ascontiguousarray(p.master.X + u[p.pos_m], dtype=float)
+    facet, N0, t, on = searchkernels.frozen(x, xm, xm, LANDING * p.radius, *ANY)
+    d = x - np.einsum("kn,knd->kd", N0, xm[np.maximum(facet, 0)])
+    gap = d[:, 0] * t[:, 1] - d[:, 1] * t[:, 0]
+    return float(gap[on & (facet >= 0)].min(initial=np.inf))
 
 
 class SlipOrigin:

@@ -263,9 +263,7 @@ class CondensedNewton(StepSolver):
                     self.interface.positions, self.I), self.interface, self.da,
                     BodyGuard(guard, self.interface, layout, self.da)
                     if guard is not None else None)]
-        # General pairs (breakwater.contact.general): one provider each, with its guard.
-        # (In 3-D, :class:`~breakwater.contact.general3d.SurfaceContact3D`, frictionless:
-        # the same provider and Pair interfaces, typed as the 2-D kind here.)
+        # General pairs (contact.general; general3d in 3-D, typed as the 2-D kind here).
         kind: Any = SurfaceContact3D if model.gdim == 3 else SurfaceContact
         self.surfaces: list[SurfaceContact] = [
             kind(model, p, layout, self.I, (self.u, self.v, self.a, self.da), dt, beta1, beta2)
