@@ -9,6 +9,11 @@ their meshes do not match (:mod:`breakwater.contact.general`). Physical groups:
   bottom), ``cylinder_arc`` (the rest of the arc), ``cylinder_top`` (the flat top
   y = R), ``cylinder_axis`` (x = 0);
 - ``block`` (cells): ``block_top``, ``block_bottom``, ``block_right``, ``block_axis``.
+
+:func:`hertz3d` is the 3-D point contact: a quarter of the lower hemisphere (x ≥ 0,
+z ≥ 0, centre at (0, R, 0)) on a quarter block, tetrahedra. Groups: ``sphere``,
+``sphere_surface`` (the curved face), ``sphere_top`` (y = R), ``sphere_x0``,
+``sphere_z0``; ``block``, ``block_top``, ``block_bottom``, ``block_x0``, ``block_z0``.
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from mpi4py import MPI
 from breakwater.common.gmshtools import gmsh_session
 from breakwater.common.parallel import on_rank_zero
 
-__all__ = ["hertz"]
+__all__ = ["hertz", "hertz3d"]
 
 
 def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
@@ -88,6 +93,58 @@ def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
             for line, name in zip(blk, ("bottom", "right", "top", "axis"), strict=True):
                 gmsh.model.addPhysicalGroup(1, [line], name=f"block_{name}")
             gmsh.model.mesh.generate(2)
+            gmsh.model.mesh.setOrder(order)
+            gmsh.write(str(path))
+        return str(path)
+
+    return pathlib.Path(on_rank_zero(comm, write))  # rank 0's path, or its error
+
+
+def hertz3d(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
+            depth: float, fine: float, coarse: float, fine_zone: float,
+            overlap: float = 0.0, order: int = 2) -> pathlib.Path:
+    """Write the 3-D mesh (rank 0 writes; collective); the arguments as :func:`hertz`'s.
+
+    The block is ``[0, width] × [−depth, 0] × [0, width]``; the element size is
+    ``fine`` within ``fine_zone`` of the origin, growing by a quarter of the distance
+    beyond, up to ``coarse``.
+    """
+    path = pathlib.Path(path)
+
+    def write() -> str:
+        with gmsh_session(model="hertz3d"):
+            occ = gmsh.model.occ
+            R, y0 = radius, -overlap
+            ball = occ.addSphere(0, y0 + R, 0, R)
+            cut = occ.addBox(0, y0, 0, R, R, R)
+            (quarter,), _ = occ.intersect([(3, ball)], [(3, cut)])
+            block = occ.addBox(0, -depth, 0, width, depth, width)
+            occ.synchronize()
+            bodies = {"sphere": quarter[1], "block": block}
+            planes = {"sphere": (("top", 1, y0 + R), ("x0", 0, 0.0), ("z0", 2, 0.0)),
+                      "block": (("top", 1, 0.0), ("bottom", 1, -depth), ("x0", 0, 0.0),
+                                ("z0", 2, 0.0))}
+            for name, v in bodies.items():
+                gmsh.model.addPhysicalGroup(3, [v], name=name)
+                faces = [f for _, f in gmsh.model.getBoundary([(3, v)], oriented=False)]
+                used = set()
+                for side, axis, at in planes[name]:
+                    tags = [f for f in faces if gmsh.model.getType(2, f) == "Plane"
+                            and abs(occ.getCenterOfMass(2, f)[axis] - at) < 1e-9]
+                    used.update(tags)
+                    gmsh.model.addPhysicalGroup(2, tags, name=f"{name}_{side}")
+                if name == "sphere":
+                    gmsh.model.addPhysicalGroup(2, [f for f in faces if f not in used],
+                                                name="sphere_surface")
+            field = gmsh.model.mesh.field
+            size = field.add("MathEval")
+            field.setString(size, "F", f"Min({coarse}, {fine} + 0.25 * Max(0, "
+                            f"Sqrt(x^2 + y^2 + z^2) - {fine_zone}))")
+            field.setAsBackgroundMesh(size)
+            for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints",
+                           "MeshSizeFromCurvature"):
+                gmsh.option.setNumber(f"Mesh.{option}", 0)
+            gmsh.model.mesh.generate(3)
             gmsh.model.mesh.setOrder(order)
             gmsh.write(str(path))
         return str(path)

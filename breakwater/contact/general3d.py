@@ -24,6 +24,7 @@ material point under them as meshed; pair probes are refused in one line.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -51,6 +52,8 @@ QUANTITIES = ("force_x", "force_y", "force_z", "contact_area", "penetration")
 OVERLAP = 1e-3
 """A slave node meshed deeper inside the master than this fraction of the face under it
 is an overlap of the meshes (as :data:`breakwater.contact.penetration.OVERLAP`)."""
+
+log = logging.getLogger("breakwater.contact.general3d")
 
 FRICTION = ("friction on a 3-D general pair is not implemented (frictionless only: "
             "friction = 0)")
@@ -402,23 +405,30 @@ class SurfaceContact3D(SurfaceForces3D):
     def static_check(self) -> str | None:
         """Why the pair cannot start from the meshed configuration (None: it can).
 
-        A slave node meshed inside the master deeper than :data:`OVERLAP` of the size
-        of the master face under it (the same on every rank).
+        A slave node meshed inside the master deeper than half the search radius (what
+        the search sees, as :meth:`penetration`); one deeper than :data:`OVERLAP` of
+        the master face under it is warned about (the static state pushes the bodies
+        apart by it). The same on every rank.
         """
         X = np.ascontiguousarray(self.node_X)
         gap, facet, _ = nodal_gaps(self, X, self._mX)
         on = np.flatnonzero(facet >= 0)
         if not len(on):
             return None
-        size = facet_size(self._mX[facet[on], :3])
-        deep = -gap[on] > OVERLAP * size
-        if not deep.any():
-            return None
-        k = on[np.argmax(np.where(deep, -gap[on] / size, -np.inf))]
+        depth = -gap[on]
+        k = on[int(np.argmax(depth))]
         where = ", ".join(f"{c:.4g}" for c in X[k])
-        return (f"contact '{self.spec.name}': slave node at ({where}) m starts "
-                f"{-gap[k]:.3g} m inside the master '{self.spec.master}': the meshes "
-                "overlap; mesh the bodies apart or in contact")
+        if -gap[k] > 0.5 * self.radius:
+            return (f"contact '{self.spec.name}': slave node at ({where}) m starts "
+                    f"{-gap[k]:.3g} m inside the master '{self.spec.master}', beyond half "
+                    f"the search radius ({self.radius:.3g} m): the meshes overlap; mesh "
+                    "the bodies apart or in contact")
+        size = facet_size(self._mX[facet[on], :3])
+        if np.any(depth > OVERLAP * size) and self.comm.rank == 0:
+            log.warning("contact '%s': the meshes overlap: slave node at (%s) m starts %.3g m "
+                        "inside the master '%s'; the static state pushes the bodies apart "
+                        "by it", self.spec.name, where, -gap[k], self.spec.master)
+        return None
 
     def probe(self, point: Sequence[float], name: str) -> Any:
         """Refused: pair probes of a 3-D general pair are not implemented."""
