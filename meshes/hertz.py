@@ -12,7 +12,8 @@ their meshes do not match (:mod:`breakwater.contact.general`). Physical groups:
 
 :func:`hertz3d` is the 3-D point contact: a quarter of the lower hemisphere (x ≥ 0,
 z ≥ 0, centre at (0, R, 0)) on a quarter block, tetrahedra. Groups: ``sphere``,
-``sphere_surface`` (the curved face), ``sphere_top`` (y = R), ``sphere_x0``,
+``sphere_contact`` (the curved face below the ``cap`` height), ``sphere_surface`` (the
+rest of it), ``sphere_top`` (y = R), ``sphere_x0``,
 ``sphere_z0``; ``block``, ``block_top``, ``block_bottom``, ``block_x0``, ``block_z0``.
 """
 
@@ -102,8 +103,13 @@ def hertz(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
 
 def hertz3d(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: float,
             depth: float, fine: float, coarse: float, fine_zone: float,
-            overlap: float = 0.0, order: int = 2) -> pathlib.Path:
+            overlap: float = 0.0, order: int = 2, cap: float = 0.3) -> pathlib.Path:
     """Write the 3-D mesh (rank 0 writes; collective); the arguments as :func:`hertz`'s.
+
+    The sphere is cut at the height ``cap`` × R above its bottom into two volumes (one
+    body): ``sphere_contact`` is the curved face below, ``sphere_surface`` the rest (a
+    contact pair's slave surface need not be the whole sphere: its unknowns are the
+    fast solver's interface).
 
     The block is ``[0, width] × [−depth, 0] × [0, width]``; the element size is
     ``fine`` within ``fine_zone`` of the origin, growing by a quarter of the distance
@@ -118,15 +124,21 @@ def hertz3d(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: floa
             ball = occ.addSphere(0, y0 + R, 0, R)
             cut = occ.addBox(0, y0, 0, R, R, R)
             (quarter,), _ = occ.intersect([(3, ball)], [(3, cut)])
+            low = occ.addBox(0, y0, 0, R, cap * R, R)
+            parts, children = occ.fragment([quarter], [(3, low)])
+            sphere = [t for d, t in children[0] if d == 3]  # the quarter's pieces
+            occ.remove([(d, t) for d, t in parts if d == 3 and t not in sphere],
+                       recursive=True)  # the box beyond the sphere
             block = occ.addBox(0, -depth, 0, width, depth, width)
             occ.synchronize()
-            bodies = {"sphere": quarter[1], "block": block}
+            bodies = {"sphere": sphere, "block": [block]}
             planes = {"sphere": (("top", 1, y0 + R), ("x0", 0, 0.0), ("z0", 2, 0.0)),
                       "block": (("top", 1, 0.0), ("bottom", 1, -depth), ("x0", 0, 0.0),
                                 ("z0", 2, 0.0))}
-            for name, v in bodies.items():
-                gmsh.model.addPhysicalGroup(3, [v], name=name)
-                faces = [f for _, f in gmsh.model.getBoundary([(3, v)], oriented=False)]
+            for name, vs in bodies.items():
+                gmsh.model.addPhysicalGroup(3, vs, name=name)
+                faces = [f for _, f in gmsh.model.getBoundary([(3, v) for v in vs],
+                                                               oriented=False)]
                 used = set()
                 for side, axis, at in planes[name]:
                     tags = [f for f in faces if gmsh.model.getType(2, f) == "Plane"
@@ -134,7 +146,10 @@ def hertz3d(path: str | pathlib.Path, comm: MPI.Comm, radius: float, width: floa
                     used.update(tags)
                     gmsh.model.addPhysicalGroup(2, tags, name=f"{name}_{side}")
                 if name == "sphere":
-                    gmsh.model.addPhysicalGroup(2, [f for f in faces if f not in used],
+                    curved = [f for f in faces if f not in used]
+                    below = [f for f in curved if occ.getCenterOfMass(2, f)[1] < y0 + cap * R]
+                    gmsh.model.addPhysicalGroup(2, below, name="sphere_contact")
+                    gmsh.model.addPhysicalGroup(2, [f for f in curved if f not in below],
                                                 name="sphere_surface")
             field = gmsh.model.mesh.field
             size = field.add("MathEval")
