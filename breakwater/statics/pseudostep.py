@@ -292,6 +292,10 @@ class SlipOrigin:
         the nearest end), n̄ its normal there, within :data:`LANDING` search radii
         (farther: 0, no landing point).
         """
+        if self._gaps is None and self.pair.node_X.shape[1] == 3:
+            # A 3-D pair is frictionless (general3d): the stage that sets friction on it
+            # fails in its forces, saying so; no landing point here.
+            self._gaps = np.zeros_like(self.pair.node_X)
         if self._gaps is None:
             p = self.pair
             X, mX = p.node_X, np.ascontiguousarray(p.master.X, dtype=float)
