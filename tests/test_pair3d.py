@@ -12,6 +12,9 @@
   is in the P2 space and the segments integrate its uniform pressure exactly, so the
   static state reproduces it to its residual: 1e-8 p asked at every DG1 node (measured
   5.7e-11 p), and the pair's resultant equals the load p × 1 m² to 1e-8.
+- A block sliding 0.1 m across the non-matching faces of a slab (frictionless): its
+  centre of mass accelerates at F/m to 1e-4; friction and ``integration = "nodes"``
+  refused by the model in one line, and the relaxation's held stage (friction) too.
 - A 3-D case with a general pair through the command line: a 0.5 × 0.3 × 0.5 m block
   meshed apart on a 1 × 0.5 × 1 m slab under gravity, 3 steps: the static contact
   resultant is the block's weight (to 1e-9: the relaxation's tolerance), the tangential
@@ -24,6 +27,7 @@ from __future__ import annotations
 import csv
 import json
 import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -354,3 +358,45 @@ def test_block_slides_across_nonmatching_faces(folder: pathlib.Path) -> None:
     assert measured[[0, 2]] == pytest.approx([acc, acc], rel=1e-4)
     assert x[-1][0] > 0.095 and x[-1][2] > 0.095  # across the 0.3 m faces
     assert force[1] == pytest.approx(mass * 9.81, rel=0.05)
+
+
+# --- what stays refused ----------------------------------------------------------------------
+
+@pytest.mark.parametrize(("friction", "integration", "phrase"), [
+    (0.3, "segments", "friction on a 3D general pair (non-matching surfaces) is not "
+     "implemented yet"),
+    (0.0, "nodes", 'integration = "nodes" has no 3D analogue')])
+def test_model_refuses_in_one_line(folder: pathlib.Path, friction: float, integration: str,
+                                   phrase: str) -> None:
+    """Friction and node integration on a 3-D general pair: one line from the model."""
+    from breakwater.common.errors import MeshError
+
+    path = boxes(folder / "patch3d.msh", COMM, [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
+                                                Box("upper", (0, 0.5, 0), (1, 0.5, 1), 0.34)])
+    pair = SurfacePair("c", "upper", "lower", "upper_bottom", "lower_top", 1e12,
+                       friction=friction, integration=integration)  # type: ignore[arg-type]
+    with pytest.raises(MeshError, match=re.escape(phrase)) as info:
+        ContactModel(read_mesh(path, COMM), [Body("lower", MATERIAL), Body("upper", MATERIAL)],
+                     surface_pairs=[pair])
+    assert "\n" not in str(info.value)
+
+
+def test_held_stage_says_friction_is_missing(folder: pathlib.Path) -> None:
+    """A frictionless block free to slide (no static state): the relaxation's held stage
+    sets friction on the pair, which a 3-D pair has not: the error says so in one line
+    (it was a 2-D array's broadcast error from the stage's landing points)."""
+    from breakwater.common.errors import ConvergenceError
+
+    path = boxes(folder / "patch3d.msh", COMM, [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
+                                                Box("upper", (0, 0.5, 0), (1, 0.5, 1), 0.34)])
+    model = ContactModel(
+        read_mesh(path, COMM), [Body("lower", MATERIAL), Body("upper", MATERIAL)],
+        fixed=[Fixed("lower_bottom")],
+        loads=[SurfaceLoad("upper_left", (P, 0.0, 0.0), lambda t: 1.0)],
+        surface_pairs=[SurfacePair("c", "upper", "lower", "upper_bottom", "lower_top", 1e12)],
+        gravity=np.array([0.0, -9.81, 0.0]))
+    model.set_time(0.0)
+    with pytest.raises(ConvergenceError, match="held: contact 'c': friction on a 3-D "
+                       "general pair is not implemented") as info:
+        initial_state(model)
+    assert "\n" not in str(info.value)
