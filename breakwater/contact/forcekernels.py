@@ -23,7 +23,7 @@ from breakwater.common.jit import kernel
 from breakwater.contact.searchkernels import curve_at
 
 __all__ = ["add_friction", "friction", "friction_round_off", "jacobian", "law_line",
-           "left_product", "point", "point_tangents", "residual", "tangential_slip"]
+           "left_product", "local_nodes", "point", "point_tangents", "residual", "tangential_slip"]
 
 H = 1e-20  # the complex step (pointkernels.H)
 
@@ -233,10 +233,10 @@ def point_tangents(Ns, xi0, xs, xm, ref, small, eps, g0, w, cu, J, Jl, work):  #
 
 
 @kernel
-def _local(X, pos, f, u, out):  # type: ignore[no-untyped-def]
-    """Facet f's current nodes ``X[f] + u[pos[f]]`` into ``out`` (−1: the trailing entry)."""
+def local_nodes(X, pos, f, u, out):  # type: ignore[no-untyped-def]
+    """Facet (3-D: face) f's current nodes ``X[f] + u[pos[f]]`` into ``out`` (−1: trailing)."""
     for a in range(X.shape[1]):
-        for d in range(2):
+        for d in range(X.shape[2]):
             out[a, d] = X[f, a, d] + u[pos[f, a, d]]
     return out
 
@@ -276,8 +276,8 @@ def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
     lam = np.zeros(n_nodes)
     xs, xm = np.empty((ns, 2)), np.empty((nm, 2))
     for k in range(K):
-        _local(sX, pos_s, f_s[k], u1, xs)
-        _local(mX, pos_m, f_m[k], u1, xm)
+        local_nodes(sX, pos_s, f_s[k], u1, xs)
+        local_nodes(mX, pos_m, f_m[k], u1, xm)
         gap[k], xi_bar[k] = point(Ns[k], xi[k], xs, xm, mX[f_m[k]], small, eps, g0,
                                   weight[k], forces[k], shares[k], True)
         for a in range(ns + nm):
@@ -471,7 +471,8 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps
     xs, xm, work = np.empty((ns, 2)), np.empty((nm, 2)), np.empty((3, local))
     for p in range(K):
         closed[p] = gap[p] <= 0.0 and point_tangents(
-            Ns[p], xi[p], _local(sX, pos_s, f_s[p], u1, xs), _local(mX, pos_m, f_m[p], u1, xm),
+            Ns[p], xi[p], local_nodes(sX, pos_s, f_s[p], u1, xs),
+            local_nodes(mX, pos_m, f_m[p], u1, xm),
             mX[f_m[p]], small, eps, g0, weight[p], cu, Jp[p], Jl[p], work)
     rows = np.empty((K, local), np.int64)
     where = np.full(n + 1, -1, np.int64)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from breakwater.common.jit import kernel
+from breakwater.contact.forcekernels import local_nodes
 
 __all__ = ["H", "jacobian", "point", "residual", "shape"]
 
@@ -150,15 +151,6 @@ def point(Ns, xi0, xs, xm, ref, small, eps, g0, w, forces, work):  # type: ignor
 
 
 @kernel
-def _local(X, pos, f, u, out):  # type: ignore[no-untyped-def]
-    """Face f's current nodes ``X[f] + u[pos[f]]`` into ``out`` (−1: the trailing entry)."""
-    for a in range(X.shape[1]):
-        for d in range(3):
-            out[a, d] = X[f, a, d] + u[pos[f, a, d]]
-    return out
-
-
-@kernel
 def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
              node_of, n_nodes):  # type: ignore[no-untyped-def]
     """The normal part of f_c and the slave nodes' normal forces λ (``vector()``).
@@ -196,8 +188,8 @@ def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
     fk = np.empty((ns + nm, 3), np.complex128)
     work = np.empty((nm, 6), np.complex128)
     for k in range(K):
-        _local(sX, pos_s, f_s[k], u1, xs)
-        _local(mX, pos_m, f_m[k], u1, xm)
+        local_nodes(sX, pos_s, f_s[k], u1, xs)
+        local_nodes(mX, pos_m, f_m[k], u1, xm)
         ref[:, :] = mX[f_m[k]]
         g, x0, x1, pw = point(Ns[k], xi[k], xs, xm, ref, small, eps, g0, weight[k], fk, work)
         gap[k], xi_bar[k, 0], xi_bar[k, 1] = g.real, x0.real, x1.real
@@ -255,8 +247,8 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps
             c = rows[p, j]
             if c < 0:
                 continue
-            _local(sX, pos_s, f_s[p], u1, xs)
-            _local(mX, pos_m, f_m[p], u1, xm)
+            local_nodes(sX, pos_s, f_s[p], u1, xs)
+            local_nodes(mX, pos_m, f_m[p], u1, xm)
             a, d = j // 3, j % 3
             if a < ns:
                 xs[a, d] += step

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["InterfaceValues", "SurfaceSearch", "outward"]
+__all__ = ["InterfaceValues", "LawFloats", "SurfaceSearch", "outward"]
 
 
 # A slave facet's nodes in closure order (the vertices, then the mid-edge node) on
@@ -249,8 +249,24 @@ class InterfaceValues:
         return out
 
 
+class LawFloats:
+    """A pair's contact law (``law``, which a stage may replace) and its numbers as floats."""
 
-class SurfaceSearch(InterfaceValues):
+    law: Any
+    _law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
+
+    @property
+    def _law(self) -> tuple[float, float, float, float]:
+        """ε_n, g₀, μ and χ of :attr:`law` (which a stage may replace) as floats."""
+        law = self.law
+        if self._law_floats is None or self._law_floats[0] is not law:
+            self._law_floats = (law, tuple(float(x) for x in (  # type: ignore[assignment]
+                law.normal.ε_n, law.normal.g0, law.friction.μ, law.friction.χ)))
+        assert self._law_floats is not None
+        return self._law_floats[1]
+
+
+class SurfaceSearch(InterfaceValues, LawFloats):
     """A general pair's surfaces, integration points and projections (the module doc).
 
     Args:
@@ -313,7 +329,7 @@ class SurfaceSearch(InterfaceValues):
         self._node_pos = np.ascontiguousarray(self.node_pos, dtype=np.int64)
         self.in_use = FacetsInUse(self._sX, self._mX, self._ps, self._pm, self.radius,
                                   self._edge)
-        self._law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
+        self._law_floats = None
         # Integration points that do not move (nodes, gauss): once.
         self._fixed_points: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         if spec.integration != "segments" or not len(master.X):
@@ -363,16 +379,6 @@ class SurfaceSearch(InterfaceValues):
         jac = np.linalg.norm(np.einsum("kn,knd->kd", dN, s.X[point_facet]), axis=1)
         weight = (0.5 * (b - a)[:, None] * w).ravel() * jac
         return point_facet, xi, weight
-
-    @property
-    def _law(self) -> tuple[float, float, float, float]:
-        """ε_n, g₀, μ and χ of :attr:`law` (which a stage may replace) as floats."""
-        law = self.law
-        if self._law_floats is None or self._law_floats[0] is not law:
-            self._law_floats = (law, tuple(float(x) for x in (  # type: ignore[assignment]
-                law.normal.ε_n, law.normal.g0, law.friction.μ, law.friction.χ)))
-        assert self._law_floats is not None
-        return self._law_floats[1]
 
     def _points(self, u1: np.ndarray) -> dict[str, Any]:
         """The integration points and the data of those with a projection (compiled).

@@ -39,7 +39,7 @@ from breakwater.contact.clip3d import SLIVER, rule
 from breakwater.contact.projection import INSIDE
 from breakwater.contact.projection3d import FLIP, shape, surface
 from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
-from breakwater.contact.surfacesearch import InterfaceValues
+from breakwater.contact.surfacesearch import InterfaceValues, LawFloats
 
 if TYPE_CHECKING:
     from breakwater.common.timings import Timings
@@ -77,7 +77,7 @@ def area_element(X: np.ndarray, xi: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.cross(dx[:, 0], dx[:, 1]), axis=1)
 
 
-class SurfaceSearch3D(InterfaceValues):
+class SurfaceSearch3D(InterfaceValues, LawFloats):
     """A 3-D general pair's faces, integration points and projections (the module doc).
 
     Args: those of :class:`breakwater.contact.surfacesearch.SurfaceSearch`.
@@ -112,7 +112,7 @@ class SurfaceSearch3D(InterfaceValues):
                               for p in (self.pos_s, self.pos_m))
         self._node_of = np.ascontiguousarray(self.node_of, dtype=np.int64)
         self._rule = rule(2 * spec.points - 1)
-        self._law_floats: tuple[Any, tuple[float, float, float, float]] | None = None
+        self._law_floats = None
         self._fixed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         if spec.integration == "gauss":
             g, w = self._rule
@@ -122,16 +122,6 @@ class SurfaceSearch3D(InterfaceValues):
             self._fixed = (f, xi, np.tile(w, S))
         self._normal_key: np.ndarray | None = None
         self._normal_points: dict[str, Any] = {}
-
-    @property
-    def _law(self) -> tuple[float, float, float, float]:
-        """ε_n, g₀, μ and χ of :attr:`law` (which a stage may replace) as floats."""
-        law = self.law
-        if self._law_floats is None or self._law_floats[0] is not law:
-            self._law_floats = (law, tuple(float(x) for x in (  # type: ignore[assignment]
-                law.normal.ε_n, law.normal.g0, law.friction.μ, law.friction.χ)))
-        assert self._law_floats is not None
-        return self._law_floats[1]
 
     def _points(self, u1: np.ndarray) -> dict[str, Any]:
         """The integration points at the state u1 and the projections of those that have one.
