@@ -23,9 +23,10 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
+from breakwater.common.errors import ConvergenceError
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
-from breakwater.contact.general3d import smallest_gap
+from breakwater.contact.general3d import SurfaceForces3D, smallest_gap
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
@@ -51,6 +52,10 @@ FALL = 0.1
 LANDING = 10.0
 """Search radii within which :meth:`SlipOrigin.reference_gaps` finds a landing point: the
 farthest a relaxation's stage lets a body fall (``MAX_STEPS`` steps of a tenth of one)."""
+
+HELD_3D = ("a 3-D general pair is frictionless (friction on it is not implemented): it cannot "
+           "hold its bodies in place; hold them with [fixed] components")
+"""Why the held state is not tried with a 3-D general pair."""
 
 
 class PseudoStepper:
@@ -121,7 +126,13 @@ class PseudoStepper:
         """Every pair's friction coefficient μ (None: their own) inside the block.
 
         Their regularisation χ is multiplied by ``stretch``.
+
+        Raises:
+            ConvergenceError: Friction asked of a 3-D general pair (frictionless only):
+                the held state's, which cannot hold its bodies.
         """
+        if μ and any(isinstance(p, SurfaceForces3D) for p in self.providers):
+            raise ConvergenceError(HELD_3D, -1, 0)
         saved = [(p, p.spec, p.law) for p in self.providers]
         conforming = [(p.law.friction, float(p.law.friction.μ.value),
                        float(p.law.friction.χ.value)) for p in self.model.pairs]
