@@ -123,13 +123,10 @@ class PseudoStepper:
 
     @contextlib.contextmanager
     def friction(self, μ: float | None, stretch: float = 1.0) -> Iterator[None]:
-        """Every pair's friction coefficient μ (None: their own) inside the block.
-
-        Their regularisation χ is multiplied by ``stretch``.
+        """Every pair's friction coefficient μ (None: their own), χ times ``stretch``, inside.
 
         Raises:
-            ConvergenceError: Friction asked of a 3-D general pair (frictionless only):
-                the held state's, which cannot hold its bodies.
+            ConvergenceError: Friction asked of a 3-D general pair (:data:`HELD_3D`).
         """
         if μ and any(isinstance(p, SurfaceForces3D) for p in self.providers):
             raise ConvergenceError(HELD_3D, -1, 0)
