@@ -331,11 +331,11 @@ def _unused_generator(raw: dict[str, Any], where: Callable[[str], str]) -> None:
     if not isinstance(mesh, dict) or "source" not in mesh:
         return
     source = mesh["source"]
-    defaults = to_toml(MeshCase(source=GODA))
     for table in (GODA, GODA3D):
         keys = mesh.get(table)
         if source == table or not isinstance(keys, dict):
             continue
+        defaults = to_toml(MeshCase(source=GODA))
         for key, value in keys.items():
             path = f"mesh.{table}.{key}"
             if value != defaults[table].get(key, value) \

@@ -35,8 +35,9 @@ from breakwater.common.errors import CaseError, ConvergenceError
 from breakwater.contact import forcekernels, forcekernels3d, searchkernels3d
 from breakwater.contact.projection import INSIDE
 from breakwater.contact.projection3d import shape, surface, unit_normal
+from breakwater.contact.searchkernels import current
 from breakwater.contact.surfaces import SurfacePair
-from breakwater.contact.surfacesearch3d import SurfaceSearch3D, current
+from breakwater.contact.surfacesearch3d import SurfaceSearch3D
 from breakwater.model.pairs import FieldNodes, StaticMeasures, facet_size, settlement
 
 if TYPE_CHECKING:

@@ -461,11 +461,11 @@ def frozen(points, xm, surface, radius, normals, deepest):  # type: ignore[no-un
 
 @kernel
 def current(X, pos, u):  # type: ignore[no-untyped-def]
-    """The facets' current nodes ``X + u[pos]`` (position −1: u's trailing entry)."""
+    """The facets' (3-D: faces') current nodes ``X + u[pos]`` (position −1: u's trailing entry)."""
     out = np.empty(X.shape)
     for f in range(X.shape[0]):
         for a in range(X.shape[1]):
-            for d in range(2):
+            for d in range(X.shape[2]):
                 out[f, a, d] = X[f, a, d] + u[pos[f, a, d]]
     return out
 

@@ -33,11 +33,11 @@ from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.arrays import key_of, unchanged
-from breakwater.common.jit import kernel
 from breakwater.contact import forcekernels3d, searchkernels3d
 from breakwater.contact.clip3d import SLIVER, rule
 from breakwater.contact.projection import INSIDE
 from breakwater.contact.projection3d import FLIP, shape, surface
+from breakwater.contact.searchkernels import current
 from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
 from breakwater.contact.surfacesearch import InterfaceValues, LawFloats
 
@@ -46,18 +46,7 @@ if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["SurfaceSearch3D", "current", "orient"]
-
-
-@kernel
-def current(X, pos, u):  # type: ignore[no-untyped-def]
-    """The faces' current nodes ``X + u[pos]`` (position −1: u's trailing entry)."""
-    out = np.empty(X.shape)
-    for f in range(X.shape[0]):
-        for a in range(X.shape[1]):
-            for d in range(3):
-                out[f, a, d] = X[f, a, d] + u[pos[f, a, d]]
-    return out
+__all__ = ["SurfaceSearch3D", "orient"]
 
 
 def orient(s: Surface) -> None:
