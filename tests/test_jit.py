@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import time
+
 import numba
 import numpy as np
 import pytest
 from numba.core import caching
 
-from breakwater.common.jit import kernel
+from breakwater.common.jit import kernel, lock_path
 
 
 def _sum_of_squares(x: np.ndarray) -> float:
@@ -32,3 +36,48 @@ def test_kernel_is_cached_where_it_can_be() -> None:
     compiled = kernel(_sum_of_squares)
     assert type(compiled._cache).__name__ == "FunctionCache"
     assert compiled(np.ones(3)) == 3.0
+
+
+@kernel
+def _inner(x: float) -> float:
+    return 2.0 * x
+
+
+@kernel
+def _outer(x: np.ndarray) -> float:
+    s = 0.0
+    for v in x:
+        s += _inner(v)
+    return s
+
+
+_HOLDER = """
+import fcntl, sys, time
+from breakwater.common.jit import lock_path
+with open(lock_path(), "a") as f:
+    fcntl.flock(f, fcntl.LOCK_EX)
+    print("held", flush=True)
+    time.sleep(float(sys.argv[1]))
+"""
+
+
+@pytest.mark.serial
+def test_kernels_take_turns_to_compile() -> None:
+    # numba's cache is not safe for processes compiling at once (numba #4807, #10128):
+    # while another process holds the lock, a kernel's first call (its cache load or
+    # compilation) waits for it. The holder keeps it 3 s; the call must wait at least
+    # 2 s of them (the holder's start-up is not counted: it has printed "held").
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3"], stdout=subprocess.PIPE,
+                              text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+        start = time.perf_counter()
+        compiled = kernel(_sum_of_squares)
+        assert compiled(np.arange(3.0)) == 5.0
+        waited = time.perf_counter() - start
+    finally:
+        holder.wait(timeout=60)
+    assert waited > 2.0
+    # Re-entrant: a kernel compiles the kernels it calls under the lock it holds.
+    assert _outer(np.arange(4.0)) == 12.0
+    assert lock_path().exists()

@@ -10,25 +10,107 @@ directory where the package is read-only; where neither can be written, e.g. a r
 install on a cluster node without a writable home, each process compiles them anew),
 without fast-math (the kernels must give the
 numbers of the NumPy and UFL references they are tested against, to round-off).
+
+Processes that share a cache take turns to compile: numba's cache is not safe when
+several processes compile the same function at once (numba issues #4807 and #10128: two
+new signatures can be given the same data file, and the index then points one signature
+at the other's machine code, a segmentation fault at its next load). Every rank of an
+``mpiexec`` run, or every run of a study on a fresh install, compiles the same kernels at
+the same moment, so each compilation or cache load of a kernel holds one file lock
+(:func:`cache_lock`, ``flock``; the kernel releases it if the process is killed).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import os
+import pathlib
+import threading
+from collections.abc import Callable, Iterator
 from typing import Any, cast
 
 import numba
 
-__all__ = ["kernel"]
+try:
+    import fcntl
+except ImportError:  # Windows: no flock; compilations go on unlocked
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["cache_lock", "kernel", "lock_path"]
+
+_LOCK_NAME = "breakwater-numba.lock"
+_held = threading.RLock()
+_depth = 0
+_handle: Any = None
+
+
+def lock_path() -> pathlib.Path:
+    """The file whose lock the kernels' compilations take turns on.
+
+    In ``NUMBA_CACHE_DIR`` where it is set; else beside the package's own cache (its
+    ``__pycache__``) where that can be written; else in numba's user cache directory;
+    else in the temporary directory.
+    """
+    cache_dir = getattr(numba.config, "CACHE_DIR", "")  # NUMBA_CACHE_DIR
+    if cache_dir:
+        return pathlib.Path(cache_dir) / _LOCK_NAME
+    beside = pathlib.Path(__file__).resolve().parents[1] / "__pycache__"
+    if os.access(beside, os.W_OK) or (not beside.exists()
+                                      and os.access(beside.parent, os.W_OK)):
+        return beside / _LOCK_NAME
+    from numba.misc.appdirs import AppDirs
+    user = pathlib.Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+    with contextlib.suppress(OSError):
+        user.mkdir(parents=True, exist_ok=True)
+    if os.access(user, os.W_OK):
+        return user / _LOCK_NAME
+    import tempfile
+    return pathlib.Path(tempfile.gettempdir()) / f"{_LOCK_NAME}.{os.getuid()}"
+
+
+@contextlib.contextmanager
+def cache_lock() -> Iterator[None]:
+    """Hold the kernels' compilation lock (re-entrant: a kernel compiles those it calls).
+
+    Where the lock file cannot be opened (or on Windows, without ``flock``), the
+    compilation goes on unlocked.
+    """
+    global _depth, _handle
+    with _held:
+        if _depth == 0 and fcntl is not None:
+            try:
+                path = lock_path()
+                path.parent.mkdir(parents=True, exist_ok=True)
+                _handle = open(path, "a")  # held until the outermost compilation ends
+                fcntl.flock(_handle, fcntl.LOCK_EX)
+            except OSError:
+                _handle = None
+        _depth += 1
+        try:
+            yield
+        finally:
+            _depth -= 1
+            if _depth == 0 and _handle is not None:
+                fcntl.flock(_handle, fcntl.LOCK_UN)
+                _handle.close()
+                _handle = None
 
 
 def kernel[F: Callable[..., Any]](function: F) -> F:
     """``numba.njit(cache=True)``: ``function`` compiled on its first call.
 
-    Without a cache where numba finds no writable directory for it (it refuses
-    ``cache=True`` then).
+    Its compilations and cache loads hold :func:`cache_lock`. Without a cache where
+    numba finds no writable directory for it (it refuses ``cache=True`` then).
     """
     try:
-        return cast(F, numba.njit(cache=True)(function))
+        compiled = numba.njit(cache=True)(function)
     except RuntimeError:  # "cannot cache function ...: no locator available"
         return cast(F, numba.njit(function))
+    unlocked = compiled.compile
+
+    def compile(sig: Any) -> Any:
+        with cache_lock():
+            return unlocked(sig)
+
+    compiled.compile = compile  # type: ignore[method-assign]
+    return cast(F, compiled)
