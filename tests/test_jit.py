@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import subprocess
 import sys
 import time
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 from numba.core import caching
 
+from breakwater.common import jit
 from breakwater.common.jit import kernel, lock_path
 
 
@@ -62,11 +64,16 @@ with open(lock_path(), "a") as f:
 
 
 @pytest.mark.serial
-def test_kernels_take_turns_to_compile() -> None:
+def test_kernels_take_turns_to_compile(monkeypatch: pytest.MonkeyPatch,
+                                       caplog: pytest.LogCaptureFixture) -> None:
     # numba's cache is not safe for processes compiling at once (numba #4807, #10128):
     # while another process holds the lock, a kernel's first call (its cache load or
     # compilation) waits for it. The holder keeps it 3 s; the call must wait at least
-    # 2 s of them (the holder's start-up is not counted: it has printed "held").
+    # 2 s of them (the holder's start-up is not counted: it has printed "held"). Past
+    # NOTICE_AFTER (here 0.5 s) of it, one line says the kernels are being compiled.
+    monkeypatch.setattr(jit, "NOTICE_AFTER", 0.5)
+    monkeypatch.setattr(jit, "_noticed", False)
+    caplog.set_level(logging.INFO, logger="breakwater")
     holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3"], stdout=subprocess.PIPE,
                               text=True)
     try:
@@ -78,6 +85,8 @@ def test_kernels_take_turns_to_compile() -> None:
     finally:
         holder.wait(timeout=60)
     assert waited > 2.0
+    notices = [r.getMessage() for r in caplog.records if r.name == "breakwater.common.jit"]
+    assert len(notices) == 1 and "compiling breakwater's kernels" in notices[0]
     # Re-entrant: a kernel compiles the kernels it calls under the lock it holds.
     assert _outer(np.arange(4.0)) == 12.0
     assert lock_path().exists()

@@ -18,11 +18,17 @@ at the other's machine code, a segmentation fault at its next load). Every rank 
 ``mpiexec`` run, or every run of a study on a fresh install, compiles the same kernels at
 the same moment, so each compilation or cache load of a kernel holds one file lock
 (:func:`cache_lock`, ``flock``; the kernel releases it if the process is killed).
+
+A first run on a machine compiles them: half a minute for the conforming pair, a minute
+or more for the general pairs' kernels. Where a compilation (or the wait for another
+process's) lasts longer than :data:`NOTICE_AFTER`, one line says so on the
+``breakwater`` logger, and where numba can cache nothing, how to let it.
 """
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import pathlib
 import threading
@@ -36,12 +42,33 @@ try:
 except ImportError:  # Windows: no flock; compilations go on unlocked
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["cache_lock", "kernel", "lock_path"]
+__all__ = ["NOTICE_AFTER", "cache_lock", "kernel", "lock_path"]
+
+NOTICE_AFTER = 3.0
+"""Seconds of compilation after which the run says it is compiling (once per process)."""
 
 _LOCK_NAME = "breakwater-numba.lock"
 _held = threading.RLock()
 _depth = 0
 _handle: Any = None
+_timer: threading.Timer | None = None
+_noticed = False
+log = logging.getLogger("breakwater.common.jit")
+
+
+def _notice(cached: bool) -> None:
+    """Say once that the kernels are being compiled (a timer's call)."""
+    global _noticed
+    if _noticed:
+        return
+    _noticed = True
+    if cached:
+        log.info("compiling breakwater's kernels for this machine (once: numba keeps "
+                    "them in its cache); this first run takes up to a few minutes longer")
+    else:
+        log.warning("compiling breakwater's kernels: numba finds no writable directory to "
+                    "keep them in, so every run compiles them anew (a few minutes); set "
+                    "NUMBA_CACHE_DIR to a writable directory")
 
 
 def lock_path() -> pathlib.Path:
@@ -69,14 +96,22 @@ def lock_path() -> pathlib.Path:
 
 
 @contextlib.contextmanager
-def cache_lock() -> Iterator[None]:
+def cache_lock(cached: bool = True) -> Iterator[None]:
     """Hold the kernels' compilation lock (re-entrant: a kernel compiles those it calls).
 
     Where the lock file cannot be opened (or on Windows, without ``flock``), the
-    compilation goes on unlocked.
+    compilation goes on unlocked. Past :data:`NOTICE_AFTER` seconds in the outermost
+    hold, the one line of :func:`_notice`.
+
+    Args:
+        cached: Whether numba caches the kernel being compiled (the notice's words).
     """
-    global _depth, _handle
+    global _depth, _handle, _timer
     with _held:
+        if _depth == 0 and not _noticed:
+            _timer = threading.Timer(NOTICE_AFTER, _notice, (cached,))
+            _timer.daemon = True
+            _timer.start()
         if _depth == 0 and fcntl is not None:
             try:
                 path = lock_path()
@@ -90,6 +125,9 @@ def cache_lock() -> Iterator[None]:
             yield
         finally:
             _depth -= 1
+            if _depth == 0 and _timer is not None:
+                _timer.cancel()
+                _timer = None
             if _depth == 0 and _handle is not None:
                 fcntl.flock(_handle, fcntl.LOCK_UN)
                 _handle.close()
@@ -104,12 +142,14 @@ def kernel[F: Callable[..., Any]](function: F) -> F:
     """
     try:
         compiled = numba.njit(cache=True)(function)
+        cached = True
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return cast(F, numba.njit(function))
+        compiled = numba.njit(function)
+        cached = False
     unlocked = compiled.compile
 
     def compile(sig: Any) -> Any:
-        with cache_lock():
+        with cache_lock(cached):
             return unlocked(sig)
 
     compiled.compile = compile  # type: ignore[method-assign]
