@@ -319,7 +319,7 @@ def test_hertz_point_contact_coarse(folder: pathlib.Path) -> None:
     # at the nodes' reference r inside 0.9 a. Measured −16 … −3 % of p₀: the projection
     # averages over a face (a/2 here) and so smears the profile's fall near the edge. The
     # law at the nodes' own projections, which this field replaced, was 0 at 6 of these
-    # 20 nodes (on the symmetry planes) and −53 … +22 % of p₀ at the others.
+    # 20 nodes (on the symmetry planes) and −30 … +24 % of p₀ at the others.
     r = np.hypot(pair.node_X[:, 0], pair.node_X[:, 2])
     inside = r < 0.9 * a_ref
     error = at_nodes[inside] / p0_ref - np.sqrt(1 - (r[inside] / a_ref) ** 2)

@@ -19,7 +19,7 @@ over a face. The law at the nodes' own projections (``law_pressure``) misses nod
 that have no projection (on a symmetry plane at the master's boundary, or below a
 concave kink of the master when the penalty lets them in) and, between them, follows
 the gap's variation over the P2 faces (measured on Hertz's point contact, element size
-a/2: nodes at 0 inside the contact disc, the others −53 … +22 % of p₀; this projection
+a/2: nodes at 0 inside the contact disc, the others −30 … +24 % of p₀; this projection
 −16 … −3 %).
 """
 
