@@ -109,8 +109,8 @@ def test_point_kernel_and_jacobian(seed: int) -> None:
     assert np.array_equal(out[pos_m], forces[:, ns:])
     pw = np.linalg.norm(forces[:, :ns].sum(axis=1), axis=1)
     assert lam.sum() == pytest.approx(pw.sum(), rel=1e-12)
-    act, A = forcekernels3d.jacobian(xs, xm, pos_s, pos_m, u1, f, f, Ns, start, w, g, False,
-                                     eps, 0.0, cu)
+    act, A, _, _ = forcekernels3d.jacobian(xs, xm, pos_s, pos_m, u1, f, f, Ns, start, w, g,
+                                           False, eps, 0.0, cu, np.zeros(0, np.int64))
     assert np.array_equal(act, np.arange(n))
     J_scale = np.abs(J_ref).max()
     for k in range(K):

@@ -1,4 +1,4 @@
-"""The compiled forces of a 3-D general contact pair: f_c and its Jacobian (frictionless).
+"""The compiled forces of a 3-D general contact pair: f_c's normal part and its Jacobian.
 
 The 3-D counterpart of :mod:`breakwater.contact.forcekernels` (issue 25), with the
 arithmetic of the NumPy reference :mod:`breakwater.contact.pointkernels3d` in loops
@@ -206,16 +206,19 @@ def residual(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, small, eps, g0,
 
 @kernel
 def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps, g0,
-             cu):  # type: ignore[no-untyped-def]
+             cu, extra):  # type: ignore[no-untyped-def]
     """∂f_c/∂Δa (``matrix()``) on the interface unknowns it couples.
 
     Per closed point (g_n ≤ 0 at the same state, :func:`residual`'s ``gap``), a
     complex step ``i h c_u`` of each of its local DOFs (the slave face's nodes, then
-    the master's, x y z each) through :func:`point`.
+    the master's, x y z each) through :func:`point`. ``extra``: further interface
+    positions the matrix couples (the friction's, :mod:`breakwater.contact.friction3d`).
 
     Returns:
-        The unknowns the matrix couples (sorted: the DOFs of the closed points) and the
-        matrix on them, ``A[act, act]``.
+        The unknowns the matrix couples (sorted: the DOFs of the closed points and
+        ``extra``), the matrix on them, ``A[act, act]``, each point's local DOFs'
+        positions ``rows (K, 3 (ns + nm))`` and ∂(p w)/∂Δa along them ``dpw`` (0: an
+        open point; the normal forces' derivatives, λ_k = Σ N_s,k p w).
     """
     K, ns, nm = len(f_s), sX.shape[1], mX.shape[1]
     n = len(u1) - 1
@@ -229,11 +232,14 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps
                 rows[p, 3 * a + d] = q
                 if q >= 0 and gap[p] <= 0.0:
                     where[q] = 0
+    for q in extra:
+        where[q] = 0
     act = np.flatnonzero(where[:n] >= 0)
     na = len(act)
     for i in range(na):
         where[act[i]] = i
     A = np.zeros((na, na))
+    dpw = np.zeros((K, local))
     xs, xm = np.empty((ns, 3), np.complex128), np.empty((nm, 3), np.complex128)
     ref = np.empty((nm, 3), np.complex128)
     fk = np.empty((ns + nm, 3), np.complex128)
@@ -254,9 +260,10 @@ def jacobian(sX, mX, pos_s, pos_m, u1, f_s, f_m, Ns, xi, weight, gap, small, eps
                 xs[a, d] += step
             else:
                 xm[a - ns, d] += step
-            point(Ns[p], xi[p], xs, xm, ref, small, eps, g0, weight[p], fk, work)
+            pw = point(Ns[p], xi[p], xs, xm, ref, small, eps, g0, weight[p], fk, work)[3]
+            dpw[p, j] = pw.imag / H
             for o in range(local):
                 r = rows[p, o]
                 if r >= 0:
                     A[where[r], where[c]] += fk[o // 3, o % 3].imag / H
-    return act, A
+    return act, A, rows, dpw

@@ -1,4 +1,4 @@
-"""General contact pairs in 3-D: two surfaces of triangles that need not match (frictionless).
+"""General contact pairs in 3-D: two surfaces of triangles that need not match.
 
 The 3-D kind of :mod:`breakwater.contact.general` (issue 25), written the same way: the
 slave's integration points (:class:`~breakwater.contact.surfacesearch3d.SurfaceSearch3D`:
@@ -14,11 +14,13 @@ unknowns (:mod:`breakwater.contact.forcekernels3d`: a complex step per local DOF
 projection's Newton differentiated), every rank evaluating the same points in the same
 order on the gathered state (the result does not depend on the partition).
 
-Friction is not implemented in 3-D: a case with one is refused
-(:func:`breakwater.casefile.dimension.general_in_3d`), and a stage that sets it on the
-pair (the static relaxation's held stage) fails with that reason. The outputs are
-measured at the slave nodes (:class:`SlaveNodes3D`): gap, law pressure
-ε_n⟨−g_n⟩₊ and tangential velocity at their projection, the slip relative to the master
+Friction (isotropic regularised Coulomb, the paper's law and χ) acts at the slave nodes,
+the slip a tangent vector relative to the master material point under the node at the
+start of the step (:mod:`breakwater.contact.friction3d`), its Jacobian consistent. The
+2-D pair's Newton aids are not written in 3-D: no slip guard (crawl points) and no slip
+memory (Newton starts at GN22's predictor). The outputs are measured at the slave
+nodes (:class:`SlaveNodes3D`): gap, law pressure ε_n⟨−g_n⟩₊, tangential velocity and
+the law's friction traction at their projection, the slip relative to the master
 material point under them as meshed; pair probes are refused in one line.
 """
 
@@ -31,8 +33,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
-from breakwater.common.errors import CaseError, ConvergenceError
-from breakwater.contact import forcekernels, forcekernels3d, searchkernels3d
+from breakwater.common.errors import CaseError
+from breakwater.contact import (
+    forcekernels,
+    forcekernels3d,
+    friction3d,
+    newtonaids,
+    searchkernels3d,
+)
 from breakwater.contact.nodalpressure3d import VertexPressure
 from breakwater.contact.projection3d import shape, surface, unit_normal
 from breakwater.contact.searchkernels import current
@@ -64,10 +72,6 @@ with 1e-6 (a millionth of a face)."""
 
 log = logging.getLogger("breakwater.contact.general3d")
 
-FRICTION = ("friction on a 3-D general pair is not implemented (frictionless only: "
-            "friction = 0)")
-
-
 class _NoSlip:
     """The slip memory of a frictionless pair (:class:`~.newtonaids.SlipMemory`): none."""
 
@@ -96,7 +100,7 @@ class _AllFacets:
         self.mask = np.ones(count, bool)
 
 
-class SurfaceForces3D(SurfaceSearch3D):
+class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
     """A 3-D general pair as a provider of the fast solver: f_c and ∂f_c/∂Δa.
 
     Args: those of :class:`~breakwater.contact.surfacesearch.SurfaceSearch`.
@@ -110,10 +114,30 @@ class SurfaceForces3D(SurfaceSearch3D):
         super().__init__(model, spec, layout, interface, state, dt, beta1, beta2)
         self.memory = _NoSlip()
         self.in_use = _AllFacets(len(self.master.X))
+        # The projection of the step the last vector() was of (the accepted state's
+        # friction is that step's, as the 2-D pair's).
+        self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
-    def _frictionless(self) -> None:
-        if self.spec.friction:
-            raise ConvergenceError(f"contact '{self.spec.name}': {FRICTION}", -1, 0)
+    def _friction(self, u0: np.ndarray, v1: np.ndarray, lam: np.ndarray,
+                  accepted: bool = False) -> dict[str, Any] | None:
+        """The slave nodes' friction (:mod:`~breakwater.contact.friction3d`; None: none).
+
+        Args:
+            u0: Displacements at the start of the step (the master points).
+            v1: Velocities of the iterate.
+            lam: The slave nodes' normal forces.
+            accepted: At the accepted state: the projection of the step accepted.
+        """
+        if not self.spec.friction:
+            return None
+        fz = (self._step_frozen if accepted and self._step_frozen is not None
+              else friction3d.frozen(self, u0))
+        _, _, mu, chi = self._law
+        lam_f, scale = newtonaids.friction_normals(lam, fz[0])
+        k, c, force, unit = friction3d.friction(lam_f, *fz, self._node_pos, self._pm, v1,
+                                                mu, chi)
+        return {"frozen": fz, "lam": lam_f, "scale": scale, "k": k, "c": c, "force": force,
+                "unit": unit}
 
     def vector(self, accepted: bool = False) -> np.ndarray:
         """The contact residual at the interface unknowns (the same on every rank).
@@ -121,21 +145,40 @@ class SurfaceForces3D(SurfaceSearch3D):
         Args:
             accepted: At the stepper's accepted state (u, v) instead of the iterate.
         """
-        self._frictionless()
-        _, u1, _ = self._state(accepted=accepted)
-        return np.asarray(self._normal(u1)["out"]).copy()
+        u0, u1, v1 = self._state(accepted=accepted)
+        p = self._normal(u1)
+        out = np.asarray(p["out"]).copy()
+        if self.spec.friction:
+            self._step_frozen = friction3d.frozen(self, u0)
+            fr = self._friction(u0, v1, p["lam"])
+            assert fr is not None
+            facet0, N0, _ = fr["frozen"]
+            friction3d.add_friction(out, fr["k"], fr["force"], facet0, N0, self._node_pos,
+                                    self._pm)
+        return out
 
     def _jacobian(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`matrix` on the unknowns it couples: ``(act, A[act, act])``."""
-        self._frictionless()
         dt = self.step_dt()
-        _, u1, _ = self._state()
+        u0, u1, v1 = self._state()
         p = self._normal(u1)
-        eps, g0, _, _ = self._law
-        return forcekernels3d.jacobian(  # type: ignore[no-any-return]
+        eps, g0, mu, chi = self._law
+        fr = self._friction(u0, v1, p["lam"])
+        extra = (np.zeros(0, np.int64) if fr is None else friction3d.friction_dofs(
+            fr["k"], fr["frozen"][0], self._node_pos, self._pm))
+        act, A, rows, dpw = forcekernels3d.jacobian(
             self._sX, self._mX, self._ps, self._pm, u1, p["slave_facet"], p["facet"],
             p["Ns"], p["xi"], p["weight"], p["gap"], self.small_rotations, eps, g0,
-            0.5 * self.beta2 * dt**2)
+            0.5 * self.beta2 * dt**2, extra)
+        if fr is not None and len(fr["k"]):
+            where = np.full(self.n + 1, -1, np.int64)
+            where[act] = np.arange(len(act))
+            facet0, N0, T0 = fr["frozen"]
+            friction3d.friction_jacobian(
+                A, where, fr["k"], fr["c"], fr["unit"] * fr["scale"], fr["lam"], facet0, N0,
+                T0, self._node_pos, self._pm, mu, chi, self.beta1 * dt,
+                p["slave_facet"], self._node_of, p["Ns"], rows, dpw)
+        return act, A
 
     def matrix(self) -> np.ndarray:
         """∂(contact residual)/∂Δa at the interface unknowns, dense."""
@@ -155,11 +198,11 @@ class SurfaceForces3D(SurfaceSearch3D):
             np.ascontiguousarray(X, dtype=float), act, A)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
-        """No slip guard (frictionless): nothing changed."""
+        """No slip guard (not written in 3-D): nothing changed."""
         return 0
 
     def true_law(self, crawl: bool = True) -> bool:
-        """The law is always the law itself (no crawl points without friction)."""
+        """The law is always the law itself (no crawl points: no slip guard)."""
         return False
 
     def reach(self) -> np.ndarray | None:
@@ -167,8 +210,17 @@ class SurfaceForces3D(SurfaceSearch3D):
         return None
 
     def resolution(self, y: np.ndarray) -> float:
-        """0: the normal part's round-off stays below the Newton's tolerances."""
-        return 0.0
+        """The round-off of f_c at y: the friction's (:func:`~.friction3d.round_off`).
+
+        0 without friction: the normal part's round-off stays below the Newton's
+        tolerances.
+        """
+        if not self.spec.friction:
+            return 0.0
+        u0, u1, v1 = self._state(y)
+        fr = self._friction(u0, v1, self._normal(u1)["lam"])
+        assert fr is not None
+        return friction3d.round_off(self, y, fr["lam"], fr["k"], fr["c"], fr["frozen"])
 
     def penetration(self, y: np.ndarray) -> str | None:
         """Why the step's solution Δa = y leaves a slave node deeper than half a search radius.
@@ -255,7 +307,8 @@ class SlaveNodes3D:
             :class:`~breakwater.contact.nodalpressure3d.VertexPressure`),
             ``law_pressure`` (ε_n⟨−g_n⟩₊ at the node's own projection), ``slip``
             (``(I − n₀⊗n₀)(u_s − u_m(X̄₀))``), ``slip_velocity``
-            (``(I − n̄⊗n̄)(v_s − v̄_m)``) and ``friction_traction`` (0).
+            (``(I − n̄⊗n̄)(v_s − v̄_m)``) and ``friction_traction``
+            (−μ p v_T/sqrt(|v_T|² + χ²), the law's at the node).
         """
         p = self.pair
         v = np.zeros_like(u) if v is None else v
@@ -277,14 +330,16 @@ class SlaveNodes3D:
         n0 = self.normal0
         slip = np.where((self.facet0 >= 0)[:, None],
                         rel0 - np.sum(rel0 * n0, axis=1)[:, None] * n0, 0.0)
-        eps = p._law[0]
+        eps, _, mu, chi = p._law
         law = np.where(on, eps * np.maximum(-np.nan_to_num(gap, nan=1.0), 0.0), 0.0)
         points = p._normal(u)
         pressure = self.vertex_pressure(points["slave_facet"], points["Ns"], points["weight"],
                                         eps * np.maximum(-points["gap"], 0.0))
+        speed = np.sqrt(np.sum(v_T * v_T, axis=1) + chi * chi)
+        traction = -(mu * pressure / speed)[:, None] * v_T
         return {"x": x, "u_slave": us, "u_master": um0, "normal": normal, "gap": gap,
                 "pressure": pressure, "law_pressure": law, "slip": slip, "slip_velocity": v_T,
-                "friction_traction": np.zeros_like(x)}
+                "friction_traction": traction}
 
 
 class SurfaceContact3D(SurfaceForces3D):
@@ -308,39 +363,65 @@ class SurfaceContact3D(SurfaceForces3D):
         return [f"{self.name}_{q}" for q in QUANTITIES]
 
     def _record(self, accepted: bool = True) -> np.ndarray:
-        """(penalty energy, contact area, largest ⟨−g_n⟩₊, resultant on the slave (3))."""
-        _, u1, _ = self._state(accepted=accepted)
+        """The pair's sums at the state.
+
+        (penalty energy, contact area, largest ⟨−g_n⟩₊, the normal resultant on the slave
+        (3), the friction resultant on it (3), the friction power).
+        """
+        u0, u1, v1 = self._state(accepted=accepted)
         p = self._normal(u1)
         closed = p["gap"] <= 0.0
         w = p["weight"][closed]
         g = p["gap"][closed]
-        eps = self._law[0]
+        eps, _, mu, chi = self._law
         ns = self._sX.shape[1]
         force = -p["forces"][:, :ns].sum(axis=(0, 1)) if len(p["forces"]) else np.zeros(3)
+        fr = self._friction(u0, v1, p["lam"], accepted)
+        friction, power = np.zeros(3), 0.0
+        if fr is not None and len(fr["k"]):
+            friction = fr["force"].sum(axis=0)
+            power = friction3d.power(fr["lam"], fr["k"], fr["c"], mu, chi)
         return np.array([float(np.sum(w * 0.5 * eps * g * g)), float(w.sum()),
-                         float(-g.min(initial=0.0)), *force])
+                         float(-g.min(initial=0.0)), *force, *friction, power])
 
     def measure(self) -> dict[str, float]:
         """The pair's history values at the accepted state (collective)."""
         r = self._record()
-        return dict(zip(self.columns, (float(r[3]), float(r[4]), float(r[5]), float(r[1]),
-                                       float(r[2])), strict=True))
+        total = r[3:6] + r[6:9]
+        return dict(zip(self.columns, (float(total[0]), float(total[1]), float(total[2]),
+                                       float(r[1]), float(r[2])), strict=True))
 
     def resultant(self, accepted: bool = True) -> np.ndarray:
         """∫ t_s: the force the master exerts on the slave (N)."""
-        return self._record(accepted)[3:6].copy()
+        r = self._record(accepted)
+        return r[3:6] + r[6:9]
 
     def resultants(self, accepted: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """The normal and friction (zero) parts of :meth:`resultant`."""
-        return self.resultant(accepted), np.zeros(3)
+        """The normal and friction parts of :meth:`resultant`."""
+        r = self._record(accepted)
+        return r[3:6].copy(), r[6:9].copy()
 
     def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
-        """None without friction: ``(0, 3)`` positions and velocities."""
-        return np.zeros((0, 3), np.int64), np.zeros((0, 3))
+        """The slave nodes in contact at the current iterate and their slip velocities.
+
+        Returns:
+            Their interface positions ``(k, 3)`` (−1: Dirichlet) and the slip velocity
+            vectors ``Σ_α c_α T₀_α`` ``(k, 3)`` (none without friction).
+        """
+        u0, u1, v1 = self._state()
+        fr = self._friction(u0, v1, self._normal(u1)["lam"])
+        if fr is None or not len(fr["k"]):
+            return np.zeros((0, 3), np.int64), np.zeros((0, 3))
+        T = fr["frozen"][2][fr["k"]]
+        return self.node_pos[fr["k"]], np.einsum("ka,kad->kd", fr["c"], T)
 
     def energies(self) -> tuple[float, float]:
-        """The penalty energy ``∫ ½ ε_n ⟨−g_n⟩₊²`` and the friction power (0)."""
-        return float(self._record()[0]), 0.0
+        """The penalty energy and the friction power at the accepted state (the ledger).
+
+        ``∫ ½ ε_n ⟨−g_n⟩₊²`` and ``Σ_k μ λ_k |c|²/sqrt(|c|² + χ²)``.
+        """
+        r = self._record()
+        return float(r[0]), float(r[9])
 
     def energy_terms(self, u0: Sequence[fem.Function], v0: Sequence[fem.Function]
                      ) -> _Energy:

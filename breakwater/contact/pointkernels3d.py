@@ -7,6 +7,8 @@ closest-point projection from the search's (ξ̄, η̄), the master's unit norma
 penalty traction ε_n⟨−g_n⟩₊ n̄; the slave receives ``−N_s t w``, the master ``N̄ t w``),
 and :func:`jacobian` its derivatives by a complex step per local DOF (36 for two 6-node
 faces). ``tests/test_pair3d.py`` checks the compiled kernels against them.
+:func:`friction_forces` is the slave nodes' friction of
+:func:`breakwater.contact.friction3d.friction` (``tests/test_pair3d_friction.py``).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import numpy as np
 
 from breakwater.contact.projection3d import closest_point, shape, surface, unit_normal
 
-__all__ = ["H", "jacobian", "normal_forces"]
+__all__ = ["H", "friction_forces", "jacobian", "normal_forces"]
 
 H = 1e-20  # complex step
 
@@ -74,3 +76,27 @@ def jacobian(Ns: np.ndarray, xi: np.ndarray, xs: np.ndarray, xm: np.ndarray, eps
         f, _ = normal_forces(Ns, xi, s, m, eps, weight, reference)
         out[:, :, j] = f.reshape(K, L).imag / H
     return out
+
+
+def friction_forces(lam: np.ndarray, N0: np.ndarray, T0: np.ndarray, vs: np.ndarray,
+                    vm: np.ndarray, mu: float, chi: float) -> np.ndarray:
+    """The friction forces on slave nodes (real or complex; complex-step safe).
+
+    ``F = −μ λ Σ_α T₀_α c_α / sqrt(|c|² + χ²)``, ``c_α = T₀_α·(v_s − Σ_b N̄₀_b v_b)``.
+
+    Args:
+        lam: The nodes' normal forces ``(m,)``.
+        N0: The master shape values at their start-of-step points ``(m, nm)``.
+        T0: The tangent bases there ``(m, 2, 3)``.
+        vs: The slave nodes' velocities ``(m, 3)``.
+        vm: The master face nodes' velocities ``(m, nm, 3)``.
+        mu: μ.
+        chi: χ.
+
+    Returns:
+        F ``(m, 3)``, the force on each slave node (the master's nodes take −N̄₀_b F).
+    """
+    rel = vs - np.einsum("kb,kbd->kd", N0, vm)
+    c = np.einsum("kad,kd->ka", T0, rel)
+    s = np.sqrt(np.sum(c * c, axis=1) + chi * chi)
+    return -mu * (lam / s)[:, None] * np.einsum("ka,kad->kd", c, T0)

@@ -100,6 +100,7 @@ class SurfaceSearch3D(InterfaceValues, LawFloats):
         self._ps, self._pm = (np.ascontiguousarray(p, dtype=np.int64)
                               for p in (self.pos_s, self.pos_m))
         self._node_of = np.ascontiguousarray(self.node_of, dtype=np.int64)
+        self._node_pos = np.ascontiguousarray(self.node_pos, dtype=np.int64)
         self._rule = rule(2 * spec.points - 1)
         self._law_floats = None
         self._fixed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None

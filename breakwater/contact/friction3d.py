@@ -1,0 +1,327 @@
+"""The friction of a 3-D general contact pair at its slave nodes (issue 25).
+
+Isotropic regularised Coulomb friction (the paper's law, as the 2-D pair's,
+:mod:`breakwater.contact.forcekernels`): per slave node k in contact (its normal force
+λ_k = ∫ p N_k > 0 and a master point at the start of the step) the force on the slave
+node is ``F_k = −μ λ_k φ(c)``, with the slip velocity a tangent vector of two components
+
+    c_α = T₀_α · (v_k − Σ_b N̄₀_b v_b),   α = 1, 2,
+
+relative to the master material point under the node at the start of the step (its
+closest point on the master surface then, face f₀ and shape values N̄₀), in the
+orthonormal tangent basis T₀ of the master face there (``T₀₁ = x_ξ/|x_ξ|``,
+``T₀₂ = n̄ × T₀₁``; the reference face's with small rotations), and
+``φ(c) = Σ_α T₀_α c_α / sqrt(|c|² + χ²)``. The master's nodes of f₀ receive ``−N̄₀_b F_k``
+(action and reaction; in the residual's sign, f_c, the slave row gets ``−F_k``).
+Where the contact ends within a slave face (a quadratic triangle's vertex λ_k < 0) the
+λ_k are scaled so that sliding carries μ Σλ
+(:func:`breakwater.contact.newtonaids.friction_normals`, as in 2-D).
+
+The Jacobian is consistent: ``∂F_k/∂Δa = −μ φ ⊗ ∂λ_k/∂Δa − μ λ_k T₀ (∂φ/∂c) T₀ᵀ β₁Δt
+(∂(v_k − v̄₀)/∂v)``, with ``∂φ_α/∂c_β = δ_αβ/r − c_α c_β/r³`` (r = sqrt(|c|² + χ²))
+and ∂λ_k/∂Δa from the normal kernel's complex steps
+(:func:`breakwater.contact.forcekernels3d.jacobian`'s ``dpw``).
+:func:`breakwater.contact.pointkernels3d.friction_forces` is the NumPy reference;
+``tests/test_pair3d_friction.py`` checks the kernels against it and the Jacobian against
+complex steps and finite differences.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from breakwater.common.arrays import key_of, unchanged
+from breakwater.common.jit import kernel
+from breakwater.contact import newtonaids, searchkernels3d
+from breakwater.contact.projection import INSIDE
+from breakwater.contact.projection3d import shape, surface, unit_normal
+
+if TYPE_CHECKING:
+    from breakwater.contact.surfacesearch3d import SurfaceSearch3D
+
+__all__ = ["add_friction", "friction", "friction_jacobian", "frozen", "power", "round_off",
+           "start_slip", "tangent_basis"]
+
+
+def tangent_basis(nodes: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    """The orthonormal tangent basis T₀ ``(K, 2, 3)`` of faces ``nodes`` at ``xi``."""
+    _, dx, _ = surface(nodes, xi)
+    t1 = dx[:, 0] / np.linalg.norm(dx[:, 0], axis=1)[:, None]
+    t2 = np.cross(unit_normal(dx), t1)
+    return np.ascontiguousarray(np.stack([t1, t2], axis=1))
+
+
+def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The slave nodes' master points at the state u0 (the start of the step; cached).
+
+    Returns:
+        Per slave node: the master face f₀ (−1: no projection within the search radius:
+        no friction at the node), its shape values N̄₀ ``(nodes, nm)`` and the tangent
+        basis T₀ ``(nodes, 2, 3)`` there.
+    """
+    kept = getattr(pair, "_frozen3d", None)
+    if kept is not None and unchanged(kept[0], u0):
+        return kept[1]  # type: ignore[no-any-return]
+    mX, pm = pair._mX, pair._pm
+    xm = mX + u0[pm]
+    x = np.ascontiguousarray(pair.node_X + u0[pair.node_pos])
+    facet, xi = searchkernels3d.project(x, np.ascontiguousarray(xm), pair.radius, INSIDE)
+    nodes, nm = len(facet), mX.shape[1]
+    N0, T0 = np.zeros((nodes, nm)), np.zeros((nodes, 2, 3))
+    on = facet >= 0
+    if on.any():
+        N0[on] = shape(xi[on], nm)[0]
+        T0[on] = tangent_basis((mX if pair.small_rotations else xm)[facet[on]], xi[on])
+    out = (np.ascontiguousarray(facet, dtype=np.int64), N0, T0)
+    pair._frozen3d = (key_of(u0), out)  # type: ignore[attr-defined]
+    return out
+
+
+@kernel
+def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi):  # type: ignore[no-untyped-def]
+    """The slave nodes' friction forces (the module doc).
+
+    Args:
+        lam: The slave nodes' normal forces (scaled: ``friction_normals``).
+        facet0: Their start-of-step master faces (−1: none).
+        N0: The master shape values there ``(nodes, nm)``.
+        T0: The tangent bases there ``(nodes, 2, 3)``.
+        node_pos: The slave nodes' interface positions ``(nodes, 3)`` (−1: Dirichlet).
+        pos_m: The master faces' ``(M, nm, 3)``.
+        v1: Velocities at the interface unknowns (a trailing 0).
+        mu: μ.
+        chi: χ.
+
+    Returns:
+        The nodes ``k`` (λ_k > 0 and a face), their slip components c ``(m, 2)``, the
+        forces on them F ``(m, 3)`` and the forces per unit λ (``unit``, −μφ).
+    """
+    m = 0
+    for j in range(len(lam)):
+        if facet0[j] >= 0 and lam[j] > 0:
+            m += 1
+    k = np.empty(m, np.int64)
+    i = 0
+    for j in range(len(lam)):
+        if facet0[j] >= 0 and lam[j] > 0:
+            k[i] = j
+            i += 1
+    c = np.zeros((m, 2))
+    force = np.empty((m, 3))
+    unit = np.empty((m, 3))
+    rel = np.empty(3)
+    for i in range(m):
+        j = k[i]
+        f = facet0[j]
+        for d in range(3):
+            vm = 0.0
+            for b in range(N0.shape[1]):
+                vm += N0[j, b] * v1[pos_m[f, b, d]]
+            rel[d] = v1[node_pos[j, d]] - vm
+        for a in range(2):
+            for d in range(3):
+                c[i, a] += T0[j, a, d] * rel[d]
+        s = np.sqrt((c[i, 0] * c[i, 0] + c[i, 1] * c[i, 1]) + chi * chi)
+        for d in range(3):
+            phi = (T0[j, 0, d] * c[i, 0] + T0[j, 1, d] * c[i, 1]) / s
+            unit[i, d] = -mu * phi
+            force[i, d] = -mu * lam[j] * phi
+    return k, c, force, unit
+
+
+@kernel
+def add_friction(out, k, force, facet0, N0, node_pos, pos_m):  # type: ignore[no-untyped-def]
+    """f_c += the friction: −F on the slave node, N̄₀ F on its master face's nodes."""
+    n = len(out)
+    for i in range(len(k)):
+        j = k[i]
+        for d in range(3):
+            q = node_pos[j, d]
+            if 0 <= q < n:
+                out[q] -= force[i, d]
+            for b in range(N0.shape[1]):
+                q = pos_m[facet0[j], b, d]
+                if 0 <= q < n:
+                    out[q] += N0[j, b] * force[i, d]
+
+
+@kernel
+def _node_rows(j, facet0, N0, node_pos, pos_m, rows, sign):  # type: ignore[no-untyped-def]
+    """Node j's friction DOFs into ``rows (1 + nm, 3)``: the slave node, then f₀'s nodes.
+
+    ``sign``: ∂(slip)/∂v of each (1, −N̄₀_b); the residual's rows are ``−sign`` F.
+    """
+    for d in range(3):
+        rows[0, d] = node_pos[j, d]
+    sign[0] = 1.0
+    for b in range(N0.shape[1]):
+        for d in range(3):
+            rows[1 + b, d] = pos_m[facet0[j], b, d]
+        sign[1 + b] = -N0[j, b]
+
+
+@kernel
+def friction_jacobian(A, where, k, c, unit, lam, facet0, N0, T0, node_pos, pos_m, mu, chi,
+                      cv, f_s, node_of, Ns, rows, dpw):  # type: ignore[no-untyped-def]
+    """A += ∂(friction part of f_c)/∂Δa (in place; the module doc).
+
+    Args:
+        A: The Jacobian on the unknowns it couples (``where``: interface position → its
+            row, every friction DOF included).
+        where: Its map.
+        k: :func:`friction`'s nodes.
+        c: Their slip components.
+        unit: −μφ (times the normal forces' scale).
+        lam: The (scaled) normal forces.
+        facet0: The start-of-step master faces.
+        N0: Their shape values.
+        T0: Their tangent bases.
+        node_pos: The slave nodes' interface positions.
+        pos_m: The master faces'.
+        mu: μ.
+        chi: χ.
+        cv: ∂v/∂Δa (β₁Δt).
+        f_s: Each point's slave face.
+        node_of: The slave node of each slave face node.
+        Ns: The points' slave shape values.
+        rows: Each point's local DOFs' interface positions ``(K, 3 (ns + nm))``.
+        dpw: ∂(p w)/∂Δa of each point along them (0: an open point).
+    """
+    m, nm = len(k), N0.shape[1]
+    index = np.full(node_pos.shape[0], -1, np.int64)
+    for i in range(m):
+        index[k[i]] = i
+    R = 1 + nm
+    rr = np.empty((R, 3), np.int64)
+    sign = np.empty(R)
+    # The normal forces' part: −sign_r unit ⊗ ∂λ_k/∂Δa.
+    for p in range(len(f_s)):
+        for a in range(Ns.shape[1]):
+            i = index[node_of[f_s[p], a]]
+            if i < 0:
+                continue
+            _node_rows(k[i], facet0, N0, node_pos, pos_m, rr, sign)
+            for jj in range(rows.shape[1]):
+                col = rows[p, jj]
+                dl = Ns[p, a] * dpw[p, jj]
+                if col < 0 or dl == 0.0:
+                    continue
+                for r in range(R):
+                    for d in range(3):
+                        q = rr[r, d]
+                        if q >= 0:
+                            A[where[q], where[col]] += -sign[r] * unit[i, d] * dl
+    # The slip's part: −sign_r sign_s B, B = −μλ T₀ ∂φ/∂c T₀ᵀ β₁Δt.
+    B = np.empty((3, 3))
+    D = np.empty((2, 2))
+    for i in range(m):
+        j = k[i]
+        r2 = (c[i, 0] * c[i, 0] + c[i, 1] * c[i, 1]) + chi * chi
+        s = np.sqrt(r2)
+        for a in range(2):
+            for b in range(2):
+                D[a, b] = ((1.0 / s if a == b else 0.0) - c[i, a] * c[i, b] / (r2 * s))
+        for d in range(3):
+            for e in range(3):
+                t = 0.0
+                for a in range(2):
+                    for b in range(2):
+                        t += T0[j, a, d] * D[a, b] * T0[j, b, e]
+                B[d, e] = -mu * lam[j] * t * cv
+        _node_rows(j, facet0, N0, node_pos, pos_m, rr, sign)
+        for r in range(R):
+            for s_ in range(R):
+                f = -sign[r] * sign[s_]
+                for d in range(3):
+                    q = rr[r, d]
+                    if q < 0:
+                        continue
+                    for e in range(3):
+                        col = rr[s_, e]
+                        if col >= 0:
+                            A[where[q], where[col]] += f * B[d, e]
+
+
+def friction_dofs(k: np.ndarray, facet0: np.ndarray, node_pos: np.ndarray,
+                  pos_m: np.ndarray) -> np.ndarray:
+    """The interface positions the friction of nodes ``k`` couples (−1 left out)."""
+    if not len(k):
+        return np.zeros(0, np.int64)
+    q = np.concatenate([node_pos[k].ravel(), pos_m[facet0[k]].ravel()])
+    return np.ascontiguousarray(np.unique(q[q >= 0]), dtype=np.int64)
+
+
+def power(lam: np.ndarray, k: np.ndarray, c: np.ndarray, mu: float, chi: float) -> float:
+    """The friction's dissipated power ``Σ_k μ λ_k |c|²/sqrt(|c|² + χ²)``."""
+    if not len(k):
+        return 0.0
+    c2 = np.sum(c * c, axis=1)
+    return float(np.sum(mu * lam[k] * c2 / np.sqrt(c2 + chi * chi)))
+
+
+def round_off(pair: Any, y: np.ndarray, lam: np.ndarray, k: np.ndarray, c: np.ndarray,
+              frozen_: tuple[np.ndarray, np.ndarray, np.ndarray]) -> float:
+    """The round-off of the friction part of f_c at the iterate y.
+
+    As :func:`breakwater.contact.newtonaids.resolution` in 2-D: per node in contact
+    ``μ λ_k |∂φ/∂c| ε Σ|v|`` (|∂φ/∂c| = 1/sqrt(|c|² + χ²), its largest eigenvalue), the
+    velocities' magnitudes ``|v| + Δt |a| + β₁Δt |Δa|`` summed over the node's and its
+    master face's DOFs (weighted by |N̄₀|); their root sum of squares.
+    """
+    if not len(k):
+        return 0.0
+    facet0, N0, _ = frozen_
+    _, v, a, da = pair._start(y)
+    dt = pair.step_dt()
+    size = np.abs(v) + dt * np.abs(a) + pair.beta1 * dt * np.abs(da)
+    size[-1] = 0.0
+    node = size[pair._node_pos[k]].sum(axis=1) + np.einsum(
+        "kb,kbd->k", np.abs(N0[k]), size[pair._pm[facet0[k]]])
+    _, _, mu, chi = pair._law
+    slope = 1.0 / np.sqrt(np.sum(c * c, axis=1) + chi * chi)
+    r = mu * lam[k] * slope * float(np.finfo(float).eps) * node
+    return float(np.sqrt(np.sum(r * r)))
+
+
+def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | None
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`breakwater.contact.general.start_slip` of a 3-D pair.
+
+    Per slave node in contact at the state, the slip velocity where the law gives the
+    friction of the last step (projection ``frozen_``; None: the state's own), against
+    it, in the tangent plane of the state's own projection, at most RELEASE χ.
+
+    Returns:
+        Their interface positions ``(k, 3)`` and slip velocities ``(k, 3)``.
+    """
+    from breakwater.contact.conforming import RELEASE
+
+    none = np.zeros((0, 3), np.int64), np.zeros((0, 3))
+    if not pair.spec.friction:
+        return none
+    u0, u1, v1 = pair._state()
+    lam = pair._normal(u1)["lam"]
+    _, _, mu, chi = pair._law
+    now = frozen(pair, u0)
+    lam_now, _ = newtonaids.friction_normals(lam, now[0])
+    k, c, _, _ = friction(lam_now, *now, pair._node_pos, pair._pm, v1, mu, chi)
+    if not len(k):
+        return none
+    T = now[2][k]
+    if frozen_ is None:
+        speed = np.linalg.norm(c, axis=1)
+        cap = RELEASE * chi
+        c = c * (cap / np.maximum(speed, cap))[:, None]
+        return pair.node_pos[k], np.einsum("ka,kad->kd", c, T)
+    lam_f, _ = newtonaids.friction_normals(lam, frozen_[0])
+    kf, _, F_k, _ = friction(lam_f, *frozen_, pair._node_pos, pair._pm, v1, mu, chi)
+    force = np.zeros((len(lam), 3))
+    force[kf] = F_k
+    F = np.einsum("kad,kd->ka", T, force[k])  # in the state's tangent plane
+    size = np.linalg.norm(F, axis=1)
+    f = np.minimum(size / (mu * lam_now[k]), 1.0)
+    speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
+    against = -F / np.maximum(size, 1e-300)[:, None]
+    return pair.node_pos[k], np.einsum("ka,kad->kd", against * speed[:, None], T)
