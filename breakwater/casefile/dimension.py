@@ -7,8 +7,8 @@ all 3; ``gravity`` sets the case's dimension (its default is 2D). The mesh must 
 of the same dimension (:func:`mesh_problem`, once it is read). In 3D,
 ``out_of_plane_length`` does not apply (nothing is per metre) and must stay 1, and a
 calibration reads its stiffness as the 3D model's (``stiffness_basis = "block"``).
-General (non-matching) pairs run in 3D frictionless, with ``segments`` or ``gauss``
-integration; friction or ``nodes`` on one is refused in one line
+General (non-matching) pairs run in 3D with ``segments`` or ``gauss`` integration
+(with or without friction); ``nodes`` on one is refused in one line
 (:func:`general_in_3d`). Goda's pressures and storms run in 3D: p(y) the same across
 the face's width.
 """
@@ -128,21 +128,19 @@ def dimension_problem(case: _Case) -> None:
 def general_in_3d(case: _Case) -> None:
     """Refuse what a general pair cannot do in a 3D case (once the mesh is known to be 3D).
 
-    Friction and ``integration = "nodes"``
-    (:func:`breakwater.model.pairs.three_d_general`), and the ``goda3d`` generator's
-    hexahedra (the 3D pair's faces are triangles: a tetrahedral mesh).
+    ``integration = "nodes"`` (:func:`breakwater.model.pairs.three_d_general`), and the
+    ``goda3d`` generator's hexahedra (the 3D pair's faces are triangles: a tetrahedral
+    mesh).
 
     Raises:
-        InvalidField: The first such pair's ``friction``, ``integration`` or
-            ``slave_surface``.
+        InvalidField: The first such pair's ``integration`` or ``slave_surface``.
     """
     if dimension(case) == 3:
         for c in case.contact:
             if c.general:
-                why = three_d_general(c.friction, c.integration)
+                why = three_d_general(c.integration)
                 if why:
-                    key = "friction" if c.friction else "integration"
-                    raise InvalidField(f"contact.{c.name}.{key}", why)
+                    raise InvalidField(f"contact.{c.name}.integration", why)
                 if case.mesh.source == GODA3D:
                     raise InvalidField(f"contact.{c.name}.slave_surface", HEXAHEDRA)
 

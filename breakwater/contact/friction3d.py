@@ -13,11 +13,15 @@ orthonormal tangent basis T₀ of the master face there (``T₀₁ = x_ξ/|x_ξ|
 ``T₀₂ = n̄ × T₀₁``; the reference face's with small rotations), and
 ``φ(c) = Σ_α T₀_α c_α / sqrt(|c|² + χ²)``. The master's nodes of f₀ receive ``−N̄₀_b F_k``
 (action and reaction; in the residual's sign, f_c, the slave row gets ``−F_k``).
-Where the contact ends within a slave face (a quadratic triangle's vertex λ_k < 0) the
-λ_k are scaled so that sliding carries μ Σλ
-(:func:`breakwater.contact.newtonaids.friction_normals`, as in 2-D).
+Where the contact ends within a slave face, or a quadratic triangle's vertex function
+makes λ_k < 0 (their integrals vanish: under a uniform pressure a 6-node face's vertex
+forces are nil, under any other some are negative), the λ_k are scaled by
+s = Σλ/Σ_carried λ so that sliding carries μ Σλ
+(:func:`breakwater.contact.newtonaids.friction_normals`, as in 2-D); the Jacobian
+differentiates s too (in 3-D s ≠ 1 nearly always: taken as a constant, as in 2-D, the
+Newton converged linearly, by 1e-2 per iteration, on a block sliding on a slab).
 
-The Jacobian is consistent: ``∂F_k/∂Δa = −μ φ ⊗ ∂λ_k/∂Δa − μ λ_k T₀ (∂φ/∂c) T₀ᵀ β₁Δt
+The Jacobian is consistent: ``∂F_k/∂Δa = −μ φ ⊗ ∂λ̂_k/∂Δa − μ λ̂_k T₀ (∂φ/∂c) T₀ᵀ β₁Δt
 (∂(v_k − v̄₀)/∂v)``, with ``∂φ_α/∂c_β = δ_αβ/r − c_α c_β/r³`` (r = sqrt(|c|² + χ²))
 and ∂λ_k/∂Δa from the normal kernel's complex steps
 (:func:`breakwater.contact.forcekernels3d.jacobian`'s ``dpw``).
@@ -163,8 +167,8 @@ def _node_rows(j, facet0, N0, node_pos, pos_m, rows, sign):  # type: ignore[no-u
 
 
 @kernel
-def friction_jacobian(A, where, k, c, unit, lam, facet0, N0, T0, node_pos, pos_m, mu, chi,
-                      cv, f_s, node_of, Ns, rows, dpw):  # type: ignore[no-untyped-def]
+def friction_jacobian(A, where, k, c, unit, lam, raw, scale, facet0, N0, T0, node_pos, pos_m,
+                      mu, chi, cv, f_s, node_of, Ns, rows, dpw):  # type: ignore[no-untyped-def]
     """A += ∂(friction part of f_c)/∂Δa (in place; the module doc).
 
     Args:
@@ -173,8 +177,11 @@ def friction_jacobian(A, where, k, c, unit, lam, facet0, N0, T0, node_pos, pos_m
         where: Its map.
         k: :func:`friction`'s nodes.
         c: Their slip components.
-        unit: −μφ (times the normal forces' scale).
-        lam: The (scaled) normal forces.
+        unit: −μφ.
+        lam: The scaled normal forces λ̂ = s λ (:func:`~.newtonaids.friction_normals`).
+        raw: The normal forces λ.
+        scale: s (1: λ̂ is λ; else s = Σλ / Σ_carried λ, differentiated too: the
+            carried nodes are those with λ > 0 and a master face).
         facet0: The start-of-step master faces.
         N0: Their shape values.
         T0: Their tangent bases.
@@ -196,7 +203,36 @@ def friction_jacobian(A, where, k, c, unit, lam, facet0, N0, T0, node_pos, pos_m
     R = 1 + nm
     rr = np.empty((R, 3), np.int64)
     sign = np.empty(R)
-    # The normal forces' part: −sign_r unit ⊗ ∂λ_k/∂Δa.
+    na = A.shape[0]
+    # The scale's part: −sign_r unit λ_k ⊗ ∂s/∂Δa, ∂s = (∂Σλ − s ∂Σ_carried λ)/Σ_carried λ.
+    if scale != 1.0 and m:
+        total = 0.0
+        for j in range(len(raw)):
+            if raw[j] > 0 and facet0[j] >= 0:
+                total += raw[j]
+        ds = np.zeros(na)
+        for p in range(len(f_s)):
+            for jj in range(rows.shape[1]):
+                col = rows[p, jj]
+                if col < 0 or dpw[p, jj] == 0.0:
+                    continue
+                carried = 0.0
+                for a in range(Ns.shape[1]):
+                    j = node_of[f_s[p], a]
+                    if raw[j] > 0 and facet0[j] >= 0:
+                        carried += Ns[p, a]
+                ds[where[col]] += (1.0 - scale * carried) * dpw[p, jj] / total
+        for i in range(m):
+            _node_rows(k[i], facet0, N0, node_pos, pos_m, rr, sign)
+            for r in range(R):
+                for d in range(3):
+                    q = rr[r, d]
+                    if q < 0:
+                        continue
+                    f = -sign[r] * unit[i, d] * raw[k[i]]
+                    for col in range(na):
+                        A[where[q], col] += f * ds[col]
+    # The normal forces' part: −sign_r unit ⊗ s ∂λ_k/∂Δa.
     for p in range(len(f_s)):
         for a in range(Ns.shape[1]):
             i = index[node_of[f_s[p], a]]
@@ -205,7 +241,7 @@ def friction_jacobian(A, where, k, c, unit, lam, facet0, N0, T0, node_pos, pos_m
             _node_rows(k[i], facet0, N0, node_pos, pos_m, rr, sign)
             for jj in range(rows.shape[1]):
                 col = rows[p, jj]
-                dl = Ns[p, a] * dpw[p, jj]
+                dl = scale * Ns[p, a] * dpw[p, jj]
                 if col < 0 or dl == 0.0:
                     continue
                 for r in range(R):

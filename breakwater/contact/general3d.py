@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
 __all__ = ["QUANTITIES", "SlaveNodes3D", "SurfaceContact3D", "SurfaceForces3D", "nodal_gaps",
-           "smallest_gap"]
+           "reference_gaps3d", "smallest_gap"]
 
 QUANTITIES = ("force_x", "force_y", "force_z", "contact_area", "penetration")
 """The history quantities of a 3-D general pair (columns ``<name>_<quantity>``)."""
@@ -175,8 +175,8 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
             where[act] = np.arange(len(act))
             facet0, N0, T0 = fr["frozen"]
             friction3d.friction_jacobian(
-                A, where, fr["k"], fr["c"], fr["unit"] * fr["scale"], fr["lam"], facet0, N0,
-                T0, self._node_pos, self._pm, mu, chi, self.beta1 * dt,
+                A, where, fr["k"], fr["c"], fr["unit"], fr["lam"], p["lam"], fr["scale"],
+                facet0, N0, T0, self._node_pos, self._pm, mu, chi, self.beta1 * dt,
                 p["slave_facet"], self._node_of, p["Ns"], rows, dpw)
         return act, A
 
@@ -264,6 +264,23 @@ def nodal_gaps(pair: SurfaceSearch3D, x: np.ndarray, xm: np.ndarray,
         n = unit_normal(surface(ref, xi[on])[1]) if pair.small_rotations else unit_normal(dx)
         gap[on] = np.sum((x[on] - x_bar) * n, axis=1) + pair._law[1]
     return gap, facet, xi
+
+
+def reference_gaps3d(pair: SurfaceSearch3D, radius: float) -> np.ndarray:
+    """Per slave node as meshed, ``((X_k − X̄)·n̄) n̄`` ``(nodes, 3)`` (0: no projection).
+
+    X̄ the closest point of the master surface as meshed within ``radius``, n̄ its unit
+    normal there (:class:`breakwater.statics.pseudostep.SlipOrigin`'s landing points).
+    """
+    X = np.ascontiguousarray(pair.node_X)
+    facet, xi = searchkernels3d.project(X, pair._mX, radius, INSIDE)
+    out = np.zeros_like(X)
+    on = facet >= 0
+    if on.any():
+        x_bar, dx, _ = surface(pair._mX[facet[on]], xi[on])
+        n = unit_normal(dx)
+        out[on] = np.sum((X[on] - x_bar) * n, axis=1)[:, None] * n
+    return out
 
 
 def smallest_gap(pair: SurfaceSearch3D, x: np.ndarray, u: np.ndarray, radius: float) -> float:

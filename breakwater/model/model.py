@@ -322,7 +322,7 @@ def _three_d_pairs(msh: dolfinx.mesh.Mesh, surface_pairs: Sequence[SurfacePair])
         MeshError: The first such pair's reason (one line).
     """
     for p in surface_pairs if msh.geometry.dim == 3 else ():
-        why = three_d_general(p.friction, p.integration) or (
+        why = three_d_general(p.integration) or (
             None if msh.topology.cell_type == dolfinx.mesh.CellType.tetrahedron
             else HEXAHEDRA)
         if why:

@@ -458,16 +458,13 @@ def settlement(u_slave: np.ndarray, u_master: np.ndarray, normal: np.ndarray) ->
     return float(abs(np.mean(np.sum(u * np.asarray(normal, float), axis=1))))
 
 
-def three_d_general(friction: float, integration: str) -> str | None:
-    """Why a general pair with these settings cannot run in 3-D (None: it can).
+def three_d_general(integration: str) -> str | None:
+    """Why a general pair with this integration cannot run in 3-D (None: it can).
 
-    3-D general pairs (:mod:`breakwater.contact.general3d`) are frictionless, with
-    ``segments`` or ``gauss`` integration: ``nodes`` has no 3-D analogue on 6-node faces
-    (a quadratic triangle's vertex weights integrate to zero).
+    3-D general pairs (:mod:`breakwater.contact.general3d`) run with ``segments`` or
+    ``gauss`` integration: ``nodes`` has no 3-D analogue on 6-node faces (a quadratic
+    triangle's vertex weights integrate to zero).
     """
-    if friction:
-        return ("friction on a 3D general pair (non-matching surfaces) is not implemented "
-                f"yet: friction = 0, or a conforming pair (got friction = {friction:g})")
     if integration == "nodes":
         return ("integration = \"nodes\" has no 3D analogue (a 6-node triangle's vertex "
                 "weights integrate to zero): \"segments\" or \"gauss\"")

@@ -23,10 +23,9 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.common.errors import ConvergenceError
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
-from breakwater.contact.general3d import SurfaceForces3D, smallest_gap
+from breakwater.contact.general3d import reference_gaps3d, smallest_gap
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
 from breakwater.stepping.solver import NewtonOptions
@@ -52,11 +51,6 @@ FALL = 0.1
 LANDING = 10.0
 """Search radii within which :meth:`SlipOrigin.reference_gaps` finds a landing point: the
 farthest a relaxation's stage lets a body fall (``MAX_STEPS`` steps of a tenth of one)."""
-
-HELD_3D = ("a 3-D general pair is frictionless (friction on it is not implemented): it cannot "
-           "hold its bodies in place; hold them with [fixed] components")
-"""Why the held state is not tried with a 3-D general pair."""
-
 
 class PseudoStepper:
     """The pseudo-transient stepper of a model and its state (see the module docstring).
@@ -123,13 +117,7 @@ class PseudoStepper:
 
     @contextlib.contextmanager
     def friction(self, μ: float | None, stretch: float = 1.0) -> Iterator[None]:
-        """Every pair's friction coefficient μ (None: their own), χ times ``stretch``, inside.
-
-        Raises:
-            ConvergenceError: Friction asked of a 3-D general pair (:data:`HELD_3D`).
-        """
-        if μ and any(isinstance(p, SurfaceForces3D) for p in self.providers):
-            raise ConvergenceError(HELD_3D, -1, 0)
+        """Every pair's friction coefficient μ (None: their own), χ times ``stretch``, inside."""
         saved = [(p, p.spec, p.law) for p in self.providers]
         conforming = [(p.law.friction, float(p.law.friction.μ.value),
                        float(p.law.friction.χ.value)) for p in self.model.pairs]
@@ -301,9 +289,7 @@ class SlipOrigin:
         (farther: 0, no landing point).
         """
         if self._gaps is None and self.pair.node_X.shape[1] == 3:
-            # A 3-D pair is frictionless (general3d): the stage that sets friction on it
-            # fails in its forces, saying so; no landing point here.
-            self._gaps = np.zeros_like(self.pair.node_X)
+            self._gaps = reference_gaps3d(cast(Any, self.pair), LANDING * self.pair.radius)
         if self._gaps is None:
             p = self.pair
             X, mX = p.node_X, np.ascontiguousarray(p.master.X, dtype=float)

@@ -124,6 +124,7 @@ from dolfinx import fem
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.errors import ConvergenceError
+from breakwater.contact import friction3d
 from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.contact.general import start_slip
 from breakwater.model.model import ContactModel, Damping
@@ -353,7 +354,8 @@ def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
     ps.rest()
     y = np.zeros(ps.solver.n)
     for p, step in zip(ps.providers, frozen, strict=True):
-        pos, v_T = start_slip(p, step)
+        pos, v_T = (friction3d.start_slip(p, step) if ps.model.gdim == 3
+                    else start_slip(p, step))
         y[pos[pos >= 0]] = v_T[pos >= 0]
     ps.add_slave_velocities(v, y)
     if ps.model.pairs:
