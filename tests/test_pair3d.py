@@ -1,4 +1,4 @@
-"""The 3-D general (non-matching) contact pair (issue 25), frictionless.
+"""The 3-D general (non-matching) contact pair (issue 25).
 
 - The compiled point kernel and its complex-step Jacobian
   (:mod:`breakwater.contact.forcekernels3d`) against the NumPy reference
@@ -13,13 +13,13 @@
   static state reproduces it to its residual: 1e-8 p asked at every DG1 node (measured
   5.7e-11 p), and the pair's resultant equals the load p × 1 m² to 1e-8.
 - A block sliding 0.1 m across the non-matching faces of a slab (frictionless): its
-  centre of mass accelerates at F/m to 1e-4; friction and ``integration = "nodes"``
-  refused by the model in one line, and the relaxation's held stage (friction) too.
+  centre of mass accelerates at F/m to 1e-4; ``integration = "nodes"`` refused by the
+  model in one line. Friction: ``tests/test_pair3d_friction.py``.
 - A 3-D case with a general pair through the command line: a 0.5 × 0.3 × 0.5 m block
-  meshed apart on a 1 × 0.5 × 1 m slab under gravity, 3 steps: the static contact
-  resultant is the block's weight (to 1e-9: the relaxation's tolerance), the tangential
-  components round-off; serially and on 2 ranks (every rank evaluates the gathered pair:
-  the partition changes the numbers by round-off only).
+  meshed apart on a 1 × 0.5 × 1 m slab under gravity, frictionless and with μ = 0.65,
+  3 steps: the static contact resultant is the block's weight (to 1e-9: the relaxation's
+  tolerance), the tangential components round-off; serially and on 2 ranks (every rank
+  evaluates the gathered pair: the partition changes the numbers by round-off only).
 """
 
 from __future__ import annotations
@@ -208,6 +208,7 @@ master = "lower"
 slave_surface = "upper_bottom"
 master_surface = "lower_top"
 penalty = 1.0e11
+friction = {friction}
 [fixed.lower_bottom]
 [fixed.upper_left]
 components = [0]
@@ -222,16 +223,30 @@ field_interval = 1
 '''
 
 
-def test_case_runs_through_the_cli(shared_dir: pathlib.Path,
+@pytest.mark.parametrize("friction", [0.0, 0.65])
+def test_case_runs_through_the_cli(shared_dir: pathlib.Path, friction: float,
                                    capsys: pytest.CaptureFixture[str]) -> None:
-    """A block meshed apart on a slab, a 3-D general pair: it runs, the static contact
-    carries the block's weight, the pair's columns and fields are written."""
+    """A block meshed apart on a slab, a 3-D general pair, frictionless or with friction
+    (the static state's frictional stage, then the dynamics' friction): it runs, the
+    static contact carries the block's weight, the pair's columns and fields are written.
+
+    With friction the static state is the frictional stage's (its friction carries the
+    block's Poisson expansion against the rollers: 98 N of 1766), and the contact's
+    vertical resultant is the weight to 1e-6 at t = 0 (the friction recorded there is
+    the start slip's, :func:`breakwater.contact.friction3d.start_slip`, whose tangent
+    plane is the state's: measured 2.1e-7). The dynamics then loses much of that
+    friction within the first steps (98 N to 18 N and back, the vertical resultant
+    2e-3 off; the same with χ = 1e-10, not understood: issue 25's report), so the
+    dynamic rows are asked to 1e-2 only. χ = 1e-4 m/s: at the paper's 1e-10 the
+    sticking block takes ~290 Newton iterations a step (no crawl points in 3-D), 3
+    minutes."""
     mesh = boxes(shared_dir / "block.msh", COMM,
                  [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
                   Box("upper", (0.25, 0.5, 0.25), (0.5, 0.3, 0.5), 0.34)])
     path = shared_dir / "pair3d.toml"
     if COMM.rank == 0:
-        path.write_text(CASE.format(mesh=mesh))
+        setting = f"{friction}\nregularisation = 1.0e-4" if friction else "0.0"
+        path.write_text(CASE.format(mesh=mesh, friction=setting))
     COMM.barrier()
     out = shared_dir / "out"
     code = cli.main(["run", str(path), "--out", str(out), "--quiet", "--no-progress"])
@@ -239,14 +254,20 @@ def test_case_runs_through_the_cli(shared_dir: pathlib.Path,
     with open(out / "history.csv") as f:
         rows = list(csv.DictReader(f))
     weight = 2400.0 * 9.81 * 0.5 * 0.3 * 0.5
-    for row in rows:
+    summary = json.loads((out / "summary.json").read_text())
+    if friction:
+        assert summary["static"]["initial_state"] == "frictional"
+        assert float(rows[0]["c_force_y"]) == pytest.approx(weight, rel=1e-6)
+        for row in rows:
+            assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-2)
+    for row in rows if not friction else ():
         assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-9)
         assert abs(float(row["c_force_x"])) < 1e-6 * weight
         assert abs(float(row["c_force_z"])) < 1e-6 * weight
         # The block's base, less the integration points just open at its edges.
         assert 0.24 < float(row["c_contact_area"]) <= 0.25 + 1e-12
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["static"]["contact_resultant"] == pytest.approx(weight, rel=1e-9)
+    assert summary["static"]["contact_resultant"] == pytest.approx(
+        weight, rel=1e-6 if friction else 1e-9)
     assert (out / "contact_c.bp").exists()
 
 
@@ -388,41 +409,16 @@ def test_block_slides_across_nonmatching_faces(folder: pathlib.Path) -> None:
 
 # --- what stays refused ----------------------------------------------------------------------
 
-@pytest.mark.parametrize(("friction", "integration", "phrase"), [
-    (0.3, "segments", "friction on a 3D general pair (non-matching surfaces) is not "
-     "implemented yet"),
-    (0.0, "nodes", 'integration = "nodes" has no 3D analogue')])
-def test_model_refuses_in_one_line(folder: pathlib.Path, friction: float, integration: str,
-                                   phrase: str) -> None:
-    """Friction and node integration on a 3-D general pair: one line from the model."""
+def test_model_refuses_in_one_line(folder: pathlib.Path) -> None:
+    """Node integration on a 3-D general pair: one line from the model."""
     from breakwater.common.errors import MeshError
 
     path = boxes(folder / "patch3d.msh", COMM, [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
                                                 Box("upper", (0, 0.5, 0), (1, 0.5, 1), 0.34)])
     pair = SurfacePair("c", "upper", "lower", "upper_bottom", "lower_top", 1e12,
-                       friction=friction, integration=integration)  # type: ignore[arg-type]
-    with pytest.raises(MeshError, match=re.escape(phrase)) as info:
+                       integration="nodes")
+    with pytest.raises(MeshError, match=re.escape('integration = "nodes" has no 3D analogue')
+                       ) as info:
         ContactModel(read_mesh(path, COMM), [Body("lower", MATERIAL), Body("upper", MATERIAL)],
                      surface_pairs=[pair])
-    assert "\n" not in str(info.value)
-
-
-def test_held_stage_says_friction_is_missing(folder: pathlib.Path) -> None:
-    """A frictionless block free to slide (no static state): the relaxation's held stage
-    sets friction on the pair, which a 3-D pair has not: the error says so in one line
-    (it was a 2-D array's broadcast error from the stage's landing points)."""
-    from breakwater.common.errors import ConvergenceError
-
-    path = boxes(folder / "patch3d.msh", COMM, [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
-                                                Box("upper", (0, 0.5, 0), (1, 0.5, 1), 0.34)])
-    model = ContactModel(
-        read_mesh(path, COMM), [Body("lower", MATERIAL), Body("upper", MATERIAL)],
-        fixed=[Fixed("lower_bottom")],
-        loads=[SurfaceLoad("upper_left", (P, 0.0, 0.0), lambda t: 1.0)],
-        surface_pairs=[SurfacePair("c", "upper", "lower", "upper_bottom", "lower_top", 1e12)],
-        gravity=np.array([0.0, -9.81, 0.0]))
-    model.set_time(0.0)
-    with pytest.raises(ConvergenceError, match="held: a 3-D general pair is frictionless "
-                       r"\(friction on it is not implemented\)") as info:
-        initial_state(model)
     assert "\n" not in str(info.value)

@@ -39,6 +39,7 @@ import numpy as np
 from breakwater.common.arrays import key_of, unchanged
 from breakwater.common.jit import kernel
 from breakwater.contact import newtonaids, searchkernels3d
+from breakwater.contact.guardkernels import land
 from breakwater.contact.projection import INSIDE
 from breakwater.contact.projection3d import shape, surface, unit_normal
 
@@ -46,7 +47,7 @@ if TYPE_CHECKING:
     from breakwater.contact.surfacesearch3d import SurfaceSearch3D
 
 __all__ = ["add_friction", "friction", "friction_jacobian", "frozen", "power", "round_off",
-           "start_slip", "tangent_basis"]
+           "slip_guard", "start_slip", "tangent_basis"]
 
 
 def tangent_basis(nodes: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -361,3 +362,68 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
     speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
     against = -F / np.maximum(size, 1e-300)[:, None]
     return pair.node_pos[k], np.einsum("ka,kad->kd", against * speed[:, None], T)
+
+
+@kernel
+def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi):  # type: ignore[no-untyped-def]
+    """A 3-D pair's slip guard on Newton's step (``precheck``; in place).
+
+    The 2-D pair's (:func:`breakwater.contact.guardkernels.slip_guard`) without its crawl
+    points: per slave node with a start-of-step master point and free DOFs, the slip
+    vector of the iterate c₀ and of Newton's proposal c₁ (the iterate less the step); a
+    step that reverses the slip (c₀·c₁ < 0) from outside the stick band (|c₀| > χ) lands
+    at zero slip, any other whose linear model asks the law for a force within its curved
+    zone lands where the law gives that force
+    (:func:`~breakwater.contact.guardkernels.land`). The slave node's tangential step is
+    set to give the landing slip (the slip is linear in Δa: exact); its normal step is
+    kept.
+
+    Returns:
+        The nodes whose step changed.
+    """
+    n = len(step)
+    ext = np.zeros(n + 1)
+    ext[:n] = step
+    fixed = 0
+    nm = N0.shape[1]
+    c0, c1, target = np.empty(2), np.empty(2), np.empty(2)
+    vs, vm, ys, ym = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    for j in range(len(facet0)):
+        f = facet0[j]
+        if f < 0 or node_pos[j, 0] < 0 or node_pos[j, 1] < 0 or node_pos[j, 2] < 0:
+            continue
+        for d in range(3):
+            vs[d], ys[d] = v1[node_pos[j, d]], ext[node_pos[j, d]]
+            vm[d], ym[d] = 0.0, 0.0
+            for b in range(nm):
+                vm[d] += N0[j, b] * v1[pos_m[f, b, d]]
+                ym[d] += N0[j, b] * ext[pos_m[f, b, d]]
+        dot, size = 0.0, 0.0
+        for a in range(2):
+            c0[a], c1[a] = 0.0, 0.0
+            for d in range(3):
+                c0[a] += T0[j, a, d] * (vs[d] - vm[d])
+                c1[a] += T0[j, a, d] * (ys[d] - ym[d])
+            c1[a] = c0[a] - dv * c1[a]
+            dot += c0[a] * c1[a]
+            size += c0[a] * c0[a]
+        if dot < 0 and size > chi * chi:
+            target[0], target[1] = 0.0, 0.0
+        elif land(c0, c1, chi, target):
+            if target[0] == c1[0] and target[1] == c1[1]:
+                continue
+        else:
+            continue
+        # T₀·y_s = T₀·ȳ_m + (c₀ − target)/dv; the normal part of y_s kept.
+        for a in range(2):
+            along = (c0[a] - target[a]) / dv
+            now = 0.0
+            for d in range(3):
+                along += T0[j, a, d] * ym[d]
+                now += T0[j, a, d] * ys[d]
+            for d in range(3):
+                ys[d] += T0[j, a, d] * (along - now)
+        for d in range(3):
+            step[node_pos[j, d]] = ys[d]
+        fixed += 1
+    return fixed

@@ -17,8 +17,9 @@ order on the gathered state (the result does not depend on the partition).
 Friction (isotropic regularised Coulomb, the paper's law and χ) acts at the slave nodes,
 the slip a tangent vector relative to the master material point under the node at the
 start of the step (:mod:`breakwater.contact.friction3d`), its Jacobian consistent. The
-2-D pair's Newton aids are not written in 3-D: no slip guard (crawl points) and no slip
-memory (Newton starts at GN22's predictor). The outputs are measured at the slave
+2-D pair's slip guard is, without its crawl points (a reversal lands at zero slip, a
+step into the law's curved zone on the law), its slip memory is not (Newton starts at
+GN22's predictor). The outputs are measured at the slave
 nodes (:class:`SlaveNodes3D`): gap, law pressure ε_n⟨−g_n⟩₊, tangential velocity and
 the law's friction traction at their projection, the slip relative to the master
 material point under them as meshed; pair probes are refused in one line.
@@ -198,11 +199,24 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
             np.ascontiguousarray(X, dtype=float), act, A)
 
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
-        """No slip guard (not written in 3-D): nothing changed."""
-        return 0
+        """Newton's slip guard at the slave nodes (:func:`~.friction3d.slip_guard`).
+
+        Args:
+            x: The current iterate (Δa at the interface unknowns).
+            step: Newton's step, changed in place where cut.
+
+        Returns:
+            The nodes whose step changed (the same on every rank).
+        """
+        if not self.spec.friction:
+            return 0
+        u0, _, v1 = self._state(x)
+        facet0, N0, T0 = friction3d.frozen(self, u0)
+        return int(friction3d.slip_guard(step, v1, facet0, N0, T0, self._node_pos, self._pm,
+                                         self.beta1 * self.step_dt(), self._law[3]))
 
     def true_law(self, crawl: bool = True) -> bool:
-        """The law is always the law itself (no crawl points: no slip guard)."""
+        """The law is always the law itself (no crawl points in 3-D)."""
         return False
 
     def reach(self) -> np.ndarray | None:

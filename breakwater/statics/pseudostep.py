@@ -282,11 +282,12 @@ class SlipOrigin:
         self._kept: tuple[np.ndarray, np.ndarray] | None = None  # (v₁, v₁ + offset)
 
     def reference_gaps(self) -> np.ndarray:
-        """Per slave node, ``((X_k − X̄)·n̄) n̄``, ``(nodes, 2)``.
+        """Per slave node, ``((X_k − X̄)·n̄) n̄``, ``(nodes, gdim)``.
 
         X̄ the closest point of the master surface as meshed (a node beyond its end:
-        the nearest end), n̄ its normal there, within :data:`LANDING` search radii
-        (farther: 0, no landing point).
+        the nearest end in 2-D, none in 3-D,
+        :func:`~breakwater.contact.general3d.reference_gaps3d`), n̄ its normal there,
+        within :data:`LANDING` search radii (farther: 0, no landing point).
         """
         if self._gaps is None and self.pair.node_X.shape[1] == 3:
             self._gaps = reference_gaps3d(cast(Any, self.pair), LANDING * self.pair.radius)
