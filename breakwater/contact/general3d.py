@@ -287,7 +287,7 @@ def reference_gaps3d(pair: SurfaceSearch3D, radius: float) -> np.ndarray:
     normal there (:class:`breakwater.statics.pseudostep.SlipOrigin`'s landing points).
     """
     X = np.ascontiguousarray(pair.node_X)
-    facet, xi = searchkernels3d.project(X, pair._mX, radius, INSIDE)
+    facet, xi = searchkernels3d.project(X, pair._mX, radius, NODE_INSIDE)
     out = np.zeros_like(X)
     on = facet >= 0
     if on.any():
