@@ -21,7 +21,8 @@ from typing import Any
 
 from mpi4py import MPI
 
-__all__ = ["Progress", "SlowPhase", "StopSignal", "rank_zero_logging", "second_sigint_raises"]
+__all__ = ["Progress", "SlowPhase", "StopSignal", "rank_zero_logging", "second_sigint_raises",
+           "stop_requested"]
 
 
 class _RankZero(logging.Filter):
@@ -215,6 +216,14 @@ class StopSignal:
         self._previous.clear()
         if outer is not None and self._received:
             outer._received = outer._received or self._received
+
+
+def stop_requested() -> int:
+    """The signal the innermost :class:`StopSignal` in effect received (0: none, or none in effect).
+
+    Local (no poll of other groups): a caller that stops on it asks every rank.
+    """
+    return StopSignal._active[-1]._received if StopSignal._active else 0
 
 
 def second_sigint_raises() -> bool:

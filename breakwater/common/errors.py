@@ -44,6 +44,14 @@ class ConvergenceError(BreakwaterError):
         self.iterations = iterations
 
 
+class Interrupted(BreakwaterError):
+    """The run stopped on a signal (SIGTERM, SIGINT) where it was looked at (collectively).
+
+    Between steps (the time loop) or between contact searches (a 3-D general pair: the
+    static state may take many of them): ``summary.json`` says ``interrupted``.
+    """
+
+
 class PenetrationError(ConvergenceError):
     """A step leaves a general pair's slave node beyond what its contact search sees.
 

@@ -71,6 +71,7 @@ from breakwater.common.errors import (
     BreakwaterError,
     CaseError,
     ConvergenceError,
+    Interrupted,
     MeshError,
     OutputError,
     PenetrationError,
@@ -125,7 +126,7 @@ class RunInterrupted(SimulationFailed):
     """The run stopped on a signal (SIGTERM, SIGINT); ``summary.json`` says ``interrupted``."""
 
 
-class _Stop(BreakwaterError):
+class _Stop(Interrupted):
     """Raised inside the time loop when a stop signal was received."""
 
 
@@ -420,7 +421,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             # (a second Ctrl-C or interrupt in a notebook, or the caller's own)
             error.add_note(_interrupted_note(r, summary))
             raise error
-        stopped = isinstance(error, _Stop)
+        stopped = isinstance(error, Interrupted)
         # The exception carries the reason (the command line prints it as its one error
         # line; the report and summary.json say it too): not logged a second time.
         log.debug("run %s: %s", "interrupted" if stopped else "failed", summary["error"])
@@ -458,7 +459,7 @@ def _end(r: Session, error: BaseException | None, output: OutputSpec, report: bo
         The summary, the same on every rank.
     """
     message = None if error is None else (str(error) or type(error).__name__)
-    stopped = isinstance(error, _Stop | KeyboardInterrupt)
+    stopped = isinstance(error, Interrupted | KeyboardInterrupt)
     status = "finished" if error is None else "interrupted" if stopped else "failed"
     if error is None:
         r.checkpointed = None  # (the summary names no checkpoint)
@@ -525,7 +526,7 @@ def _failed_end(r: Session, error: BaseException) -> dict[str, Any]:
     ``summary.json`` says ``failed`` (``interrupted`` on a stop) with the one-line
     reason, when it can still be written; the state is what the run had reached.
     """
-    stopped = isinstance(error, _Stop | KeyboardInterrupt)
+    stopped = isinstance(error, Interrupted | KeyboardInterrupt)
     summary = r.summary(False, str(error) or type(error).__name__,
                         "interrupted" if stopped else "failed")
     with contextlib.suppress(OutputError):
