@@ -200,7 +200,7 @@ class ContactCase:
         "segments", doc="general pair: the slave's integration points: segments "
         "(segment-to-segment, `points` Gauss points per segment), gauss (`points` per "
         "slave facet) or nodes (the slave nodes, Simpson weights: the conforming pair's "
-        "quadrature; refused in 3D, where general pairs are frictionless)")
+        "quadrature; refused in 3D: a 6-node triangle's vertex weights integrate to zero)")
     rotations: Literal["finite", "small"] = setting(
         "finite", doc="general pair: the normal of the current master surface at the "
         "projection (finite, eq. 7) or of the reference one (small: the linear bodies' "

@@ -342,7 +342,7 @@ def _no_interface(name: str, data: gmshio.MeshData, comm: MPI.Comm) -> MeshError
                   data.facet_tags.find(tag)).size) > 0]
     apart = ("for surfaces meshed apart give slave_surface and master_surface" if tdim == 2
              else "in 3D either give slave_surface and master_surface (a general pair: "
-             "tetrahedra, frictionless) or mesh the bodies together so that they share the "
+             "tetrahedra) or mesh the bodies together so that they share the "
              "interface's nodes, e.g. gmsh's BooleanFragments (OpenCASCADE) or one Extrude "
              "of both")
     return MeshError(f"contact.{name}: interface '{name}' has no facet shared by two cells: "
