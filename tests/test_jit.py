@@ -34,6 +34,23 @@ def test_kernel_without_a_writable_cache(monkeypatch: pytest.MonkeyPatch) -> Non
     assert compiled(np.arange(5.0)) == 30.0
 
 
+@pytest.mark.serial
+def test_kernel_without_a_cache_takes_no_lock(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Nothing cached, nothing to race on: it compiles while another process holds the
+    # lock (3 s; the compilation alone takes well under a second).
+    monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])
+    compiled = kernel(_sum_of_squares)
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3"], stdout=subprocess.PIPE,
+                              text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+        start = time.perf_counter()
+        assert compiled(np.arange(5.0)) == 30.0
+        assert time.perf_counter() - start < 2.0
+    finally:
+        holder.wait(timeout=60)
+
+
 def test_kernel_is_cached_where_it_can_be() -> None:
     compiled = kernel(_sum_of_squares)
     assert type(compiled._cache).__name__ == "FunctionCache"

@@ -99,7 +99,8 @@ def lock_path() -> pathlib.Path:
 def cache_lock(cached: bool = True) -> Iterator[None]:
     """Hold the kernels' compilation lock (re-entrant: a kernel compiles those it calls).
 
-    Where the lock file cannot be opened (or on Windows, without ``flock``), the
+    Where numba keeps no cache (nothing to race on: the processes may compile at
+    once), where the lock file cannot be opened, or on Windows (no ``flock``), the
     compilation goes on unlocked. Past :data:`NOTICE_AFTER` seconds in the outermost
     hold, the one line of :func:`_notice`.
 
@@ -112,7 +113,7 @@ def cache_lock(cached: bool = True) -> Iterator[None]:
             _timer = threading.Timer(NOTICE_AFTER, _notice, (cached,))
             _timer.daemon = True
             _timer.start()
-        if _depth == 0 and fcntl is not None:
+        if _depth == 0 and fcntl is not None and cached:  # (no cache: nothing to race on)
             try:
                 path = lock_path()
                 path.parent.mkdir(parents=True, exist_ok=True)
