@@ -18,6 +18,9 @@ from mpi_harness import (  # noqa: F401  (the plugin's hooks, registered from he
 )
 
 import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx when present)
+from breakwater.common import petscfree
+
+petscfree.install()  # the tests' own dolfinx objects too
 
 # --- fixtures -------------------------------------------------------------------------
 
@@ -32,11 +35,11 @@ def _collect_module():
     fixtures: what they held is collected here.
     """
     gc.unfreeze()
-    gc.collect()
+    petscfree.release()
     gc.freeze()
     yield
     gc.unfreeze()
-    gc.collect()
+    petscfree.release()
     gc.freeze()
 
 
@@ -50,7 +53,7 @@ def _collect_and_sync():
     end).
     """
     yield
-    gc.collect()
+    petscfree.release()  # a collection, then what dolfinx's destructors put aside
     gc.freeze()
     MPI.COMM_WORLD.barrier()
 

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
-from breakwater.common import formcache
+from breakwater.common import formcache, petscfree
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import InitialSpec
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
@@ -50,6 +50,7 @@ from breakwater.model.parts import (
 )
 
 formcache.install()  # the forms' compilations, interrupted, leave the JIT cache usable
+petscfree.install()  # dolfinx's destructors leave PETSc objects for a collective release
 
 __all__ = ["Body", "BodyData", "ContactModel", "ContactPair", "Damping", "Fixed", "LoadData",
            "Material", "PairData", "SurfaceLoad", "SurfacePair"]
@@ -162,6 +163,9 @@ class ContactModel(KnownAttributes, ModelGroups):
                                          const(body.material.density), const(λ), const(μ),
                                          vertex_map=vmap))
         self.bodies = built
+        for comm in (msh.comm, *(c for b in built for c in (b.V.mesh.comm,
+                                                              b.V.dofmap.index_map.comm))):
+            petscfree.anchor(comm)  # the PETSc communicators of its vectors and matrices
         self.entity_maps = [b.cell_map for b in self.bodies]
         self._by_name = {b.spec.name: b for b in self.bodies}
 

@@ -64,7 +64,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from breakwater.common import files, folderlock
+from breakwater.common import files, folderlock, petscfree
 from breakwater.common.arrays import finite
 from breakwater.common.console import Progress, SlowPhase, StopSignal, rank_zero_logging
 from breakwater.common.errors import (
@@ -415,6 +415,7 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
             summary = _failed_end(r, error)
         finally:
             r.close()
+            petscfree.release(model.comm)  # what dolfinx's destructors put aside
         if error is None:
             return summary
         if isinstance(error, KeyboardInterrupt):

@@ -141,22 +141,6 @@ class NewtonTimings(Timings):
         self.seconds = {"newton": 0.0}
 
 
-class _NonlinearProblem(fem_petsc.NonlinearProblem):
-    """dolfinx's, whose destructor also takes a problem whose construction was interrupted.
-
-    dolfinx's ``__del__`` reads each PETSc object its constructor makes: an interrupt
-    while the constructor compiles the forms (a notebook's interrupt button) printed
-    ``Exception ignored in ... NonlinearProblem.__del__ ... AttributeError: ... '_snes'``
-    under the KeyboardInterrupt, and the matrix made already was never destroyed.
-    """
-
-    def __del__(self) -> None:
-        for name in ("_snes", "_A", "_b", "_x", "_P_mat"):
-            obj = getattr(self, name, None)
-            if obj is not None:
-                obj.destroy()
-
-
 def clear_options(prefix: str, options: Mapping[str, object]) -> None:
     """Remove a solver's options, read already, from PETSc's global options database.
 
@@ -211,7 +195,7 @@ class NewtonSolver(StepSolver):
         J = None
         if jacobian_of is not None:
             J = fem_petsc.derivative_block(ufl.extract_blocks(jacobian_of), self.x)
-        self.problem = _NonlinearProblem(
+        self.problem = fem_petsc.NonlinearProblem(
             ufl.extract_blocks(F), self.x, bcs=model.bcs, J=J, kind="mpi",
             entity_maps=model.entity_maps,
             petsc_options_prefix=(prefix := model.options_prefix(name)),
