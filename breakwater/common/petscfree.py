@@ -111,15 +111,18 @@ def release(comm: MPI.Comm | None = None) -> int:
         How many objects were destroyed.
     """
     gc.collect()
-    kept, done = [], 0
-    for obj in _aside:
+    pending = _aside[:]
+    del _aside[:]  # (what a collection puts aside from here waits for the next release)
+    done = 0
+    for obj in pending:
+        if not obj.handle:  # destroyed since, through another reference
+            continue
         if comm is not None and MPI.Comm.Compare(obj.comm.tompi4py(), comm) not in (
                 MPI.IDENT, MPI.CONGRUENT):
-            kept.append(obj)
+            _aside.append(obj)
             continue
         obj.destroy()
         done += 1
-    _aside[:] = kept
     return done
 
 
