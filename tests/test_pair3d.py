@@ -238,8 +238,8 @@ def test_case_runs_through_the_cli(shared_dir: pathlib.Path, friction: float,
     friction within the first steps (98 N to 18 N and back, the vertical resultant
     2e-3 off; the same with χ = 1e-10, not understood: issue 25's report), so the
     dynamic rows are asked to 1e-2 only. χ = 1e-4 m/s: at the paper's 1e-10 the
-    sticking block takes ~290 Newton iterations a step (no crawl points in 3-D), 3
-    minutes."""
+    sticking block takes ~290 Newton iterations a step (a 2-cycle that the crawl points
+    do not break: docs/general-contact.md), 3 minutes."""
     mesh = boxes(shared_dir / "block.msh", COMM,
                  [Box("lower", (0, 0, 0), (1, 0.5, 1), 0.5),
                   Box("upper", (0.25, 0.5, 0.25), (0.5, 0.3, 0.5), 0.34)])

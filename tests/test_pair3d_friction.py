@@ -32,7 +32,14 @@ import ufl
 from breakwater.meshes.apart import Box, boxes
 from dolfinx import fem
 
-from breakwater.contact import forcekernels3d, friction3d, newtonaids, pointkernels3d
+from breakwater.contact import (
+    forcekernels,
+    forcekernels3d,
+    friction3d,
+    guardkernels,
+    newtonaids,
+    pointkernels3d,
+)
 from breakwater.contact.projection3d import shape
 from breakwater.contact.surfaces import SurfacePair
 from breakwater.model.mesh import read_mesh
@@ -40,6 +47,11 @@ from breakwater.model.model import Body, ContactModel, Fixed, Material, SurfaceL
 from breakwater.statics.initial import initial_state
 
 COMM = MPI.COMM_WORLD
+
+
+def no_crawl(lam: np.ndarray) -> np.ndarray:
+    """No crawl point at any node (:func:`friction3d.friction`'s ``lin``): the law itself."""
+    return np.full((len(lam), 2), np.nan)
 
 
 # --- the kernels ----------------------------------------------------------------------------
@@ -96,7 +108,8 @@ class _Points:
             self.start, self.w, False, self.eps, 0.0, self.node_of, self.K * self.ns)
         lam, _ = newtonaids.friction_normals(lam, self.facet0)
         k, _, force, _ = friction3d.friction(lam, self.facet0, self.N0, self.T0,
-                                             self.node_pos, self.pos_m, v1, self.mu, self.chi)
+                                             self.node_pos, self.pos_m, v1, self.mu, self.chi,
+                                             no_crawl(lam))
         friction3d.add_friction(out, k, force, self.facet0, self.N0, self.node_pos, self.pos_m)
         return out
 
@@ -109,7 +122,8 @@ class _Points:
             self.start, self.w, False, self.eps, 0.0, self.node_of, self.K * self.ns)
         scaled, scale = newtonaids.friction_normals(lam, self.facet0)
         k, c, _, unit = friction3d.friction(scaled, self.facet0, self.N0, self.T0,
-                                            self.node_pos, self.pos_m, v1, self.mu, self.chi)
+                                            self.node_pos, self.pos_m, v1, self.mu, self.chi,
+                                            no_crawl(lam))
         extra = friction3d.friction_dofs(k, self.facet0, self.node_pos, self.pos_m)
         act, A, rows, dpw = forcekernels3d.jacobian(
             self.xs, self.xm, self.pos_s, self.pos_m, u1, self.f, self.f, self.Ns, self.start,
@@ -147,6 +161,80 @@ class _Points:
         return out
 
 
+def _one_node(c0: np.ndarray, c1: np.ndarray, dv: float, dim: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One slave node over a resting master facet (3 nodes, shape values 1/3 each) of a
+    plane whose tangent basis is x̂ (2-D: t₀ = x̂) or (x̂, −ẑ) (3-D: n̄ = ŷ), at the
+    slip c0 (tangent components), Newton's step giving the slip c1.
+
+    Returns:
+        v1, the step, the facet (0), N̄₀ and the tangent basis (2-D: t₀ ``(1, 2)``).
+    """
+    T = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])[: dim - 1, :dim]
+    n = dim * 4  # the slave node's DOFs, then the facet's three nodes'
+    v1 = np.zeros(n + 1)
+    v1[:dim] = c0 @ T
+    step = np.zeros(n)
+    step[:dim] = (c0 - c1) @ T / dv  # c₁ = c₀ − dv T (y_s − ȳ_m), ȳ_m = 0
+    step[1] = 0.3  # a normal step, kept
+    basis = T[0][None, :] if dim == 2 else T[None, :, :]
+    return v1, step, np.zeros(1, np.int64), np.full((1, 3), 1.0 / 3.0), basis
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7, 2.5])
+@pytest.mark.parametrize("kind", ["crawl", "land", "reverse"])
+def test_slip_guard_is_the_2d_guard_turned(angle: float, kind: str) -> None:
+    """The 3-D slip guard (:func:`friction3d.slip_guard`, with crawl points) on a slip
+    along the tangent basis' direction (cos θ, sin θ) is the 2-D guard's
+    (:func:`guardkernels.slip_guard`) on that line, turned by θ: the same landing, the
+    same crawl point (a vector along Newton's proposal), the same bounds; the normal step
+    kept. The 2-D guard is the reference (``tests/test_contactkernels.py`` checks it
+    against its formulas); asked to 1e-13 relative (one rotation's round-off). ``crawl``:
+    a slip of 200χ that Newton grows to 260χ, beyond the curved zone (the linear model's
+    force 1 − 5e-6): its law is linearised at the next iterate where the law gives that
+    force (316χ, within GROW |c₁|); ``land``: from 2χ to 3χ (force 0.983), landed on the
+    law's curve; ``reverse``: from 5χ to −5χ, landed at zero slip."""
+    chi, dv = 1e-3, 0.5e-3
+    a0, a1 = {"crawl": (200.0, 260.0), "land": (2.0, 3.0), "reverse": (5.0, -5.0)}[kind]
+    turn = np.array([np.cos(angle), np.sin(angle)])
+    v2, step2, f2, N2, t2 = _one_node(np.array([a0 * chi]), np.array([a1 * chi]), dv, 2)
+    lin2, next2 = np.full(1, np.nan), np.full(1, np.nan)
+    bounds2 = np.full(1, guardkernels.FREE, np.int8)
+    fixed2 = guardkernels.slip_guard(step2, v2, f2, N2, t2, np.array([[0, 1]]),
+                                     np.arange(2, 8).reshape(1, 3, 2), dv, chi, lin2, next2,
+                                     bounds2)
+    v3, step3, f3, N3, T3 = _one_node(a0 * chi * turn, a1 * chi * turn, dv, 3)
+    crawl = newtonaids.CrawlPoints(1, 2, friction3d.slip_guard)
+    fixed3 = crawl.guard(step3, v3, (f3, N3, T3), np.array([[0, 1, 2]]),
+                         np.arange(3, 12).reshape(1, 3, 3), dv, chi)
+    assert fixed3 == fixed2 == (0 if kind == "crawl" else 1)
+    np.testing.assert_array_equal(crawl._bounds, bounds2)
+    assert bool(np.isnan(next2[0])) == (kind != "crawl") == (not crawl.any)
+    if kind == "crawl":
+        assert next2[0] == pytest.approx(316.2 * chi, rel=1e-3)
+        # 1e-9: the law's inverse χ f/sqrt(1 − f²) magnifies the slips' round-off by
+        # 1/(1 − f²) = 1e5 (measured 1.1e-11).
+        np.testing.assert_allclose(crawl.at[0], next2[0] * turn, rtol=1e-9)
+    # The slave's tangential step (the slip's), turned; its normal step kept.
+    c2 = (step2[0] * t2[0, 0]) * turn
+    c3 = step3[:3] @ T3[0].T
+    np.testing.assert_allclose(c3, c2, rtol=1e-13, atol=1e-13 * abs(c2).max())
+    assert step3[1] == step2[1] == 0.3
+    # The next iterate's friction at the crawl point: the law's tangent line there, as
+    # the 2-D pair's (forcekernels.friction), turned.
+    if kind == "crawl":
+        lam = np.array([2.0])
+        _, _, force2, _ = forcekernels.friction(lam, f2, N2, t2, np.array([[0, 1]]),
+                                                np.arange(2, 8).reshape(1, 3, 2), v2, 0.5,
+                                                chi, next2)
+        _, c, force3, _ = friction3d.friction(lam, f3, N3, T3, np.array([[0, 1, 2]]),
+                                              np.arange(3, 12).reshape(1, 3, 3), v3, 0.5,
+                                              chi, crawl.at)
+        np.testing.assert_allclose(c[0], crawl.at[0], rtol=0)  # the slope's slip
+        np.testing.assert_allclose(force3[0] @ T3[0].T, force2[0, 0] * turn, rtol=1e-13)
+    assert crawl.drop() == (kind == "crawl") and not crawl.any
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_friction_kernel_and_jacobian(seed: int) -> None:
     """The compiled friction forces equal the reference's to 1e-12 of their scale; the
@@ -168,7 +256,7 @@ def test_friction_kernel_and_jacobian(seed: int) -> None:
     lam, scale = newtonaids.friction_normals(lam, P.facet0)
     assert scale < 1
     k, c, force, _ = friction3d.friction(lam, P.facet0, P.N0, P.T0, P.node_pos, P.pos_m,
-                                         P.v0, P.mu, P.chi)
+                                         P.v0, P.mu, P.chi, no_crawl(lam))
     assert 0 < len(k) < P.K * P.ns and np.all(lam[k] > 0)
     assert np.abs(c).max() > 3 * P.chi and np.abs(c).min() < P.chi  # both sides of χ
     ref = pointkernels3d.friction_forces(lam[k], P.N0[k], P.T0[k], P.v0[P.node_pos[k]],
@@ -289,9 +377,14 @@ def _block(folder: pathlib.Path, comm: MPI.Comm, mu: float, chi: float, steps: i
     fr = pair._friction(u0, v1, pair.normal_forces(u1), accepted=True)
     slip = np.einsum("ka,kad->kd", fr["c"], fr["frozen"][2][fr["k"]])
     out["slip_velocity"] = list(fr["lam"][fr["k"]] @ slip)
+    out["slip_speed"] = [float(np.linalg.norm(fr["c"], axis=1).max())]
+    assert s.fast is not None
+    newton = s.fast.newton
+    counts = {"continuations": newton.continuations, "rescues": newton.rescues}
     s.destroy()
     result: dict[str, Any] = {k: np.array(v) for k, v in out.items()}
     result["norms"] = norms
+    result.update(counts)
     return result
 
 

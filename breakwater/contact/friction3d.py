@@ -39,7 +39,17 @@ import numpy as np
 from breakwater.common.arrays import key_of, unchanged
 from breakwater.common.jit import kernel
 from breakwater.contact import newtonaids, searchkernels3d
-from breakwater.contact.guardkernels import land
+from breakwater.contact.forcekernels import law_line
+from breakwater.contact.guardkernels import (
+    CRAWL,
+    FREE,
+    GROW,
+    NONE,
+    REGROW,
+    REVERSED,
+    crawl_point,
+    land,
+)
 from breakwater.contact.projection import INSIDE
 from breakwater.contact.projection3d import shape, surface, unit_normal
 
@@ -85,8 +95,12 @@ def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 @kernel
-def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi):  # type: ignore[no-untyped-def]
+def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi, lin):  # type: ignore[no-untyped-def]
     """The slave nodes' friction forces (the module doc).
+
+    Where ``lin`` holds a crawl point h (tangent-basis components; NaN: none), the
+    law's tangent line at h instead (as the 2-D pair's,
+    :func:`breakwater.contact.forcekernels.friction`; :func:`slip_guard`).
 
     Args:
         lam: The slave nodes' normal forces (scaled: ``friction_normals``).
@@ -98,10 +112,12 @@ def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi):  # type: ignore
         v1: Velocities at the interface unknowns (a trailing 0).
         mu: μ.
         chi: χ.
+        lin: The crawl points ``(nodes, 2)`` (NaN: the law at the slip itself).
 
     Returns:
-        The nodes ``k`` (λ_k > 0 and a face), their slip components c ``(m, 2)``, the
-        forces on them F ``(m, 3)`` and the forces per unit λ (``unit``, −μφ).
+        The nodes ``k`` (λ_k > 0 and a face), their slip components c ``(m, 2)`` (h
+        where a crawl point is: where the law's slope is taken), the forces on them F
+        ``(m, 3)`` and the forces per unit λ (``unit``, −μφ).
     """
     m = 0
     for j in range(len(lam)):
@@ -116,7 +132,7 @@ def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi):  # type: ignore
     c = np.zeros((m, 2))
     force = np.empty((m, 3))
     unit = np.empty((m, 3))
-    rel = np.empty(3)
+    rel, h, line = np.empty(3), np.empty(2), np.empty(2)
     for i in range(m):
         j = k[i]
         f = facet0[j]
@@ -128,9 +144,15 @@ def friction(lam, facet0, N0, T0, node_pos, pos_m, v1, mu, chi):  # type: ignore
         for a in range(2):
             for d in range(3):
                 c[i, a] += T0[j, a, d] * rel[d]
-        s = np.sqrt((c[i, 0] * c[i, 0] + c[i, 1] * c[i, 1]) + chi * chi)
+        if lin[j, 0] == lin[j, 0]:  # the law's tangent line at the crawl point h
+            h[0], h[1] = lin[j, 0], lin[j, 1]
+            law_line(h, c[i], chi, line)
+            c[i, 0], c[i, 1] = h[0], h[1]
+        else:
+            s = np.sqrt((c[i, 0] * c[i, 0] + c[i, 1] * c[i, 1]) + chi * chi)
+            line[0], line[1] = c[i, 0] / s, c[i, 1] / s
         for d in range(3):
-            phi = (T0[j, 0, d] * c[i, 0] + T0[j, 1, d] * c[i, 1]) / s
+            phi = T0[j, 0, d] * line[0] + T0[j, 1, d] * line[1]
             unit[i, d] = -mu * phi
             force[i, d] = -mu * lam[j] * phi
     return k, c, force, unit
@@ -343,7 +365,8 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
     _, _, mu, chi = pair._law
     now = frozen(pair, u0)
     lam_now, _ = newtonaids.friction_normals(lam, now[0])
-    k, c, _, _ = friction(lam_now, *now, pair._node_pos, pair._pm, v1, mu, chi)
+    no = np.full((len(lam), 2), np.nan)
+    k, c, _, _ = friction(lam_now, *now, pair._node_pos, pair._pm, v1, mu, chi, no)
     if not len(k):
         return none
     T = now[2][k]
@@ -353,7 +376,7 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
         c = c * (cap / np.maximum(speed, cap))[:, None]
         return pair.node_pos[k], np.einsum("ka,kad->kd", c, T)
     lam_f, _ = newtonaids.friction_normals(lam, frozen_[0])
-    kf, _, F_k, _ = friction(lam_f, *frozen_, pair._node_pos, pair._pm, v1, mu, chi)
+    kf, _, F_k, _ = friction(lam_f, *frozen_, pair._node_pos, pair._pm, v1, mu, chi, no)
     force = np.zeros((len(lam), 3))
     force[kf] = F_k
     F = np.einsum("kad,kd->ka", T, force[k])  # in the state's tangent plane
@@ -365,18 +388,24 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
 
 
 @kernel
-def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi):  # type: ignore[no-untyped-def]
+def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi, lin, lin_next,  # type: ignore[no-untyped-def]
+               bounds):
     """A 3-D pair's slip guard on Newton's step (``precheck``; in place).
 
-    The 2-D pair's (:func:`breakwater.contact.guardkernels.slip_guard`) without its crawl
-    points: per slave node with a start-of-step master point and free DOFs, the slip
-    vector of the iterate c₀ and of Newton's proposal c₁ (the iterate less the step); a
-    step that reverses the slip (c₀·c₁ < 0) from outside the stick band (|c₀| > χ) lands
-    at zero slip, any other whose linear model asks the law for a force within its curved
-    zone lands where the law gives that force
-    (:func:`~breakwater.contact.guardkernels.land`). The slave node's tangential step is
-    set to give the landing slip (the slip is linear in Δa: exact); its normal step is
-    kept.
+    The 2-D pair's (:func:`breakwater.contact.guardkernels.slip_guard`, its arguments;
+    t₀ is the tangent basis T₀ and the crawl points are tangent vectors ``(nodes, 2)``):
+    per slave node with a start-of-step master point and free DOFs, the slip vector of
+    the iterate c₀ and of Newton's proposal c₁ (the iterate less the step); a step that
+    reverses the slip (c₀·c₁ < 0) from outside the stick band (|c₀| > χ) lands at zero
+    slip, any other whose linear model (at the node's crawl point where it has one)
+    asks the law for a force within its curved zone lands where the law gives that
+    force (:func:`~breakwater.contact.guardkernels.land`). The slave node's tangential
+    step is set to give the landing slip (the slip is linear in Δa: exact); its normal
+    step is kept. A slip crawling along the saturated law (a = the crawl point or c₀,
+    a·c₁ > 0 and |c₁| > CRAWL |a|) is not moved: ``lin_next`` is where its law is
+    linearised at the next iterate, along c₁ at the slip where the law gives the
+    linear model's force, at most GROW (REGROW) |c₁|
+    (:func:`~breakwater.contact.guardkernels.crawl_point`).
 
     Returns:
         The nodes whose step changed.
@@ -386,9 +415,10 @@ def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi):  # type: ign
     ext[:n] = step
     fixed = 0
     nm = N0.shape[1]
-    c0, c1, target = np.empty(2), np.empty(2), np.empty(2)
+    c0, c1, target, a = np.empty(2), np.empty(2), np.empty(2), np.empty(2)
     vs, vm, ys, ym = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for j in range(len(facet0)):
+        lin_next[j, 0], lin_next[j, 1] = np.nan, np.nan
         f = facet0[j]
         if f < 0 or node_pos[j, 0] < 0 or node_pos[j, 1] < 0 or node_pos[j, 2] < 0:
             continue
@@ -399,30 +429,44 @@ def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi):  # type: ign
                 vm[d] += N0[j, b] * v1[pos_m[f, b, d]]
                 ym[d] += N0[j, b] * ext[pos_m[f, b, d]]
         dot, size = 0.0, 0.0
-        for a in range(2):
-            c0[a], c1[a] = 0.0, 0.0
+        for q in range(2):
+            c0[q], c1[q] = 0.0, 0.0
             for d in range(3):
-                c0[a] += T0[j, a, d] * (vs[d] - vm[d])
-                c1[a] += T0[j, a, d] * (ys[d] - ym[d])
-            c1[a] = c0[a] - dv * c1[a]
-            dot += c0[a] * c1[a]
-            size += c0[a] * c0[a]
+                c0[q] += T0[j, q, d] * (vs[d] - vm[d])
+                c1[q] += T0[j, q, d] * (ys[d] - ym[d])
+            c1[q] = c0[q] - dv * c1[q]
+            dot += c0[q] * c1[q]
+            size += c0[q] * c0[q]
         if dot < 0 and size > chi * chi:
             target[0], target[1] = 0.0, 0.0
-        elif land(c0, c1, chi, target):
-            if target[0] == c1[0] and target[1] == c1[1]:
-                continue
+            bounds[j] = max(bounds[j], REVERSED)  # not a monotone crawl: a bounded one
         else:
-            continue
+            crawling = lin[j, 0] == lin[j, 0]
+            for q in range(2):
+                a[q] = lin[j, q] if crawling else c0[q]
+            if land(a, c1, chi, target):
+                if target[0] == c1[0] and target[1] == c1[1]:
+                    continue
+            else:
+                along = a[0] * c1[0] + a[1] * c1[1]
+                a2 = a[0] * a[0] + a[1] * a[1]
+                c2 = c1[0] * c1[0] + c1[1] * c1[1]
+                if along > 0 and c2 > CRAWL * CRAWL * a2 and bounds[j] != NONE:
+                    speed = np.sqrt(c2)
+                    far = crawl_point(np.sqrt(target[0] * target[0] + target[1] * target[1]),
+                                      speed, chi, GROW if bounds[j] == FREE else REGROW)
+                    for q in range(2):
+                        lin_next[j, q] = far * c1[q] / speed
+                continue
         # T₀·y_s = T₀·ȳ_m + (c₀ − target)/dv; the normal part of y_s kept.
-        for a in range(2):
-            along = (c0[a] - target[a]) / dv
+        for q in range(2):
+            along = (c0[q] - target[q]) / dv
             now = 0.0
             for d in range(3):
-                along += T0[j, a, d] * ym[d]
-                now += T0[j, a, d] * ys[d]
+                along += T0[j, q, d] * ym[d]
+                now += T0[j, q, d] * ys[d]
             for d in range(3):
-                ys[d] += T0[j, a, d] * (along - now)
+                ys[d] += T0[j, q, d] * (along - now)
         for d in range(3):
             step[node_pos[j, d]] = ys[d]
         fixed += 1

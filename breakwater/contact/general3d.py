@@ -17,9 +17,10 @@ order on the gathered state (the result does not depend on the partition).
 Friction (isotropic regularised Coulomb, the paper's law and χ) acts at the slave nodes,
 the slip a tangent vector relative to the master material point under the node at the
 start of the step (:mod:`breakwater.contact.friction3d`), its Jacobian consistent. The
-2-D pair's slip guard is, without its crawl points (a reversal lands at zero slip, a
-step into the law's curved zone on the law), its slip memory is not (Newton starts at
-GN22's predictor). The outputs are measured at the slave
+2-D pair's slip guard is, with its crawl points (:class:`~.newtonaids.CrawlPoints`: a
+reversal lands at zero slip, a step into the law's curved zone on the law, a slip
+crawling along the saturated law linearises the law further along); its slip memory is
+not (Newton starts at GN22's predictor). The outputs are measured at the slave
 nodes (:class:`SlaveNodes3D`): gap, law pressure ε_n⟨−g_n⟩₊, tangential velocity and
 the law's friction traction at their projection, the slip relative to the master
 material point under them as meshed; pair probes are refused in one line.
@@ -118,9 +119,10 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
         # The projection of the step the last vector() was of (the accepted state's
         # friction is that step's, as the 2-D pair's).
         self._step_frozen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.crawl = newtonaids.CrawlPoints(len(self.node_pos), 2, friction3d.slip_guard)
 
     def _friction(self, u0: np.ndarray, v1: np.ndarray, lam: np.ndarray,
-                  accepted: bool = False) -> dict[str, Any] | None:
+                  accepted: bool = False, iterate: bool = False) -> dict[str, Any] | None:
         """The slave nodes' friction (:mod:`~breakwater.contact.friction3d`; None: none).
 
         Args:
@@ -128,6 +130,8 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
             v1: Velocities of the iterate.
             lam: The slave nodes' normal forces.
             accepted: At the accepted state: the projection of the step accepted.
+            iterate: Newton's (f_c, its Jacobian): the law's tangent lines at the crawl
+                points (:attr:`crawl`); else the law itself.
         """
         if not self.spec.friction:
             return None
@@ -135,8 +139,9 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
               else friction3d.frozen(self, u0))
         _, _, mu, chi = self._law
         lam_f, scale = newtonaids.friction_normals(lam, fz[0])
-        k, c, force, unit = friction3d.friction(lam_f, *fz, self._node_pos, self._pm, v1,
-                                                mu, chi)
+        k, c, force, unit = friction3d.friction(
+            lam_f, *fz, self._node_pos, self._pm, v1, mu, chi,
+            self.crawl.at if iterate else self.crawl.none)
         return {"frozen": fz, "lam": lam_f, "scale": scale, "k": k, "c": c, "force": force,
                 "unit": unit}
 
@@ -151,7 +156,7 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
         out = np.asarray(p["out"]).copy()
         if self.spec.friction:
             self._step_frozen = friction3d.frozen(self, u0)
-            fr = self._friction(u0, v1, p["lam"])
+            fr = self._friction(u0, v1, p["lam"], iterate=not accepted)
             assert fr is not None
             facet0, N0, _ = fr["frozen"]
             friction3d.add_friction(out, fr["k"], fr["force"], facet0, N0, self._node_pos,
@@ -201,6 +206,9 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
     def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
         """Newton's slip guard at the slave nodes (:func:`~.friction3d.slip_guard`).
 
+        Its crawl points are the next iterates' (:class:`~.newtonaids.CrawlPoints`), until
+        :meth:`true_law`.
+
         Args:
             x: The current iterate (Δa at the interface unknowns).
             step: Newton's step, changed in place where cut.
@@ -211,13 +219,12 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
         if not self.spec.friction:
             return 0
         u0, _, v1 = self._state(x)
-        facet0, N0, T0 = friction3d.frozen(self, u0)
-        return int(friction3d.slip_guard(step, v1, facet0, N0, T0, self._node_pos, self._pm,
-                                         self.beta1 * self.step_dt(), self._law[3]))
+        return self.crawl.guard(step, v1, friction3d.frozen(self, u0), self._node_pos,
+                                self._pm, self.beta1 * self.step_dt(), self._law[3])
 
     def true_law(self, crawl: bool = True) -> bool:
-        """The law is always the law itself (no crawl points in 3-D)."""
-        return False
+        """The iterates' friction is the law itself again; whether it was not."""
+        return self.crawl.drop(crawl)
 
     def reach(self) -> np.ndarray | None:
         """None: the step's contact may touch any interface unknown."""

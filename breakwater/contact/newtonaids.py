@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -224,8 +225,15 @@ class CrawlPoints:
     slip reverses takes crawl points closer to Newton's proposal until then
     (:data:`~breakwater.contact.guardkernels.REGROW`).
 
+    A 3-D pair's crawl points are tangent vectors (``components`` = 2, in the tangent
+    basis of the node's start-of-step master point) and its guard
+    :func:`~breakwater.contact.friction3d.slip_guard` (``kernel``: the same arguments).
+
     Args:
         nodes: The slave nodes.
+        components: The slip's components (1 in 2-D, 2 in 3-D).
+        kernel: The guard (:func:`~breakwater.contact.guardkernels.slip_guard`'s
+            arguments).
 
     Attributes:
         none: No crawl point (NaN at every node): the law itself.
@@ -234,8 +242,10 @@ class CrawlPoints:
         version: Counts the changes of ``at`` (a cache's key).
     """
 
-    def __init__(self, nodes: int) -> None:
-        self.none = np.full(nodes, np.nan)
+    def __init__(self, nodes: int, components: int = 1,
+                 kernel: Callable[..., int] = guardkernels.slip_guard) -> None:
+        self.none = np.full(nodes if components == 1 else (nodes, components), np.nan)
+        self._kernel = kernel
         self.at, self._next = self.none.copy(), self.none.copy()
         self.any = False
         self.version = 0
@@ -248,7 +258,7 @@ class CrawlPoints:
         Args:
             step: Newton's step, cut in place.
             v1: The iterate's velocities at the interface unknowns (a trailing 0).
-            frozen: The slave nodes' start-of-step master facet, N̄₀ and t₀.
+            frozen: The slave nodes' start-of-step master facet, N̄₀ and t₀ (T₀ in 3-D).
             node_pos: The slave nodes' interface positions.
             pos_m: The master facets'.
             dv: β₁Δt.
@@ -258,8 +268,8 @@ class CrawlPoints:
             The nodes whose step changed.
         """
         facet, N0, t0 = frozen
-        fixed = int(guardkernels.slip_guard(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi,
-                                            self.at, self._next, self._bounds))
+        fixed = int(self._kernel(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi, self.at,
+                                 self._next, self._bounds))
         self.at, self._next = self._next, self.at
         self.any = not np.isnan(self.at).all()
         self.version += 1
