@@ -365,7 +365,7 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
     _, _, mu, chi = pair._law
     now = frozen(pair, u0)
     lam_now, _ = newtonaids.friction_normals(lam, now[0])
-    no = np.full((len(lam), 2), np.nan)
+    no = pair.crawl.none  # the law itself at every node
     k, c, _, _ = friction(lam_now, *now, pair._node_pos, pair._pm, v1, mu, chi, no)
     if not len(k):
         return none
