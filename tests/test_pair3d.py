@@ -260,14 +260,18 @@ def test_case_runs_through_the_cli(shared_dir: pathlib.Path, friction: float,
         assert float(rows[0]["c_force_y"]) == pytest.approx(weight, rel=1e-6)
         for row in rows:
             assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-2)
+    # Frictionless: the weight to the static state's and Newton's tolerance (1e-9 of the
+    # load norm ‖f‖ ≤ the weight): the resultant sums the residual's rows, up to sqrt(n)
+    # times its norm; 1e-8 asked (measured 1.03e-9 at t = 0 with one BLAS thread, below
+    # 1e-9 with several: the round-off of the factorisation differs).
     for row in rows if not friction else ():
-        assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-9)
+        assert float(row["c_force_y"]) == pytest.approx(weight, rel=1e-8)
         assert abs(float(row["c_force_x"])) < 1e-6 * weight
         assert abs(float(row["c_force_z"])) < 1e-6 * weight
         # The block's base, less the integration points just open at its edges.
         assert 0.24 < float(row["c_contact_area"]) <= 0.25 + 1e-12
     assert summary["static"]["contact_resultant"] == pytest.approx(
-        weight, rel=1e-6 if friction else 1e-9)
+        weight, rel=1e-6 if friction else 1e-8)
     assert (out / "contact_c.bp").exists()
 
 
