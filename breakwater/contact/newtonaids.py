@@ -161,26 +161,28 @@ def friction_normals(lam: np.ndarray, facet: np.ndarray) -> tuple[np.ndarray, fl
         lam: The slave nodes' normal forces λ_k = ∫ p N_k.
         facet: Their start-of-step master facets (−1: none).
     """
-    if not uncarried(lam, facet):
-        return lam, 1.0
-    carried = (lam > 0) & (facet >= 0)
-    share = float(lam[carried].sum())
-    if share <= 0:
-        return lam, 1.0
-    s = max(float(lam.sum()), 0.0) / share
-    return lam * s, s
+    s = carried_scale(lam, facet)
+    return (lam, 1.0) if s == 1.0 else (lam * s, s)
 
 
 @kernel
-def uncarried(lam, facet):  # type: ignore[no-untyped-def]
-    """Whether a node's normal force is negative or presses without a master point.
+def carried_scale(lam, facet):  # type: ignore[no-untyped-def]
+    """:func:`friction_normals`' scale s, compiled: one pass at every evaluation.
 
-    :func:`friction_normals`' test, compiled: one pass at every evaluation of the friction.
+    1 unless a node's normal force is negative or presses without a master point and
+    the carried forces (λ_k > 0 with a master point) have a positive sum; then
+    ``max(Σλ, 0) / Σ_carried λ``.
     """
+    total, share, uncarried = 0.0, 0.0, False
     for j in range(len(lam)):
+        total += lam[j]
         if lam[j] < 0.0 or (lam[j] > 0.0 and facet[j] < 0):
-            return True
-    return False
+            uncarried = True
+        elif lam[j] > 0.0:
+            share += lam[j]
+    if not uncarried or share <= 0.0:
+        return 1.0
+    return max(total, 0.0) / share
 
 
 def resolution(pair: SurfaceSearch, y: np.ndarray) -> float:
