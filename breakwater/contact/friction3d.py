@@ -350,14 +350,17 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
 
     Per slave node in contact at the state, the slip velocity where the law gives the
     friction of the last step (projection ``frozen_``; None: the state's own), against
-    it, in the tangent plane of the state's own projection, at most RELEASE χ.
+    it, in the tangent plane of the state's own projection, at most RELEASE χ; set as
+    the velocities of the slave node's free components and, for its held ones (a node
+    on a ``[fixed]`` face), of its master face's nodes
+    (:func:`~breakwater.contact.newtonaids.slip_velocities_at`).
 
     Returns:
-        Their interface positions ``(k, 3)`` and slip velocities ``(k, 3)``.
+        The interface positions set and their velocities (flat).
     """
     from breakwater.contact.conforming import RELEASE
 
-    none = np.zeros((0, 3), np.int64), np.zeros((0, 3))
+    none = np.zeros(0, np.int64), np.zeros(0)
     if not pair.spec.friction:
         return none
     u0, u1, v1 = pair._state()
@@ -374,7 +377,8 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
         speed = np.linalg.norm(c, axis=1)
         cap = RELEASE * chi
         c = c * (cap / np.maximum(speed, cap))[:, None]
-        return pair.node_pos[k], np.einsum("ka,kad->kd", c, T)
+        return newtonaids.slip_velocities_at(pair._node_pos, pair._pm, now[0], now[1], k,
+                                             np.einsum("ka,kad->kd", c, T), pair.n)
     lam_f, _ = newtonaids.friction_normals(lam, frozen_[0])
     kf, _, F_k, _ = friction(lam_f, *frozen_, pair._node_pos, pair._pm, v1, mu, chi, no)
     force = np.zeros((len(lam), 3))
@@ -384,7 +388,9 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
     f = np.minimum(size / (mu * lam_now[k]), 1.0)
     speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
     against = -F / np.maximum(size, 1e-300)[:, None]
-    return pair.node_pos[k], np.einsum("ka,kad->kd", against * speed[:, None], T)
+    return newtonaids.slip_velocities_at(pair._node_pos, pair._pm, now[0], now[1], k,
+                                         np.einsum("ka,kad->kd", against * speed[:, None], T),
+                                         pair.n)
 
 
 @kernel

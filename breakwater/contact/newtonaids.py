@@ -31,7 +31,8 @@ if TYPE_CHECKING:
     from breakwater.contact.surfaces import SurfacePair
     from breakwater.contact.surfacesearch import SurfaceSearch
 
-__all__ = ["CrawlPoints", "Regularised", "SlipMemory", "friction_normals", "resolution"]
+__all__ = ["CrawlPoints", "Regularised", "SlipMemory", "friction_normals", "resolution",
+           "slip_velocities_at"]
 
 
 class SlipMemory:
@@ -163,6 +164,59 @@ def friction_normals(lam: np.ndarray, facet: np.ndarray) -> tuple[np.ndarray, fl
     """
     s = carried_scale(lam, facet)
     return (lam, 1.0) if s == 1.0 else (lam * s, s)
+
+
+def slip_velocities_at(node_pos: np.ndarray, pos_m: np.ndarray, facet: np.ndarray,
+                       N0: np.ndarray, k: np.ndarray, rel: np.ndarray, n: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities at the interface unknowns that give slave nodes ``k`` the slip ``rel``.
+
+    The slip of node k is its velocity relative to its master point,
+    ``v_k − Σ_b N̄₀_b v_b`` (facet f₀ = ``facet[k]``, shape values ``N0[k]``). Where the
+    node's DOFs are free it is its own velocity: ``v_k = rel_k + Σ_b N̄₀_b v_b``. Where a
+    component d is held (a slave node on a ``[fixed]`` face, position −1), its slip is
+    the master's alone, ``Σ_b N̄₀_b v_b,d = −rel_k,d``: the master nodes of f₀ then move,
+    the smallest such velocities (least squares over every held component at once),
+    and the free slave nodes on the faces they share keep their slip. Without them the
+    static state's friction along a held component (the master slipping under the
+    node: the support's Poisson expansion) had no slip in the dynamics, and its reaction
+    on the master vanished at t = 0 (issue 25).
+
+    Args:
+        node_pos: The slave nodes' interface positions ``(nodes, gdim)`` (−1: held).
+        pos_m: The master facets' ``(M, nm, gdim)``.
+        facet: The slave nodes' master facets f₀.
+        N0: Their shape values there ``(nodes, nm)``.
+        k: The nodes given a slip.
+        rel: Their slip velocities ``(len(k), gdim)``.
+        n: The number of interface unknowns.
+
+    Returns:
+        The interface positions set and their velocities (flat, positions ≥ 0, unique).
+    """
+    y = np.zeros(n + 1)  # a trailing 0: the held entries (position −1)
+    set_ = np.zeros(n + 1, bool)
+    held = node_pos[k] < 0
+    if held.any():
+        rows, comp = np.nonzero(held)
+        cols = pos_m[facet[k[rows]], :, comp]  # (rows, nm): the master DOFs of each
+        weights = N0[k[rows]]
+        free = np.unique(cols[cols >= 0])
+        if len(free):
+            A = np.zeros((len(rows), len(free)))
+            at = np.searchsorted(free, np.maximum(cols, 0))
+            for b in range(cols.shape[1]):
+                ok = cols[:, b] >= 0
+                np.add.at(A, (np.flatnonzero(ok), at[ok, b]), weights[ok, b])
+            y[free] = np.linalg.lstsq(A, -rel[rows, comp], rcond=None)[0]
+            set_[free] = True
+    master = np.einsum("kb,kbd->kd", N0[k], y[pos_m[facet[k]]])
+    pos = node_pos[k]
+    y[pos[~held]] = (rel + master)[~held]
+    set_[pos[~held]] = True
+    set_[-1] = False
+    where = np.flatnonzero(set_)
+    return where, y[where]
 
 
 @kernel

@@ -74,10 +74,11 @@ stages 1 and 1b first:
    velocity is set up for it: with u₀ = u_k, the GN22 start (v₀, a₀) is chosen so that
    ``c a₁ = u₁ − u_k`` (the mass term above) and ``v₁ = u₁/τ``, and β₁ = ½β₂Δτ_max/τ (τ
    at c_max; smaller c give a smaller τ, a narrower stick band, until c settles). The
-   slave nodes in contact start with the slip velocity carrying that friction (``start_slip``).
-   The slip is measured from the landing point, not from the meshed position
-   (:class:`~breakwater.statics.pseudostep.SlipOrigin`): a body meshed above its
-   support does not count its fall as slip.
+   slave nodes in contact start with the slip velocity carrying that friction (``start_slip``;
+   along a component a ``[fixed]`` group holds, their master's nodes move). The slip is
+   measured from the landing point, not from the meshed position
+   (:class:`~breakwater.statics.pseudostep.SlipOrigin`): a body meshed above its support
+   does not count its fall as slip.
 3. **Held** (stage 2 fails, or no friction): every pair's friction coefficient is
    raised to :data:`HELD_FRICTION` for the relaxation (the bodies are held in place up
    to t = 0); a warning names each body whose pair carries a tangential resultant
@@ -348,7 +349,7 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
 
 
 def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
-    """Add the slave nodes' slip velocity of the frictional state to ``v``."""
+    """Add the frictional state's slip velocities (``start_slip``'s) to ``v``."""
     s = ps.stepper
     frozen = [p._step_frozen for p in ps.providers]  # the last step's, before rest()
     ps.rest()
