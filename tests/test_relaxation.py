@@ -296,6 +296,53 @@ def test_frictional_state_on_a_soft_base_starts_in_equilibrium(mesh_path: pathli
     assert float(rest["a0"]) < 1.0
 
 
+def test_block_held_along_x_by_its_side_stays_at_rest(mesh_path: pathlib.Path) -> None:
+    """The block's left side fixed along x (a roller), E = 1e9 Pa, μ = 0.65, frictional
+    loading: the friction carries the bodies' Poisson expansions against the roller, and
+    the dynamics keeps that state (issue 25).
+
+    The block's lower left corner is a slave node held along x, the interface's
+    tangent: its static friction is the base's slip under it. Its start slip is now the
+    base's nodes' velocity (``newtonaids.slip_velocities_at``); before, it had none at
+    t = 0, the friction there and its reaction on the base were lost: |a₀| 17.8 m/s²,
+    the friction resultant −4.13 N/m at t = 0 (the state's: −2.075), then 4.74, −10.54,
+    −0.32 N/m, velocities up to 1.9e-4 m/s (measured). Bounds: the start slip is at most
+    RELEASE χ = 1e-8 m/s (a master node's up to twice that: the least-squares velocity
+    of a facet whose quadratic shape values are partly negative), a creep of at most
+    RELEASE χ t = 3e-11 m over the 3 steps, which changes the elastic forces by
+    ~E × 3e-11 m = 0.03 N/m: the friction resultant stays that of t = 0 to that
+    (measured 5.7e-5 N/m), |a₀| below 1e-3 g (measured 1.2e-7 m/s²)."""
+    mat = Material(ρ, 0.2, young_modulus=1e9)
+    pair = SurfacePair("c", "block", "base", "block_bottom", "base_top", PENALTY,
+                       friction=0.65, regularisation=χ)
+    model = ContactModel(read_mesh(mesh_path, COMM), [Body("base", mat), Body("block", mat)],
+                         fixed=[Fixed("base_bottom"), Fixed("block_left", (0,))],
+                         gravity=(0.0, -g), surface_pairs=[pair])
+    model.initial = InitialSpec(loading="frictional")
+    state, _ = _static(model)
+    assert state.kind == "frictional"
+    s = GN22(model, 1e-3)
+    s.initialise(state.u, state.v)
+    provider = s.surfaces[-1]
+    assert isinstance(provider, SurfaceContact)
+    a0 = max(COMM.allreduce(float(np.abs(a.x.array).max(initial=0.0)), op=MPI.MAX)
+             for a in s.a)
+    friction = [provider.resultants()[1][0]]
+    fastest = 0.0
+    for _ in range(3):
+        s.step()
+        friction.append(provider.resultants()[1][0])
+        fastest = max(fastest, *(COMM.allreduce(float(np.abs(v.x.array).max(initial=0.0)),
+                                                op=MPI.MAX) for v in s.v))
+    s.destroy()
+    _print(f"block on a side roller: |a0| {a0:.2e} m/s², friction {friction} N/m, "
+           f"max |v| {fastest:.2e} m/s")
+    assert abs(friction[0]) > 1.0  # the state carries friction (2.075 N/m)
+    assert np.ptp(friction) < 1e9 * 100 * χ * 3e-3, friction
+    assert a0 < 1e-3 * g
+    assert fastest < 2 * 100 * χ
+
+
 def test_a_frictionless_state_that_moves_a_body_sideways(mesh_path: pathlib.Path) -> None:
     """``rigidmodes.sideways`` and ``drift``: the block (no fixed group) moved sideways
     more than DRIFT times its sinking in a frictionless state is refused in one line

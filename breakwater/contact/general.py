@@ -525,8 +525,15 @@ def start_slip(pair: SurfaceContact,
     penalty's overlap, whose share along a tangent 2e-6 rad off gave that node
     4.15 N/m of friction instead of −0.05.
 
+    Set as the velocities of the slave node's free components and, for its held ones (a
+    node on a ``[fixed]`` group), of its master facet's nodes
+    (:func:`~breakwater.contact.newtonaids.slip_velocities_at`, issue 25): a block held
+    along x by a side fixed along x, whose corner node's static friction is the base's
+    slip under it, lost that friction and its reaction on the base at t = 0 (|a₀| 22 m/s²,
+    the friction resultant −132, 50, −138, 39 N/m over the first steps).
+
     Returns:
-        Their interface positions ``(k, gdim)`` and slip velocities ``(k, 2)``.
+        The interface positions set and their velocities (flat, or none: ``(0, gdim)``).
     """
     if not pair.spec.friction:
         return pair.slip_velocities()  # (none)
@@ -536,10 +543,13 @@ def start_slip(pair: SurfaceContact,
     if now is None:
         return pair.slip_velocities()  # (none in contact)
     _, _, mu, chi = pair._law
+    facet, N0, _ = pair._frozen(u0)  # the projection _friction took
     if frozen is None:
         speed = np.linalg.norm(now["v_T"], axis=1)
         cap = RELEASE * chi
-        return now["pos_s"], now["v_T"] * (cap / np.maximum(speed, cap))[:, None]
+        return newtonaids.slip_velocities_at(
+            pair._node_pos, pair._pm, facet, N0, now["k"],
+            now["v_T"] * (cap / np.maximum(speed, cap))[:, None], pair.n)
     λ_f, _ = newtonaids.friction_normals(lam, frozen[0])
     k, _, F_k, _ = forcekernels.friction(λ_f, *frozen, pair._node_pos, pair._pm, v1, mu,
                                          chi, pair.crawl.none)
@@ -549,7 +559,8 @@ def start_slip(pair: SurfaceContact,
     f = np.minimum(np.linalg.norm(F, axis=1) / (mu * now["lam"][now["k"]]), 1.0)
     speed = np.minimum(chi * f / np.sqrt(np.maximum(1.0 - f * f, 1e-300)), RELEASE * chi)
     against = -np.sign(np.einsum("kd,kd->k", F, now["t"]))
-    return now["pos_s"], (against * speed)[:, None] * now["t"]
+    return newtonaids.slip_velocities_at(pair._node_pos, pair._pm, facet, N0, now["k"],
+                                         (against * speed)[:, None] * now["t"], pair.n)
 
 
 class SurfaceEnergy:
