@@ -9,6 +9,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 DOCS_STAMP := $(VENV)/.docs-installed
 NP ?= 2
+WORKERS ?= 2
 CASE ?=
 ARGS ?=
 
@@ -32,8 +33,11 @@ run: $(STAMP)
 
 test: test-serial test-mpi
 
+# The serial suite in WORKERS processes (pytest-xdist; a test file's tests all in one of
+# them, its module fixtures built once), one BLAS thread each; WORKERS=0: in this process.
 test-serial: $(STAMP)
-	$(BIN)/python -m pytest -q --durations=25 tests
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q --durations=25 \
+	    -n $(WORKERS) --dist loadfile tests
 
 # Each test has its own time limit (tests/mpi_harness.py: a rank left waiting or a hang
 # stops every rank with the test's name); the whole run's limit is only a backstop.
