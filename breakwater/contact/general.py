@@ -533,15 +533,16 @@ def start_slip(pair: SurfaceContact,
     the friction resultant −132, 50, −138, 39 N/m over the first steps).
 
     Returns:
-        The interface positions set and their velocities (flat, or none: ``(0, gdim)``).
+        The interface positions set and their velocities (flat).
     """
+    none = np.zeros(0, np.int64), np.zeros(0)
     if not pair.spec.friction:
-        return pair.slip_velocities()  # (none)
+        return none
     u0, u1, v1 = pair._state()
     lam = pair._normal(u1)["lam"]
     now = pair._friction(u0, v1, lam)
     if now is None:
-        return pair.slip_velocities()  # (none in contact)
+        return none  # none in contact
     _, _, mu, chi = pair._law
     facet, N0, _ = pair._frozen(u0)  # the projection _friction took
     if frozen is None:

@@ -357,7 +357,7 @@ def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
     for p, step in zip(ps.providers, frozen, strict=True):
         pos, v_T = (friction3d.start_slip(p, step) if ps.model.gdim == 3
                     else start_slip(p, step))
-        y[pos[pos >= 0]] = v_T[pos >= 0]
+        y[pos] = v_T
     ps.add_slave_velocities(v, y)
     if ps.model.pairs:
         u = [fem.Function(f.function_space) for f in s.u]
