@@ -348,6 +348,44 @@ def test_start_slip_on_held_components_moves_the_master() -> None:
     np.testing.assert_allclose(slip, c, rtol=0, atol=1e-13 * np.abs(c).max())
 
 
+def test_node_past_the_master_edge_takes_the_nearest_vertex() -> None:
+    """:func:`friction3d.frozen`: a slave node with no projection (past the master's
+    edge) takes the nearest master vertex within the search radius, as the 2-D pair
+    takes the nearest end, and carries the friction of its slip there.
+
+    The master: the square [0, 1]² of the plane y = 0, two flat 6-node triangles. Node 0
+    above the square (a projection), node 1 0.02 past its edge x = 1 near the corner
+    (1, 0, 1), node 2 0.5 past it (beyond the radius 0.1). Before, node 1 had no master
+    point and no friction (only the scale of ``friction_normals`` restored μN, in sum).
+    With λ = 1 and the same slip velocity v (the master at rest), nodes 0 and 1 carry the
+    same force, the law's −μ v/sqrt(|v|² + χ²) (to round-off: 1e-15 of μ)."""
+    from types import SimpleNamespace
+
+    corners = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 0, 1]], [[1.0, 0, 0], [1, 0, 1], [0, 0, 1]]])
+    mids = [(1, 2), (0, 2), (0, 1)]  # projection3d.NODES[6]'s mid-edge nodes
+    mX = np.concatenate([corners, 0.5 * (corners[:, [a for a, _ in mids]]
+                                         + corners[:, [b for _, b in mids]])], axis=1)
+    pos_m = np.arange(36).reshape(2, 6, 3)  # every master node its own (resting) DOFs
+    node_X = np.array([[0.3, 0.001, 0.3], [1.02, 0.001, 0.98], [1.5, 0.001, 0.5]])
+    node_pos = np.arange(36, 45).reshape(3, 3)
+    pair = SimpleNamespace(_mX=mX, _pm=pos_m, node_X=node_X, node_pos=node_pos, radius=0.1,
+                           small_rotations=False)
+    u0 = np.zeros(46)
+    facet, N0, T0 = friction3d.frozen(pair, u0)  # type: ignore[arg-type]
+    assert facet[0] >= 0 and facet[2] == -1
+    assert facet[1] == 1  # the corner (1, 0, 1) is face 1's vertex 1
+    np.testing.assert_array_equal(N0[1], np.eye(6)[1])
+    np.testing.assert_allclose(np.abs(np.cross(T0[1, 0], T0[1, 1])), [0, 1, 0], atol=1e-15)
+    mu, chi, v = 0.5, 1e-4, np.array([1e-3, 0.0, 0.0])
+    v1 = np.zeros(46)
+    v1[node_pos[:2]] = v
+    k, _, force, _ = friction3d.friction(np.ones(3), facet, N0, T0, node_pos, pos_m, v1, mu,
+                                         chi, no_crawl(np.ones(3)))
+    np.testing.assert_array_equal(k, [0, 1])
+    law = -mu * v / np.sqrt(v @ v + chi**2)
+    np.testing.assert_allclose(force, [law, law], rtol=0, atol=1e-15 * mu)
+
+
 # --- a block pushed diagonally ------------------------------------------------------------
 
 RHO, PUSH, DT = 2400.0, 5.0, 0.01

@@ -51,13 +51,13 @@ from breakwater.contact.guardkernels import (
     land,
 )
 from breakwater.contact.projection import INSIDE
-from breakwater.contact.projection3d import shape, surface, unit_normal
+from breakwater.contact.projection3d import NODES, shape, surface, unit_normal
 
 if TYPE_CHECKING:
     from breakwater.contact.surfacesearch3d import SurfaceSearch3D
 
-__all__ = ["add_friction", "friction", "friction_jacobian", "frozen", "power", "round_off",
-           "slip_guard", "start_slip", "tangent_basis"]
+__all__ = ["add_friction", "friction", "friction_jacobian", "frozen", "nearest_vertex", "power",
+           "round_off", "slip_guard", "start_slip", "tangent_basis"]
 
 
 def tangent_basis(nodes: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -71,10 +71,16 @@ def tangent_basis(nodes: np.ndarray, xi: np.ndarray) -> np.ndarray:
 def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The slave nodes' master points at the state u0 (the start of the step; cached).
 
+    A node with no projection (past the master surface's edge) takes the nearest master
+    vertex within the search radius (:func:`nearest_vertex`), as the 2-D pair takes the
+    nearest end: a slave face hanging over the master's edge presses with its nodes
+    beyond it too (λ_k > 0), and their friction was missing (only the scale s of
+    ``friction_normals`` restored μN, in sum).
+
     Returns:
-        Per slave node: the master face f₀ (−1: no projection within the search radius:
-        no friction at the node), its shape values N̄₀ ``(nodes, nm)`` and the tangent
-        basis T₀ ``(nodes, 2, 3)`` there.
+        Per slave node: the master face f₀ (−1: no master vertex within the search
+        radius either: no friction at the node), its shape values N̄₀ ``(nodes, nm)`` and
+        the tangent basis T₀ ``(nodes, 2, 3)`` there.
     """
     kept = getattr(pair, "_frozen3d", None)
     if kept is not None and unchanged(kept[0], u0):
@@ -83,6 +89,9 @@ def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarra
     xm = mX + u0[pm]
     x = np.ascontiguousarray(pair.node_X + u0[pair.node_pos])
     facet, xi = searchkernels3d.project(x, np.ascontiguousarray(xm), pair.radius, INSIDE)
+    beyond = np.flatnonzero(facet < 0)
+    if len(beyond):
+        facet[beyond], xi[beyond] = nearest_vertex(x[beyond], xm, pair.radius)
     nodes, nm = len(facet), mX.shape[1]
     N0, T0 = np.zeros((nodes, nm)), np.zeros((nodes, 2, 3))
     on = facet >= 0
@@ -92,6 +101,35 @@ def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarra
     out = (np.ascontiguousarray(facet, dtype=np.int64), N0, T0)
     pair._frozen3d = (key_of(u0), out)  # type: ignore[attr-defined]
     return out
+
+
+def nearest_vertex(points: np.ndarray, xm: np.ndarray, radius: float,
+                   chunk: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """The nearest master vertex (a face corner) of each point within ``radius``.
+
+    Args:
+        points: The points ``(m, 3)``.
+        xm: The master faces' nodes ``(M, nm, 3)`` (corners first).
+        radius: The search radius.
+        chunk: Points per batch (the distances of a batch to every corner at once).
+
+    Returns:
+        The face of each point's nearest corner (−1: none within the radius; ties: the
+        lowest face) and the corner's reference coordinates (ξ, η) on it ``(m, 2)``.
+    """
+    corners = np.ascontiguousarray(xm[:, :3]).reshape(-1, 3)
+    facet = np.full(len(points), -1, np.int64)
+    xi = np.zeros((len(points), 2))
+    if not len(corners):
+        return facet, xi
+    for lo in range(0, len(points), chunk):
+        d2 = np.sum((points[lo:lo + chunk, None, :] - corners[None]) ** 2, axis=2)
+        best = np.argmin(d2, axis=1)  # the first of equals: the lowest face, then corner
+        near = d2[np.arange(len(best)), best] <= radius**2
+        at = np.arange(lo, lo + len(best))[near]
+        facet[at] = best[near] // 3
+        xi[at] = NODES[3][best[near] % 3]
+    return facet, xi
 
 
 @kernel
