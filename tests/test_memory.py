@@ -1,5 +1,9 @@
 """The fast solver within the node's memory: X in chunks, the cache freed, MUMPS's failures.
 
+And ``time.solver = "auto"`` (:mod:`breakwater.stepping.solverchoice`): the fast solver
+where its dense interface matrices fit, else the full-system Newton (general pairs:
+refused in one line).
+
 :mod:`breakwater.common.memory` reads what the node has left; the factorisations
 (:mod:`breakwater.stepping.factorisations`) build X = A⁻¹E whole only where it fits,
 otherwise in chunks of columns keeping X_II (a second back-solve per step), free kept
@@ -22,12 +26,20 @@ import breakwater  # noqa: F401  (imports dolfinx_solver before dolfinx)
 # isort: split
 from petsc4py import PETSc
 
+from breakwater.casefile.case import load_case
 from breakwater.common.errors import BreakwaterError
+from breakwater.common.files import read_history
 from breakwater.common.memory import available_bytes, fits
+from breakwater.contact.surfaces import SurfacePair
+from breakwater.model.layout import MonolithicLayout
 from breakwater.model.mesh import read_mesh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, Material
+from breakwater.run import simulation
+from breakwater.stepping import solverchoice
+from breakwater.stepping.bulk import interface_dofs
 from breakwater.stepping.factorisations import check_factorisation
 from breakwater.stepping.gn22 import GN22, solve_static
+from breakwater.stepping.solverchoice import DENSE_COPIES, DENSE_MEMORY, choose, dense_bytes
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from blocks import two_rectangles
@@ -209,3 +221,76 @@ def test_a_newton_matrix_mumps_cannot_factorise_is_refused(
     finally:
         for name in names:
             options.delValue(name)
+
+
+# --- time.solver = "auto": the fast solver where its dense interface fits ---------------
+
+def test_auto_takes_the_fast_solver_where_its_dense_interface_fits(folder: pathlib.Path) -> None:
+    """:func:`solverchoice.choose`: ``"auto"`` is ``"fast"`` while DENSE_COPIES × 8 n_I²
+    bytes per rank fit in half the node's memory, else the full-system Newton
+    (``"reference"``) with one line saying why; ``"fast"`` and ``"reference"`` are
+    taken as asked. The boundary is the formula's: n_I of this two-block model (its
+    interface's unknowns), the memory set just above and just below twice the need of
+    the node's ranks."""
+    path = two_rectangles(folder / "auto.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    model = _two_blocks(path)
+    n = len(interface_dofs(model, MonolithicLayout(model)))
+    assert n > 0
+    node = COMM.Split_type(MPI.COMM_TYPE_SHARED)
+    need = node.size * dense_bytes(n)  # the node's ranks each hold them
+    node.Free()
+    assert dense_bytes(n) == DENSE_COPIES * 8.0 * n**2
+    assert choose(model, "auto", available=2.01 * need / (2 * DENSE_MEMORY)) == ("fast", None)
+    solver, line = choose(model, "auto", available=0.99 * need / DENSE_MEMORY)
+    assert solver == "reference" and line is not None
+    assert f"({n} interface unknowns" in line and "full-system Newton" in line
+    assert choose(model, "fast", available=1.0) == ("fast", None)
+    assert choose(model, "reference", available=1e15) == ("reference", None)
+
+
+def test_auto_refuses_general_pairs_whose_dense_interface_does_not_fit(
+        folder: pathlib.Path) -> None:
+    """General pairs have no full-system solver: ``"auto"`` refuses them in one line
+    where their fast solver would not fit, and takes it where it does."""
+    path = two_rectangles(folder / "auto_general.msh", COMM, (0.2, 0.1), (0.3, 0.1), h=0.05)
+    model = ContactModel(read_mesh(path, COMM),
+                         [Body("a", Material(2000.0, 0.25, young_modulus=1e8)),
+                          Body("b", Material(1800.0, 0.3, young_modulus=5e7))],
+                         fixed=[Fixed("b_bottom")], gravity=(0.0, -9.81),
+                         surface_pairs=[SurfacePair("c", "a", "b", "interface", "interface",
+                                                    1e10, 0.5)])
+    assert choose(model, "auto", available=1e15) == ("fast", None)
+    with pytest.raises(BreakwaterError, match="general contact pairs have no other solver"):
+        choose(model, "auto", available=1.0)
+
+
+def test_auto_runs_the_reference_solver_where_the_interface_does_not_fit(
+        shared_dir: pathlib.Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Through a run: the Goda case with ``time.solver = "auto"`` and no memory for the
+    dense interface (DENSE_MEMORY = 0) runs the full-system Newton, says so in the
+    summary (``solver.kind``), and its history is the ``"reference"`` run's: bit for bit
+    on one rank (the same solver on the same inputs); on several, MUMPS's distributed
+    factorisation is not reproducible to the bit from run to run (two ``"reference"``
+    runs of this case on 2 ranks differ in the last bits, and stick-sensitive force
+    columns by more), so there the displacements agree to 1e-8 of each column's scale
+    (test_fastpath's tolerance between the two solvers)."""
+    monkeypatch.setattr(solverchoice, "DENSE_MEMORY", 0.0)
+    summaries = {}
+    for solver in ("auto", "reference"):
+        case = load_case(None, ["mesh.refinement=0.5", "time.end_time=0.0015",
+                                f"time.solver={solver}", "output.figures=false",
+                                "output.field_interval=0", "output.checkpoint_interval=0",
+                                f"output.directory={(shared_dir / solver).as_posix()}"])
+        model, spec, output, extra = case.build(COMM)
+        summaries[solver] = simulation.run(model, spec, output, extra_summary=extra,
+                                           report=False)
+    assert summaries["auto"]["solver"]["kind"] == "reference"
+    assert summaries["auto"]["finished"]
+    a, b = (read_history(shared_dir / s / "history.csv") for s in ("auto", "reference"))
+    assert list(a) == list(b)
+    for name in a:
+        if COMM.size == 1:
+            np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+        elif name.endswith(("_ux", "_uy")):
+            np.testing.assert_allclose(a[name], b[name], rtol=0,
+                                       atol=1e-8 * np.abs(b[name]).max(), err_msg=name)

@@ -116,9 +116,10 @@ class CaseSettings:
         for c in self.contact:
             body(c.slave, f"contact.{c.name}.slave")
             body(c.master, f"contact.{c.name}.master")
-            if c.general and self.time.solver != "fast":
+            if c.general and self.time.solver == "reference":
                 raise InvalidField("time.solver", f"contact.{c.name} is a general pair "
-                                   '(slave_surface/master_surface): it needs "fast"')
+                                   '(slave_surface/master_surface): it needs "fast" (or '
+                                   '"auto")')
         cal = self.calibration
         if cal.enabled and any(c.general for c in self.contact):
             raise InvalidField("calibration.enabled", "the calibration bonds conforming "

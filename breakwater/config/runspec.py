@@ -77,8 +77,10 @@ MAX_NEWTON_IT = 10_000
 function evaluations) in 32-bit integers, and a Newton solve that has not converged in
 a few tens of iterations will not."""
 
-Solver = Literal["fast", "reference"]
-"""The GN22 step solvers (:class:`breakwater.stepping.gn22.GN22`'s ``solver``)."""
+Solver = Literal["auto", "fast", "reference"]
+"""The GN22 step solvers (:class:`breakwater.stepping.gn22.GN22`'s ``solver``), or
+``"auto"``: the fast one where its dense interface fits in memory
+(:mod:`breakwater.stepping.solverchoice`)."""
 
 
 @assignment_hint("make another, dataclasses.replace(time, {name}=...), and pass it to run")
@@ -121,10 +123,12 @@ class TimeSpec:
     tolerance: float = setting(1e-3, doc="adaptive steps: the local error allowed per step, "
                                "relative to the step's displacement increment (1e-3: the "
                                "Goda case within 0.2 % of dt = 1e-4 s)")
-    solver: Solver = setting("fast", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
-                             'on the contact surfaces only; "reference": Newton on the whole '
-                             "residual, refactorised every iteration (the same results to "
-                             "round-off, ≈10× slower)")
+    solver: Solver = setting("auto", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
+                             'on the contact surfaces only (dense interface matrices on every '
+                             'rank); "reference": Newton on the whole residual, refactorised '
+                             "every iteration (the same results to round-off, 10-400× slower "
+                             'per step, sparse only); "auto": "fast" where its dense interface '
+                             'matrices fit in half the memory, else "reference"')
 
     def __post_init__(self) -> None:
         check_fields(self)

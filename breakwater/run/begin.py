@@ -29,11 +29,25 @@ from breakwater.run import runstate
 from breakwater.run.session import Session, Stepped
 from breakwater.statics.initial import initial_state
 from breakwater.statics.rigidmodes import DriftError, drift, sideways
+from breakwater.stepping.solverchoice import choose
 from breakwater.stepping.stepsize import StepSize
 
-__all__ = ["restore", "start"]
+__all__ = ["restore", "start", "step_solver"]
 
 log = logging.getLogger("breakwater.run.simulation")  # the run's logger: rank 0 only in run()
+
+
+def step_solver(r: Session) -> str:
+    """The run's step solver, ``time.solver``'s choice; its warning line logged (collective).
+
+    Raises:
+        BreakwaterError: General pairs whose fast solver does not fit in memory
+            (:func:`~breakwater.stepping.solverchoice.choose`).
+    """
+    solver, line = choose(r.model, r.time.solver)
+    if line is not None:
+        log.warning("%s", line)
+    return solver
 
 
 def start(r: Session) -> None:
@@ -60,6 +74,7 @@ def start(r: Session) -> None:
             log.warning("%s", line)
     if st.step.adaptive:  # a history without breakpoints: refused before the static state
         load_breakpoints(m)
+    solver = step_solver(r)  # (general pairs that do not fit: before their static state)
     m.set_time(0.0)
     init = initial_state(m)
     st.static_iterations = init.iterations
@@ -70,7 +85,7 @@ def start(r: Session) -> None:
         raise DriftError(refusal)
     for line in warnings:
         log.warning("%s", line)
-    r.stepped = x = Stepped(m, r.time, r.output, r.directory)
+    r.stepped = x = Stepped(m, r.time, r.output, r.directory, solver)
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
     s.initialise(init.u, init.v, m.initial.loads)  # a₀: the state's loads (f at 0⁻)
@@ -148,7 +163,7 @@ def restore(r: Session) -> None:
                     "equals the uninterrupted run to round-off, not bit for bit",
                     comm.size, saved.mpi_size)
     m.set_time(0.0)  # GN22 scales its tolerances with the loads at t = 0
-    r.stepped = x = Stepped(m, r.time, r.output, r.directory)
+    r.stepped = x = Stepped(m, r.time, r.output, r.directory, step_solver(r))
     if saved.columns != x.monitor.columns:
         raise CheckpointError("the checkpoint's history columns are not the run's")
     saved.restore_fields(x.functions())

@@ -39,6 +39,7 @@ from breakwater.run import runstate
 from breakwater.run.runstate import RunState
 from breakwater.stepping.gn22 import GN22, GN22Parameters
 from breakwater.stepping.solver import NewtonOptions
+from breakwater.stepping.solverchoice import choose
 
 __all__ = ["Session", "Stepped"]
 
@@ -56,6 +57,8 @@ class Stepped:
         time: The time settings (step, GN22 and Newton parameters).
         output: The probes and the field output interval.
         directory: The output folder.
+        solver: The step solver (``"fast"`` or ``"reference"``; None: ``time.solver``'s
+            choice, :func:`~breakwater.stepping.solverchoice.choose`).
 
     Attributes:
         stepper: The GN22 stepper (its pairs, :attr:`~breakwater.stepping.gn22.GN22.contacts`,
@@ -68,11 +71,12 @@ class Stepped:
     """
 
     def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
-                 directory: pathlib.Path) -> None:
+                 directory: pathlib.Path, solver: str | None = None) -> None:
         newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
                                max_it=time.newton_max_it)
         params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
-        self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=time.solver)
+        solver = solver or choose(model, time.solver)[0]
+        self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=solver)
         if s.fast is not None and time.levels:  # adaptive steps: a factorisation per level
             s.fast.factorisations.cache_size = max(s.fast.factorisations.cache_size,
                                                    min(time.levels + 1, ADAPTIVE_CACHE))
@@ -278,7 +282,7 @@ class Session:
             st.steps, st.iterations, st.failed_steps, st.failed_iterations,
             st.step.cutbacks, st.step.min_dt, s.flips if s is not None else 0,
             s.solver.floor_accepts if s is not None else 0, self.wall_time(),
-            kind=self.time.solver, time_loop=st.time_loop)
+            kind=s.kind if s is not None else self.time.solver, time_loop=st.time_loop)
         if st.step.adaptive:
             taken = st.step.accepted[1:]
             solver["adaptive"] = {

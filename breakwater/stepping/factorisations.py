@@ -115,7 +115,7 @@ class Factorisation:
     X_II: np.ndarray  # its interface rows, shape (n_I, n_I), the same on every rank
     S: np.ndarray  # (X_II)⁻¹, the interface Schur complement of A
     chunks: int = 0  # X's columns solved in this many chunks (0: whole, X may be kept)
-    bytes: float = 0.0  # this rank's memory for it: A's factors and X's blocks
+    bytes: float = 0.0  # this rank's memory for it: A's factors, X's blocks, X_II and S
 
     # X's columns of a set of interface unknowns by block (subtract_X's ``support``).
     _columns: tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]] | None = field(
@@ -255,7 +255,8 @@ class Factorisations:
         else:
             blocks = []
             X_II = S = np.zeros((len(self.interface), len(self.interface)))
-        kept = sum(b.X.nbytes for b in blocks or ())
+        # (X_II and S too: on a large interface, n_I² each on every rank)
+        kept = sum(b.X.nbytes for b in blocks or ()) + X_II.nbytes + S.nbytes
         fact = Factorisation(ksp, A, blocks, X_II, S, chunks, _factor_bytes(ksp) + kept)
         self._cache[dt] = fact
         if len(self._cache) > self.cache_size:

@@ -280,6 +280,7 @@ class GN22:
             raise ValueError("general contact pairs (slave and master surfaces) need the "
                              "fast solver (time.solver = \"fast\")")
         self.model = model
+        self.kind = solver  # (the summary's solver.kind)
         self.params = p = parameters or GN22Parameters()
         msh = model.mesh
         self.t = fem.Constant(msh, dolfinx.default_scalar_type(t0))
