@@ -106,8 +106,10 @@ the run went on from the undeformed state with one warning.
 :func:`relax` is called by :func:`breakwater.statics.initial.initial_state` for models with
 general pairs; a₀ of the stepper's initialisation then vanishes (it includes the
 general pairs' forces). This module is the control of the stages (c over the steps,
-:func:`_stage`, :func:`_slide`) and the initial velocities of the state found
-(:func:`_creep`, :func:`_held`, :func:`_release`); the pseudo step itself, its state and
+:func:`_stage`, :func:`_slide`) and the frictional state's initial velocities
+(:func:`_creep`); the held bodies and their release are :mod:`breakwater.statics.release`'s
+(:func:`~breakwater.statics.release.held_bodies`,
+:func:`~breakwater.statics.release.release`); the pseudo step itself, its state and
 the model estimates (c₀, c_max, τ) are :class:`~breakwater.statics.pseudostep.PseudoStepper`'s.
 """
 
@@ -129,7 +131,6 @@ from breakwater.contact import friction3d
 from breakwater.contact.conforming import RELEASE, creep_velocities
 from breakwater.contact.general import start_slip
 from breakwater.model.model import ContactModel, Damping
-from breakwater.model.pairs import SurfacePair
 from breakwater.statics.pseudostep import (
     FALL,
     GROWTH,
@@ -139,6 +140,7 @@ from breakwater.statics.pseudostep import (
     PseudoStepper,
     no_state_advice,
 )
+from breakwater.statics.release import HELD_FRICTION, held_bodies, moving_body, release
 from breakwater.stepping.solver import NewtonOptions
 
 __all__ = ["FALLBACK", "FLOOR", "GROWTH", "HELD_FRICTION", "MAX_STEPS", "RATIO", "RELEASE",
@@ -172,11 +174,6 @@ FLOOR = 1e-7
 """The pseudo steps' Newton accepts a stall below this fraction of the load norm as its
 round-off (the stall test of :func:`breakwater.stepping.solver.convergence_reason`)."""
 
-HELD_FRICTION = 100.0
-"""Friction coefficient of every pair while the bodies are held (stage 3); χ is multiplied
-by it too: the stick tangent μp/χ stays that of μ = 1 (a step converges as in stage 2)."""
-
-
 @dataclasses.dataclass
 class _Result:
     """One stage's outcome."""
@@ -208,7 +205,7 @@ def _stage(ps: PseudoStepper, frictional: bool) -> _Result:
         # The bodies that move onto their support (a slave with a [fixed] group, its
         # master free: the master; the offset on a fixed body's Dirichlet entries made
         # the swapped pair's steps drift, 4.9e-11 m growing 4 % per step: no state).
-        slaves = {m.body(_moving(m, p)).index for p in m.surface_pairs}
+        slaves = {m.body(moving_body(m, p)).index for p in m.surface_pairs}
         slaves |= {p.slave for p in m.pairs}
         for i in slaves:
             s.u[i].x.array.reshape(-1, m.gdim)[:] = 1e-9 * g / np.linalg.norm(g)
@@ -294,7 +291,8 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
 
     Args:
         ps: The pseudo stepper, in the held state.
-        sliding: Held slave body → its sliding direction (:func:`_held`).
+        sliding: Held slave body → its sliding direction
+            (:func:`~breakwater.statics.release.held_bodies`).
 
     Returns:
         The Newton iterations.
@@ -319,7 +317,7 @@ def _slide(ps: PseudoStepper, sliding: dict[int, np.ndarray]) -> int:
         # with the sign reversed), at first the held state's pressure with the
         # friction of sliding against d.
         slaves = [(p, 1.0 if m.body(p.spec.slave).index == i else -1.0)
-                  for p in ps.providers if m.body(_moving(m, p.spec)).index == i]
+                  for p in ps.providers if m.body(moving_body(m, p.spec)).index == i]
         contact = 0.0
         for p, sign in slaves:
             normal, _ = p.resultants(accepted=True)
@@ -366,86 +364,6 @@ def _creep(ps: PseudoStepper, v: list[fem.Function]) -> None:
         τ = 0.5 * ps.β2 * float(s.dt.value) / ps.β1  # τ of the last step
         creep_velocities(ps.model, ps.model.pairs, u, v, τ)
 
-
-def _held(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
-    """The slave bodies whose pair's tangential resultant exceeds μN (held state).
-
-    Returns:
-        Their names, each in a warning, and (general pairs) each body's sliding direction
-        (against the held friction), for :func:`_slide` and :func:`_release`.
-    """
-    out: list[str] = []
-    sliding: dict[int, np.ndarray] = {}
-    ps.rest()
-    with ps.friction(HELD_FRICTION, HELD_FRICTION):
-        forces = [p.resultants(accepted=False) for p in ps.providers]
-    for p, (normal, friction) in zip(ps.providers, forces, strict=True):
-        N, T = float(np.linalg.norm(normal)), float(np.linalg.norm(friction))
-        μ = p.spec.friction
-        if T - μ * N > 1e-6 * max(N, T):
-            body = _moving(ps.model, p.spec)
-            if ps.model.comm.rank == 0:
-                u = "N" if ps.model.gdim == 3 else "N/m"
-                log.warning("initial state: body '%s' cannot be held by friction on '%s' "
-                            "(tangential force %.4g %s, μN = %.4g %s): held in place up "
-                            "to t = 0 and released at t = 0", body, p.spec.name, T, u, μ * N, u)
-            index = ps.model.body(body).index
-            # Against the friction on it (the master's is the slave's, reversed).
-            sign = 1.0 if body == p.spec.slave else -1.0
-            sliding[index] = sliding.get(index, 0.0) - sign * friction
-            if body not in out:
-                out.append(body)
-    if not out:  # the conforming pairs' bodies (not checked one by one)
-        for pair in ps.model.pairs:
-            body = ps.model.bodies[pair.slave].spec.name
-            if ps.model.comm.rank == 0:
-                log.warning("initial state: body '%s' cannot be held by friction on "
-                            "'%s': held in place up to t = 0 and released at t = 0",
-                            body, pair.spec.interface)
-            out.append(body)
-    return out, sliding
-
-
-def _moving(model: ContactModel, spec: SurfacePair) -> str:
-    """The body of a pair that slides when released (:func:`_held`).
-
-    Its slave, or its master when the slave is fixed and the master is not (roles
-    swapped: a block as the master surface of a fixed base's slave surface; before, the
-    base was released and the block kept the held state's shear: a block on a 30°
-    slope slid 2.9 % too far).
-    """
-    if model.fixed_on(spec.slave) and not model.fixed_on(spec.master):
-        return spec.master
-    return spec.slave
-
-
-def _release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Function]
-             ) -> None:
-    """Start the held bodies' slave nodes in contact sliding (added to ``v``).
-
-    Each gets the velocity :data:`RELEASE` χ along its tangent, in the body's
-    sliding direction (``sliding``: :func:`_held`): the law then carries the sliding
-    friction μλ at t = 0 (to 5e-5), so that a₀ is the sliding acceleration rather than
-    that without friction.
-    """
-    ps.rest()
-    y = np.zeros(ps.solver.n)
-    for p in ps.providers:
-        body = _moving(ps.model, p.spec)
-        d = sliding.get(ps.model.body(body).index)
-        if d is None:
-            continue
-        if body != p.spec.slave:  # the slave's slip relative to a sliding master
-            d = -d
-        pos, v_T = p.slip_velocities()
-        size = np.linalg.norm(v_T, axis=1)[:, None]
-        keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
-        unit = v_T[keep] / size[keep]
-        # Along the node's tangent, turned to the sliding direction (a node's own
-        # slip in the held state may point the other way).
-        unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
-        y[pos[keep]] = RELEASE * p.spec.regularisation * unit
-    ps.add_slave_velocities(v, y)
 
 @contextlib.contextmanager
 def _undamped(model: ContactModel) -> Iterator[None]:
@@ -546,7 +464,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
             if kind == "frictional":
                 _creep(r, v)
             elif kind == "held":
-                held, sliding = _held(r)
+                held, sliding = held_bodies(r)
                 if not held:  # then the held state is no equilibrium of the dynamics
                     raise ConvergenceError(NONE_HELD.format("; ".join(failed),
                                                             no_state_advice(model)),
@@ -562,7 +480,7 @@ def relax(model: ContactModel, v: list[fem.Function], stick_band: float,
                         log.debug("released from the held state (%s)", e)
                         for f, x in zip(r.stepper.u, u_held, strict=True):
                             f.x.array[:] = x
-                _release(r, sliding, v)
+                release(r, sliding, v)
             steps = r.steps
         finally:
             r.destroy()
