@@ -397,21 +397,31 @@ class SurfaceContact(SurfaceForces):
             self._record_of = (self._accepted, p, r)
         return r
 
-    def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
-        """The slave nodes in contact at the current iterate and their slip velocities.
+    def sliding_velocities(self, d: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
+        """Velocities that start the slave nodes in contact sliding along d (a release).
+
+        At the current iterate, each node in contact (the friction's) slips at ``speed``
+        along its tangent, in the direction of d
+        (:func:`~breakwater.contact.newtonaids.sliding_velocities`: a held component's
+        share is its master's).
+
+        Args:
+            d: The unit sliding direction of the slave relative to the master.
+            speed: The slip speed.
 
         Returns:
-            Their interface positions ``(k, gdim)`` (−1: Dirichlet) and ``v_T``, the
-            tangential velocity relative to the master (``(k, gdim)``; none without
-            friction).
+            The interface positions set and their velocities (flat).
         """
+        none = np.zeros(0, np.int64), np.zeros(0)
         if not self.spec.friction:
-            return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
+            return none
         u0, u1, v1 = self._state()
         fr = self._friction(u0, v1, self._normal(u1)["lam"])
         if fr is None:
-            return np.zeros((0, self.node_pos.shape[1]), np.int64), np.zeros((0, 2))
-        return fr["pos_s"], fr["v_T"]
+            return none
+        facet, N0, t0 = self._frozen(u0)  # the projection _friction took
+        return newtonaids.sliding_velocities(self._node_pos, self._pm, facet, N0,
+                                             t0[:, None, :], fr["k"], d, speed, self.n)
 
     def energies(self) -> tuple[float, float]:
         """The penalty energy and the friction power at the accepted state (the ledger).
@@ -511,8 +521,8 @@ def start_slip(pair: SurfaceContact,
     own): per slave node in contact, the speed where the law gives the friction
     of that step (the inverse law ``χ f/sqrt(1 − f²)``, f = |F|/(μλ)), at most
     :data:`RELEASE` χ, along the tangent of the state's own projection (the one
-    the dynamics starts with), against F; :meth:`SurfaceContact.slip_velocities` where frozen is
-    None and no node is faster than RELEASE χ.
+    the dynamics starts with), against F; where frozen is None, the state's own slip,
+    capped at RELEASE χ.
 
     Measured on the Goda caisson meshed apart (2026-11-28): a node that slides in
     the static state (a base corner under its Poisson expansion) kept its static

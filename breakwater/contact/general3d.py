@@ -439,19 +439,22 @@ class SurfaceContact3D(SurfaceForces3D):
         r = self._record(accepted)
         return r[3:6].copy(), r[6:9].copy()
 
-    def slip_velocities(self) -> tuple[np.ndarray, np.ndarray]:
-        """The slave nodes in contact at the current iterate and their slip velocities.
+    def sliding_velocities(self, d: np.ndarray, speed: float) -> tuple[np.ndarray, np.ndarray]:
+        """Velocities that start the slave nodes in contact sliding along d (a release).
+
+        :meth:`breakwater.contact.general.SurfaceContact.sliding_velocities` of a 3-D
+        pair: the slip along d's part in each node's tangent plane.
 
         Returns:
-            Their interface positions ``(k, 3)`` (−1: Dirichlet) and the slip velocity
-            vectors ``Σ_α c_α T₀_α`` ``(k, 3)`` (none without friction).
+            The interface positions set and their velocities (flat).
         """
         u0, u1, v1 = self._state()
         fr = self._friction(u0, v1, self._normal(u1)["lam"])
         if fr is None or not len(fr["k"]):
-            return np.zeros((0, 3), np.int64), np.zeros((0, 3))
-        T = fr["frozen"][2][fr["k"]]
-        return self.node_pos[fr["k"]], np.einsum("ka,kad->kd", fr["c"], T)
+            return np.zeros(0, np.int64), np.zeros(0)
+        facet, N0, T0 = fr["frozen"]
+        return newtonaids.sliding_velocities(self._node_pos, self._pm, facet, N0, T0,
+                                             fr["k"], d, speed, self.n)
 
     def energies(self) -> tuple[float, float]:
         """The penalty energy and the friction power at the accepted state (the ledger).

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from breakwater.contact.surfacesearch import SurfaceSearch
 
 __all__ = ["CrawlPoints", "Regularised", "SlipMemory", "friction_normals", "resolution",
-           "slip_velocities_at"]
+           "sliding_velocities", "slip_velocities_at"]
 
 
 class SlipMemory:
@@ -217,6 +217,45 @@ def slip_velocities_at(node_pos: np.ndarray, pos_m: np.ndarray, facet: np.ndarra
     set_[-1] = False
     where = np.flatnonzero(set_)
     return where, y[where]
+
+
+def sliding_velocities(node_pos: np.ndarray, pos_m: np.ndarray, facet: np.ndarray,
+                       N0: np.ndarray, T0: np.ndarray, k: np.ndarray, d: np.ndarray,
+                       speed: float, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Velocities at the interface unknowns that start slave nodes ``k`` sliding along d.
+
+    Each node's slip is ``speed`` along the tangential part of d at its master point,
+    ``Σ_α (d·T₀_α) T₀_α`` (its own tangent: the slip of a body sliding along d), set by
+    :func:`slip_velocities_at`: the node's free components move; a held one (a slave
+    node on a ``[fixed]`` face, e.g. a roller) takes no velocity, and its share of the
+    slip, ``−(d·n) n`` along it where d has no component along it (a body can slide
+    only along its free directions), goes to the master face's nodes. That share is nil
+    where the master's normal is perpendicular to the held direction (a roller face
+    perpendicular to the interface: the node's whole slip is along its free
+    components); a fully held slave node (a fixed support, the slave of a sliding
+    master) gives its whole slip to the master. A node where d is normal to the master
+    is left at rest.
+
+    Args:
+        node_pos: The slave nodes' interface positions ``(nodes, gdim)`` (−1: held).
+        pos_m: The master facets'.
+        facet: The slave nodes' master facets f₀.
+        N0: Their shape values there.
+        T0: Their tangent bases ``(nodes, gdim − 1, gdim)`` (orthonormal).
+        k: The nodes started (in contact).
+        d: The unit sliding direction of the slave relative to the master.
+        speed: The slip speed.
+        n: The number of interface unknowns.
+
+    Returns:
+        The interface positions set and their velocities (flat).
+    """
+    T = T0[k]
+    along = np.einsum("ka,kad->kd", np.einsum("kad,d->ka", T, d), T)
+    size = np.linalg.norm(along, axis=1)
+    keep = size > 1e-12
+    return slip_velocities_at(node_pos, pos_m, facet, N0, k[keep],
+                              speed * along[keep] / size[keep, None], n)
 
 
 @kernel

@@ -91,7 +91,8 @@ stages 1 and 1b first:
    reversed slip velocities at the first steps: +1.3 % of the slide of a pushed block
    with E = 1e9 at Δt = 1e-3). Its slave nodes then start sliding at :data:`RELEASE` χ
    along their tangent in the sliding direction (1e-8 m/s at the paper's χ: from
-   rest), where the law carries μλ: the first step sees the friction of sliding
+   rest), those with a held component too (:mod:`breakwater.statics.release`), where
+   the law carries μλ: the first step sees the friction of sliding
    (with v = 0 it would see none, a₀ would be F/m instead of (F − μN)/m, and GN22
    would keep (1 − β₁)Δt times the difference as a velocity error).
 

@@ -8,9 +8,16 @@ Stage 3 of :mod:`breakwater.statics.relaxation` (models with general pairs):
 - :func:`moving_body`: which body of a pair slides when released (its slave, or its
   master where the slave is fixed and the master is not).
 - :func:`release`: the slave nodes in contact of each such pair start sliding at
-  :data:`~breakwater.contact.conforming.RELEASE` χ along their tangent in the sliding
-  direction, so that the law carries the sliding friction μλ (to 5e-5) at t = 0 and a₀
-  is the sliding acceleration.
+  :data:`~breakwater.contact.conforming.RELEASE` χ along d's part in their tangent, so
+  that the law carries the sliding friction μλ (to 5e-5) at t = 0 and a₀ is the sliding
+  acceleration (:meth:`~breakwater.contact.general.SurfaceContact.sliding_velocities`).
+  A slave node with a held component (a ``[fixed]`` group holds it, a roller: the edge
+  nodes of a 3-D block whose side faces are held along their normal) starts too: its
+  free components take the slip, and a held component's share of it, if any, is its
+  master's (:func:`~breakwater.contact.newtonaids.sliding_velocities`). Before, such a
+  node got no release velocity and carried no friction at t = 0: a block pushed with
+  F = 1.5 μN between rollers started with a₀ 32 % above (F − μN)/m, the friction
+  resultant 0.839 μN (``tests/test_pair3d_friction.py``).
 
 The state of incipient sliding itself (the pseudo steps with the real μ) is
 :func:`breakwater.statics.relaxation._slide`.
@@ -94,10 +101,9 @@ def release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Funct
             ) -> None:
     """Start the held bodies' slave nodes in contact sliding (added to ``v``).
 
-    Each gets the velocity :data:`~breakwater.contact.conforming.RELEASE` χ along its
-    tangent, in the body's sliding direction (``sliding``: :func:`held_bodies`): the law
-    then carries the sliding friction μλ at t = 0 (to 5e-5), so that a₀ is the sliding
-    acceleration rather than that without friction.
+    Each slips at :data:`~breakwater.contact.conforming.RELEASE` χ along its tangent, in
+    the body's sliding direction (``sliding``: :func:`held_bodies`; the module doc), its
+    held components included.
     """
     ps.rest()
     y = np.zeros(ps.solver.n)
@@ -106,14 +112,9 @@ def release(ps: PseudoStepper, sliding: dict[int, np.ndarray], v: list[fem.Funct
         d = sliding.get(ps.model.body(body).index)
         if d is None:
             continue
+        d = d / np.linalg.norm(d)
         if body != p.spec.slave:  # the slave's slip relative to a sliding master
             d = -d
-        pos, v_T = p.slip_velocities()
-        size = np.linalg.norm(v_T, axis=1)[:, None]
-        keep = np.all(pos >= 0, axis=1) & (size[:, 0] > 0)
-        unit = v_T[keep] / size[keep]
-        # Along the node's tangent, turned to the sliding direction (a node's own
-        # slip in the held state may point the other way).
-        unit *= np.where(unit @ d < 0, -1.0, 1.0)[:, None]
-        y[pos[keep]] = RELEASE * p.spec.regularisation * unit
+        pos, vel = p.sliding_velocities(d, RELEASE * p.spec.regularisation)
+        y[pos] = vel
     ps.add_slave_velocities(v, y)
