@@ -4,7 +4,7 @@ Stage 3 of :mod:`breakwater.statics.relaxation` (models with general pairs):
 
 - :func:`held_bodies`: the slave bodies whose pair carries a tangential resultant
   above μN in the held state (μ = :data:`HELD_FRICTION`), each with its sliding
-  direction d (against the held friction).
+  direction d (against the held friction, along its free components).
 - :func:`moving_body`: which body of a pair slides when released (its slave, or its
   master where the slave is fixed and the master is not).
 - :func:`release`: the slave nodes in contact of each such pair start sliding at
@@ -49,7 +49,8 @@ def held_bodies(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
 
     Returns:
         Their names, each in a warning, and (general pairs) each body's sliding direction
-        (against the held friction), for
+        (against the held friction, less the components its ``[fixed]`` groups hold:
+        :func:`_free_part`), for
         :func:`~breakwater.statics.relaxation._slide` and :func:`release`.
     """
     out: list[str] = []
