@@ -126,7 +126,7 @@ class TimeSpec:
     solver: Solver = setting("auto", doc='"fast": the bulk factorised once per Δt, Newton '  # noqa: RUF009
                              'on the contact surfaces only (dense interface matrices on every '
                              'rank); "reference": Newton on the whole residual, refactorised '
-                             "every iteration (the same results to round-off, 10-400× slower "
+                             "every iteration (the same results to round-off, 10-80× slower "
                              'per step, sparse only); "auto": "fast" where its dense interface '
                              'matrices fit in half the memory, else "reference"')
 

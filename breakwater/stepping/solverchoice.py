@@ -6,16 +6,16 @@ X_II and S = X_II⁻¹ of the factorisation, the round-off estimate's |X_II| and
 Newton's systems on the closed unknowns (with their LU copies). Their memory grows as
 n_I² per rank (every rank holds them), faster than the sparse factors. The full-system
 Newton (``"reference"``, :class:`~breakwater.stepping.solver.NewtonSolver`: SNES on the
-whole residual, the contact terms in its Jacobian, a sparse LU per iteration) holds sparse
-matrices only, but factorises at every Newton iteration: on ``goda3d`` it is hundreds of
-times slower per step (benchmarks/records/2026-11-29-solver-choice.md), and n_I
-back-solves per Δt (the fast path's X) cost less than its factorisations per step at
-every size measured. So the choice is by memory, not time: ``time.solver = "auto"`` (the
-default) takes ``"fast"`` unless :data:`DENSE_COPIES` × 8 n_I² bytes per rank exceed
-:data:`DENSE_MEMORY` of a node's available memory, and then ``"reference"``, with one
-warning line. General pairs have no full-system solver (their forces are not UFL
-forms): where theirs does not fit the run is refused in one line, before the static
-state.
+whole residual, the contact terms in its Jacobian, a sparse LU per iteration) holds
+sparse matrices only, but factorises at every Newton iteration: on ``goda3d`` at
+refinement 1 it took 81.5 times the fast solver's CPU time per step
+(benchmarks/records/2026-11-29-solver-choice.md), and n_I back-solves per Δt (the fast
+path's X) cost less than its factorisations per step at every size measured. So the
+choice is by memory, not time: ``time.solver = "auto"`` (the default) takes ``"fast"``
+unless :data:`DENSE_COPIES` × 8 n_I² bytes per rank exceed :data:`DENSE_MEMORY` of a
+node's available memory, and then ``"reference"``, with one warning line. General pairs
+have no full-system solver (their forces are not UFL forms): where theirs does not fit
+the run is refused in one line, before the static state.
 """
 
 from __future__ import annotations
