@@ -42,6 +42,10 @@ MAX_POINTS = 20
 integrand is smooth (a P2 shape function times the penalty of a quadratic gap), which 3
 points integrate to degree 5; 20000 points took 6.5 GB and 20 minutes before the first
 time step of a block on a base (1e9: a MemoryError of leggauss's 1e9 x 1e9 matrix)."""
+GENERAL_ONLY = {"points": 3, "integration": "segments", "rotations": "finite"}
+"""A general pair's keys and their defaults: a conforming pair (one shared group) is
+integrated at its shared nodes with the reference normal, so another value on it would be
+ignored (``integration = "gauss"`` on goda's interface ran silently as before)."""
 REGULARISATION_RANGE = (1e-100, 1e100)
 """Regularisation velocities χ (m/s) the friction law's arithmetic takes: its Jacobian and
 the slip guard use χ² and χ³, which underflow below 3e-103 and overflow above 6e102 (χ =
@@ -216,6 +220,13 @@ class ContactCase:
         if self.general and self.gap:
             raise InvalidField("gap", "a general pair takes its gap from the geometry "
                                "(remove gap)")
+        for key, default in GENERAL_ONLY.items():
+            if not self.general and getattr(self, key) != default:
+                raise InvalidField(key, f"{key} = {getattr(self, key)!r} is a general "
+                                   "pair's setting (with slave_surface and master_surface):"
+                                   " a conforming pair is integrated at its shared nodes "
+                                   "with its reference normals, and would not apply it "
+                                   f"(remove {key})")
         if self.points < 2:  # at one point (a segment's middle) the P2 end nodes' N is 0
             raise InvalidField("points", f"must be >= 2 (got {self.points}): one Gauss point "
                                "per segment gives the facets' end nodes no contact force")
