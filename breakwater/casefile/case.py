@@ -69,7 +69,6 @@ from breakwater.common.gmshtools import (
 )
 from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
 from breakwater.config.fields import InvalidField, printable, suggest, to_toml
-from breakwater.config.overrides import OVERRIDE
 from breakwater.config.schema import Schema
 
 if TYPE_CHECKING:
@@ -315,14 +314,18 @@ def load_case(path: str | pathlib.Path | None = None, overrides: Sequence[str] |
     return case
 
 
-def _unused_generator(raw: dict[str, Any], where: Callable[[str], str]) -> None:
+def _unused_generator(raw: dict[str, Any], where: Callable[[str], str],
+                      order: Sequence[str]) -> None:
     """Refuse a ``[mesh.goda]``/``[mesh.goda3d]`` value that the mesh source leaves unused.
 
     Such a value (not the default) set where ``mesh.source`` names another mesh (the same
     file, or ``--set``) ran without a word, the mesh read as it is (a caisson 20 m wide in
-    ``[mesh.goda]`` beside ``source = "my.msh"``). A table inherited from a case the file
-    extends is not refused (``examples/goda_apart``: its own ``.geo`` over
-    ``goda_nonmatching.toml``), nor a default written out (a resolved case's tables).
+    ``[mesh.goda]`` beside ``source = "my.msh"``), or set after it (a file extending
+    ``goda3d`` with a ``[mesh.goda]`` caisson_width: the block stayed 0.205 m wide, as the
+    ``goda3d`` mesh takes its cross-section from ``[mesh.goda3d]``). A value inherited from
+    a case that the source's file extends is not refused (``examples/goda_apart``: its
+    own ``.geo`` over ``goda_nonmatching.toml``), nor a default written out (a resolved
+    case's tables).
 
     Raises:
         InvalidField: The first such key, naming the source.
@@ -339,12 +342,15 @@ def _unused_generator(raw: dict[str, Any], where: Callable[[str], str]) -> None:
         for key, value in keys.items():
             path = f"mesh.{table}.{key}"
             if value != defaults[table].get(key, value) \
-                    and where(path) in (OVERRIDE, where("mesh.source")):
+                    and order.index(where(path)) >= order.index(where("mesh.source")):
                 used = f"the built-in {source} mesh" if source in (GODA, GODA3D) else \
                     f"the file {pathlib.Path(str(source)).name}"
+                fix = f"mesh.{GODA3D}.{key} (the {GODA3D} mesh's own)" \
+                    if source == GODA3D and key in defaults[GODA3D] \
+                    else f"mesh.source = \"{table}\""
                 raise InvalidField(path, f"sets the built-in {table} mesh, but mesh.source "
                                    f"reads {used}, which it does not change: remove it, or "
-                                   f"set mesh.source = \"{table}\"")
+                                   f"set {fix}")
 
 
 def override_list(overrides: Any) -> list[str]:

@@ -42,6 +42,10 @@ from breakwater.config.fields import InvalidField, describe, printable
 from breakwater.config.overrides import OVERRIDE, apply_override, path_key
 from breakwater.config.tomlfiles import display, merge, origin, read_toml, record, resolved
 
+RawCheck = Callable[[dict[str, Any], Callable[[str], str], Sequence[str]], None]
+"""A check of the raw table: given it, where a dotted key was set and the labels in the
+order they apply (see :meth:`Schema.load`)."""
+
 __all__ = ["Schema"]
 
 
@@ -69,7 +73,7 @@ class Schema:
     def load(self, file: pathlib.Path, overrides: Sequence[str] = (),
              check: Callable[[Any], None] | None = None,
              prepare: Callable[[dict[str, Any]], None] | None = None,
-             check_raw: Callable[[dict[str, Any], Callable[[str], str]], None] | None = None
+             check_raw: RawCheck | None = None
              ) -> Any:
         """Read ``file`` (and what it extends), apply the overrides, build the root.
 
@@ -80,9 +84,11 @@ class Schema:
                 with a path from the root).
             prepare: Changes the file's table (with what it extends) before the
                 overrides (``calibrate``: a ``[time]`` it does not use, when none).
-            check_raw: Checks of the table after the overrides, given it and where a
+            check_raw: Checks of the table after the overrides, given it, where a
                 dotted key was set (the file's label, or ``--set``; a key the file
-                extends: that file's label), raising :class:`InvalidField`.
+                extends: that file's label) and the labels in the order they apply
+                (the case extended first, the file, then ``--set``), raising
+                :class:`InvalidField`.
 
         Raises:
             CaseError: One line naming the file (or ``--set``), the field and the problem
@@ -97,10 +103,11 @@ class Schema:
     def _load(self, file: pathlib.Path, overrides: Sequence[str],
               check: Callable[[Any], None] | None,
               prepare: Callable[[dict[str, Any]], None] | None,
-              check_raw: Callable[[dict[str, Any], Callable[[str], str]], None] | None
+              check_raw: RawCheck | None
               ) -> Any:
         origins: dict[str, str] = {}
-        raw = self._load_raw(file, (), origins)
+        labels: list[str] = []
+        raw = self._load_raw(file, (), origins, labels=labels)
         if prepare is not None:
             prepare(raw)
         merged: list[str] = []
@@ -109,7 +116,7 @@ class Schema:
         label = display(file)
         try:
             if check_raw is not None:
-                check_raw(raw, lambda key: origin(key, origins, label))
+                check_raw(raw, lambda key: origin(key, origins, label), [*labels, OVERRIDE])
             obj = convert.build(self.root, self.root, raw, "")
             if check is not None:
                 check(obj)
@@ -164,8 +171,13 @@ class Schema:
         return read
 
     def _load_raw(self, path: pathlib.Path, chain: tuple[pathlib.Path, ...],
-                  origins: dict[str, str], read: list[pathlib.Path] | None = None
-                  ) -> dict[str, Any]:
+                  origins: dict[str, str], read: list[pathlib.Path] | None = None,
+                  labels: list[str] | None = None) -> dict[str, Any]:
+        """The file's table merged over those it extends.
+
+        ``origins``, ``read`` (the files, the file first) and ``labels`` (their labels,
+        the case extended first) are filled in.
+        """
         label = display(path)
         raw = read_toml(path)
         if read is not None:
@@ -176,6 +188,8 @@ class Schema:
         base = raw.pop("extends", None)
         if base is None:
             record(raw, label, "", origins)
+            if labels is not None:
+                labels.append(label)
             return raw
         if not isinstance(base, str):
             raise CaseError(f"{label}: extends: expected a case name or file, got "
@@ -192,9 +206,11 @@ class Schema:
             raise CaseError(f"{label}: extends: case file not found: {base}")
         if base_path in chain or base_path == path.resolve():
             raise CaseError(f"{label}: extends: circular ({base})")
-        merged = merge(self._load_raw(base_path, (*chain, path.resolve()), origins, read),
-                       raw)
+        merged = merge(self._load_raw(base_path, (*chain, path.resolve()), origins, read,
+                                      labels), raw)
         record(raw, label, "", origins)
+        if labels is not None:
+            labels.append(label)
         return merged
 
     def reference(self) -> str:
