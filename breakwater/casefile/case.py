@@ -345,12 +345,19 @@ def _unused_generator(raw: dict[str, Any], where: Callable[[str], str],
                     and order.index(where(path)) >= order.index(where("mesh.source")):
                 used = f"the built-in {source} mesh" if source in (GODA, GODA3D) else \
                     f"the file {pathlib.Path(str(source)).name}"
-                fix = f"mesh.{GODA3D}.{key} (the {GODA3D} mesh's own)" \
-                    if source == GODA3D and key in defaults[GODA3D] \
-                    else f"mesh.source = \"{table}\""
                 raise InvalidField(path, f"sets the built-in {table} mesh, but mesh.source "
-                                   f"reads {used}, which it does not change: remove it, or "
-                                   f"set {fix}")
+                                   f"reads {used}, which it does not change: "
+                                   f"{_unused_fix(source, table, key, defaults)}")
+
+
+def _unused_fix(source: str, table: str, key: str, defaults: dict[str, Any]) -> str:
+    """What to do with ``mesh.<table>.<key>`` that the mesh ``source`` leaves unused."""
+    if source == GODA3D and key == "conforming":
+        return ("remove it: the goda3d mesh is conforming only (bodies meshed apart in 3D: "
+                "a tetrahedral mesh file and a general pair)")
+    if source == GODA3D and key in defaults[GODA3D]:
+        return f"remove it, or set mesh.{GODA3D}.{key} (the {GODA3D} mesh's own)"
+    return f"remove it, or set mesh.source = \"{table}\""
 
 
 def override_list(overrides: Any) -> list[str]:
