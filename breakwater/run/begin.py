@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from breakwater.common import files
 from breakwater.common.errors import CaseError
-from breakwater.contact.penetration import meshed_overlap
+from breakwater.contact.penetration import meshed_gap3d, meshed_overlap
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
@@ -89,6 +89,10 @@ def start(r: Session) -> None:
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
     s.initialise(init.u, init.v, m.initial.loads)  # a₀: the state's loads (f at 0⁻)
+    for contact in s.surfaces if m.gdim == 3 else ():  # meshed apart, the gap closed
+        line = meshed_gap3d(contact)  # type: ignore[arg-type]  # gdim 3: SurfaceContact3D
+        if line is not None:
+            log.warning("%s", line)
     if st.step.adaptive:
         adaptive_start(st.step, m, s.u)
     r.rows = out.open_history(x.monitor.columns)
