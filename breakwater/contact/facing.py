@@ -16,7 +16,9 @@ caisson's rear face on its crest, is not) and each lies in front of the other, t
 the two facets' lengths (n_s · (x_m − x_s) and n_m · (x_s − x_m) not below
 −(ℓ_s + ℓ_m)/2: surfaces meshed in contact have their midpoints side by side). One
 facing pair of facets anywhere is enough: the check refuses only surfaces that cannot
-meet, never a surface partly off its master.
+meet, never a surface partly off its master. In 3D a facet is the triangle of its
+vertices (its centroid, normal and longest edge): a 3-D pair with the block's top as its
+slave surface ran, the pair carrying nothing (or failed in the static state).
 """
 
 from __future__ import annotations
@@ -39,12 +41,23 @@ _BLOCK = 512
 
 
 def _frames(surface: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each facet's chord midpoint, outward unit normal and chord length (2D)."""
+    """Each facet's midpoint, outward unit normal and length.
+
+    2D: the chord's midpoint, normal and length; 3D: the triangle of its vertices'
+    centroid, normal and longest edge.
+    """
     a, b = surface.X[:, 0], surface.X[:, 1]
-    chord = b - a
-    length = np.linalg.norm(chord, axis=1)
-    normal = np.stack([chord[:, 1], -chord[:, 0]], axis=1) / length[:, None]
-    mid = 0.5 * (a + b)
+    if surface.X.shape[2] == 3:
+        c = surface.X[:, 2]
+        cross = np.cross(b - a, c - a)
+        normal = cross / np.linalg.norm(cross, axis=1)[:, None]
+        length = np.max([np.linalg.norm(e, axis=1) for e in (b - a, c - b, a - c)], axis=0)
+        mid = (a + b + c) / 3.0
+    else:
+        chord = b - a
+        length = np.linalg.norm(chord, axis=1)
+        normal = np.stack([chord[:, 1], -chord[:, 0]], axis=1) / length[:, None]
+        mid = 0.5 * (a + b)
     outward = np.sign(np.sum((mid - surface.interior) * normal, axis=1))
     return mid, normal * np.where(outward == 0, 1.0, outward)[:, None], length
 

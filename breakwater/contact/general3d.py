@@ -43,6 +43,7 @@ from breakwater.contact import (
     newtonaids,
     searchkernels3d,
 )
+from breakwater.contact.facing import facing
 from breakwater.contact.nodalpressure3d import VertexPressure
 from breakwater.contact.projection3d import shape, surface, unit_normal
 from breakwater.contact.searchkernels import current
@@ -547,13 +548,15 @@ class SurfaceContact3D(SurfaceForces3D):
         A slave node meshed inside the master deeper than half the search radius (what
         the search sees, as :meth:`penetration`); one deeper than :data:`OVERLAP` of
         the master face under it is warned about (the static state pushes the bodies
-        apart by it). The same on every rank.
+        apart by it). Before them, a slave surface that faces no master face
+        (:func:`breakwater.contact.facing.facing`). The same on every rank (collective).
         """
         X = np.ascontiguousarray(self.node_X)
         gap, facet, _ = nodal_gaps(self, X, self._mX)
         on = np.flatnonzero(facet >= 0)
-        if not len(on):
-            return None
+        why = facing(self.model, self.spec, bool(np.any(gap[on] < 0)))
+        if why is not None or not len(on):
+            return why
         depth = -gap[on]
         k = on[int(np.argmax(depth))]
         where = ", ".join(f"{c:.4g}" for c in X[k])
