@@ -313,3 +313,22 @@ def test_dynamic_penetration_against_the_smallest_facet() -> None:
     low, _ = q.suggested_penalty  # r = 2: ε_n (2 / 0.8)² (the edge's exponent ½)
     assert low == pytest.approx((2 / 0.8) ** 2 * args["penalty"], rel=1e-12)
     assert quality.assess(**args, dynamic_penetration=0.005 * h).issues == ()
+
+
+def test_penetration_facet_does_not_depend_on_round_off() -> None:
+    # The facet h_δ the static penetration is compared with: nodes whose penetrations
+    # differ by round-off (1.7e-5 relative: goda3d's block base edge, uniform along z,
+    # 2.40549e-5 or 2.40545e-5 m as its sides were free or on rollers) give the same h_δ,
+    # the smallest of theirs, whichever is the deeper. Before, the deepest node's alone:
+    # 0.0143 or 0.0447 m (0.17 % or 0.054 % of h).
+    from breakwater.model.pairs import penetration_facet
+
+    sizes = np.array([0.0447, 0.0143, 0.03, 0.01])
+    for deep in (0, 1):
+        gap = np.array([-2.40545e-5, -2.40545e-5, -1e-5, 1e-4])
+        gap[deep] = -2.40549e-5
+        assert penetration_facet(gap, sizes) == 0.0143
+    # A node 10 % shallower is another penetration: not counted (its facet is smaller).
+    assert penetration_facet(np.array([-1e-5, -0.9e-5]), np.array([0.04, 0.01])) == 0.04
+    # No penetration: the smallest facet.
+    assert penetration_facet(np.array([1e-6, 0.0]), np.array([0.04, 0.02])) == 0.02

@@ -32,6 +32,7 @@ from breakwater.model.pairs import (
     StaticMeasures,
     max_penetration,
     pair_names,
+    penetration_facet,
     probe_keys,
     settlement,
 )
@@ -157,14 +158,15 @@ class ConformingPair:
     def static_measures(self, u: Sequence[fem.Function]) -> StaticMeasures:
         """h: the interface's length over its facets; δ and s at its nodes.
 
-        The penetration's facet size: the smallest facet at the node where δ is largest
-        (the interface's smallest when nothing penetrates).
+        The penetration's facet size: the smallest facet at the nodes where δ is largest,
+        to within 1 % (:func:`breakwater.model.pairs.penetration_facet`; the interface's
+        smallest when nothing penetrates).
         """
         m, p, nd = self.model, self.pair, self.nodes
         us, um = nd.gather(*self._sides(u))
         gap = nd.contact_state(*self._sides(u))["gap"]
         δ = max_penetration(gap)
-        at = nd.facet_size[int(np.argmin(gap))] if δ > 0 else nd.facet_size.min(initial=np.inf)
+        at = penetration_facet(gap, nd.facet_size)
         return StaticMeasures(
             penalty=p.spec.penalty, element_size=mean_facet_length(m, p),
             young_moduli=(m.bodies[p.slave].spec.material.E,
