@@ -7,7 +7,9 @@ it buys nothing but a worse-conditioned Jacobian. The measures, per contact pair
 
 - ``h``, the element size at the interface: the mean length of the interface facets;
 - ``h_δ``, the size of the facet where the static penetration is largest (the smallest
-  facet at its node; the interface's smallest facet when nothing penetrates): the
+  facet at its node, or, for a conforming pair, at the nodes within 1 % of it:
+  :func:`breakwater.model.pairs.penetration_facet`; the interface's smallest facet when
+  nothing penetrates): the
   penetration is compared with the facets it distorts, not with the mean (on a graded
   mesh, fine where the contact presses and coarse elsewhere, the mean hid a penetration
   of several % of the pressed facets: before 2026-11-28);
