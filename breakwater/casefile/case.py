@@ -263,8 +263,15 @@ def _check_groups(case: Case, groups: Mapping[str, int]) -> None:
         else:
             need(c.name, d - 1, f"contact.{c.name}")
     interfaces = {c.name for c in case.contact if not c.general}
+    slave_surfaces = {c.slave_surface: c.name for c in case.contact if c.general}
     for f in case.fixed:
         need(f.name, (d - 1, 0), f"fixed.{f.name}")  # a facet group, or points
+        if f.name in slave_surfaces:  # it ran: the slave's face held, the pair carrying 0 N
+            raise InvalidField(f"fixed.{f.name}", f"'{f.name}' is the slave surface of "
+                               f"contact pair '{slave_surfaces[f.name]}': holding it holds "
+                               "the face the pair presses, which then carries nothing; "
+                               "hold a face of one body away from the contact (the "
+                               "support's bottom), or leave the pair out")
         if f.name in interfaces:  # it ran: both sides held, the pair carrying nothing
             raise InvalidField(f"fixed.{f.name}", f"'{f.name}' is the interface of contact "
                                f"pair '{f.name}': holding it holds both bodies' faces there "
