@@ -29,6 +29,7 @@ material point under them as meshed; pair probes are refused in one line.
 from __future__ import annotations
 
 import logging
+import weakref
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -74,6 +75,9 @@ the 20 nodes inside 0.9 a (all on the planes x = 0 and z = 0) had no gap with IN
 with 1e-6 (a millionth of a face)."""
 
 log = logging.getLogger("breakwater.contact.general3d")
+_OVERLAP_WARNED: weakref.WeakKeyDictionary[Any, set[str]] = weakref.WeakKeyDictionary()
+"""Per mesh (the models of a run share it), the pairs whose overlap was warned of (the
+relaxation's steppers and the run's check each: the line was printed twice)."""
 
 class _NoSlip:
     """The slip memory of a frictionless pair (:class:`~.newtonaids.SlipMemory`): none."""
@@ -557,8 +561,9 @@ class SurfaceContact3D(SurfaceForces3D):
         why = facing(self.model, self.spec, bool(np.any(gap[on] < 0)))
         if why is not None or not len(on):
             return why
-        depth = -gap[on]
-        k = on[int(np.argmax(depth))]
+        depth = -gap[on]  # the deepest node, the first by x, y, z (any partition's)
+        deep = on[depth >= depth.max() - 1e-9 * self.radius]
+        k = deep[np.lexsort(X[deep].T[::-1])[0]]
         where = ", ".join(f"{c:.4g}" for c in X[k])
         if -gap[k] > 0.5 * self.radius:
             return (f"contact '{self.spec.name}': slave node at ({where}) m starts "
@@ -566,10 +571,14 @@ class SurfaceContact3D(SurfaceForces3D):
                     f"the search radius ({self.radius:.3g} m): the meshes overlap; mesh "
                     "the bodies apart or in contact")
         size = facet_size(self._mX[facet[on], :3])
-        if np.any(depth > OVERLAP * size) and self.comm.rank == 0:
-            log.warning("contact '%s': the meshes overlap: slave node at (%s) m starts %.3g m "
-                        "inside the master '%s'; the static state pushes the bodies apart "
-                        "by it", self.spec.name, where, -gap[k], self.spec.master)
+        warned = _OVERLAP_WARNED.setdefault(self.model.mesh, set())
+        if np.any(depth > OVERLAP * size) and self.spec.name not in warned:
+            warned.add(self.spec.name)  # once a run, not at each stepper's check
+            if self.comm.rank == 0:
+                log.warning("contact '%s': the meshes overlap: slave node at (%s) m starts "
+                            "%.3g m inside the master '%s'; the static state pushes the "
+                            "bodies apart by it", self.spec.name, where, -gap[k],
+                            self.spec.master)
         return None
 
     def probe(self, point: Sequence[float], name: str) -> Any:
