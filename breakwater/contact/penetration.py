@@ -53,11 +53,10 @@ from breakwater.contact.projection import FacetGrid, curve, project
 from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
 
 if TYPE_CHECKING:
-    from breakwater.contact.general3d import SurfaceContact3D
     from breakwater.model.model import ContactModel
 
-__all__ = ["OVERLAP", "StepCheck", "allowed_depth", "initial_overlap", "meshed_gap3d",
-           "meshed_overlap", "search_radius", "step_penetration"]
+__all__ = ["OVERLAP", "StepCheck", "allowed_depth", "initial_overlap", "meshed_overlap",
+           "search_radius", "step_penetration"]
 
 
 def search_radius(spec: SurfacePair, master: Surface) -> float:
@@ -209,44 +208,6 @@ def meshed_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
             "under it); the static state pushes the bodies apart by it, and its "
             "displacements and settlement include it: move the slave body out of the "
             "master in the mesh")
-
-
-def meshed_gap3d(contact: SurfaceContact3D) -> str | None:
-    """A warning where a 3-D general pair's meshes start apart, the static state closing it.
-
-    Collective: call it on every rank, after the stepper's initialise.
-
-    Every slave node that projects onto the master as meshed lies off it by more than
-    :data:`OVERLAP` of the face under it, and the pair carries a force in the static
-    state: the bodies moved together by the gap as rigid bodies, silently before, so
-    that their displacements, the settlement and the penalty's quality check include it
-    (a block meshed 10 mm above its slab: the check said "ok" where the block meshed on
-    the slab said "too soft"), as :func:`meshed_overlap` warns of an overlap.
-
-    Returns:
-        One line (the nearest slave node and its gap), the same on every rank; None
-        when a node starts on the master, none projects, or the pair carries nothing.
-    """
-    from breakwater.contact.general3d import nodal_gaps
-    from breakwater.model.pairs import facet_size
-
-    carried = bool(np.any(contact.resultant() != 0.0))
-    X = np.ascontiguousarray(contact.node_X)
-    gap, facet, _ = nodal_gaps(contact, X, contact._mX)
-    on = np.flatnonzero(facet >= 0)
-    if not carried or not len(on):
-        return None
-    size = facet_size(contact._mX[facet[on], :3])
-    if np.any(gap[on] <= OVERLAP * size):
-        return None
-    # The nearest node, the first by x, y, z of those as near (the same on any partition)
-    near = on[gap[on] <= gap[on].min() + 1e-9 * size.max()]
-    k = near[np.lexsort(X[near].T[::-1])[0]]
-    return (f"contact '{contact.spec.name}': the meshes start apart: the slave's nearest "
-            f"node, at {_point(X[k])}, is {gap[k]:.3g} m off the master "
-            f"'{contact.spec.master}', and the static state closed the gap: the bodies "
-            "moved together by it, and the displacements, the settlement and the "
-            "penalty's quality check include it: mesh the bodies in contact")
 
 
 def _distance(point: np.ndarray, X: np.ndarray) -> float:

@@ -18,7 +18,8 @@ from mpi4py import MPI
 
 from breakwater.common import files
 from breakwater.common.errors import CaseError
-from breakwater.contact.penetration import meshed_gap3d, meshed_overlap
+from breakwater.contact.meshedgap import meshed_gap3d
+from breakwater.contact.penetration import meshed_overlap
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads

@@ -1,0 +1,52 @@
+"""Whether a 3-D general pair's meshes start apart, the static state closing the gap.
+
+:func:`meshed_gap3d` warns of it, as :func:`breakwater.contact.penetration.meshed_overlap`
+and :meth:`breakwater.contact.general3d.SurfaceContact3D.static_check` warn of an overlap.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from breakwater.contact.general3d import SurfaceContact3D, nodal_gaps
+from breakwater.contact.penetration import OVERLAP
+from breakwater.model.pairs import facet_size
+
+__all__ = ["meshed_gap3d"]
+
+
+def meshed_gap3d(contact: SurfaceContact3D) -> str | None:
+    """A warning where a 3-D general pair's meshes start apart, the static state closing it.
+
+    Collective: call it on every rank, after the stepper's initialise.
+
+    Every slave node that projects onto the master as meshed lies off it by more than
+    :data:`OVERLAP` of the face under it, and the pair carries a force in the static
+    state: the bodies moved together by the gap as rigid bodies, silently before, so
+    that their displacements, the settlement and the penalty's quality check include it
+    (a block meshed 10 mm above its slab: the check said "ok" where the block meshed on
+    the slab said "too soft"), as :func:`breakwater.contact.penetration.meshed_overlap` warns of an
+    overlap.
+
+    Returns:
+        One line (the nearest slave node and its gap), the same on every rank; None
+        when a node starts on the master, none projects, or the pair carries nothing.
+    """
+    carried = bool(np.any(contact.resultant() != 0.0))
+    X = np.ascontiguousarray(contact.node_X)
+    gap, facet, _ = nodal_gaps(contact, X, contact._mX)
+    on = np.flatnonzero(facet >= 0)
+    if not carried or not len(on):
+        return None
+    size = facet_size(contact._mX[facet[on], :3])
+    if np.any(gap[on] <= OVERLAP * size):
+        return None
+    # The nearest node, the first by x, y, z of those as near (the same on any partition)
+    near = on[gap[on] <= gap[on].min() + 1e-9 * size.max()]
+    k = near[np.lexsort(X[near].T[::-1])[0]]
+    at = ", ".join(f"{c:.4g}" for c in X[k])
+    return (f"contact '{contact.spec.name}': the meshes start apart: the slave's nearest "
+            f"node, at ({at}) m, is {gap[k]:.3g} m off the master "
+            f"'{contact.spec.master}', and the static state closed the gap: the bodies "
+            "moved together by it, and the displacements, the settlement and the "
+            "penalty's quality check include it: mesh the bodies in contact")
