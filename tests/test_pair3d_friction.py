@@ -308,20 +308,11 @@ def forcekernels_normal(P: _Points) -> np.ndarray:
     return out
 
 
-def test_start_slip_on_held_components_moves_the_master() -> None:
-    """:func:`newtonaids.slip_velocities_at`: velocities at the interface unknowns that
-    give every slave node the asked slip, its held components included (issue 25).
-
-    Four slave nodes over two 6-node master faces that share four nodes (one master node
+def _held_nodes(rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+    """Four slave nodes over two 6-node master faces sharing four nodes (one master node
     held): node 0 free, node 1 held along x, node 2 along z (both on face 0), node 3
-    along x and z (on face 1); tangent bases tilted out of the x-z plane. The held
-    components' slip is the master's, two conditions per component on 7 free master
-    nodes: solvable exactly. The relative velocity v_k − Σ_b N̄₀_b v_b (v_k's held
-    components 0) is the asked slip to 1e-13 of it, and the friction kernel's slip (the
-    dynamics' law, :func:`friction3d.friction`) is its tangent components. Before, the
-    held components were left out (the slave node's own velocity only): node 3 had none
-    and the static state's friction on the master there was lost at t = 0."""
-    rng = np.random.default_rng(3)
+    along x and z (on face 1); random shape values and tangent bases tilted out of the
+    x-z plane. Returns pos_m, node_pos, facet0, N0, T0."""
     master = np.arange(12, 12 + 8 * 3).reshape(8, 3)
     master[7] = -1  # a held master node
     pos_m = np.ascontiguousarray(master[[[0, 1, 2, 3, 4, 5], [2, 3, 4, 5, 6, 7]]])
@@ -337,6 +328,24 @@ def test_start_slip_on_held_components_moves_the_master() -> None:
         n = np.cross(t1, rng.normal(size=3))
         t2 = np.cross(n / np.linalg.norm(n), t1)
         T0[j] = t1, t2
+    return pos_m, node_pos, facet0, N0, T0
+
+
+def test_start_slip_on_held_components_moves_the_master() -> None:
+    """:func:`newtonaids.slip_velocities_at`: velocities at the interface unknowns that
+    give every slave node the asked slip, its held components included (issue 25).
+
+    Four slave nodes over two 6-node master faces that share four nodes (one master node
+    held): node 0 free, node 1 held along x, node 2 along z (both on face 0), node 3
+    along x and z (on face 1); tangent bases tilted out of the x-z plane. The held
+    components' slip is the master's, two conditions per component on 7 free master
+    nodes: solvable exactly. The relative velocity v_k − Σ_b N̄₀_b v_b (v_k's held
+    components 0) is the asked slip to 1e-13 of it, and the friction kernel's slip (the
+    dynamics' law, :func:`friction3d.friction`) is its tangent components. Before, the
+    held components were left out (the slave node's own velocity only): node 3 had none
+    and the static state's friction on the master there was lost at t = 0."""
+    rng = np.random.default_rng(3)
+    pos_m, node_pos, facet0, N0, T0 = _held_nodes(rng)
     c = 1e-9 * rng.normal(size=(4, 2))
     rel = np.einsum("ka,kad->kd", c, T0)
     k = np.arange(4)
@@ -401,21 +410,7 @@ def test_sliding_velocities_slip_along_the_tangential_direction() -> None:
     slip is the asked one to 1e-13 of it, and no velocity is set on a held component.
     Before, a release left out every node with a held component (here nodes 1–3)."""
     rng = np.random.default_rng(3)
-    master = np.arange(12, 12 + 8 * 3).reshape(8, 3)
-    master[7] = -1
-    pos_m = np.ascontiguousarray(master[[[0, 1, 2, 3, 4, 5], [2, 3, 4, 5, 6, 7]]])
-    node_pos = np.arange(12).reshape(4, 3)
-    node_pos[1, 0] = node_pos[2, 2] = node_pos[3, 0] = node_pos[3, 2] = -1
-    facet0 = np.array([0, 0, 0, 1])
-    N0 = rng.uniform(0.1, 1.0, (4, 6))
-    N0 /= N0.sum(axis=1)[:, None]
-    T0 = np.empty((4, 2, 3))
-    for j in range(4):
-        t1 = np.array([np.cos(j), 0.1 * rng.normal(), np.sin(j)])
-        t1 /= np.linalg.norm(t1)
-        n = np.cross(t1, rng.normal(size=3))
-        t2 = np.cross(n / np.linalg.norm(n), t1)
-        T0[j] = t1, t2
+    pos_m, node_pos, facet0, N0, T0 = _held_nodes(rng)
     d = np.array([1.0, 0.0, 0.3]) / np.hypot(1.0, 0.3)
     speed = 1e-8
     k = np.arange(4)
