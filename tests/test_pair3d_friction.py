@@ -433,6 +433,24 @@ WEIGHT = MASS * 9.81
 FORCE = PUSH * MASS * np.sqrt(2.0)  # the push's magnitude, along (1, 0, 1)/√2
 
 
+def _started(model: ContactModel, comm: MPI.Comm, mass: float) -> tuple[Any, Any, Any]:
+    """The model's initial state, a GN22 stepper (Δt = DT) started from it, and the
+    block's (body 1, density RHO, mass ``mass``) mass-weighted mean of a vector field."""
+    from breakwater.stepping.gn22 import GN22
+
+    model.set_time(0.0)
+    state = initial_state(model)
+    s = GN22(model, DT)
+    s.initialise(state.u, state.v)
+    block = model.bodies[1].submesh
+
+    def centre(f: fem.Function) -> np.ndarray:
+        return np.array([comm.allreduce(fem.assemble_scalar(fem.form(
+            RHO * f[k] * ufl.dx(domain=block))), op=MPI.SUM) for k in range(3)]) / mass
+
+    return state, s, centre
+
+
 def _block(folder: pathlib.Path, comm: MPI.Comm, mu: float, chi: float, steps: int
            ) -> dict[str, Any]:
     """test_pair3d's block on a slab (non-matching faces), with friction μ and χ, pushed
@@ -443,7 +461,6 @@ def _block(folder: pathlib.Path, comm: MPI.Comm, mu: float, chi: float, steps: i
     (test_pair3d's traction (p, 0, p) on the face x = 0.1 alone spins the block about y,
     the friction then turns from the push's direction).
     """
-    from breakwater.stepping.gn22 import GN22
     from breakwater.stepping.interfacenewton import InterfaceNewton
 
     path = boxes(folder / "slide3d.msh", COMM,
@@ -463,15 +480,7 @@ def _block(folder: pathlib.Path, comm: MPI.Comm, mu: float, chi: float, steps: i
         surface_pairs=[SurfacePair("c", "block", "slab", "block_bottom", "slab_top", 1e11,
                                    friction=mu, regularisation=chi)],
         gravity=np.array([0.0, -9.81, 0.0]))
-    model.set_time(0.0)
-    state = initial_state(model)
-    s = GN22(model, DT)
-    s.initialise(state.u, state.v)
-    block = model.bodies[1].submesh
-
-    def centre(f: fem.Function) -> np.ndarray:
-        return np.array([comm.allreduce(fem.assemble_scalar(fem.form(
-            RHO * f[k] * ufl.dx(domain=block))), op=MPI.SUM) for k in range(3)]) / MASS
+    _, s, centre = _started(model, comm, MASS)
 
     out: dict[str, list[Any]] = {"v": [], "x": [], "normal": [], "friction": [],
                                  "iterations": []}
@@ -616,8 +625,6 @@ def _rollers_block(folder: pathlib.Path, steps: int) -> dict[str, Any]:
         each step (``v``), the pair's friction and normal resultants at t = 0 and after each step,
         the initial state's kind and held bodies.
     """
-    from breakwater.stepping.gn22 import GN22
-
     path = boxes(folder / "rollers3d.msh", COMM,
                  [Box("slab", (0, 0, 0), (1.0, 0.2, 0.8), 0.3),
                   Box("block", (0.1, 0.2, 0.2), (0.4, 0.2, 0.4), 0.2)])
@@ -630,15 +637,7 @@ def _rollers_block(folder: pathlib.Path, steps: int) -> dict[str, Any]:
         surface_pairs=[SurfacePair("c", "block", "slab", "block_bottom", "slab_top", 1e11,
                                    friction=0.3, regularisation=1e-10)],
         gravity=np.array([0.0, -9.81, 0.0]))
-    model.set_time(0.0)
-    state = initial_state(model)
-    s = GN22(model, DT)
-    s.initialise(state.u, state.v)
-    block = model.bodies[1].submesh
-
-    def centre(f: fem.Function) -> np.ndarray:
-        return np.array([COMM.allreduce(fem.assemble_scalar(fem.form(
-            RHO * f[k] * ufl.dx(domain=block))), op=MPI.SUM) for k in range(3)]) / ROLLER_MASS
+    state, s, centre = _started(model, COMM, ROLLER_MASS)
 
     pair = s.surfaces[0]
     out: dict[str, Any] = {"kind": state.kind, "held": state.held, "a0": centre(s.a[1])}
