@@ -575,10 +575,9 @@ class SurfaceContact3D(SurfaceForces3D):
         if np.any(depth > OVERLAP * size) and self.spec.name not in warned:
             warned.add(self.spec.name)  # once a run, not at each stepper's check
             if self.comm.rank == 0:
-                log.warning("contact '%s': the meshes overlap: slave node at (%s) m starts "
-                            "%.3g m inside the master '%s'; the static state pushes the "
-                            "bodies apart by it", self.spec.name, where, -gap[k],
-                            self.spec.master)
+                log.warning("contact '%s': the meshes overlap: slave node at (%s) m starts %.3g "
+                            "m inside the master '%s'; the static state pushes the bodies apart "
+                            "by it", self.spec.name, where, -gap[k], self.spec.master)
         return None
 
     def probe(self, point: Sequence[float], name: str) -> Any:
