@@ -103,32 +103,38 @@ def frozen(pair: SurfaceSearch3D, u0: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return out
 
 
-def nearest_vertex(points: np.ndarray, xm: np.ndarray, radius: float,
-                   chunk: int = 256) -> tuple[np.ndarray, np.ndarray]:
+def nearest_vertex(points: np.ndarray, xm: np.ndarray, radius: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """The nearest master vertex (a face corner) of each point within ``radius``.
+
+    Among the faces the search's grid gives each point
+    (:func:`~breakwater.contact.searchkernels3d.candidates`: every face whose box, grown
+    by the radius, holds it, so every corner within the radius), as the 2-D pair's
+    :func:`~breakwater.contact.searchkernels.nearest_end`.
 
     Args:
         points: The points ``(m, 3)``.
         xm: The master faces' nodes ``(M, nm, 3)`` (corners first).
         radius: The search radius.
-        chunk: Points per batch (the distances of a batch to every corner at once).
 
     Returns:
         The face of each point's nearest corner (−1: none within the radius; ties: the
-        lowest face) and the corner's reference coordinates (ξ, η) on it ``(m, 2)``.
+        lowest face, then corner) and the corner's reference coordinates (ξ, η) on it
+        ``(m, 2)``.
     """
-    corners = np.ascontiguousarray(xm[:, :3]).reshape(-1, 3)
     facet = np.full(len(points), -1, np.int64)
     xi = np.zeros((len(points), 2))
-    if not len(corners):
+    point, face = searchkernels3d.candidates(points, xm, radius)
+    if not len(point):
         return facet, xi
-    for lo in range(0, len(points), chunk):
-        d2 = np.sum((points[lo:lo + chunk, None, :] - corners[None]) ** 2, axis=2)
-        best = np.argmin(d2, axis=1)  # the first of equals: the lowest face, then corner
-        near = d2[np.arange(len(best)), best] <= radius**2
-        at = np.arange(lo, lo + len(best))[near]
-        facet[at] = best[near] // 3
-        xi[at] = NODES[3][best[near] % 3]
+    d2 = np.sum((xm[face, :3] - points[point, None, :]) ** 2, axis=2)
+    corner = np.argmin(d2, axis=1)  # the first of equals: the lowest corner
+    dist = d2[np.arange(len(face)), corner]
+    order = np.lexsort((3 * face + corner, dist, point))  # per point the nearest first
+    first = order[np.r_[True, point[order][1:] != point[order][:-1]]]
+    first = first[dist[first] <= radius**2]
+    facet[point[first]] = face[first]
+    xi[point[first]] = NODES[3][corner[first]]
     return facet, xi
 
 
