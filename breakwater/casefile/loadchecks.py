@@ -409,9 +409,9 @@ def pulling_warning(load: loadcase.LoadCase, model: ContactModel) -> str | None:
     d = fem.Constant(model.mesh, np.array(load.direction))  # one form for any direction
     dn = ufl.dot(d, n)
     ds = [ld.ds for ld in model.loads if ld.spec.name == load.name]
-    outward = sum(model.assemble(model.form(dn * m)) for m in ds)
     pulled = sum(model.assemble(model.form(ufl.max_value(dn, 0.0) * m)) for m in ds)
     total = sum(model.assemble(model.form(abs(dn) * m)) for m in ds)
+    outward = 2.0 * pulled - total  # ∫d·n = ∫⟨d·n⟩₊ − ∫⟨−d·n⟩₊, ∫|d·n| their sum
     direction = [float(c) for c in load.direction]
     if outward > 1e-9 * total:  # (not > 0: opposite faces cancel to round-off, either sign)
         into = [-c + 0.0 for c in load.direction]  # (+ 0.0: no -0.0)
