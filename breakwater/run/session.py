@@ -39,7 +39,6 @@ from breakwater.run import runstate
 from breakwater.run.runstate import RunState
 from breakwater.stepping.gn22 import GN22, GN22Parameters
 from breakwater.stepping.solver import NewtonOptions
-from breakwater.stepping.solverchoice import choose
 
 __all__ = ["Session", "Stepped"]
 
@@ -57,8 +56,8 @@ class Stepped:
         time: The time settings (step, GN22 and Newton parameters).
         output: The probes and the field output interval.
         directory: The output folder.
-        solver: The step solver (``"fast"`` or ``"reference"``; None: ``time.solver``'s
-            choice, :func:`~breakwater.stepping.solverchoice.choose`).
+        solver: The step solver, ``"fast"`` or ``"reference"`` (``time.solver``'s choice:
+            :func:`breakwater.run.begin.step_solver`).
 
     Attributes:
         stepper: The GN22 stepper (its pairs, :attr:`~breakwater.stepping.gn22.GN22.contacts`,
@@ -71,11 +70,10 @@ class Stepped:
     """
 
     def __init__(self, model: ContactModel, time: TimeSpec, output: OutputSpec,
-                 directory: pathlib.Path, solver: str | None = None) -> None:
+                 directory: pathlib.Path, solver: str) -> None:
         newton = NewtonOptions(rtol=time.newton_rtol, atol=time.newton_atol,
                                max_it=time.newton_max_it)
         params = GN22Parameters(time.beta1, time.beta2, time.allow_conditional)
-        solver = solver or choose(model, time.solver)[0]
         self.stepper = s = GN22(model, time.dt, params, newton=newton, solver=solver)
         if s.fast is not None and time.levels:  # adaptive steps: a factorisation per level
             s.fast.factorisations.cache_size = max(s.fast.factorisations.cache_size,
