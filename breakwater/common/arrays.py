@@ -13,7 +13,8 @@ import numpy as np
 
 from breakwater.common.jit import kernel
 
-__all__ = ["equal", "equal_at", "finite", "key_of", "read_only", "unchanged"]
+__all__ = ["equal", "equal_at", "finite", "first_by_position", "key_of", "read_only",
+           "unchanged"]
 
 
 def read_only(x: np.ndarray) -> np.ndarray:
@@ -72,3 +73,12 @@ def finite(x):  # type: ignore[no-untyped-def]
         if not np.isfinite(v):
             return False
     return True
+
+
+def first_by_position(X: np.ndarray, nodes: np.ndarray) -> int:
+    """Of ``nodes`` (indices into the points X), the first by x, then y (then z).
+
+    The same node on every partition where several are as deep or as near to round-off
+    (the node a warning or a refusal names).
+    """
+    return int(nodes[np.lexsort(X[nodes].T[::-1])[0]])

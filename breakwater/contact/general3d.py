@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from dolfinx import fem
 
+from breakwater.common.arrays import first_by_position
 from breakwater.common.errors import CaseError
 from breakwater.contact import (
     forcekernels,
@@ -561,9 +562,8 @@ class SurfaceContact3D(SurfaceForces3D):
         why = facing(self.model, self.spec, bool(np.any(gap[on] < 0)))
         if why is not None or not len(on):
             return why
-        depth = -gap[on]  # the deepest node, the first by x, y, z (any partition's)
-        deep = on[depth >= depth.max() - 1e-9 * self.radius]
-        k = deep[np.lexsort(X[deep].T[::-1])[0]]
+        depth = -gap[on]  # the deepest node (any partition's)
+        k = first_by_position(X, on[depth >= depth.max() - 1e-9 * self.radius])
         where = ", ".join(f"{c:.4g}" for c in X[k])
         if -gap[k] > 0.5 * self.radius:
             return (f"contact '{self.spec.name}': slave node at ({where}) m starts "

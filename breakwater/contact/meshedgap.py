@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from breakwater.common.arrays import first_by_position
 from breakwater.contact.general3d import SurfaceContact3D, nodal_gaps
 from breakwater.contact.penetration import OVERLAP
 from breakwater.model.pairs import facet_size
@@ -41,9 +42,7 @@ def meshed_gap3d(contact: SurfaceContact3D) -> str | None:
     size = facet_size(contact._mX[facet[on], :3])
     if np.any(gap[on] <= OVERLAP * size):
         return None
-    # The nearest node, the first by x, y, z of those as near (the same on any partition)
-    near = on[gap[on] <= gap[on].min() + 1e-9 * size.max()]
-    k = near[np.lexsort(X[near].T[::-1])[0]]
+    k = first_by_position(X, on[gap[on] <= gap[on].min() + 1e-9 * size.max()])  # the nearest
     at = ", ".join(f"{c:.4g}" for c in X[k])
     return (f"contact '{contact.spec.name}': the meshes start apart: the slave's nearest "
             f"node, at ({at}) m, is {gap[k]:.3g} m off the master "
