@@ -81,6 +81,7 @@ from breakwater.contact.conforming import (
 from breakwater.contact.slipguard import SlipGuard
 from breakwater.model.model import ContactModel, PairData
 from breakwater.statics.relaxation import FALLBACK, no_state_advice, relax
+from breakwater.statics.release import free_part
 from breakwater.statics.rigidmodes import free_mode, joined, static_needed
 from breakwater.stepping.gn22 import force_scale, solve_static, tangential_stiffness
 from breakwater.stepping.solver import NewtonOptions, NewtonSolver
@@ -475,8 +476,11 @@ def _release(model: ContactModel, u: list[fem.Function], v: list[fem.Function],
 
     Each held pair's slave nodes get the slip velocity :data:`~breakwater.contact.conforming.
     RELEASE` χ along the body's sliding direction d (the held pairs' shear
-    resultant), so that the law carries the friction of sliding, μp, at t = 0. The
-    displacements are then solved for the state in which the body slides as a rigid
+    resultant less its components along the directions the body's ``[fixed]`` groups
+    hold, :func:`~breakwater.statics.release.free_part`, as the general pairs': before,
+    a block on rollers released with a velocity along them and α off by d_z²), so
+    that the law carries the friction of sliding, μp, at t = 0. The displacements are
+    then solved for the state in which the body slides as a rigid
     one: the held pairs carry that friction, each held slave body has the uniform
     acceleration α d, α from the body's resultant along d (updated at every Newton
     iterate, so that the residual never drives its free rigid mode along d, which the
@@ -493,9 +497,14 @@ def _release(model: ContactModel, u: list[fem.Function], v: list[fem.Function],
     bodies: dict[int, np.ndarray] = {}
     for p, shear in held:
         bodies[p.slave] = bodies.get(p.slave, 0.0) + shear
+    for i in list(bodies):  # less what its [fixed] groups hold (as the general pairs')
+        bodies[i] = free_part(model, i, bodies[i])
+        if not np.any(bodies[i]):  # held along all of it: no slide
+            del bodies[i]
     pairs = [p for p, _ in held]
-    release_velocities(model, pairs, [bodies[p.slave] / np.linalg.norm(bodies[p.slave])
-                                      for p in pairs], v)
+    moving = [p for p in pairs if p.slave in bodies]
+    release_velocities(model, moving, [bodies[p.slave] / np.linalg.norm(bodies[p.slave])
+                                       for p in moving], v)
     held_ids = {id(p) for p in pairs}
     v_τ = [f / τ for f in u] if free else None
     F = model.bulk_residual(u)

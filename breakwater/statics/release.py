@@ -35,7 +35,7 @@ from breakwater.model.model import ContactModel
 from breakwater.model.pairs import SurfacePair
 from breakwater.statics.pseudostep import PseudoStepper
 
-__all__ = ["HELD_FRICTION", "held_bodies", "moving_body", "release"]
+__all__ = ["HELD_FRICTION", "free_part", "held_bodies", "moving_body", "release"]
 
 log = logging.getLogger("breakwater.statics.relaxation")  # the relaxation's warnings
 
@@ -50,7 +50,7 @@ def held_bodies(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     Returns:
         Their names, each in a warning, and (general pairs) each body's sliding direction
         (against the held friction, less the components its ``[fixed]`` groups hold:
-        :func:`_free_part`), for
+        :func:`free_part`), for
         :func:`~breakwater.statics.relaxation._slide` and :func:`release`.
     """
     out: list[str] = []
@@ -75,7 +75,7 @@ def held_bodies(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
             if body not in out:
                 out.append(body)
     for index in list(sliding):
-        sliding[index] = _free_part(ps.model, index, sliding[index])
+        sliding[index] = free_part(ps.model, index, sliding[index])
         if not np.any(sliding[index]):  # held by its [fixed] groups along it: no slide
             del sliding[index]
     if not out:  # the conforming pairs' bodies (not checked one by one)
@@ -89,7 +89,7 @@ def held_bodies(ps: PseudoStepper) -> tuple[list[str], dict[int, np.ndarray]]:
     return out, sliding
 
 
-def _free_part(model: ContactModel, index: int, total: np.ndarray) -> np.ndarray:
+def free_part(model: ContactModel, index: int, total: np.ndarray) -> np.ndarray:
     """A body's sliding direction (unnormalised) less the components its groups hold.
 
     A body with a ``[fixed]`` group translates along its free components only. The
@@ -101,7 +101,8 @@ def _free_part(model: ContactModel, index: int, total: np.ndarray) -> np.ndarray
     stalled at 2.4e-6 of the load (a rigid drift of 3.5e-6 m per pseudo step: no state,
     the block released from the held state with its bonded shear, +8 % on its
     acceleration at the second step); at t = 0 the block accelerated at 0.057 m/s²
-    along z.
+    along z. The conforming pairs' release (:func:`breakwater.statics.initial._release`)
+    takes its direction from here too.
     """
     out = np.array(total, dtype=float)
     held = sorted({c for _, comps in model.fixed_on(model.bodies[index].spec.name)
