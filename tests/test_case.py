@@ -139,6 +139,9 @@ def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monke
     ("time.dt=abc", "--set: time.dt: expected a number, got 'abc'"),
     ("bodies.mound.poisson=0.5", "--set: bodies.mound.poisson: Poisson's ratio"),
     ("dt=1e-4", "did you mean 'time.dt'?"),
+    # Keys are case sensitive (refused) but suggested without case (was 'time', 'tolerance').
+    ("DT=1e-4", "did you mean 'time.dt'?"),
+    ("time.DT=1e-4", "did you mean 'time.dt'?"),
     # A check of two keys blames the --set of either (not the case file whose dt it is).
     ("time.end_time=5e-5", "--set: time.dt: must be smaller than end_time"),
     ("time.max_steps=10", "--set: time.end_time: end_time / dt"),

@@ -98,11 +98,20 @@ def printable(text: str) -> str:
 
 
 def suggest(word: str, choices: Sequence[str]) -> str:
-    """`` (did you mean 'x'?)`` with the closest choice, or nothing without choices."""
+    """`` (did you mean 'x'?)`` with the closest choice, or nothing without choices.
+
+    Compared without case (:meth:`str.casefold`; the first of choices equal but for
+    case): values and keys are case sensitive and stay refused, but ``"AUTO"`` is
+    nearest ``'auto'``, not ``'reference'`` (difflib's ratio, case sensitive, saw no
+    letter in common with ``auto``).
+    """
     if not choices:
         return ""
-    best = difflib.get_close_matches(word, choices, n=1, cutoff=0.0)
-    return f" (did you mean '{best[0]}'?)" if best else ""
+    folded: dict[str, str] = {}
+    for c in choices:
+        folded.setdefault(c.casefold(), c)
+    best = difflib.get_close_matches(word.casefold(), list(folded), n=1, cutoff=0.0)
+    return f" (did you mean '{folded[best[0]]}'?)" if best else ""
 
 
 # --- the types of the fields -----------------------------------------------------------
@@ -228,10 +237,12 @@ def suggest_key(root: type, word: str, valid: Sequence[str]) -> str:
         word: The unknown key.
         valid: The keys of the table it was given in.
     """
-    elsewhere = {k.rsplit(".", 1)[-1]: k for k in reversed(schema_keys(root))}
+    # Without case, as suggest: "DT" is 'time.dt'.
+    elsewhere = {k.rsplit(".", 1)[-1].casefold(): k for k in reversed(schema_keys(root))}
+    word = word.casefold()
     if word in elsewhere:
         return f" (did you mean '{elsewhere[word]}'?)"
-    if difflib.get_close_matches(word, valid, n=1, cutoff=0.6):
+    if difflib.get_close_matches(word, [v.casefold() for v in valid], n=1, cutoff=0.6):
         return suggest(word, valid)
     near = difflib.get_close_matches(word, list(elsewhere), n=1, cutoff=0.8)
     if near:
