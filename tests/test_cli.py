@@ -65,6 +65,21 @@ def test_show_case_prints_the_resolved_case(capsys):
         assert data["time"]["dt"] == 5e-5
 
 
+def test_show_case_says_it_did_not_check_the_probe_points(capsys):
+    """show-case does not mesh (goda3d's mesh takes 8 s): a probe point outside the bodies
+    was printed as if accepted, run refusing it only once meshed. The output now says,
+    in TOML comments above the case, that the points were not checked."""
+    far = 'output.probes.far={body="caisson",point=[50.0,50.0,0.0]}'
+    assert cli.main(["show-case", "goda3d", "--set", far]) == 0
+    if COMM.rank == 0:
+        out = capsys.readouterr().out
+        assert out.startswith(cli.UNMESHED_PROBES)
+        assert "not checked" in out.splitlines()[1]
+        data = tomllib.loads(out)  # still TOML: the note is comments
+        assert data == load_case("goda3d", [far]).resolved()
+        assert data["output"]["probes"]["far"]["point"] == [50.0, 50.0, 0.0]
+
+
 def test_show_case_reference(capsys):
     assert cli.main(["show-case", "--reference"]) == 0
     if COMM.rank == 0:
