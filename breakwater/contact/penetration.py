@@ -55,8 +55,8 @@ from breakwater.contact.surfaces import Surface, SurfacePair, gather_surface
 if TYPE_CHECKING:
     from breakwater.model.model import ContactModel
 
-__all__ = ["OVERLAP", "StepCheck", "allowed_depth", "initial_overlap", "meshed_overlap",
-           "search_radius", "step_penetration"]
+__all__ = ["OVERLAP", "StepCheck", "allowed_depth", "initial_overlap", "meshed_gaps",
+           "meshed_overlap", "search_radius", "step_penetration"]
 
 
 def search_radius(spec: SurfacePair, master: Surface) -> float:
@@ -122,13 +122,8 @@ def _depths(model: ContactModel, spec: SurfacePair
     k = np.flatnonzero(inside)
     if not len(k):
         return None
-    # Orient each master facet so that (t_y, −t_x) points out of its cell.
-    X = master.X.copy()
-    mid = X.mean(axis=1)
+    X = _oriented(master)
     chord = X[:, 1] - X[:, 0]
-    flip = np.sum((master.interior - mid) * np.stack([chord[:, 1], -chord[:, 0]], 1),
-                  axis=1) > 0
-    X[flip, 0], X[flip, 1] = master.X[flip, 1], master.X[flip, 0]
     radius = search_radius(spec, master)
     allowed = allowed_depth(master, radius)
     facet, xi = project(nodes[k], X, FacetGrid(X, radius))
@@ -142,6 +137,47 @@ def _depths(model: ContactModel, spec: SurfacePair
     limit = np.where(on, allowed[np.maximum(facet, 0)], 0.0)
     length = np.where(on, np.linalg.norm(chord, axis=1)[np.maximum(facet, 0)], 0.0)
     return nodes[k], depth, limit, length, radius
+
+
+def _oriented(master: Surface) -> np.ndarray:
+    """The master facets' nodes, each facet's ordered so that (t_y, −t_x) points out."""
+    X = master.X.copy()
+    mid = X.mean(axis=1)
+    chord = X[:, 1] - X[:, 0]
+    flip = np.sum((master.interior - mid) * np.stack([chord[:, 1], -chord[:, 0]], 1),
+                  axis=1) > 0
+    X[flip, 0], X[flip, 1] = master.X[flip, 1], master.X[flip, 0]
+    return X
+
+
+def meshed_gaps(model: ContactModel, spec: SurfacePair
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Every slave node's distance outside the master surface at t = 0 (collective).
+
+    The 2-D counterpart of :func:`breakwater.contact.general3d.nodal_gaps` on the meshed
+    configuration, for :func:`breakwater.contact.meshedgap.meshed_gap2d`.
+
+    Returns:
+        The slave nodes (sorted, the same on every rank), their gaps (negative inside;
+        inf: no master surface point within the search radius) and the length of the
+        master facet each projects on (0 without one); None without nodes.
+    """
+    slave = gather_surface(model, None, spec.slave, (spec.slave_surface,))
+    master = gather_surface(model, None, spec.master, spec.master_groups)
+    nodes = np.unique(slave.X.reshape(-1, model.gdim), axis=0)
+    if not len(nodes) or not len(master.X):
+        return None
+    X = _oriented(master)
+    facet, xi = project(nodes, X, FacetGrid(X, search_radius(spec, master)))
+    gap = np.full(len(nodes), np.inf)
+    on = facet >= 0
+    if on.any():
+        x_bar, tangent, _ = curve(X[facet[on]], xi[on])
+        tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+        n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
+        gap[on] = np.sum((nodes[on] - x_bar) * n, axis=1)
+    chord = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    return nodes, gap, np.where(on, chord[np.maximum(facet, 0)], 0.0)
 
 
 def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:

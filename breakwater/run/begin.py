@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from breakwater.common import files
 from breakwater.common.errors import CaseError
-from breakwater.contact.meshedgap import meshed_gap3d
+from breakwater.contact.meshedgap import meshed_gap2d, meshed_gap3d
 from breakwater.contact.penetration import meshed_overlap
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
@@ -90,8 +90,9 @@ def start(r: Session) -> None:
     r.applied = AppliedLoads(m, r.time.beta1, st.applied_loads)
     s, out = x.stepper, x.files
     s.initialise(init.u, init.v, m.initial.loads)  # a₀: the state's loads (f at 0⁻)
-    for contact in s.surfaces if m.gdim == 3 else ():  # meshed apart, the gap closed
-        line = meshed_gap3d(contact)  # type: ignore[arg-type]  # gdim 3: SurfaceContact3D
+    for contact in s.surfaces:  # meshed apart, the gap closed
+        line = (meshed_gap3d(contact) if m.gdim == 3  # type: ignore[arg-type]
+                else meshed_gap2d(m, contact))  # type: ignore[arg-type]
         if line is not None:
             log.warning("%s", line)
     if st.step.adaptive:
