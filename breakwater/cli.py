@@ -457,6 +457,23 @@ def _report(error: BaseException) -> None:
         print(f"breakwater: error: {line}", file=sys.stderr, flush=True)
 
 
+@contextmanager
+def _signals(args: argparse.Namespace) -> Iterator[None]:
+    """SIGTERM and SIGINT end a command that computes in one line (exit status 1).
+
+    ``show-case`` reads a case and prints it: nothing to stop (and no PETSc to load).
+    """
+    if getattr(args, "command", None) == "show-case":
+        yield
+        return
+    from mpi4py import MPI
+
+    from breakwater.common.commandsignals import signals_end_the_command
+
+    with signals_end_the_command(MPI.COMM_WORLD):
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = _parser()
@@ -467,7 +484,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from breakwater.outputs.checkpoint import CheckpointError
 
     try:
-        with _logging(args):
+        with _logging(args), _signals(args):
             return int(args.func(args))
     except (CaseError, MeshError, CheckpointError) as e:
         if args.debug:
