@@ -12,16 +12,16 @@ refinement 1 it took 81.5 times the fast solver's CPU time per step
 (benchmarks/records/2026-11-29-solver-choice.md), and n_I back-solves per Δt (the fast
 path's X) cost less than its factorisations per step at every size measured. An iterative
 full system (GMRES and GAMG, the interface's tangential unknowns rotated into their pairs'
-mean and difference) converged, but took 5 times MUMPS's CPU time per Newton iteration
-over 12 steps of ``goda3d`` at refinement 1 (rising with the slip) and 3.3 times per
-linear system at refinement 2, with less memory there (0.5 against 4.2 GB; record
-2026-11-29-iterative-full-system): it is not offered (the sizes where "auto" switches,
-n_I of 9000 and more, were not measured). So the choice is by memory, not time:
+mean and difference) failed at the 13th step of ``goda3d`` at refinement 1, took 5 times
+MUMPS's CPU time per Newton iteration over the 12 before (rising with the slip) and 3.3
+times per linear system at refinement 2, with less memory there (0.5 against 4.2 GB;
+record 2026-11-29-iterative-full-system): it is not offered (the sizes where "auto"
+switches, n_I of 9000 and more, were not measured). So the choice is by memory, not time:
 ``time.solver = "auto"`` (the default) takes ``"fast"`` unless :data:`DENSE_COPIES` × 8
 n_I² bytes per rank exceed :data:`DENSE_MEMORY` of a node's available memory, and then
-``"reference"``, with one warning line. General pairs
-have no full-system solver (their forces are not UFL forms): where theirs does not fit
-the run is refused in one line, before the static state.
+``"reference"``, with one warning line. General pairs have no full-system solver (their
+forces are not UFL forms): where theirs does not fit the run is refused in one line,
+before the static state.
 """
 
 from __future__ import annotations
