@@ -190,3 +190,29 @@ def test_load_case_overrides_not_a_list() -> None:
                            ([pathlib.Path("x")], "an item PosixPath PosixPath('x')")):
         with pytest.raises(CaseError, match=expected + re.escape(got) + "$"):
             load_case("goda", overrides)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("where", ["bodies", "contact", "fixed", "loads", "output.probes",
+                                   "output.pair_probes"])
+def test_an_entry_given_twice_from_python_is_refused(where: str) -> None:
+    """A case file's entries are its tables' keys; ``dataclasses.replace`` could give one
+    twice: ``contact=(c, c)`` ran with the pair twice (the Goda case's peak sway at
+    t = 2 ms 2.158e-4 m instead of 2.204e-4 m), ``loads=(ld, ld)`` with twice the impulse,
+    each silently; the summary kept one entry of the name."""
+    case = load_case("goda")
+
+    def with_entries(entries: tuple[Any, ...]) -> Any:
+        if where.startswith("output."):
+            output = dataclasses.replace(case.output, **{where.split(".")[1]: entries})
+            return dataclasses.replace(case, output=output)
+        return dataclasses.replace(case, **{where: entries})
+
+    entries = getattr(case.output if where.startswith("output.") else case,
+                      where.split(".")[-1])
+    last = entries[-1]
+    with pytest.raises(InvalidField, match=rf"^{re.escape(where)}\.{last.name}: given twice "
+                       r"\(each entry of .* once") as e:
+        with_entries((*entries, last))
+    assert "\n" not in str(e.value)
+    # The entry replaced (the message's advice) is taken.
+    with_entries(tuple(dataclasses.replace(x) if x.name == last.name else x for x in entries))

@@ -98,6 +98,7 @@ class CaseSettings:
         dimension_problem(self)
         if not self.bodies:
             raise InvalidField("bodies", "the case needs at least one body ([bodies.<name>])")
+        self._check_names_once()
         names = [b.name for b in self.bodies]
         # The ParaView files fields_<body>.bp and contact_<pair>.bp are named after them.
         for where, file in [*((f"bodies.{b.name}", f"fields_{b.name}.bp") for b in self.bodies),
@@ -163,6 +164,28 @@ class CaseSettings:
                 raise InvalidField(f"output.pair_probes.{q.name}.pair",
                                    f"no contact pair '{q.pair}'{suggest(q.pair, pairs)} "
                                    f"(pairs: {', '.join(pairs) or 'none'})")
+
+    def _check_names_once(self) -> None:
+        """Refuse an entry of a named collection given twice (the case from Python).
+
+        A case file's entries are its tables' keys, given once; ``dataclasses.replace``
+        can add one of the same name: ``contact=(*case.contact, replace(c, friction=0.3))``
+        ran with both pairs, the contact's stiffness and friction doubled, a load given
+        twice applied twice its impulse, and the summary kept one of each name.
+        """
+        for where, entries in (("bodies", self.bodies), ("contact", self.contact),
+                               ("fixed", self.fixed), ("loads", self.loads),
+                               ("output.probes", self.output.probes),
+                               ("output.pair_probes", self.output.pair_probes)):
+            seen: set[str] = set()
+            for entry in entries:
+                if entry.name in seen:
+                    raise InvalidField(f"{where}.{entry.name}", f"given twice (each entry of "
+                                       f"{where} once, as the case file's [{where}.<name>] "
+                                       "tables: replace it, e.g. tuple(dataclasses.replace(x, "
+                                       f"...) if x.name == '{entry.name}' else x for x in "
+                                       f"case.{where}))")
+                seen.add(entry.name)
 
     # --- derived values ------------------------------------------------------------
 
