@@ -12,6 +12,7 @@ import json
 import math
 import os
 import pathlib
+import re
 import signal
 import subprocess
 import sys
@@ -24,6 +25,7 @@ import breakwater  # noqa: F401  (imports the PETSc of the dolfinx wheel first)
 
 # isort: split
 from breakwater import cli
+from breakwater.casefile.case import load_case
 from breakwater.common.errors import CaseError
 from breakwater.outputs import checkpoint
 from breakwater.studies.columns import TABLE_COLUMNS, headline_columns
@@ -203,6 +205,49 @@ def test_ranks_per_case_must_divide(shared_dir, capsys):
     assert cli.main(["sweep", str(path), "--ranks-per-case", str(COMM.size + 1)]) == 2
     if COMM.rank == 0:
         assert "--ranks-per-case" in capsys.readouterr().err
+
+
+def test_study_arguments_from_python_are_refused_in_one_line(shared_dir):
+    """A notebook's calls, each refused in one line before the study's folder is made.
+
+    ``run_study("study.toml")`` failed with ``AttributeError: 'str' object has no
+    attribute 'points'``, ``load_study(path, "time.end_time=0.05")`` read the string
+    character by character (``--set t: expected key=value``), ``load_study(path, None)``
+    and ``load_case({...})`` with TypeErrors of ``list`` and ``pathlib``. Every rank
+    refuses alike (the same arguments): no rank is left waiting.
+    """
+    path = study_file(shared_dir, '[grid]\n"contact.interface.friction" = [0.5]\n')
+    study = load_study(path, None)  # None: no overrides, as load_case
+    assert load_study(path, ("time.end_time=0.002",)).fixed["time.end_time"] == "0.002"
+    out = shared_dir / "never"
+    for call, message in (
+            (lambda: run_study(str(path), out),  # type: ignore[arg-type]
+             r"^run_study: study: expected a Study, got a path: read it first, "
+             rf"run_study\(load_study\('{re.escape(str(path))}'\), \.\.\.\)$"),
+            (lambda: run_study({"base": "goda"}, out),  # type: ignore[arg-type]
+             r"^run_study: study: expected a Study \(run_study\(load_study\('study\.toml'\), "
+             r"\.\.\.\)\), got dict "),
+            (lambda: run_study(study, out, ranks_per_case="1"),  # type: ignore[arg-type]
+             r"^run_study: ranks_per_case: expected an integer, got str '1'$"),
+            (lambda: run_study(study, out, comm="world"),  # type: ignore[arg-type]
+             r"^run_study: comm: expected an MPI communicator .*, got str 'world'$"),
+            (lambda: run_study(study, 5),  # type: ignore[arg-type]
+             r"^run_study: out: expected a folder as a str or a pathlib\.Path .*got int 5$")):
+        with pytest.raises(TypeError, match=message):
+            call()
+    for call, message in (
+            (lambda: load_study(path, "time.end_time=0.002"),  # type: ignore[arg-type]
+             r"^overrides: expected a list of 'key=value' strings \(e\.g\. load_study\("
+             r"'study\.toml', \['time\.end_time=0\.05'\]\)\), got str "
+             r"'time\.end_time=0\.002'$"),
+            (lambda: load_study({"base": "goda"}),  # type: ignore[arg-type]
+             r"^path: expected a study file as a str or a pathlib\.Path, got dict "),
+            (lambda: load_case({"name": "x"}),  # type: ignore[arg-type]
+             r"^path: expected a case file \(or a built-in case's name, 'goda'\) as a str "
+             r"or a pathlib\.Path, got dict ")):
+        with pytest.raises(CaseError, match=message):
+            call()
+    assert not out.exists()
 
 
 @pytest.mark.timeout(120)

@@ -37,7 +37,7 @@ type, unit and default.
 from __future__ import annotations
 
 import pathlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from breakwater.casefile.dimension import dimension, general_in_3d, mesh_problem
@@ -68,7 +68,8 @@ from breakwater.common.gmshtools import (
     unsupported_format,
 )
 from breakwater.common.xdmfinfo import is_xdmf, xdmf_groups
-from breakwater.config.fields import InvalidField, printable, suggest, to_toml
+from breakwater.config.fields import InvalidField, suggest, to_toml
+from breakwater.config.overrides import file_argument, override_list
 from breakwater.config.schema import Schema
 
 if TYPE_CHECKING:
@@ -367,33 +368,6 @@ def _unused_fix(source: str, table: str, key: str, defaults: dict[str, Any]) -> 
     return f"remove it, or set mesh.source = \"{table}\""
 
 
-def override_list(overrides: Any) -> list[str]:
-    """``load_case``'s overrides as a list of strings (None: none).
-
-    A single string was read character by character (``load_case(None,
-    "time.end_time=0.05")`` said ``--set t: expected key=value``), a dict by its keys
-    (``--set time.end_time: expected key=value``), and None failed with ``TypeError:
-    'NoneType' object is not iterable``.
-
-    Raises:
-        CaseError: Not a list (or tuple) of strings, in one line saying what is.
-    """
-    if overrides is None:
-        return []
-    example = "e.g. load_case(None, ['time.end_time=0.05', 'contact.interface.friction=0.5'])"
-    if isinstance(overrides, str | bytes | Mapping) or not isinstance(overrides, Iterable):
-        what = "a dict" if isinstance(overrides, Mapping) else \
-            f"{type(overrides).__name__} {printable(repr(overrides))[:60]}"
-        raise CaseError(f"overrides: expected a list of 'key=value' strings ({example}), "
-                        f"got {what}")
-    items = list(overrides)
-    wrong = next((o for o in items if not isinstance(o, str)), None)
-    if wrong is not None:
-        raise CaseError(f"overrides: expected a list of 'key=value' strings ({example}), "
-                        f"got an item {type(wrong).__name__} {printable(repr(wrong))[:60]}")
-    return items
-
-
 STATIC_TIME = {"dt": 0.5, "end_time": 1.0}
 """The ``[time]`` of a case read for a static solve alone, when it has none (unused)."""
 
@@ -409,6 +383,7 @@ def _case_file(path: str | pathlib.Path | None) -> pathlib.Path:
     """The file of a case argument: a file, a built-in name, or None (the default)."""
     if path is None:
         return builtin_case(DEFAULT_CASE)
+    file_argument(path, "a case file (or a built-in case's name, 'goda')")
     file = pathlib.Path(path)
     if not file.exists() and file.suffix == "" and "/" not in str(path):
         return builtin_case(str(path))

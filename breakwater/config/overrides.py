@@ -12,9 +12,10 @@ the value is a TOML value, a bare word a string (:func:`parse_value`).
 from __future__ import annotations
 
 import dataclasses
+import os
 import pathlib
 import tomllib
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import fields
 from typing import Any
 
@@ -23,16 +24,70 @@ from breakwater.config.fields import (
     key_field,
     keyed_item,
     optional,
+    printable,
     suggest,
     suggest_key,
     type_hints,
 )
 from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range, record, resolved
 
-__all__ = ["OVERRIDE", "apply_override", "parse_value", "path_key"]
+__all__ = ["OVERRIDE", "apply_override", "file_argument", "override_list", "parse_value",
+           "path_key"]
 
 OVERRIDE = "--set"
 """Origin of a value given as a ``key=value`` override."""
+
+
+def _shown(value: Any) -> str:
+    """A value's type and start, for a message."""
+    return f"{type(value).__name__} {printable(repr(value))[:60]}"
+
+
+def override_list(overrides: Any, example: str = "load_case(None, ['time.end_time=0.05', "
+                  "'contact.interface.friction=0.5'])") -> list[str]:
+    """Overrides given from Python as a list of strings (None: none).
+
+    A single string was read character by character (``load_case(None,
+    "time.end_time=0.05")`` said ``--set t: expected key=value``), a dict by its keys
+    (``--set time.end_time: expected key=value``), and None failed with ``TypeError:
+    'NoneType' object is not iterable``.
+
+    Args:
+        overrides: A list (or tuple, or iterable) of ``key=value`` strings, or None.
+        example: The call the message shows.
+
+    Raises:
+        CaseError: Not a list (or tuple) of strings, in one line saying what is.
+    """
+    if overrides is None:
+        return []
+    expected = f"overrides: expected a list of 'key=value' strings (e.g. {example})"
+    if isinstance(overrides, str | bytes | Mapping) or not isinstance(overrides, Iterable):
+        what = "a dict" if isinstance(overrides, Mapping) else _shown(overrides)
+        raise CaseError(f"{expected}, got {what}")
+    items = list(overrides)
+    wrong = next((o for o in items if not isinstance(o, str)), None)
+    if wrong is not None:
+        raise CaseError(f"{expected}, got an item {_shown(wrong)}")
+    return items
+
+
+def file_argument(path: Any, what: str) -> None:
+    """Refuse a file argument given from Python that is not a str or a path.
+
+    ``load_case({...})`` or ``load_study(case)`` failed in ``pathlib`` with
+    ``TypeError: argument should be a str or an os.PathLike object ...``.
+
+    Args:
+        path: The argument.
+        what: What it names, e.g. ``"a case file (or a built-in case name, 'goda')"``.
+
+    Raises:
+        CaseError: One line saying what was given.
+    """
+    if not isinstance(path, str | os.PathLike):
+        raise CaseError(f"path: expected {what} as a str or a pathlib.Path, got "
+                        f"{_shown(path)}")
 
 
 def _split(spec: str) -> tuple[str, str] | None:

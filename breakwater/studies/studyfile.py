@@ -67,7 +67,7 @@ from typing import TYPE_CHECKING, Any
 from breakwater.common.errors import CaseError
 from breakwater.common.files import name_problem, path_problem
 from breakwater.config.fields import printable, suggest
-from breakwater.config.overrides import OVERRIDE
+from breakwater.config.overrides import OVERRIDE, file_argument, override_list
 from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range
 
 if TYPE_CHECKING:
@@ -342,20 +342,22 @@ class _Reader:
         return out
 
 
-def load_study(path: str | pathlib.Path, overrides: Sequence[str] = (),
+def load_study(path: str | pathlib.Path, overrides: Sequence[str] | None = (),
                max_points: int = MAX_POINTS) -> Study:
     """Read a study file into its points (the cases are not read: :func:`check_points`).
 
     Args:
         path: The study file.
-        overrides: ``key=value`` case overrides added to ``[set]`` (``--set``); a key
-            the study varies may not be given.
+        overrides: ``key=value`` case overrides added to ``[set]`` (``--set``), a list
+            or a tuple of strings (None: none); a key the study varies may not be given.
         max_points: Refuse a study of more points (counted before any is drawn).
 
     Raises:
         CaseError: One line naming the file and the problem.
 
     """
+    file_argument(path, "a study file")
+    overrides = override_list(overrides, "load_study('study.toml', ['time.end_time=0.05'])")
     path = pathlib.Path(path)
     if not path.is_file():
         raise CaseError(f"{path}: study file not found")

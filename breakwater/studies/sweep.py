@@ -61,6 +61,7 @@ from breakwater.outputs import checkpoint  # importing PETSc is collective: at i
 from breakwater.run import simulation
 from breakwater.run.resumecase import build_to_resume
 from breakwater.studies.columns import headline
+from breakwater.studies.studyargs import checked_study_arguments
 from breakwater.studies.studyfile import Point, Study, check_points
 from breakwater.studies.sweeptable import RECORD, TABLE, read_records, write_table
 
@@ -383,10 +384,12 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
         The counts of the points by status, the same on every rank.
 
     Raises:
+        TypeError: An argument of another type, e.g. a path for ``study`` (one line).
         CaseError: A bad study (every point's case is read before anything runs), or
             ``ranks_per_case`` does not divide the number of ranks.
 
     """
+    ranks_per_case = checked_study_arguments(study, out, comm, ranks_per_case, quiet)
     comm = MPI.COMM_WORLD if comm is None else comm
     if ranks_per_case < 1 or comm.size % ranks_per_case:
         raise CaseError(f"--ranks-per-case {ranks_per_case}: must divide the number of "
