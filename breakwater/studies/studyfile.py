@@ -124,10 +124,15 @@ class Derived:
     table: tuple[tuple[Any, Any], ...]
     interpolate: bool = False
 
+    @staticmethod
+    def same(a: Any, x: Any) -> bool:
+        """Whether the table's ``a`` is the source value ``x`` (numbers to 1e-9)."""
+        return bool(a == x or (_number(a) and _number(x) and math.isclose(a, x, rel_tol=1e-9)))
+
     def value(self, x: Any) -> Any:
         """The derived value for ``x``; CaseError when the table does not give one."""
         for a, b in self.table:
-            if a == x or (_number(a) and _number(x) and math.isclose(a, x, rel_tol=1e-9)):
+            if self.same(a, x):
                 return b
         if self.interpolate and _number(x):
             xs = [a for a, _ in self.table]
@@ -315,6 +320,12 @@ class _Reader:
                         not all(map(math.isfinite, (*xs, *(b for _, b in rows)))):
                     raise self.error(f"{where}.table", "interpolate: expected finite numbers, "
                                      "the first column increasing")
+            # A value given twice: value() took its first row, silently (a row copied and
+            # its first column not edited).
+            for k, (a, _) in enumerate(rows):
+                if any(Derived.same(a, b) for b, _ in rows[:k]):
+                    raise self.error(f"{where}.table", f"{d['from']} = {toml_literal(a)} is "
+                                     "given twice in the first column (each value once)")
             out.append(Derived(d["from"], d["key"], rows, interpolate))
         return tuple(out)
 
