@@ -66,6 +66,35 @@ def test_refused():
         MonteCarlo((0,), np.zeros(1), ()).storms_needed(confidence=1.0)
 
 
+def test_storms_neither_a_count_nor_seeds_are_refused():
+    """``storms="100"`` ran the seeds 1, 0, 0 (a string read character by character), the
+    storm of seed 0 counted twice in the mean, percentiles and P(S > limit), as did
+    ``storms=[0, 0]``; ``storms=[1.7, 2.2]`` ran seeds 1 and 2. Now one line each; a
+    NumPy count and a single limit are taken (``np.int64(3)``: ``TypeError: 'numpy.int64'
+    object is not iterable``; ``limits=0.2``: ``'float' object is not iterable``)."""
+    site, caisson = _case(30.0)
+    sea = SeaState(2.0, 10.0, waves=10)
+    for storms, message in (
+            ("100", r"^storms: expected the number of storms or a list of seeds \(integers "
+                    r">= 0\), got str '100'$"),
+            ([0, 0], r"^storms: seed 0 is given twice \(a seed is one storm"),
+            ([1.7, 2.2], r"^storms: a seed must be an integer >= 0 \(got 1\.7\)$"),
+            (3.0, r"^storms: expected the number of storms .*got float 3\.0$"),
+            (True, r"^storms: expected the number of storms .*got bool True$")):
+        with pytest.raises(ValueError, match=message):
+            expected_sliding(sea, site, caisson, storms=storms)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^limits: must be >= 0 \(got '0\.1'\)$"):
+        expected_sliding(sea, site, caisson, storms=1, limits=["0.1"])  # type: ignore[list-item]
+    result = expected_sliding(sea, site, caisson, storms=np.int64(2), limits=0.2)
+    assert result.seeds == (0, 1) and result.limits == (0.2,)
+    # The sea state takes NumPy numbers and stores them as Python's (np.float32(14.0)
+    # was refused as not "a number > 0").
+    numpy_sea = SeaState(np.float64(2.0), np.float32(10.0), waves=np.int64(10),
+                         seed=np.int64(3))
+    assert numpy_sea == SeaState(2.0, 10.0, waves=10, seed=3)
+    assert type(numpy_sea.significant_period) is float and type(numpy_sea.seed) is int
+
+
 @pytest.mark.serial
 def test_storm_rigid_example_refuses_a_bad_argument(tmp_path):
     """``examples/storm_rigid.py abc`` (or ``0``) failed with a traceback (int()'s, or

@@ -28,8 +28,9 @@ from __future__ import annotations
 import math
 import pathlib
 import statistics
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -106,7 +107,7 @@ class MonteCarlo:
 
 def expected_sliding(sea: SeaState, site: Site, caisson: Caisson,
                      storms: int | Sequence[int] = 100,
-                     limits: Sequence[float] = (0.1, 0.3),
+                     limits: Sequence[float] | float = (0.1, 0.3),
                      profile: ForceProfile | None = None) -> MonteCarlo:
     """The total sliding over storms of the sea state (seeds 0..storms−1, or given).
 
@@ -114,26 +115,64 @@ def expected_sliding(sea: SeaState, site: Site, caisson: Caisson,
         sea: The sea state (its ``seed`` is replaced by each storm's).
         site: The site.
         caisson: The caisson (base width and toe depth as the site's).
-        storms: The number of storms (seeds 0..n−1) or the seeds.
-        limits: Tolerable slidings (m) for the exceedance probabilities.
+        storms: The number of storms (seeds 0..n−1) or the seeds (integers, each once).
+        limits: Tolerable slidings (m) for the exceedance probabilities (or one).
         profile: The force-time profile (default
             :class:`~breakwater.storms.waveforce.ForceProfile`).
 
+    Raises:
+        ValueError: ``storms`` neither a count nor a list of distinct integer seeds
+            (a string, a float seed, a seed given twice), or a bad limit (one line).
     """
-    if isinstance(storms, int):
-        if storms < 1:
-            raise ValueError(f"storms: must be >= 1 (got {storms})")
-        seeds = tuple(range(storms))
-    else:
-        seeds = tuple(int(s) for s in storms)
-        if not seeds:
-            raise ValueError("storms: no seed given")
+    seeds = _seeds(storms)
+    if _real(limits):  # one limit
+        limits = (float(limits),)  # type: ignore[arg-type]
+    if isinstance(limits, str | bytes) or not isinstance(limits, Iterable):
+        raise ValueError(f"limits: expected a list of slidings (m), got {limits!r}")
     for lim in limits:
-        if not (lim >= 0 and math.isfinite(lim)):
+        if not (_real(lim) and lim >= 0 and math.isfinite(lim)):
             raise ValueError(f"limits: must be >= 0 (got {lim!r})")
     totals = np.array([storm_sliding(wave_train(replace(sea, seed=s), site), site, caisson,
                                      profile)[-1] for s in seeds])
     return MonteCarlo(seeds=seeds, totals=totals, limits=tuple(float(x) for x in limits))
+
+
+def _integer(x: Any) -> bool:
+    return isinstance(x, int | np.integer) and not isinstance(x, bool | np.bool_)
+
+
+def _real(x: Any) -> bool:
+    return isinstance(x, int | float | np.integer | np.floating) \
+        and not isinstance(x, bool | np.bool_)
+
+
+def _seeds(storms: Any) -> tuple[int, ...]:
+    """The storms' seeds: ``range(storms)`` of a count, or the seeds given, each once.
+
+    A string was read as seeds character by character (``storms="100"``: seeds 1, 0, 0,
+    the storm of seed 0 counted twice), a seed given twice counted one storm twice in
+    the statistics, a float seed was truncated (1.7: seed 1) and a NumPy count failed
+    with ``TypeError: 'numpy.int64' object is not iterable``.
+    """
+    if _integer(storms):
+        if storms < 1:
+            raise ValueError(f"storms: must be >= 1 (got {storms})")
+        return tuple(range(int(storms)))
+    if isinstance(storms, str | bytes) or not isinstance(storms, Iterable):
+        raise ValueError("storms: expected the number of storms or a list of seeds "
+                         f"(integers >= 0), got {type(storms).__name__} {storms!r}")
+    given = list(storms)
+    if not given:
+        raise ValueError("storms: no seed given")
+    wrong = next((s for s in given if not (_integer(s) and s >= 0)), None)
+    if wrong is not None:
+        raise ValueError(f"storms: a seed must be an integer >= 0 (got {wrong!r})")
+    seeds = tuple(int(s) for s in given)
+    twice = next((s for k, s in enumerate(seeds) if s in seeds[:k]), None)
+    if twice is not None:
+        raise ValueError(f"storms: seed {twice} is given twice (a seed is one storm: "
+                         "twice, it would be counted twice in the statistics)")
+    return seeds
 
 
 def write_csv(result: MonteCarlo, path: str | pathlib.Path) -> pathlib.Path:

@@ -55,6 +55,11 @@ __all__ = ["SeaState", "WaveHeights", "breaker_limit", "read_wave_table", "wave_
            "wave_train"]
 
 
+NUMBER = (int, float, np.integer, np.floating)
+"""What a number of a sea state may be (NumPy's too: ``np.float32(14.0)`` was refused
+as not "a number > 0")."""
+
+
 @dataclass(frozen=True)
 class SeaState:
     """A storm: a stationary sea state of N waves (give ``waves`` or ``duration``).
@@ -81,7 +86,7 @@ class SeaState:
     def __post_init__(self) -> None:
         for name in ("significant_height", "significant_period"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) \
+            if isinstance(value, bool) or not isinstance(value, NUMBER) \
                     or not (value > 0 and math.isfinite(value)):
                 raise ValueError(f"{name}: must be a number > 0 (got {value!r})")
         if (self.waves is None) == (self.duration is None):
@@ -93,7 +98,7 @@ class SeaState:
             raise ValueError(f"waves: must be an integer >= 1 (got {self.waves!r})")
         if self.duration is not None:
             d = self.duration
-            if isinstance(d, bool) or not isinstance(d, int | float) \
+            if isinstance(d, bool) or not isinstance(d, NUMBER) \
                     or not (d > 0 and math.isfinite(d)):
                 raise ValueError(f"duration: must be a number > 0 (got {d!r})")
             if d < self.significant_period * (1 - 1e-12):
@@ -102,6 +107,11 @@ class SeaState:
         if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) \
                 or self.seed < 0:
             raise ValueError(f"seed: must be an integer >= 0 (got {self.seed!r})")
+        # NumPy numbers stored as Python's, as the case file's reader stores them.
+        for name, kind in (("significant_height", float), ("significant_period", float),
+                           ("waves", int), ("duration", float), ("seed", int)):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, kind(getattr(self, name)))
 
     @property
     def count(self) -> int:
