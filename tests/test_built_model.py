@@ -34,7 +34,7 @@ from breakwater.model.model import (
     Material,
     SurfaceLoad,
 )
-from breakwater.run.asrun import checked_arguments, checked_extra
+from breakwater.run.asrun import RUN_ENTRIES, checked_arguments, checked_extra
 from breakwater.run.simulation import run
 
 COMM = MPI.COMM_WORLD
@@ -263,3 +263,26 @@ def test_extra_summary_that_json_cannot_hold(model: ContactModel, folder: pathli
         with pytest.raises(TypeError, match=f"^{re.escape(message)}$"):
             run(model, time, output, extra_summary=extra, report=False)  # type: ignore[arg-type]
     assert not out.exists()  # refused before anything is written
+
+
+def test_extra_summary_of_the_runs_own_entries(model: ContactModel,
+                                               folder: pathlib.Path) -> None:
+    """A key of ``extra_summary`` that the run writes itself is refused first.
+
+    ``{"status": "bogus", "steps": -1}`` made ``summary.json`` say ``"status": "bogus"``
+    for a finished run (what a study's rerun and ``--resume`` read); ``work`` and
+    ``gravity`` given were overwritten by the run's, silently. The list of the run's own
+    entries is checked against a run's summary: every entry but the build's (``mesh``,
+    ``calibration``, ``loads``) and the one given is in it.
+    """
+    time = TimeSpec(dt=1e-4, end_time=3e-4)
+    out = folder / "never_written_own"
+    for key in RUN_ENTRIES:
+        with pytest.raises(TypeError, match=rf"^run: extra_summary\['{key}'\]: summary\.json's "
+                           r"own entry, which the run writes: give yours under another key"):
+            run(model, time, OutputSpec(out), extra_summary={"note": 1, key: 2}, report=False)
+    assert not out.exists()
+    summary = run(model, time, OutputSpec(folder / "own_entries"), report=False,
+                  extra_summary={"notes": {"status": "draft"}})
+    assert summary["status"] == "finished" and summary["notes"] == {"status": "draft"}
+    assert set(summary) - set(RUN_ENTRIES) <= {"mesh", "calibration", "loads", "notes"}

@@ -76,6 +76,14 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
                     f"built.case.resolved()), got {type(resolved_case).__name__}")
 
 
+RUN_ENTRIES = ("case_name", "dimension", "finished", "status", "error", "time", "static",
+               "dynamic", "contact_quality", "solver", "energy", "checkpoint",
+               "resumed_from", "outputs", "versions", "work", "gravity", "fixed")
+"""The entries of ``summary.json`` that the run writes itself
+(:func:`~breakwater.outputs.summary.run_summary`, :class:`~breakwater.run.session.Session`);
+a case's build adds ``mesh``, ``calibration`` and ``loads``."""
+
+
 def checked_extra(extra_summary: Any) -> Mapping[str, Any] | None:
     """``run``'s ``extra_summary`` checked: a mapping that ``summary.json`` can hold.
 
@@ -84,9 +92,14 @@ def checked_extra(extra_summary: Any) -> Mapping[str, Any] | None:
     object) failed with ``json``'s traceback at the first summary write, once the
     outputs of an earlier run in the folder had been cleared.
 
+    A key of the run's own (:data:`RUN_ENTRIES`) overwrote the run's entry:
+    ``{"status": "draft"}`` made ``summary.json`` say ``draft`` for a finished run (a
+    study's rerun reads it), ``{"time": {"dt": 1}}`` changed the time step it reports; or
+    was overwritten by it (``work``, ``gravity``), silently.
+
     Raises:
-        TypeError: Not a mapping, or a value of a key JSON cannot hold (one line naming
-            the key; nothing is written).
+        TypeError: Not a mapping, a key of the run's own, or a value of a key JSON cannot
+            hold (one line naming the key; nothing is written).
     """
     if extra_summary is None:
         return None
@@ -94,6 +107,10 @@ def checked_extra(extra_summary: Any) -> Mapping[str, Any] | None:
         raise TypeError("run: extra_summary: expected a mapping (e.g. {'note': 'trial 3'}), "
                         f"got {type(extra_summary).__name__}")
     for key, value in extra_summary.items():
+        if key in RUN_ENTRIES:
+            raise TypeError(f"run: extra_summary[{key!r}]: summary.json's own entry, which "
+                            "the run writes: give yours under another key (e.g. "
+                            "extra_summary={'notes': {...}})")
         try:
             json.dumps(to_jsonable(value))
         except (TypeError, ValueError) as e:  # (ValueError: a circular reference)
