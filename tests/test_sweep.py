@@ -205,6 +205,11 @@ def test_ranks_per_case_must_divide(shared_dir, capsys):
     assert cli.main(["sweep", str(path), "--ranks-per-case", str(COMM.size + 1)]) == 2
     if COMM.rank == 0:
         assert "--ranks-per-case" in capsys.readouterr().err
+    for k in ("0", "-1"):  # (they said "must divide the number of ranks")
+        assert cli.main(["sweep", str(path), "--ranks-per-case", k]) == 2
+        if COMM.rank == 0:
+            assert capsys.readouterr().err == f"breakwater: error: --ranks-per-case {k}: " \
+                f"must be >= 1 (and divide the number of ranks, {COMM.size})\n"
 
 
 def test_study_arguments_from_python_are_refused_in_one_line(shared_dir):

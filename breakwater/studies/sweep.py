@@ -391,7 +391,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     """
     ranks_per_case = checked_study_arguments(study, out, comm, ranks_per_case, quiet)
     comm = MPI.COMM_WORLD if comm is None else comm
-    if ranks_per_case < 1 or comm.size % ranks_per_case:
+    if ranks_per_case < 1:  # ("must divide the number of ranks (2)" said 0 and -1)
+        raise CaseError(f"--ranks-per-case {ranks_per_case}: must be >= 1 (and divide the "
+                        f"number of ranks, {comm.size})")
+    if comm.size % ranks_per_case:
         raise CaseError(f"--ranks-per-case {ranks_per_case}: must divide the number of "
                         f"ranks ({comm.size})")
     folder = files.make_directory(out if out is not None else f"results/{study.name}", comm)
