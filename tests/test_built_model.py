@@ -286,3 +286,25 @@ def test_extra_summary_of_the_runs_own_entries(model: ContactModel,
                   extra_summary={"notes": {"status": "draft"}})
     assert summary["status"] == "finished" and summary["notes"] == {"status": "draft"}
     assert set(summary) - set(RUN_ENTRIES) <= {"mesh", "calibration", "loads", "notes"}
+
+
+def test_gravity_set_upwards_is_refused_before_the_run(model: ContactModel,
+                                                        folder: pathlib.Path) -> None:
+    """``model.gravity = (0, 9.81)`` on a built model: refused in one line naming the body
+    and the direction, as the case file's build refuses it, before the folder is touched.
+
+    It ran into the static state, whose Newton failed after 40 iterations with and without
+    friction (the Goda case: 'no static equilibrium ...; leave loads out of it ..., or set
+    [initial] undeformed = true'), the earlier outputs of the folder cleared.
+    """
+    out = folder / "never_written_up"
+    try:
+        model.gravity = (0.0, 9.81)  # type: ignore[assignment]
+        with pytest.raises(CaseError, match=r"^run: bodies\.a: nothing beneath it: gravity "
+                           r"\(0\.0, 9\.81\) pulls it off its contact interfaces "
+                           r"\('interface'\), .*gravity points up\?") as e:
+            run(model, TimeSpec(dt=1e-4, end_time=3e-4), OutputSpec(out), report=False)
+        assert "\n" not in str(e.value)
+    finally:
+        model.gravity = (0.0, -9.81)  # type: ignore[assignment]
+    assert not out.exists()

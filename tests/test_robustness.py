@@ -22,7 +22,7 @@ from breakwater import cli
 from breakwater.common.errors import MeshError
 from breakwater.config.runspec import OutputSpec, TimeSpec
 from breakwater.model.mesh import read_mesh
-from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material, SurfaceLoad
 from breakwater.run import simulation
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
@@ -74,15 +74,20 @@ def test_truncated_mesh_exit_2(mesh_path, folder, section, capsys):
 
 
 def test_failed_static_state_report_and_summary(mesh_path, shared_dir, capsys):
-    # No static state: gravity pulls the block off its base, so no frictional (nor a held)
-    # equilibrium exists: an error naming [initial] undeformed, the key that starts the
-    # run undeformed. Nothing of the run is written but the summary, which says so and
-    # names no file that was not written; the report has no "None" or "n/a" solver line
-    # (it had "(mean n/a, max None)").
+    # No static state: a load at t = 0 pulls the block off its base (100 times its weight),
+    # so no frictional (nor a held) equilibrium exists: an error naming [initial]
+    # undeformed, the key that starts the run undeformed. Nothing of the run is written
+    # but the summary, which says so and names no file that was not written; the report
+    # has no "None" or "n/a" solver line (it had "(mean n/a, max None)"). (A gravity
+    # pulling the block off, as here before, is refused before the run:
+    # test_built_model.py.)
     material = Material(2000.0, 0.25, young_modulus=1e9)
+    weight = 2000.0 * 0.2 * 0.05 * 9.81  # N/m, block a: 0.2 × 0.05 m
     model = ContactModel(read_mesh(mesh_path, COMM), [Body("a", material), Body("b", material)],
                          [ContactPair("interface", "a", "b", penalty=1e12, friction=0.3)],
-                         [Fixed("b_bottom")], gravity=(1.0, 9.81))
+                         [Fixed("b_bottom")],
+                         [SurfaceLoad("a_top", (0.0, 100.0 * weight / 0.2), lambda t: 1.0)],
+                         gravity=(0.0, -9.81))
     out = shared_dir / "failed"
     with pytest.raises(simulation.SimulationFailed,
                        match=r"no static equilibrium .*Newton did not converge.*\[initial\] "

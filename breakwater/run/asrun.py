@@ -47,12 +47,15 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
 
     Raises:
         TypeError: An argument of another type (one line naming it).
-        CaseError: A probe naming a body or a pair the model does not have (one line).
+        CaseError: A probe naming a body or a pair the model does not have, or a
+            gravity that pulls a body off its supports (one line).
         MeshError: A probe's point outside its body (one line).
     """
+    from breakwater.common.errors import CaseError
     from breakwater.model.model import ContactModel
     from breakwater.model.pairs import probed_pair
     from breakwater.model.pointprobe import check_body, check_point
+    from breakwater.statics.initial import gravity_problem
 
     for name, value, cls, hint in (
             ("model", model, ContactModel, "built.model"),
@@ -67,6 +70,9 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
     general = [p.name for p in model.surface_pairs]
     for q in output.pair_probes:
         probed_pair(q.name, q.pair, len(model.pairs), general)
+    why = gravity_problem(model)  # (collective) a gravity set since the build
+    if why is not None:
+        raise CaseError(f"run: {why}")
     if resolved_case is None or isinstance(resolved_case, Mapping):
         return resolved_case
     resolved = getattr(resolved_case, "resolved", None)

@@ -184,6 +184,16 @@ def unsupported(model: ContactModel, calibrating: bool = False) -> str | None:
     return free_mode(model, calibrating) or (_nothing_beneath(model) if static else None)
 
 
+def gravity_problem(model: ContactModel) -> str | None:
+    """Why gravity leaves a body with nothing beneath it (None: it does not; collective).
+
+    The build refuses it (:func:`unsupported`); ``run`` asks again, for a gravity set on
+    the built model: ``model.gravity = (0.0, 9.81)`` failed in the static Newton after
+    40 iterations, advising to leave the loads out or start undeformed.
+    """
+    return _nothing_beneath(model) if static_needed(model) else None
+
+
 LEVEL = 1e-3
 """A body's contact interfaces are along gravity when the mean |n · g/|g|| over them all
 is below this (their normals perpendicular to gravity, within 0.06°)."""
