@@ -532,3 +532,14 @@ def test_case_file_a_spreadsheet_saved(tmp_path: pathlib.Path) -> None:
     path.write_bytes(text.encode("utf-16"))
     with pytest.raises(CaseError, match=r"UTF-16 text .* save the file as UTF-8"):
         load_case(path)
+
+
+def test_build_with_a_communicator_of_another_type_is_refused() -> None:
+    """``case.build("x")`` (or a dict, a rank number) failed in dolfinx's mesh reading
+    with ``AttributeError: 'str' object has no attribute 'size'``; now one line."""
+    case = load_case("goda", ["time.end_time=0.002"])
+    for comm in ("x", 0, {"comm": None}):
+        with pytest.raises(TypeError, match=r"^build: comm: expected an MPI communicator "
+                           rf"\(e\.g\. MPI\.COMM_WORLD, or None: every rank\), got "
+                           rf"{type(comm).__name__}$"):
+            case.build(comm)  # type: ignore[arg-type]

@@ -287,8 +287,13 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
         CaseError: The mesh does not fit the case (e.g. a Goda profile off its loaded
             face, :func:`~breakwater.casefile.godaface.check_goda_face`; warned when partly off).
         CalibrationError: The calibration failed.
+        TypeError: ``comm`` not a communicator (one line; ``case.build("x")`` failed in
+            dolfinx with ``'str' object has no attribute 'size'``).
 
     """
+    if comm is not None and not isinstance(comm, MPI.Intracomm):
+        raise TypeError("build: comm: expected an MPI communicator (e.g. MPI.COMM_WORLD, or "
+                        f"None: every rank), got {type(comm).__name__}")
     comm = MPI.COMM_WORLD if comm is None else comm
     data = read_mesh(case, comm)
     # Before the calibration: a misplaced Goda profile fails fast (its exact integral
