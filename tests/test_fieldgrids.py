@@ -123,6 +123,22 @@ def test_refusals(folder: pathlib.Path) -> None:
     assert read_fields(folder, "contact_block").field_data["time"][0] == 0.0
 
 
+def test_arguments_of_another_type(folder: pathlib.Path) -> None:
+    """A time given as a string failed in numpy (``UFuncTypeError: ufunc 'less_equal' did
+    not contain a loop ...``), a name None with ``AttributeError: 'NoneType' object has no
+    attribute 'removesuffix'``; now one line naming the argument. A NumPy time is taken."""
+    if MPI.COMM_WORLD.rank != 0:
+        return
+    for time, got in (("0.1", "str '0.1'"), (True, "bool True"), ([0.1], "list [0.1]")):
+        with pytest.raises(ValueError, match=r"^time: expected a number \(s\) or None \(the "
+                           rf"last\), got {re.escape(got)}$"):
+            read_fields(folder, "block", time)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"^name: expected a body's or a contact pair's name "
+                       r"\(a str\), got NoneType None$"):
+        read_fields(folder, None)  # type: ignore[arg-type]
+    assert read_fields(folder, "block", np.float32(0.1)).field_data["time"][0] == 0.1
+
+
 def test_ranks_without_cells(shared_dir: pathlib.Path) -> None:
     """A body whose cells lie on some ranks only (a run's body is a submesh of the whole
     mesh: the Goda caisson on 3 or 4 ranks, a small block on a long base): the file holds

@@ -55,6 +55,9 @@ def field_names(directory: str | pathlib.Path) -> list[str]:
 def _files(directory: str | pathlib.Path, name: str) -> list[pathlib.Path]:
     """The files of ``name`` (a body, a pair or a file's stem), earlier parts first."""
     folder = pathlib.Path(directory)
+    if not isinstance(name, str):  # (None: 'NoneType' object has no attribute ...)
+        raise ValueError(f"name: expected a body's or a contact pair's name (a str), got "
+                         f"{type(name).__name__} {name!r}")
     names = field_names(folder)
     stem = name.removesuffix(".bp")
     if stem not in names:
@@ -157,6 +160,10 @@ def _choose(stored: list[_Stored], time: float | None, name: str) -> _Stored:
         raise ValueError(f"the fields of '{name}' hold no time yet")
     if time is None:
         return stored[-1]
+    if isinstance(time, bool) or not isinstance(time, int | float | np.integer | np.floating):
+        # ("0.1" failed in numpy: ufunc 'less_equal' did not contain a loop ...)
+        raise ValueError(f"time: expected a number (s) or None (the last), got "
+                         f"{type(time).__name__} {time!r}")
     times = np.array([s.time for s in stored])
     slack = 1e-9 * max(abs(times[-1]), abs(times[0]), 1e-300)
     if not times[0] - slack <= time <= times[-1] + slack:
@@ -245,7 +252,8 @@ def read_fields(directory: str | pathlib.Path, name: str, time: float | None = N
         read in ``field_data["time"]``.
 
     Raises:
-        ValueError: No such file in the folder, a time outside the ones written, or a
+        ValueError: No such file in the folder, a name not a str or a time not a
+            number, a time outside the ones written, or a
             file whose data or metadata is cut short at that time (its index lists more
             than its files hold: a copy of a running run, a run killed, a full disk); the
             line names the last whole time before it.
