@@ -140,3 +140,18 @@ def test_storm_record_reads_the_array_as_the_dicts():
         d["pair_penetration"] for d in dicts[41:81])
     assert small_sliding_warning(rows, storm["record"], 1e-3) == \
         small_sliding_warning(dicts, storm["record"], 1e-3)
+
+
+def test_read_history_takes_the_file_or_the_run_folder(tmp_path):
+    """``read_history`` of a run's output folder reads its history.csv (a notebook's
+    natural call, ``read_history(out)``, failed with IsADirectoryError)."""
+    from breakwater.common.files import HISTORY, read_history
+
+    dicts = _rows(3)
+    (tmp_path / HISTORY).write_text(",".join(COLUMNS) + "\n" + "".join(
+        ",".join(repr(d[c]) for c in COLUMNS) + "\n" for d in dicts), encoding="utf-8")
+    for given in (tmp_path, str(tmp_path), tmp_path / HISTORY):
+        read = read_history(given)
+        assert list(read) == list(COLUMNS)
+        for c in COLUMNS:
+            assert read[c].tolist() == [d[c] for d in dicts]  # repr round-trips exactly

@@ -405,7 +405,15 @@ def atomic_savez(path: str | pathlib.Path, **arrays: np.ndarray) -> pathlib.Path
 
 
 def read_history(path: str | pathlib.Path) -> dict[str, np.ndarray]:
-    """Read a ``history.csv`` into one array per column."""
+    """Read a ``history.csv`` into one array per column.
+
+    Args:
+        path: The file, or a run's output folder (its ``history.csv``): given the
+            folder, it failed with ``IsADirectoryError``.
+    """
+    path = pathlib.Path(path)
+    if path.is_dir():
+        path = path / HISTORY
     with open(path, encoding="utf-8") as f:
         header = f.readline().strip().split(",")
         lines = [line for line in f if line.strip()]
