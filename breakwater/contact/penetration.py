@@ -122,32 +122,37 @@ def _depths(model: ContactModel, spec: SurfacePair
     k = np.flatnonzero(inside)
     if not len(k):
         return None
-    X = _oriented(master)
-    chord = X[:, 1] - X[:, 0]
     radius = search_radius(spec, master)
-    allowed = allowed_depth(master, radius)
-    facet, xi = project(nodes[k], X, FacetGrid(X, radius))
-    depth = np.full(len(k), np.inf)
-    on = facet >= 0
-    if on.any():
-        x_bar, tangent, _ = curve(X[facet[on]], xi[on])
-        tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-        n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
-        depth[on] = -np.sum((nodes[k][on] - x_bar) * n, axis=1)
-    limit = np.where(on, allowed[np.maximum(facet, 0)], 0.0)
-    length = np.where(on, np.linalg.norm(chord, axis=1)[np.maximum(facet, 0)], 0.0)
-    return nodes[k], depth, limit, length, radius
+    gap, facet, length = _gaps(nodes[k], master, radius)
+    limit = np.where(facet >= 0, allowed_depth(master, radius)[np.maximum(facet, 0)], 0.0)
+    return nodes[k], np.where(facet >= 0, -gap, np.inf), limit, length, radius
 
 
-def _oriented(master: Surface) -> np.ndarray:
-    """The master facets' nodes, each facet's ordered so that (t_y, −t_x) points out."""
+def _gaps(nodes: np.ndarray, master: Surface, radius: float
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each node's signed distance outside the master surface (2-D, the meshed state).
+
+    Returns:
+        The gaps (negative inside; inf: no master surface point within ``radius``), the
+        master facet each projects on (−1: none) and its length (chord; 0 without one).
+    """
+    # Orient each master facet so that (t_y, −t_x) points out of its cell.
     X = master.X.copy()
     mid = X.mean(axis=1)
     chord = X[:, 1] - X[:, 0]
     flip = np.sum((master.interior - mid) * np.stack([chord[:, 1], -chord[:, 0]], 1),
                   axis=1) > 0
     X[flip, 0], X[flip, 1] = master.X[flip, 1], master.X[flip, 0]
-    return X
+    facet, xi = project(nodes, X, FacetGrid(X, radius))
+    gap = np.full(len(nodes), np.inf)
+    on = facet >= 0
+    if on.any():
+        x_bar, tangent, _ = curve(X[facet[on]], xi[on])
+        tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+        n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
+        gap[on] = np.sum((nodes[on] - x_bar) * n, axis=1)
+    length = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    return gap, facet, np.where(on, length[np.maximum(facet, 0)], 0.0)
 
 
 def meshed_gaps(model: ContactModel, spec: SurfacePair
@@ -167,17 +172,8 @@ def meshed_gaps(model: ContactModel, spec: SurfacePair
     nodes = np.unique(slave.X.reshape(-1, model.gdim), axis=0)
     if not len(nodes) or not len(master.X):
         return None
-    X = _oriented(master)
-    facet, xi = project(nodes, X, FacetGrid(X, search_radius(spec, master)))
-    gap = np.full(len(nodes), np.inf)
-    on = facet >= 0
-    if on.any():
-        x_bar, tangent, _ = curve(X[facet[on]], xi[on])
-        tangent /= np.linalg.norm(tangent, axis=1)[:, None]
-        n = np.stack([tangent[:, 1], -tangent[:, 0]], axis=1)
-        gap[on] = np.sum((nodes[on] - x_bar) * n, axis=1)
-    chord = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
-    return nodes, gap, np.where(on, chord[np.maximum(facet, 0)], 0.0)
+    gap, _, length = _gaps(nodes, master, search_radius(spec, master))
+    return nodes, gap, length
 
 
 def initial_overlap(model: ContactModel, spec: SurfacePair) -> str | None:
