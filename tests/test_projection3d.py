@@ -31,6 +31,7 @@ from breakwater.contact.projection3d import (
     surface,
     unit_normal,
 )
+from breakwater.contact.searchkernels3d import RADIUS_GROWTH
 
 pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
 
@@ -205,10 +206,11 @@ def test_unit_normal_complex_step_against_differences() -> None:
         assert np.abs(cs).max() > 0.1
 
 
-def _bumpy(n: int, nn: int) -> np.ndarray:
+def _bumpy(n: int, nn: int, graded: bool = False) -> np.ndarray:
     """Faces ``(2n², nn, 3)`` of z = 0.1 sin 3x cos 2y over [0, 1]², a structured grid
     with alternating diagonals, interior vertices jittered, mid-edge nodes on the surface
-    (curved faces)."""
+    (curved faces); ``graded``: the grid's coordinates squared (faces from about 1/n² at
+    the origin's corner to 2/n at the far one)."""
     rng = np.random.default_rng(4)
     s = np.linspace(0.0, 1.0, n + 1)
     X, Y = np.meshgrid(s, s, indexing="ij")
@@ -216,6 +218,8 @@ def _bumpy(n: int, nn: int) -> np.ndarray:
     jitter[:, [0, -1], :] = 0
     jitter[:, :, [0, -1]] = 0
     X, Y = X + jitter[0], Y + jitter[1]
+    if graded:
+        X, Y = X**2, Y**2
 
     def lift(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.stack([x, y, 0.1 * np.sin(3 * x) * np.cos(2 * y)], axis=-1)
@@ -287,6 +291,70 @@ def test_a_bulging_face_is_a_candidate() -> None:
     np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-14)
     np.testing.assert_allclose(surface(faces, xi)[0][0], [1 / 3, 1 / 3, 2 / 3], rtol=0,
                                atol=1e-14)
+
+
+@pytest.mark.parametrize("nn", [3, 6])
+def test_compiled_projection_in_passes_is_the_reference(nn: int) -> None:
+    """On a graded surface (faces 0.006–0.25, the radius the longest face edge, the
+    default search radius), the compiled projection works in passes of a growing radius
+    (from the shortest face size, ×4 a pass): its faces and (ξ, η) are the reference's
+    one pass (equal; to 1e-12, the arithmetic summed in another order, the graded
+    faces' small Jacobians amplifying it to 1.3e-13 on 2 of 1200), and those of the
+    compiled single pass bit for bit, for points near the surface and up to the radius
+    off it."""
+    faces = _bumpy(12, nn, graded=True)
+    edges = np.linalg.norm(faces[:, [1, 2, 0], :] - faces[:, :3, :], axis=2).max(axis=1)
+    radius = float(edges.max())
+    assert edges.min() < radius / RADIUS_GROWTH**2  # three passes at least
+    rng = np.random.default_rng(11)
+    m = 600
+    x, y = rng.uniform(-0.02, 1.02, m) ** 2, rng.uniform(-0.02, 1.02, m) ** 2
+    off = np.concatenate([rng.uniform(-1e-3, 1e-3, m // 2),
+                          rng.uniform(-1.2 * radius, 1.2 * radius, m - m // 2)])
+    points = np.column_stack([x, y, 0.1 * np.sin(3 * x) * np.cos(2 * y) + off])
+    f_ref, xi_ref = project(points, faces, FacetGrid(faces, radius))
+    f, xi = searchkernels3d.project(points, faces, radius, 1e-9)
+    np.testing.assert_array_equal(f, f_ref)
+    np.testing.assert_allclose(xi, xi_ref, rtol=0, atol=1e-12)
+    f_one, xi_one = searchkernels3d._project_within(points, faces, radius, radius, 1e-9)
+    np.testing.assert_array_equal(f, f_one)
+    np.testing.assert_array_equal(xi, xi_one)
+    assert (f >= 0).sum() > m // 2 and (f < 0).sum() > 0
+
+
+def test_compiled_passes_find_a_bulging_face() -> None:
+    """test_a_bulging_face_is_a_candidate in passes: beside the bulging face, a small
+    face (the first pass's radius, 0.014) and a flat face 0.1 above the point. The
+    point, 0.05 above the bulge and 0.217 above its nodes' box, projects onto the
+    bulge, its nearest face, not onto the flat one."""
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    mids = np.array([[0.5, 0.5, 0.5], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+    point = np.array([[1 / 3, 1 / 3, 2 / 3 + 0.05]])
+    flat = corners + np.array([0.0, 0.0, point[0, 2] + 0.1])
+    small = corners * 0.01 + np.array([2.0, 0.0, 0.0])
+    faces = np.stack([np.concatenate([c, 0.5 * (c[[1, 0, 0]] + c[[2, 2, 1]])])
+                      for c in (flat, small)])
+    faces = np.concatenate([np.concatenate([corners, mids])[None], faces])
+    face, xi = searchkernels3d.project(point, faces, 1.0, 1e-9)
+    assert face[0] == 0
+    np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-13)
+
+
+def test_compiled_passes_keep_the_nearest() -> None:
+    """A point 0.3 above a small face (0.03 across: the first pass's radius 0.042) and
+    0.495 from a large tilted face whose box holds it: the passes of radius 0.042 and
+    0.17 accept neither (the tilted face is a candidate of both, beyond their radius),
+    the pass of 0.67 takes the nearest, the small face, at (⅓, ⅓) (its centroid below
+    the point)."""
+    small = np.array([[-0.01, -0.01, -0.3], [0.02, -0.01, -0.3], [-0.01, 0.02, -0.3]])
+    tilted = np.array([[-1.0, -1.0, 1.7], [2.0, -1.0, -1.3], [-1.0, 2.0, 1.7]])
+    faces = np.stack([small, tilted])
+    point = np.zeros((1, 3))
+    face, xi = searchkernels3d.project(point, faces, 1.0, 1e-9)
+    assert face[0] == 0
+    np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-13)
+    f_ref, _ = project(point, faces, FacetGrid(faces, 1.0))
+    assert f_ref[0] == 0
 
 
 def test_dolfinx_p2_tetrahedron_facet_closure_order() -> None:

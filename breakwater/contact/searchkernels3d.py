@@ -229,17 +229,21 @@ def near(points, point, nodes, cand, radius, tol):  # type: ignore[no-untyped-de
     return point[keep], cand[keep]
 
 
-@kernel
-def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
-    """:func:`breakwater.contact.projection3d.project` (FacetGrid(nodes, radius), 10 steps).
+RADIUS_GROWTH = 4.0
+"""The passes of :func:`project` widen their radius by this factor."""
 
-    Returns:
-        The face of each point (−1: no projection) and its (ξ, η), ``(m, 2)``.
+
+@kernel
+def _project_within(points, nodes, radius, reach, tol):  # type: ignore[no-untyped-def]
+    """One pass of :func:`project`: the projections within ``radius``.
+
+    The grid's candidates are those of ``reach`` (≥ radius: the faces' bulge beyond
+    their nodes' box added), the box filter and the acceptance use ``radius``.
     """
     m = len(points)
     face = np.full(m, -1, np.int64)
     out = np.zeros((m, 2))
-    point, cand = candidates(points, nodes, radius)
+    point, cand = candidates(points, nodes, reach)
     point, cand = near(points, point, nodes, cand, radius, tol)
     if len(point) == 0:
         return face, out
@@ -265,6 +269,84 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
                 a, b = max(a, 0.0), max(b, 0.0)
                 over = max(a + b - 1, 0.0)
                 out[p, 0], out[p, 1] = a - 0.5 * over, b - 0.5 * over
+    return face, out
+
+
+@kernel
+def _scales(nodes, tol):  # type: ignore[no-untyped-def]
+    """The shortest of the faces' longest corner edges, and the box filter's widening.
+
+    The widening is :func:`near`'s margin beyond its radius, the largest over faces
+    and axes: a quadratic face leaves its nodes' box by at most the sum over its edges
+    of the midside node's offset from the chord (each edge's 4 L_a L_b ≤ 1), and a
+    projection accepted up to ``tol`` outside the triangle a little more.
+    """
+    shortest, widen = np.inf, 0.0
+    edges = ((1, 2), (0, 2), (0, 1))
+    nn = nodes.shape[1]
+    for f in range(nodes.shape[0]):
+        longest = 0.0
+        for k in range(3):
+            a, b = edges[k]
+            e = 0.0
+            for d in range(3):
+                e += (nodes[f, a, d] - nodes[f, b, d]) ** 2
+            longest = max(longest, np.sqrt(e))
+        shortest = min(shortest, longest)
+        for d in range(3):
+            linear = abs(nodes[f, 1, d] - nodes[f, 0, d]) + abs(nodes[f, 2, d] - nodes[f, 0, d])
+            c = 0.0
+            if nn == 6:
+                for k in range(3):
+                    a, b = edges[k]
+                    c += abs(nodes[f, 3 + k, d] - 0.5 * (nodes[f, a, d] + nodes[f, b, d]))
+            widen = max(widen, c * (1 + 2 * tol) ** 2 + 2 * tol * linear)
+    return shortest, widen
+
+
+@kernel
+def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
+    """:func:`breakwater.contact.projection3d.project` (FacetGrid(nodes, radius), 10 steps).
+
+    In passes of a growing radius r, each on the points without a projection yet:
+    first the shortest face size, then :data:`RADIUS_GROWTH` times more, and last
+    ``radius`` itself (the reference's pass). The result is the reference's: a point's
+    nearest projection within r is its nearest within ``radius``, since every face the
+    reference accepts within r is a candidate of the pass (the grid's boxes are widened
+    by the box filter's own margin beyond r, :func:`_scales`), every face the pass
+    accepts is one of the reference's candidates (r and that margin stay within
+    ``radius``), and each (point, face) pair's Newton is the same in every pass.
+
+    Where the faces are of one size this is the reference's one pass. On a graded
+    surface (the Hertz sphere's block: faces 0.04–0.73 m, the radius the largest) the
+    points near the master no longer run Newton on every face within the largest
+    face's reach (1.1 million pairs for 7616 points: 2 s a search).
+
+    Returns:
+        The face of each point (−1: no projection) and its (ξ, η), ``(m, 2)``.
+    """
+    m = len(points)
+    face = np.full(m, -1, np.int64)
+    out = np.zeros((m, 2))
+    if m == 0 or nodes.shape[0] == 0:
+        return face, out
+    shortest, widen = _scales(nodes, tol)
+    r = shortest
+    left = np.arange(m)
+    while len(left):
+        last = r >= radius or r + widen > radius
+        if last:
+            f, o = _project_within(points[left], nodes, radius, radius, tol)
+        else:
+            f, o = _project_within(points[left], nodes, r, r + widen, tol)
+        for j in range(len(left)):
+            if f[j] >= 0:
+                face[left[j]] = f[j]
+                out[left[j], 0], out[left[j], 1] = o[j, 0], o[j, 1]
+        if last:
+            break
+        left = left[f < 0]
+        r *= RADIUS_GROWTH
     return face, out
 
 
