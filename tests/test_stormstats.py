@@ -70,12 +70,13 @@ def test_monte_carlo_needs_the_seed_alone(tmp_path: pathlib.Path) -> None:
 
 
 def test_a_seed_counts_once(tmp_path: pathlib.Path) -> None:
-    # Seeds 0, 1, 1: storm 1 twice is one storm, not two draws. Its statistics would
-    # weigh it double (mean (0 + 2 + 2)/3 = 1.33 against 1.0 of the two storms) and
-    # narrow the half-width by sqrt(3/2): none are given, the reason said.
+    # Seeds 0, 1, 1 (three draws of a choice of three seeds may repeat one): storm 1
+    # twice is one storm, not two draws. Its statistics would weigh it double (mean
+    # (0 + 2 + 2)/3 = 1.33 against 1.0 of the two storms) and narrow the half-width by
+    # sqrt(3/2): none are given, the reason said.
     study_file = tmp_path / "storms.toml"
     study_file.write_text('base = "goda"\n[samples]\ncount = 3\n'
-                          '"loads.storm.storm.sea.seed" = {choice = [0, 1]}\n')
+                          '"loads.storm.storm.sea.seed" = {choice = [0, 1, 2]}\n')
     key = "loads.storm.storm.sea.seed"
     rows = [{key: str(seed), "status": "finished", COLUMN: repr(total)}
             for seed, total in ((0, 0.0), (1, 0.002), (1, 0.002))]

@@ -34,8 +34,9 @@ new entry of a named collection: ``"fixed.rear" = {components = [0]}``). The poi
 are the product of the ``[grid]`` lists, the ``[zip]`` rows and the ``[samples]`` rows
 (any of them may be absent, not all); samples draw each key in file order, point after point, from
 ``numpy.random.default_rng(seed)`` (``uniform``: in [a, b); ``log_uniform``: its
-logarithm uniform; ``choice``: one of a list). Derived keys are set after the varied
-ones (a table lookup matches a number to 1e-9 relative).
+logarithm uniform; ``choice``: one of a list, with replacement; a ``count`` above the
+distinct points the choices can draw, every key a choice, is refused). Derived keys are
+set after the varied ones (a table lookup matches a number to 1e-9 relative).
 
 File paths in a study (``base``, and the values of case keys that name files:
 ``mesh.source``, ``loads.<name>.table.file``) are relative to the study file, as in a
@@ -276,6 +277,7 @@ class _Reader:
                 raise self.error(where, f"{kind}: expected finite [a, b] with a < b"
                                  + (" and a > 0" if kind == "log_uniform" else ""))
             checked[key] = (kind, args)
+        self.enough_points(checked, count)
         rng = np.random.default_rng(seed)
         rows = []
         for _ in range(count):
@@ -290,6 +292,23 @@ class _Reader:
                     row[key] = args[int(rng.integers(len(args)))]
             rows.append(row)
         return rows
+
+    def enough_points(self, checked: Mapping[str, tuple[str, Any]], count: int) -> None:
+        """Refuse more samples than the distinct points the choices can draw.
+
+        When every key is a ``choice``, a ``count`` above the product of their distinct
+        values makes identical cases, certainly (the grid refuses a value given twice).
+        Fewer may still draw a point twice: sampling with replacement, by chance.
+        """
+        if any(kind != "choice" for kind, _ in checked.values()):
+            return  # a uniform draw: distinct points
+        distinct = math.prod(len({toml_literal(v) for v in args})
+                             for _, args in checked.values())
+        if count > distinct:
+            where = f"samples.{next(iter(checked))}" if len(checked) == 1 else "samples"
+            points = f"{distinct} distinct point{'s' * (distinct > 1)}"
+            raise self.error(where, f"count = {count} draws of {points}: identical cases "
+                             f"(count at most {distinct}, or each value once in [grid])")
 
     def derived(self, items: Any) -> tuple[Derived, ...]:
         if not isinstance(items, list) or not all(isinstance(d, Mapping) for d in items):
