@@ -119,9 +119,10 @@ def _inputs(args: argparse.Namespace, case: Case) -> list[pathlib.Path]:
 
 def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Path],
                   comm: MPI.Comm, patterns: Sequence[str] = files.OUTPUT_PATTERNS,
-                  outputs: str = "the outputs") -> None:
-    """Refuse an output folder that cannot be written or would replace an input.
+                  outputs: str = "the outputs", study: bool = False) -> None:
+    """Refuse an output folder that cannot be written, or would replace an input.
 
+    Or that holds the other kind's outputs (a study's for a run, a run's for a study).
     Before anything runs; rank 0 checks, every rank raises.
 
     Args:
@@ -131,13 +132,16 @@ def _check_output(folder: pathlib.Path, where: str, inputs: Sequence[pathlib.Pat
         comm: The ranks that raise.
         patterns: The names written in ``folder`` (a run's, or a study's).
         outputs: How the messages name what is written.
+        study: Whether a study writes in ``folder`` (else a run).
 
     Raises:
-        CaseError: ``cannot write <path>: <reason>``, a file of that name, or an input
-            (the case file, the mesh, a table, the study file) under an output's name.
+        CaseError: ``cannot write <path>: <reason>``, a file of that name, an input
+            (the case file, the mesh, a table, the study file) under an output's name,
+            or a folder of the other kind (:func:`files.check_unmixed`).
     """
     def check() -> None:
         files.check_writable(folder, where)
+        files.check_unmixed(folder, where, study)
         risky = files.overwritten_inputs(folder, inputs, patterns)
         if risky:
             raise CaseError(f"{where} {folder}: {outputs} would write over the input "
@@ -323,7 +327,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else pathlib.Path("results") / study.name
     where = "--out" if args.out is not None else "the study's folder"
     _check_output(out, where, [study.path, *case_sources(study.base)], MPI.COMM_WORLD,
-                  files.STUDY_PATTERNS, "the study's outputs")
+                  files.STUDY_PATTERNS, "the study's outputs", study=True)
     if not args.verbose:  # the cases' own messages: one line per case instead
         logging.getLogger("breakwater").setLevel(logging.CRITICAL)
     outcome = run_study(study, args.out, ranks_per_case=args.ranks_per_case,

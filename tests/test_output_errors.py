@@ -28,9 +28,14 @@ from blocks import two_block_case, two_rectangles
 from mpi4py import MPI
 
 from breakwater import cli
+from breakwater.casefile.case import load_case
 from breakwater.common import files
+from breakwater.common.errors import CaseError
 from breakwater.outputs import figures
 from breakwater.outputs.writers import HistoryWriter
+from breakwater.run import simulation
+from breakwater.studies.studyfile import load_study
+from breakwater.studies.sweep import run_study
 
 COMM = MPI.COMM_WORLD
 FULL = os.strerror(errno.ENOSPC)  # "No space left on device"
@@ -513,6 +518,52 @@ def test_sweep_never_replaces_its_study(shared_dir, capsys):
     code, err = _main(["sweep", str(study), "--out", str(shared_dir)], capsys)
     _refused(code, err, "the study's outputs would write over the input")
     assert study.is_file()
+
+
+# --- a run's folder and a study's are not mixed -------------------------------------------
+
+def _names(folder: pathlib.Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_a_study_is_refused_a_runs_folder(shared_dir, capsys):
+    """sweep --out at a run's output folder wrote sweep.csv, the case folders and the
+    study's figures beside the run's summary.json, history.csv and fields: refused in
+    one line, the folder untouched (from Python: run_study alike)."""
+    case = _case(shared_dir)
+    study = _study(shared_dir, case)
+    out = shared_dir / "run"
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    assert code == 0, err
+    before = _names(out)
+    code, err = _main(["sweep", str(study), "--out", str(out)], capsys)
+    _refused(code, err, f"--out {out}: holds a run's outputs (summary.json), not a "
+             "study's: the study's would mix with them (choose another folder)")
+    assert _names(out) == before
+    with pytest.raises(CaseError, match=r"out .*: holds a run's outputs \(summary\.json\)"):
+        run_study(load_study(study), out, quiet=True)
+    assert _names(out) == before
+
+
+def test_a_run_is_refused_a_studys_folder(shared_dir, capsys):
+    """run --out at a study's folder wrote the run's outputs beside sweep.csv and the
+    case folders: refused in one line, the folder untouched (from Python:
+    simulation.run alike)."""
+    case = _case(shared_dir)
+    study = _study(shared_dir, case)
+    out = shared_dir / "study"
+    code, err = _main(["sweep", str(study), "--out", str(out)], capsys)
+    assert code == 0, err
+    before = _names(out)
+    code, err = _main(["run", str(case), "--out", str(out), "--no-progress"], capsys)
+    _refused(code, err, f"--out {out}: holds a study's outputs (sweep.csv), not a "
+             "run's: the run's would mix with them (choose another folder)")
+    assert _names(out) == before
+    model, time, output, _ = load_case(case, [f"output.directory={json.dumps(str(out))}"]
+                                       ).build(COMM)
+    with pytest.raises(CaseError, match=r"output\.directory .*: holds a study's outputs"):
+        simulation.run(model, time, output, report=False)
+    assert _names(out) == before
 
 
 # --- a crash of the numerical libraries ---------------------------------------------------

@@ -45,6 +45,7 @@ __all__ = [
     "atomic_write_json",
     "atomic_write_text",
     "atomic_write_toml",
+    "check_unmixed",
     "check_writable",
     "clear_previous_run",
     "make_directory",
@@ -221,6 +222,42 @@ def check_writable(directory: str | pathlib.Path, where: str = "--out") -> None:
 STUDY_PATTERNS = ("sweep.csv", ".sweep.lock", FIGURES, ".*.tmp[0-9]*",
                   "case-[0-9][0-9][0-9][0-9]*")
 """The names a study writes in its folder (its cases' folders are replaced whole)."""
+
+
+RUN_MARKS = (SUMMARY, HISTORY)
+"""The files that make a folder a run's output folder."""
+STUDY_MARKS = ("sweep.csv", ".sweep.lock")
+"""The files that make a folder a study's output folder."""
+
+
+def check_unmixed(directory: str | pathlib.Path, where: str, study: bool) -> None:
+    """Refuse a run's output folder for a study, or a study's for a run; call on rank 0.
+
+    ``sweep --out`` into a run's folder wrote the study's ``sweep.csv`` and case folders
+    beside the run's ``summary.json`` and fields (and ``run --out`` into a study's folder
+    the run's outputs beside the study's), one folder read as both.
+
+    Args:
+        directory: The output folder.
+        where: How the message names it (``--out``, ``output.directory``).
+        study: Whether a study writes in it (else a run).
+
+    Raises:
+        CaseError: ``<where> <path>: holds a run's outputs (summary.json), not a
+            study's ...``, one line.
+    """
+    directory = pathlib.Path(directory)
+    marks, theirs, ours = (RUN_MARKS, "run", "study") if study \
+        else (STUDY_MARKS, "study", "run")
+    for name in marks:
+        try:
+            found = (directory / name).exists()
+        except OSError:  # an unreadable folder: check_writable names it
+            found = False
+        if found:
+            raise CaseError(f"{where} {directory}: holds a {theirs}'s outputs ({name}), not "
+                            f"a {ours}'s: the {ours}'s would mix with them (choose another "
+                            "folder)")
 
 
 def overwritten_inputs(directory: str | pathlib.Path, inputs: Iterable[str | pathlib.Path],

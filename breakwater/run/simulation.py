@@ -361,6 +361,8 @@ def run(model: ContactModel, time: TimeSpec, output: OutputSpec,
         CheckpointError: ``resume``: no usable checkpoint (the folder is untouched).
     """
     resolved_case = checked_arguments(model, time, output, resolved_case)
+    on_rank_zero(model.comm, lambda: files.check_unmixed(output.directory,
+                                                         "output.directory", study=False))
     extra_summary = checked_extra(extra_summary)
     as_run: list[tuple[str, Any, Any]] = []
     if resolved_case is not None:  # case.toml says what runs (the specs given here)

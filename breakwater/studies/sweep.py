@@ -397,7 +397,10 @@ def run_study(study: Study, out: str | pathlib.Path | None = None,
     if comm.size % ranks_per_case:
         raise CaseError(f"--ranks-per-case {ranks_per_case}: must divide the number of "
                         f"ranks ({comm.size})")
-    folder = files.make_directory(out if out is not None else f"results/{study.name}", comm)
+    target = out if out is not None else f"results/{study.name}"
+    where = "out" if out is not None else "the study's folder"
+    on_rank_zero(comm, lambda: files.check_unmixed(target, where, study=True))
+    folder = files.make_directory(target, comm)
     # Rank 0 checks every point (the same error on every rank); then each rank reads
     # the cases itself (cheap, and no large broadcast).
     on_rank_zero(comm, lambda: bool(check_points(study, folder)))
