@@ -146,6 +146,11 @@ def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monke
     ("time.end_time=5e-5", "--set: time.dt: must be smaller than end_time"),
     ("time.max_steps=10", "--set: time.end_time: end_time / dt"),
     ("time.beta1=0.7", "--set: time.beta2: beta2 = 0.605 < beta1 = 0.7"),
+    # The mesh's size: its refinement, or a size in mesh.goda (was blamed on goda.toml).
+    ("mesh.refinement=1e3", "--set: mesh.max_elements: refinement 1000 with the mesh.goda "
+     "dimensions and element sizes makes about 6.01e+08 triangles"),
+    ("mesh.goda.mound_element_size=1e-5", "--set: mesh.max_elements: refinement 1 with "
+     "the mesh.goda dimensions and element sizes makes about 3.42e+09 triangles"),
 ])
 def test_bad_overrides(override, phrase):
     with pytest.raises(CaseError) as info:

@@ -150,6 +150,35 @@ def test_bad_study_through_main(path, shared_dir, capsys):
     assert not any(out.glob("case-*"))  # nothing ran
 
 
+@pytest.mark.parametrize(("override", "message"), [
+    # a bad value of every case: its line as run --set's, the study named after it
+    ("bodies.mound.density=-1", "--set: bodies.mound.density: must be > 0 (got -1) (every "
+     "case of study.toml)"),
+    ("mesh.refinement=1e3", "--set: mesh.max_elements: refinement 1000 with the mesh.goda "
+     "dimensions"),
+    ("time.dtt=1", "--set time.dtt: unknown key 'time.dtt' (did you mean 'dt'?)"),
+    # of one point: the point named, the value's source --set
+    ("time.end_time=1.5e-4", "study.toml: 1 of 2 points make an invalid case: case-0001 "
+     "(time.dt=0.0002): --set: time.dt: must be smaller than end_time (0.0002 >= 0.00015)"),
+    ("time.dt=1e-4", "--set time.dt: the study varies it (a key is varied, derived or set "
+     "only once)"),
+    ("output.directory=x", "--set output.directory: is set by the sweep"),
+])
+def test_a_bad_set_value_is_named_as_sweep_set(override, message, shared_dir, capsys):
+    """A bad value given by ``sweep --set`` was named as the study file's (``study.toml:
+    ... case-0000 (...): bodies.mound.density: must be > 0``), or as the base case's."""
+    path = study_file(shared_dir, '[grid]\n"time.dt" = [1e-4, 2e-4]\n')
+    with pytest.raises(CaseError) as info:
+        check_points(load_study(path, [override]), shared_dir / "out")
+    assert str(info.value) == message or str(info.value).startswith(message), info.value
+    assert "\n" not in str(info.value)
+    # a study's own bad value is still the study's, the point named
+    bad = study_file(shared_dir, '[grid]\n"time.dt" = [1e-4, -1.0]\n', name="bad.toml")
+    with pytest.raises(CaseError, match=r"^bad\.toml: 1 of 2 points make an invalid case: "
+                       r"case-0001 \(time\.dt=-1\.0\): time\.dt: must be > 0"):
+        check_points(load_study(bad), shared_dir / "out")
+
+
 def test_max_points_flag(shared_dir, capsys):
     """The limit on points is counted before any point is drawn; --max-points raises it."""
     big = BAD / "s1_five_million_samples.toml"

@@ -99,7 +99,8 @@ class MeshCase:
         if self.generated:
             coarse = self.geometry.coarse_elements(self.refinement)
             if coarse is not None:
-                raise InvalidField("refinement", f"{self.refinement:g}: {coarse}")
+                raise InvalidField("refinement", f"{self.refinement:g}: {coarse}",
+                                   others=(self.source,))
             estimate = self.geometry.estimated_elements(self.refinement)
             if estimate > self.max_elements:
                 cells = "hexahedra" if self.source == GODA3D else "triangles"
@@ -107,7 +108,7 @@ class MeshCase:
                                    f"the mesh.{self.source} dimensions and element sizes "
                                    f"makes about {estimate:.3g} {cells}, above the limit "
                                    f"{self.max_elements} (raise mesh.max_elements to mesh "
-                                   "it)")
+                                   "it)", others=("refinement", self.source))
 
     @property
     def generated(self) -> bool:

@@ -31,11 +31,33 @@ from breakwater.config.fields import (
 )
 from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range, record, resolved
 
-__all__ = ["OVERRIDE", "apply_override", "file_argument", "override_list", "parse_value",
-           "path_key"]
+__all__ = ["OVERRIDE", "Override", "apply_override", "file_argument", "origin_of",
+           "override_list", "parse_value", "path_key"]
 
 OVERRIDE = "--set"
 """Origin of a value given as a ``key=value`` override."""
+
+
+class Override(str):
+    """A ``key=value`` override that names its origin for the messages.
+
+    A study's values reach its cases as overrides beside ``sweep --set``'s: they are
+    labelled with the study file, so that a bad value is blamed on where it was given
+    (a ``--set`` value was named as the study's).
+    """
+
+    origin: str
+
+    def __new__(cls, spec: str, origin: str = OVERRIDE) -> Override:
+        """``spec`` (``key=value``) from ``origin`` (``--set``, a study file's name)."""
+        self = super().__new__(cls, spec)
+        self.origin = origin
+        return self
+
+
+def origin_of(spec: str) -> str:
+    """Where an override was given: its :class:`Override` origin, else ``--set``."""
+    return spec.origin if isinstance(spec, Override) else OVERRIDE
 
 
 def _shown(value: Any) -> str:
@@ -169,31 +191,33 @@ def apply_override(root: type, paths: Mapping[str, Collection[str]], raw: dict[s
             a path value is resolved against the working directory.
         raw: The data of the file(s), changed in place.
         spec: The override, ``key=value``.
-        origins: Where each key came from; the key's entries become ``--set``.
+        origins: Where each key came from; the key's entries become ``--set`` (or
+            the :class:`Override`'s origin, which the messages name too).
         merged: When given, the dotted keys of the tables a table value was merged into
             are appended (for the messages).
 
     Raises:
         CaseError: A malformed override, or a key path the schema does not have.
     """
+    label = origin_of(spec)
     split = _split(spec)
     if split is None:
-        raise CaseError(f"{OVERRIDE} {spec}: expected key=value")
+        raise CaseError(f"{label} {spec}: expected key=value")
     key, text = split
     parts = key_parts(key)
     if not key or not all(parts):
-        raise CaseError(f"{OVERRIDE} {spec}: empty key")
+        raise CaseError(f"{label} {spec}: empty key")
     value = parse_value(text)
     if out_of_range(value) is not None:
-        raise CaseError(f"{OVERRIDE} {key}: {OUT_OF_RANGE}")
-    _set(root, paths, raw, parts, value, origins, merged)
+        raise CaseError(f"{label} {key}: {OUT_OF_RANGE}")
+    _set(root, paths, raw, parts, value, origins, merged, label)
 
 
 def _set(root: type, paths: Mapping[str, Collection[str]], raw: dict[str, Any],
          parts: list[str], value: Any, origins: dict[str, str],
-         merged: list[str] | None) -> None:
+         merged: list[str] | None, label: str) -> None:
     """Set the value of the key path ``parts`` (a table value: key by key)."""
-    node, part, here, table = _walk(root, raw, parts, origins)
+    node, part, here, table = _walk(root, raw, parts, origins, label)
     if table and isinstance(value, dict):
         if isinstance(node.get(part), dict) and value:
             if merged is not None and node[part]:
@@ -201,17 +225,17 @@ def _set(root: type, paths: Mapping[str, Collection[str]], raw: dict[str, Any],
         else:  # a table the override creates, or empties ({}: back to the defaults,
             node[part] = {}  # no entries), or a value it replaces: its keys are its own
             _forget(here, origins)
-            origins[here] = OVERRIDE
+            origins[here] = label
         for k, v in value.items():
-            _set(root, paths, raw, [*parts, k], v, origins, merged)
+            _set(root, paths, raw, [*parts, k], v, origins, merged, label)
         return
     not_paths = path_key(paths, here)
     if not_paths is not None and isinstance(value, str) and value not in not_paths:
-        value = resolved(pathlib.Path(), value, f"{OVERRIDE} {'.'.join(parts)}")
+        value = resolved(pathlib.Path(), value, f"{label} {'.'.join(parts)}")
     node[part] = value
     _forget(here, origins)
-    origins[here] = OVERRIDE
-    record(value, OVERRIDE, here, origins)
+    origins[here] = label
+    record(value, label, here, origins)
 
 
 def _forget(here: str, origins: dict[str, str]) -> None:
@@ -220,13 +244,13 @@ def _forget(here: str, origins: dict[str, str]) -> None:
         del origins[p]
 
 
-def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, str]
-          ) -> tuple[dict[str, Any], str, str, bool]:
+def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, str],
+          label: str = OVERRIDE) -> tuple[dict[str, Any], str, str, bool]:
     """Where the key path ``parts`` goes: its table, last key and dotted path.
 
     Also whether the schema's value there is a table (a dataclass, a named collection
     or an entry of one). The tables on the way that the case does not have are made
-    (their origin ``--set``).
+    (their origin ``label``, ``--set``).
 
     Raises:
         CaseError: A key path the schema does not have, or a dotted key into an entry
@@ -241,11 +265,11 @@ def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, 
         part = parts[i]
         here = ".".join([*done, part])
         if not dataclasses.is_dataclass(cls):
-            raise CaseError(f"{OVERRIDE} {key}: '{'.'.join(done)}' is not a table")
+            raise CaseError(f"{label} {key}: '{'.'.join(done)}' is not a table")
         key_name = key_field(cls)
         valid = [f.name for f in fields(cls) if f.init and f.name != key_name]
         if part not in valid:
-            raise CaseError(f"{OVERRIDE} {key}: unknown key '{here}'"
+            raise CaseError(f"{label} {key}: unknown key '{here}'"
                             f"{suggest_key(root, part, valid)} "
                             f"(valid keys: {', '.join(valid)})")
         tp = type_hints(cls)[part]
@@ -255,11 +279,11 @@ def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, 
         if last:
             return node, part, here, item is not None or dataclasses.is_dataclass(target)
         if part not in node:  # a table the override creates: its keys are its own
-            origins[here] = OVERRIDE
+            origins[here] = label
         if item is not None:
             table = node.setdefault(part, {})
             if not isinstance(table, dict):
-                raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
+                raise CaseError(f"{label} {key}: '{here}' is not a table")
             names = list(table)
             entry = parts[i + 1]
             if entry not in table and entry.isdigit() and int(entry) < len(names):
@@ -267,7 +291,7 @@ def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, 
             if i + 1 == len(parts) - 1:  # the whole entry is set (or created)
                 return table, entry, f"{here}.{entry}", True
             if entry not in table:
-                raise CaseError(f"{OVERRIDE} {key}: no entry '{parts[i + 1]}' in "
+                raise CaseError(f"{label} {key}: no entry '{parts[i + 1]}' in "
                                 f"{here}{suggest(parts[i + 1], names)} "
                                 f"(entries: {', '.join(names) or 'none'}; a new entry is "
                                 f"given whole: {OVERRIDE} '{here}.{parts[i + 1]}="
@@ -277,10 +301,10 @@ def _walk(root: type, raw: dict[str, Any], parts: list[str], origins: dict[str, 
             i += 2
             continue
         if not dataclasses.is_dataclass(target):
-            raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
+            raise CaseError(f"{label} {key}: '{here}' is not a table")
         sub = node.setdefault(part, {})
         if not isinstance(sub, dict):
-            raise CaseError(f"{OVERRIDE} {key}: '{here}' is not a table")
+            raise CaseError(f"{label} {key}: '{here}' is not a table")
         done.append(part)
         node, cls = sub, target
         i += 1

@@ -39,7 +39,7 @@ from breakwater.common.errors import CaseError
 from breakwater.config import convert
 from breakwater.config import reference as _reference
 from breakwater.config.fields import InvalidField, describe, printable
-from breakwater.config.overrides import OVERRIDE, apply_override, path_key
+from breakwater.config.overrides import OVERRIDE, apply_override, origin_of, path_key
 from breakwater.config.tomlfiles import display, merge, origin, read_toml, record, resolved
 
 RawCheck = Callable[[dict[str, Any], Callable[[str], str], Sequence[str]], None]
@@ -114,17 +114,28 @@ class Schema:
         for spec in overrides:
             apply_override(self.root, self.paths, raw, spec, origins, merged)
         label = display(file)
+        # Where overrides come from: --set first (blamed first), a study's file.
+        given = [OVERRIDE, *dict.fromkeys(origin_of(s) for s in overrides)]
+
+        def where_set(key: str) -> str:  # every override after every file
+            found = origin(key, origins, label)
+            return OVERRIDE if found in given else found
+
         try:
             if check_raw is not None:
-                check_raw(raw, lambda key: origin(key, origins, label), [*labels, OVERRIDE])
+                check_raw(raw, where_set, [*labels, OVERRIDE])
             obj = convert.build(self.root, self.root, raw, "")
             if check is not None:
                 check(obj)
         except InvalidField as e:
-            # The --set of any field the problem involves is the one to blame.
-            where = next((w for w in (origin(f, origins, label) for f in e.fields())
-                          if w == OVERRIDE), origin(e.field, origins, label))
-            if where not in (label, OVERRIDE):  # a key of a file this one extends
+            # The override of any field the problem involves is the one to blame (of an
+            # involved table, any key in it: mesh.goda's sizes for the mesh's size).
+            field, *others = e.fields()
+            involved = {origin(f, origins, label) for f in e.fields()} | {
+                o for f in others for k, o in origins.items() if k.startswith(f + ".")}
+            where = next((w for w in given if w in involved),
+                         origin(field, origins, label))
+            if where not in (label, *given):  # a key of a file this one extends
                 where = f"{label} (extends {where})"
             table = next((t for t in merged if e.field == t or e.field.startswith(t + ".")),
                          None)

@@ -4,12 +4,15 @@ The file side of :class:`~breakwater.config.schema.Schema`: :func:`read_toml` (U
 valid TOML, 64-bit integers: :func:`out_of_range`), :func:`resolved` (a path value
 against the file's folder), :func:`merge` (``extends``: table by table),
 :func:`record` and :func:`origin` (the file, or ``--set``, each key came from, for the
-messages), :func:`display` (a path as the messages name it).
+messages), :func:`display` (a path as the messages name it), :func:`toml_literal` (a
+value's TOML text, for a ``key=value`` override).
 """
 
 from __future__ import annotations
 
 import codecs
+import datetime
+import json
 import pathlib
 import tomllib
 from collections.abc import Mapping
@@ -19,7 +22,7 @@ from breakwater.common.errors import CaseError
 from breakwater.common.files import path_problem
 
 __all__ = ["INTEGER_RANGE", "OUT_OF_RANGE", "display", "merge", "origin", "out_of_range",
-           "read_toml", "record", "resolved"]
+           "read_toml", "record", "resolved", "toml_literal"]
 
 
 def display(path: pathlib.Path) -> str:
@@ -121,3 +124,30 @@ def origin(path: str, origins: Mapping[str, str], default: str) -> str:
         if p in origins:
             return origins[p]
     return default
+
+
+def toml_literal(value: Any) -> str:
+    """The TOML text of a value (for a ``key=value`` override)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int | float):
+        return repr(value)  # TOML spells inf and nan as Python does
+    if isinstance(value, str):
+        return _string(value)
+    if isinstance(value, datetime.date | datetime.time):
+        return value.isoformat()  # TOML's dates and times (the case refuses them)
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{_string(str(k))} = {toml_literal(v)}"
+                               for k, v in value.items()) + "}"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(toml_literal(v) for v in value) + "]"
+    raise TypeError(f"no TOML literal for {value!r}")
+
+
+def _string(text: str) -> str:
+    """A TOML basic string.
+
+    JSON's, but the characters beyond U+FFFF kept (JSON would write surrogate pairs,
+    which TOML refuses) and DEL escaped (TOML refuses it raw).
+    """
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")

@@ -54,9 +54,7 @@ point with its error.
 from __future__ import annotations
 
 import bisect
-import datetime
 import itertools
-import json
 import math
 import pathlib
 import re
@@ -68,8 +66,8 @@ from typing import TYPE_CHECKING, Any
 from breakwater.common.errors import CaseError
 from breakwater.common.files import name_problem, path_problem
 from breakwater.config.fields import printable, suggest
-from breakwater.config.overrides import OVERRIDE, file_argument, override_list
-from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range
+from breakwater.config.overrides import OVERRIDE, Override, file_argument, override_list
+from breakwater.config.tomlfiles import OUT_OF_RANGE, out_of_range, toml_literal
 
 if TYPE_CHECKING:
     from breakwater.casefile.case import Case
@@ -87,33 +85,6 @@ SHOWN_ERRORS = 5
 """The distinct errors of bad points a study's refusal shows (then their count)."""
 RESERVED = ("output.directory", "name")
 """Case keys a study may not set: the sweep names each case's folder."""
-
-
-def toml_literal(value: Any) -> str:
-    """The TOML text of a value (for a ``key=value`` override)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)  # TOML spells inf and nan as Python does
-    if isinstance(value, str):
-        return _string(value)
-    if isinstance(value, datetime.date | datetime.time):
-        return value.isoformat()  # TOML's dates and times (the case refuses them)
-    if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{_string(str(k))} = {toml_literal(v)}"
-                               for k, v in value.items()) + "}"
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(toml_literal(v) for v in value) + "]"
-    raise TypeError(f"no TOML literal for {value!r}")
-
-
-def _string(text: str) -> str:
-    """A TOML basic string.
-
-    JSON's, but the characters beyond U+FFFF kept (JSON would write surrogate pairs,
-    which TOML refuses) and DEL escaped (TOML refuses it raw).
-    """
-    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 @dataclass(frozen=True)
@@ -453,8 +424,12 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] | None = (),
     varied = [*grid, *zipped, *(samples[0] if samples else {})]
     if not varied:
         raise r.error("", "empty study: nothing to vary (give [grid], [zip] or [samples])")
+    given = {k for k, v in fixed.items() if isinstance(v, _Literal)}  # by --set
     seen: dict[str, str] = {}
     for key in [*varied, *(d.key for d in derived)]:
+        if key in given:  # a --set value was named as the study file's
+            raise CaseError(printable(f"{OVERRIDE} {key}: the study varies it (a key is "
+                                      "varied, derived or set only once)"))
         if key in seen or key in fixed_keys:
             raise r.error(key, "set twice (a key is varied, derived or set only once)")
         seen[key] = key
@@ -462,6 +437,9 @@ def load_study(path: str | pathlib.Path, overrides: Sequence[str] | None = (),
             raise r.error(key, "is set by the sweep (one folder per case)")
     for key in fixed_keys:
         if key in RESERVED:
+            if key in given:
+                raise CaseError(printable(f"{OVERRIDE} {key}: is set by the sweep (one "
+                                          "folder per case; sweep --out DIR: the study's)"))
             raise r.error(f"set.{key}", "is set by the sweep (one folder per case)")
     for d in derived:
         if d.source not in varied:
@@ -491,7 +469,9 @@ class _Literal(str):
 
 
 def _fixed_overrides(study: Study) -> list[str]:
-    return [f"{k}={v}" if isinstance(v, _Literal) else f"{k}={toml_literal(v)}"
+    """The ``[set]`` values, labelled with the study file, and ``--set``'s."""
+    return [Override(f"{k}={v}") if isinstance(v, _Literal)
+            else Override(f"{k}={toml_literal(v)}", study.path.name)
             for k, v in study.fixed.items()]
 
 
@@ -530,8 +510,10 @@ def case_of(study: Study, point: Point, folder: pathlib.Path) -> Case:
 
     fixed = replace(study, fixed=_relative_to_study(study, study.fixed))
     values = Point(point.index, _relative_to_study(study, point.values))
-    overrides = [*_fixed_overrides(fixed), *values.overrides(),
-                 f"output.directory={toml_literal(str(folder))}"]
+    # The study's values named as its file's, --set's as --set's (the messages).
+    overrides = [*_fixed_overrides(fixed),
+                 *(Override(o, study.path.name) for o in values.overrides()),
+                 Override(f"output.directory={toml_literal(str(folder))}", study.path.name)]
     return load_case(study.base, overrides)
 
 
@@ -555,7 +537,10 @@ def check_points(study: Study, out: pathlib.Path) -> tuple[list[Point], list[Cas
             cases.append(case_of(study, q, out / q.folder))
             points.append(q)
         except CaseError as e:
-            bad.setdefault(_strip(e), []).append(p.label())
+            bad.setdefault(_strip(e, study.path.name), []).append(p.label())
+    if len(bad) == 1 and len(next(iter(bad.values()))) == len(study.points) \
+            and next(iter(bad)).startswith(OVERRIDE):  # a --set value: every case
+        raise CaseError(printable(f"{next(iter(bad))} (every case of {study.path.name})"))
     if bad:
         n = sum(map(len, bad.values()))
         parts = [f"{labels[0] if len(labels) == 1 else _names(labels)}: {message}"
@@ -596,6 +581,7 @@ def _names(labels: Sequence[str]) -> str:
     return f"{', '.join(x.split(' ', 1)[0] for x in labels)} ({len(labels)} points)"
 
 
-def _strip(error: CaseError) -> str:
+def _strip(error: CaseError, label: str) -> str:
+    """The error of a point's case, without the study's label (``--set``'s kept)."""
     text = " ".join(str(error).split())
-    return text.removeprefix(f"{OVERRIDE}: ").removeprefix(f"{OVERRIDE} ")
+    return text.removeprefix(f"{label}: ").removeprefix(f"{label} ")
