@@ -33,6 +33,7 @@ from breakwater.model.model import (
     Fixed,
     Material,
     SurfaceLoad,
+    SurfacePair,
 )
 from breakwater.run.asrun import RUN_ENTRIES, checked_arguments, checked_extra
 from breakwater.run.simulation import run
@@ -136,6 +137,25 @@ def test_a_misspelt_setting_of_a_built_model_is_refused(model: ContactModel) -> 
     model._solvers += 1
     model._scratch = 1
     del model._scratch
+
+
+def test_two_pairs_of_one_name_are_refused(folder: pathlib.Path) -> None:
+    """Two contact pairs of one name, built in Python, are refused in one line.
+
+    The case file names each ``[contact.<name>]`` once (and a case from Python refuses
+    a name given twice); the model took both: the interface's contact twice.
+    """
+    path = two_rectangles(folder / "stacked.msh", COMM, (1.0, 0.5), (2.0, 0.5), 0.5)
+    material = Material(2000.0, 0.2, young_modulus=1e8)
+    pair = ContactPair("interface", "a", "b", penalty=1e10, friction=0.6)
+    general = SurfacePair("interface", "a", "b", "a_bottom", "b_top", penalty=1e10)
+    message = ("contact 'interface': two pairs of this name (each pair once: a conforming "
+               "pair is named by its interface group, a general pair by its name)")
+    for pairs, surface_pairs in (([pair, dataclasses.replace(pair, friction=0.3)], []),
+                                 ([pair], [general]), ([], [general, general])):
+        with pytest.raises(CaseError, match=f"^{re.escape(message)}$"):
+            ContactModel(read_mesh(path, COMM), [Body("a", material), Body("b", material)],
+                         pairs, [Fixed("b_bottom")], surface_pairs=surface_pairs)
 
 
 @pytest.mark.parametrize(("obj", "name", "hint"), [

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common import formcache, petscfree
-from breakwater.common.errors import MeshError
+from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
@@ -129,6 +129,7 @@ class ContactModel(KnownAttributes, ModelGroups):
         degree: int = 2,
         surface_pairs: Sequence[SurfacePair] = (),
     ) -> None:
+        _pair_names_once(pairs, surface_pairs)
         self.mesh_data = mesh_data
         self.mesh = msh = mesh_data.mesh
         self.comm = msh.comm
@@ -317,6 +318,26 @@ def _check_interface(model: ContactModel, pair: ContactPair, facets: np.ndarray,
                     f"alone, not between '{pair.slave}' and '{pair.master}': a conforming "
                     "pair's group is the face the two bodies share; leave the rest (an "
                     "overhang, the free crest) out of the group")
+
+
+def _pair_names_once(pairs: Sequence[ContactPair], surface_pairs: Sequence[SurfacePair]
+                     ) -> None:
+    """Refuse two contact pairs of one name (a model built in Python).
+
+    A conforming pair is named by its interface group, a general pair by its name (the
+    case's ``[contact.<name>]``, given once; a case from Python refuses a name given
+    twice). The model took both, the same contact twice, and named their history
+    columns and summary entries by their index instead.
+
+    Raises:
+        CaseError: The first name given twice (one line).
+    """
+    names = [p.interface for p in pairs] + [p.name for p in surface_pairs]
+    twice = next((n for k, n in enumerate(names) if n in names[:k]), None)
+    if twice is not None:
+        raise CaseError(f"contact '{twice}': two pairs of this name (each pair once: a "
+                        "conforming pair is named by its interface group, a general pair "
+                        "by its name)")
 
 
 def _three_d_pairs(msh: dolfinx.mesh.Mesh, surface_pairs: Sequence[SurfacePair]) -> None:
