@@ -9,7 +9,13 @@ the penalty's static penetration under the slave's weight). Warned: χ ≥ V, χ
 
 from __future__ import annotations
 
+import json
+import logging
+import pathlib
+
 import pytest
+from blocks import two_rectangles
+from mpi4py import MPI
 
 from breakwater.casefile.case import load_case
 from breakwater.casefile.frictionchecks import (
@@ -19,6 +25,10 @@ from breakwater.casefile.frictionchecks import (
     speed_scale,
     velocity_roundoff,
 )
+from breakwater.config.runspec import OutputSpec, TimeSpec
+from breakwater.model.mesh import read_mesh
+from breakwater.model.model import Body, ContactModel, ContactPair, Fixed, Material
+from breakwater.run.simulation import run
 
 EPS = 2.220446049250313e-16  # numpy.finfo(float).eps
 # The Goda case's bodies (breakwater/cases/goda.toml): the caisson 0.205 m wide, 0.202 m
@@ -67,3 +77,29 @@ def test_goda_warns_only_at_the_extremes() -> None:
                               GODA_SIZES)
         assert len(lines) == 1 and phrase in lines[0], lines
         assert lines[0].startswith("contact.interface.regularisation = ")
+
+
+def test_a_model_built_in_python_is_checked(shared_dir: pathlib.Path,
+                                            caplog: pytest.LogCaptureFixture) -> None:
+    """run() on a model built in Python with χ = 1000 m/s, far above V = |g| T = 0.0196
+    m/s: the line is logged once and kept in the summary's ``mesh.warnings``, as a case
+    file's run does (before 2026-11-29 only a case file's build checked χ: the model ran
+    without a word)."""
+    comm = MPI.COMM_WORLD
+    mesh = two_rectangles(shared_dir / "blocks.msh", comm, a=(0.2, 0.1), b=(0.4, 0.1),
+                          h=0.05)
+    model = ContactModel(read_mesh(mesh, comm),
+                         [Body("a", Material(2400.0, 0.2, shear_modulus=2e9)),
+                          Body("b", Material(2000.0, 0.25, shear_modulus=3e6))],
+                         [ContactPair("interface", "a", "b", 5e8, friction=0.6,
+                                      regularisation=1e3)], [Fixed("b_bottom")],
+                         gravity=(0.0, -9.81))
+    line = regularisation_warning("interface", 1e3, 0.6, speed_scale(9.81, 2e-3), 0.0)
+    assert line is not None and "V = 0.0196 m/s" in line
+    with caplog.at_level(logging.WARNING, logger="breakwater"):
+        run(model, TimeSpec(dt=1e-3, end_time=2e-3),
+            OutputSpec(directory=shared_dir / "out", figures=False), report=False)
+    summary = json.loads((shared_dir / "out" / "summary.json").read_text())
+    assert summary["mesh"]["warnings"] == [line]
+    if comm.rank == 0:  # rank 0 prints
+        assert [r.getMessage() for r in caplog.records].count(line) == 1

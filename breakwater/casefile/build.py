@@ -22,7 +22,6 @@ import numpy as np
 from mpi4py import MPI
 
 from breakwater.casefile.dimension import mesh_problem
-from breakwater.casefile.frictionchecks import case_warnings as regularisation_warnings
 from breakwater.casefile.godaface import check_goda_face, goda_quadrature
 from breakwater.casefile.loadchecks import (
     face_problems,
@@ -314,9 +313,6 @@ def build(case: CaseSettings, comm: MPI.Comm | None = None) -> BuiltCase:
     extra["mesh"]["bodies"] = units["bodies"]
     if "warnings" in units:
         extra["mesh"].setdefault("warnings", []).extend(units["warnings"])
-    chi = regularisation_warnings(case, units["bodies"])  # logged when the run starts
-    if chi:
-        extra["mesh"].setdefault("warnings", []).extend(chi)
     extra["loads"] = {ld.name: load_summary(ld, data, case.out_of_plane_length)
                       for ld in case.loads if ld.enabled}
     for ld in case.loads:

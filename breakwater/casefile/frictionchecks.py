@@ -31,7 +31,11 @@ The regularised Coulomb law (SPEC, eqs. 14-15) is ``t_T = −μ p φ(v)``,
   (226 s, or 19 s for a 2-step run); the paper's χ = 1e-10 m/s is 250 MARGIN δv.
   Not checked without gravity (δ = 0).
 
-Both are warnings, not refusals: V and δ are scales, not bounds on what a run does.
+Both are warnings, not refusals: V and δ are scales, not bounds on what a run does. A run
+checks its model (:func:`model_warnings`, from :class:`breakwater.run.session.Session`):
+a case's and one built in Python alike (before 2026-11-29 a case's build checked its case,
+and a model built in Python was not checked), the lines logged once when the run starts
+and kept in the summary's ``mesh.warnings``.
 """
 
 from __future__ import annotations
@@ -40,10 +44,14 @@ import math
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from breakwater.casefile.settings import CaseSettings
+    from collections.abc import Iterable, Mapping, Sequence
 
-__all__ = ["MARGIN", "ROUND_OFF", "case_warnings", "regularisation_warning", "speed_scale",
-           "velocity_roundoff"]
+    from breakwater.casefile.settings import CaseSettings
+    from breakwater.config.runspec import TimeSpec
+    from breakwater.model.model import ContactModel
+
+__all__ = ["MARGIN", "ROUND_OFF", "case_warnings", "model_warnings", "regularisation_warning",
+           "speed_scale", "velocity_roundoff"]
 
 ROUND_OFF = 2.0**-52
 """Double precision's relative round-off ε (numpy.finfo(float).eps)."""
@@ -112,20 +120,49 @@ def case_warnings(case: CaseSettings, sizes: dict[str, dict[str, Any]]) -> list[
         sizes: The bodies' ``extent`` by name
             (:func:`~breakwater.outputs.bodysizes.body_sizes`).
     """
-    g = math.hypot(*case.gravity)
     t = case.time
     v0 = max((math.hypot(*b.initial_velocity) for b in case.bodies), default=0.0)
+    return _warnings(case.gravity, t, v0, {b.name: b.density for b in case.bodies},
+                     ((c.name, c.slave, c.penalty, c.friction, c.regularisation)
+                      for c in case.contact), sizes)
+
+
+def model_warnings(model: ContactModel, time: TimeSpec,
+                   sizes: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """:func:`regularisation_warning` of every contact pair of a model, run with ``time``.
+
+    Args:
+        model: The model (its gravity, initial velocities, bodies and pairs): a case's,
+            or one built in Python.
+        time: The run's time settings.
+        sizes: The bodies' ``extent`` by name
+            (:func:`~breakwater.outputs.bodysizes.body_sizes`).
+    """
+    v0 = max((math.hypot(*v) for _, v in model.initial.velocities), default=0.0)
+    pairs = [(p.spec.interface, p.spec.slave, p.spec.penalty, p.spec.friction,
+              p.spec.regularisation) for p in model.pairs]
+    pairs += [(p.name, p.slave, p.penalty, p.friction, p.regularisation)
+              for p in model.surface_pairs]
+    return _warnings([float(g) for g in model.gravity.value], time, v0,
+                     {b.spec.name: b.spec.material.density for b in model.bodies}, pairs,
+                     sizes)
+
+
+def _warnings(gravity: Sequence[float], t: TimeSpec, v0: float, density: Mapping[str, float],
+              pairs: Iterable[tuple[str, str, float, float, float]],
+              sizes: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """The lines of the pairs ``(name, slave, penalty, friction, regularisation)``."""
+    g = math.hypot(*gravity)
     speed = speed_scale(g, t.end_time, v0)
-    density = {b.name: b.density for b in case.bodies}
     lines = []
-    for c in case.contact:
+    for name, slave, penalty, friction, chi in pairs:
         roundoff = 0.0
-        if g > 0.0 and c.slave in sizes:  # H: the slave's extent along g
-            height = sum(abs(gk) / g * e for gk, e in zip(case.gravity, sizes[c.slave]["extent"],
+        if g > 0.0 and slave in sizes:  # H: the slave's extent along g
+            height = sum(abs(gk) / g * e for gk, e in zip(gravity, sizes[slave]["extent"],
                                                         strict=False))
-            penetration = density[c.slave] * g * height / c.penalty
-            roundoff = velocity_roundoff(penetration, t.dt, t.beta1, t.beta2)
-        line = regularisation_warning(c.name, c.regularisation, c.friction, speed, roundoff)
+            roundoff = velocity_roundoff(density[slave] * g * height / penalty, t.dt,
+                                         t.beta1, t.beta2)
+        line = regularisation_warning(name, chi, friction, speed, roundoff)
         if line is not None:
             lines.append(line)
     return lines

@@ -23,6 +23,7 @@ from typing import Any
 
 from dolfinx import fem
 
+from breakwater.casefile.frictionchecks import model_warnings as regularisation_warnings
 from breakwater.common import files, folderlock, liveness
 from breakwater.common.parallel import on_rank_zero
 from breakwater.config.runspec import OutputSpec, TimeSpec
@@ -165,6 +166,10 @@ class Session:
         mesh = self.extra["mesh"]
         if isinstance(mesh, dict) and isinstance(mesh.get("bodies"), dict):
             initial_motion(mesh["bodies"], model.initial.velocities)
+            # χ against the run's scales, any model's: logged when the run starts (a copy:
+            # the caller's extra_summary, run again, would collect them twice)
+            if chi := regularisation_warnings(model, time, mesh["bodies"]):
+                self.extra["mesh"] = {**mesh, "warnings": [*mesh.get("warnings", ()), *chi]}
         self.comm = model.comm
         self.directory = files.make_directory(output.directory, self.comm)
         self.wall0 = _time.perf_counter()
