@@ -139,6 +139,44 @@ def test_tunnelling_block_is_cut_back_and_caught(shared_dir: pathlib.Path) -> No
 
 # --- the initial overlap ---------------------------------------------------------------
 
+def test_a_meshed_gap_is_measured_on_the_pairs_own_surfaces(
+        shared_dir: pathlib.Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """p14 (a 2-D block meshed 2 mm above its base): the run warns as before, the gaps
+    measured on the surfaces the pair gathered when it was built: meshed_gap2d gathers
+    nothing (it gathered both surfaces again, two collective allgathers, at every run's
+    start)."""
+    from breakwater.contact import penetration
+    from breakwater.run import begin
+
+    gathered: list[str] = []
+    real_gather, real_gap = penetration.gather_surface, begin.meshed_gap2d
+
+    def counted(*args: object) -> object:
+        gathered.append(str(args[2]))  # the body
+        return real_gather(*args)  # type: ignore[arg-type]
+
+    during: list[int] = []
+
+    def watched(*args: object) -> object:
+        before = len(gathered)
+        line = real_gap(*args)  # type: ignore[arg-type]
+        during.append(len(gathered) - before)
+        return line
+
+    monkeypatch.setattr(penetration, "gather_surface", counted)
+    monkeypatch.setattr(begin, "meshed_gap2d", watched)
+    case = RUNS / "p14_meshed_gap_2d.toml"
+    assert cli.main(["run", str(case), "--out", str(shared_dir / "out"), "--quiet",
+                     "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    phrase = case.read_text().splitlines()[0].removeprefix("# expect: ")
+    if COMM.rank == 0:  # rank 0 prints
+        assert err.count(phrase) == 1, err
+    assert during == [0]  # one pair, no gather
+    assert gathered  # (the counting sees the other checks' gathers)
+
+
 @pytest.mark.parametrize("sunk", [0.0, 1e-3, 0.03], ids=["touching", "1mm", "30mm"])
 def test_initial_overlap(sunk: float, shared_dir: pathlib.Path) -> None:
     """A block meshed ``sunk`` into its base (10 mm facets: r = 10 mm, cells 20 mm high):

@@ -13,7 +13,6 @@ from breakwater.common.arrays import first_by_position
 from breakwater.contact.general import SurfaceContact
 from breakwater.contact.general3d import SurfaceContact3D, nodal_gaps
 from breakwater.contact.penetration import OVERLAP, meshed_gaps
-from breakwater.model.model import ContactModel
 from breakwater.model.pairs import facet_size
 
 __all__ = ["meshed_gap2d", "meshed_gap3d"]
@@ -49,7 +48,7 @@ def meshed_gap3d(contact: SurfaceContact3D) -> str | None:
     return _apart(contact.spec.name, contact.spec.master, X[k], float(gap[k]))
 
 
-def meshed_gap2d(model: ContactModel, contact: SurfaceContact) -> str | None:
+def meshed_gap2d(contact: SurfaceContact) -> str | None:
     """:func:`meshed_gap3d` of a 2-D general pair (collective, after the initialise).
 
     Every slave node that projects onto the master's surface within the search radius
@@ -58,12 +57,17 @@ def meshed_gap2d(model: ContactModel, contact: SurfaceContact) -> str | None:
     state. Before, a 2-D block meshed 2 mm above its base dropped onto it in the static
     state without a word (the 3-D pair warned).
 
+    Collective through the pair's resultant only: the gaps are measured on the surfaces
+    the pair gathered when it was built (on every rank), and not at all when the pair
+    carries nothing (before, both surfaces were gathered again at every call).
+
     Returns:
         One line, the same on every rank; None otherwise.
     """
-    carried = bool(np.any(contact.resultant() != 0.0))
-    found = meshed_gaps(model, contact.spec)
-    if not carried or found is None:
+    if not np.any(contact.resultant() != 0.0):
+        return None
+    found = meshed_gaps(contact.slave, contact.master, contact.radius)
+    if found is None:
         return None
     X, gap, length = found
     on = np.flatnonzero(np.isfinite(gap))

@@ -155,24 +155,29 @@ def _gaps(nodes: np.ndarray, master: Surface, radius: float
     return gap, facet, np.where(on, length[np.maximum(facet, 0)], 0.0)
 
 
-def meshed_gaps(model: ContactModel, spec: SurfacePair
+def meshed_gaps(slave: Surface, master: Surface, radius: float
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Every slave node's distance outside the master surface at t = 0 (collective).
+    """Every slave node's distance outside the master surface at t = 0 (not collective).
 
     The 2-D counterpart of :func:`breakwater.contact.general3d.nodal_gaps` on the meshed
-    configuration, for :func:`breakwater.contact.meshedgap.meshed_gap2d`.
+    configuration, for :func:`breakwater.contact.meshedgap.meshed_gap2d`, of the pair's
+    own surfaces (gathered on every rank when it was built: the same on every rank, no
+    gather here).
+
+    Args:
+        slave: The slave surface (its reference coordinates).
+        master: The master surface (oriented or not: :func:`_gaps` orients it).
+        radius: The pair's search radius.
 
     Returns:
         The slave nodes (sorted, the same on every rank), their gaps (negative inside;
         inf: no master surface point within the search radius) and the length of the
         master facet each projects on (0 without one); None without nodes.
     """
-    slave = gather_surface(model, None, spec.slave, (spec.slave_surface,))
-    master = gather_surface(model, None, spec.master, spec.master_groups)
-    nodes = np.unique(slave.X.reshape(-1, model.gdim), axis=0)
+    nodes = np.unique(slave.X.reshape(-1, slave.X.shape[-1]), axis=0)
     if not len(nodes) or not len(master.X):
         return None
-    gap, _, length = _gaps(nodes, master, search_radius(spec, master))
+    gap, _, length = _gaps(nodes, master, radius)
     return nodes, gap, length
 
 

@@ -92,7 +92,7 @@ def start(r: Session) -> None:
     s.initialise(init.u, init.v, m.initial.loads)  # a₀: the state's loads (f at 0⁻)
     for contact in s.surfaces:  # meshed apart, the gap closed
         line = (meshed_gap3d(contact) if m.gdim == 3  # type: ignore[arg-type]
-                else meshed_gap2d(m, contact))  # type: ignore[arg-type]
+                else meshed_gap2d(contact))  # type: ignore[arg-type]
         if line is not None:
             log.warning("%s", line)
     if st.step.adaptive:
