@@ -318,7 +318,7 @@ def test_block_on_rollers_stays_at_rest(shared_dir: pathlib.Path,
 
 # --- Hertz's point contact ---------------------------------------------------------------
 
-@pytest.mark.serial  # a minute of the suite; 2 ranks equal serial: test_case_runs_through_the_cli
+@pytest.mark.serial  # 20 s of the suite; 2 ranks equal serial: test_case_runs_through_the_cli
 def test_hertz_point_contact_coarse(folder: pathlib.Path) -> None:
     """A quarter hemisphere (R = 1 m) pressed on a quarter block (3 × 3 × 3 m), both
     E = 1 GPa, ν = 0.25, frictionless, rollers on the symmetry planes x = 0 and z = 0:
@@ -329,7 +329,7 @@ def test_hertz_point_contact_coarse(folder: pathlib.Path) -> None:
     sphere below 0.05 R, a cap 3.1 a in radius: below 0.3 R the run took twice as
     long, a −6.1 %, p₀ +14.8 %), a measured from the contact area (the closed
     integration points' weight A, a = sqrt(4A/π)), p₀ as the largest pressure at them.
-    Measured: a −4.9 %, p₀ +15.5 %; at a/4 (the whole sphere the slave, 9 minutes:
+    Measured: a −4.9 %, p₀ +15.5 %; at a/4 (the whole sphere the slave, 5 minutes:
     docs/general-contact.md) −2.4 % and −0.8 %, within issue 25's 3 %. Asked here: 8 %
     and 20 %, the coarse mesh's discretisation error, which a wrong modulus exceeds (E
     2.5 times too stiff, the shear modulus read as E, gave −27 % and +80 %). The
