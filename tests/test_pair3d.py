@@ -318,7 +318,7 @@ def test_block_on_rollers_stays_at_rest(shared_dir: pathlib.Path,
 
 # --- Hertz's point contact ---------------------------------------------------------------
 
-@pytest.mark.serial  # 20 s of the suite; 2 ranks equal serial: test_case_runs_through_the_cli
+@pytest.mark.serial  # 30 s of the suite; 2 ranks equal serial: test_case_runs_through_the_cli
 def test_hertz_point_contact_coarse(folder: pathlib.Path) -> None:
     """A quarter hemisphere (R = 1 m) pressed on a quarter block (3 × 3 × 3 m), both
     E = 1 GPa, ν = 0.25, frictionless, rollers on the symmetry planes x = 0 and z = 0:
