@@ -204,11 +204,26 @@ def candidates(points, nodes, radius):  # type: ignore[no-untyped-def]
 
 
 @kernel
+def _margin(nodes, f, d, radius, tol):  # type: ignore[no-untyped-def]
+    """:func:`near`'s margin of face f's nodes' box along axis d: the radius and more.
+
+    A quadratic face leaves its nodes' box by at most the sum over its edges of the
+    midside node's offset from the chord (each edge's 4 L_a L_b ≤ 1); a projection
+    accepted up to ``tol`` outside the triangle a little more.
+    """
+    linear = abs(nodes[f, 1, d] - nodes[f, 0, d]) + abs(nodes[f, 2, d] - nodes[f, 0, d])
+    c = 0.0
+    if nodes.shape[1] == 6:
+        for a, b, k in ((1, 2, 3), (0, 2, 4), (0, 1, 5)):
+            c += abs(nodes[f, k, d] - 0.5 * (nodes[f, a, d] + nodes[f, b, d]))
+    return radius + c * (1 + 2 * tol) ** 2 + 2 * tol * linear  # (projection3d.near's sum)
+
+
+@kernel
 def near(points, point, nodes, cand, radius, tol):  # type: ignore[no-untyped-def]
     """:func:`breakwater.contact.projection3d.near`: the pairs a projection can accept."""
     keep = np.zeros(len(point), np.bool_)
     nn = nodes.shape[1]
-    edges = ((1, 2), (0, 2), (0, 1))
     for j in range(len(point)):
         f, p = cand[j], point[j]
         ok = True
@@ -216,13 +231,7 @@ def near(points, point, nodes, cand, radius, tol):  # type: ignore[no-untyped-de
             lo, hi = nodes[f, 0, d], nodes[f, 0, d]
             for k in range(1, nn):
                 lo, hi = min(lo, nodes[f, k, d]), max(hi, nodes[f, k, d])
-            linear = abs(nodes[f, 1, d] - nodes[f, 0, d]) + abs(nodes[f, 2, d] - nodes[f, 0, d])
-            c = 0.0
-            if nn == 6:
-                for k in range(3):
-                    a, b = edges[k]
-                    c += abs(nodes[f, 3 + k, d] - 0.5 * (nodes[f, a, d] + nodes[f, b, d]))
-            margin = radius + c * (1 + 2 * tol) ** 2 + 2 * tol * linear
+            margin = _margin(nodes, f, d, radius, tol)
             if points[p, d] < lo - margin or points[p, d] > hi + margin:
                 ok = False
         keep[j] = ok
@@ -276,14 +285,11 @@ def _project_within(points, nodes, radius, reach, tol):  # type: ignore[no-untyp
 def _scales(nodes, tol):  # type: ignore[no-untyped-def]
     """The shortest of the faces' longest corner edges, and the box filter's widening.
 
-    The widening is :func:`near`'s margin beyond its radius, the largest over faces
-    and axes: a quadratic face leaves its nodes' box by at most the sum over its edges
-    of the midside node's offset from the chord (each edge's 4 L_a L_b ≤ 1), and a
-    projection accepted up to ``tol`` outside the triangle a little more.
+    The widening is :func:`near`'s margin beyond its radius (:func:`_margin`), the
+    largest over faces and axes.
     """
     shortest, widen = np.inf, 0.0
     edges = ((1, 2), (0, 2), (0, 1))
-    nn = nodes.shape[1]
     for f in range(nodes.shape[0]):
         longest = 0.0
         for k in range(3):
@@ -294,13 +300,7 @@ def _scales(nodes, tol):  # type: ignore[no-untyped-def]
             longest = max(longest, np.sqrt(e))
         shortest = min(shortest, longest)
         for d in range(3):
-            linear = abs(nodes[f, 1, d] - nodes[f, 0, d]) + abs(nodes[f, 2, d] - nodes[f, 0, d])
-            c = 0.0
-            if nn == 6:
-                for k in range(3):
-                    a, b = edges[k]
-                    c += abs(nodes[f, 3 + k, d] - 0.5 * (nodes[f, a, d] + nodes[f, b, d]))
-            widen = max(widen, c * (1 + 2 * tol) ** 2 + 2 * tol * linear)
+            widen = max(widen, _margin(nodes, f, d, 0.0, tol))
     return shortest, widen
 
 
