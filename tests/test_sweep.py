@@ -672,13 +672,18 @@ def test_a_case_killed_by_sigkill_reads_stopped_and_keeps_its_wall_time(tmp_path
     table reads ``stopped``, and the rerun adds the killed run's wall time to its last
     checkpoint (its summary's): made 1000 s here, so the total is at least 1000 s plus
     the rerun's part of the loop (mesh and static state on top: below 1300 s).
+
+    500 steps (end 0.05 s, as test_resumed_case_counts_its_wall_time; was 0.2 s, 2000
+    steps, of which the rerun did about 1980 for the same assertions): the SIGKILL
+    follows the first checkpoint (step 20) within a 20 ms poll, 480 steps before the run
+    could end.
     """
     from breakwater.common import liveness
     from breakwater.studies.sweep import write_table
 
     if COMM.size > 1:
         pytest.skip("subprocess sweeps run serially")
-    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.2)
+    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.05)
     process.send_signal(signal.SIGKILL)
     process.communicate(timeout=120)
     (folder,) = out.glob("case-*")
@@ -714,12 +719,15 @@ def test_killed_case_counts_its_wall_time(tmp_path):
     7.7 s for a case killed after 261 of its 300 steps, against 20 to 25 s for the
     cases that ran whole). The checkpoint is made to say 1000 s, so the total must be
     at least the summary's (``loop_time``: the runs' own, from the checkpoint's on).
+
+    500 steps (end 0.05 s; was 0.2 s): as
+    test_a_case_killed_by_sigkill_reads_stopped_and_keeps_its_wall_time.
     """
     if COMM.size > 1:
         pytest.skip("subprocess sweeps run serially")
     from breakwater.outputs import checkpoint as ckpt
 
-    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.2)
+    path, out, process = _case_at_its_checkpoint(tmp_path, end=0.05)
     process.kill()
     process.communicate(timeout=60)
     (case,) = out.glob("case-*/")
