@@ -210,6 +210,24 @@ def _run(folder: pathlib.Path, mesh: pathlib.Path, loads: str, name: str, end_ti
     return summary, read_history(folder / name / "history.csv")
 
 
+TWO_WAVES = [(0.02, 0.3), (0.03, 0.4)]  # (H, T) of the two-wave storm
+
+
+@pytest.fixture(scope="module")
+def two_wave_storm(stacked, folder) -> dict:
+    """The two-wave storm (:data:`TWO_WAVES`, the hand-made wave loads of
+    :func:`hand_waves`) on the frictionless block, 1 ms steps to 0.7 s, in
+    ``folder / "two_storm"``: its summary. One run for the tests that check its record
+    and ledger and the adaptive steps against it (the same case, run twice before)."""
+    from breakwater.casefile.stormcase import StormCase
+
+    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
+             f"waves = {[list(w) for w in TWO_WAVES]}\n")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(StormCase, "wave_loads", _wave_loads)
+        return _run(folder, stacked, storm, "two_storm", 0.7)[0]
+
+
 @pytest.mark.timeout(120)
 def test_one_wave_equals_the_goda_load_with_its_table(stacked, folder, hand_waves):
     # One wave through the storm path, and the same load as a single-event case: Goda's
@@ -275,7 +293,7 @@ def _Wave(H, T):
 
 
 @pytest.mark.timeout(120)
-def test_two_waves_record_and_ledger(stacked, folder, hand_waves):
+def test_two_waves_record_and_ledger(folder, two_wave_storm):
     # Two waves of different H (η* and p₃/p₁ differ: the front shape is assembled again
     # at the second wave's start). The applied impulse along x (GN22's rule over the
     # step ends) equals Σ Δt [(1 − β₁)F(t₀) + β₁F(t₁)] with F(t) = p₁(t) × each wave's
@@ -291,11 +309,8 @@ def test_two_waves_record_and_ledger(stacked, folder, hand_waves):
     # T differs too (L, hence α₁, α₃, differ); η* = 1.5 H above the crest (y = 0.15, the
     # face's top): every kink of the profiles on a facet's end, so that the facet
     # quadrature is exact (face_fraction 1).
-    waves = [(0.02, 0.3), (0.03, 0.4)]
-    storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
-             f"waves = {[list(w) for w in waves]}\n")
-    summary, _ = _run(folder, stacked, storm, "two_storm", 0.7)
-    sc = StormCase(**_site_values(), waves=tuple(waves))
+    summary = two_wave_storm
+    sc = StormCase(**_site_values(), waves=tuple(TWO_WAVES))
     ratio = []
     for w in sc.waves_train.waves:
         g = _goda(sc, w)
@@ -519,13 +534,13 @@ def test_wave_history_breakpoints():
 
 
 @pytest.mark.timeout(120)
-def test_adaptive_steps_through_a_storm(stacked, folder, hand_waves):
+def test_adaptive_steps_through_a_storm(stacked, folder, hand_waves, two_wave_storm):
     # The lead's adaptive steps ([time] adaptive) take the storm's breakpoints: 226
     # steps instead of 700, the total sliding within 0.23 % of the fixed 1 ms steps'
     # (bound 1 %, as tests/test_adaptive.py), the ledger closed as well.
     storm = (f"[loads.wave]\ngroup = \"a_left\"\n[loads.wave.storm]\n{SITE}"
-             "waves = [[0.02, 0.3], [0.03, 0.4]]\n")
-    fixed, _ = _run(folder, stacked, storm, "storm_fixed", 0.7)
+             f"waves = {[list(w) for w in TWO_WAVES]}\n")
+    fixed = two_wave_storm  # the same storm with fixed steps
     adaptive, _ = _run(folder, stacked, storm, "storm_adaptive", 0.7,
                        overrides=("time.adaptive=true", "time.dt=8e-3"))
     assert adaptive["solver"]["steps"] < 0.5 * fixed["solver"]["steps"]
