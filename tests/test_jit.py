@@ -107,3 +107,40 @@ def test_kernels_take_turns_to_compile(monkeypatch: pytest.MonkeyPatch,
     # Re-entrant: a kernel compiles the kernels it calls under the lock it holds.
     assert _outer(np.arange(4.0)) == 12.0
     assert lock_path().exists()
+
+
+@pytest.mark.serial
+def test_a_kernel_compiles_again_when_a_kernel_it_calls_changes(tmp_path) -> None:
+    """A kernel ``outer`` in ``b.py`` calls the kernel ``inner`` of ``a.py``; ``a.py`` is
+    edited (``inner`` returns 2, not 1) and ``b.py`` is not: a new process runs the new
+    ``inner``. numba's own stamp (``b.py``'s time and size) took the cached ``outer``
+    with the old ``inner`` compiled into it (1); the digest of the package's sources in
+    the stamp compiles it again (``kernel``'s ``_stamp_with_sources``)."""
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    inner = "from breakwater.common.jit import kernel\n\n@kernel\ndef inner():\n    return {}\n"
+    (package / "a.py").write_text(inner.format(1))
+    (package / "b.py").write_text(
+        "from breakwater.common.jit import kernel\nfrom pkg.a import inner\n\n"
+        "@kernel\ndef outer():\n    return inner()\n")
+    env = {**__import__("os").environ, "PYTHONPATH": str(tmp_path),
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    run = [sys.executable, "-c", "import breakwater, pkg.b; print(pkg.b.outer())"]
+    first = subprocess.run(run, env=env, capture_output=True, text=True, timeout=300)
+    assert first.stdout.split() == ["1"], first.stderr
+    (package / "a.py").write_text(inner.format(2))
+    again = subprocess.run(run, env=env, capture_output=True, text=True, timeout=300)
+    assert again.stdout.split() == ["2"], again.stderr
+    assert list((tmp_path / "cache").rglob("*outer*.nbi"))  # cached, not uncached
+
+
+def test_the_stamp_holds_the_sources_digest() -> None:
+    """breakwater's kernels' cache indexes are stamped with the package's sources
+    (numba's private ``_cache._cache_file._source_stamp``, 0.68: under a numba without
+    it the stale-callee hazard of the test above would be back, and this test says so)."""
+    from breakwater.contact import guardkernels
+
+    stamp = guardkernels.land._cache._cache_file._source_stamp
+    assert stamp[1] == jit.sources_digest("breakwater")
+    assert len(stamp[1]) == 64
