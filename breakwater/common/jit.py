@@ -20,18 +20,18 @@ the same moment, so each compilation or cache load of a kernel holds one file lo
 (:func:`cache_lock`, ``flock``; the kernel releases it if the process is killed).
 
 A first run on a machine compiles them: half a minute for the conforming pair, a minute
-or more for the general pairs' kernels.
+or more for the general pairs' kernels. Where a compilation (or the wait for another
+process's) lasts longer than :data:`NOTICE_AFTER`, one line says so on the
+``breakwater`` logger, and where numba can cache nothing, how to let it.
 
 numba keeps a kernel's machine code while the kernel's own source file is unchanged
 (its modification time and size), not the files of the kernels it calls or of the
 constants it reads, which are compiled into it: after a ``git pull`` that changed
 ``guardkernels.land`` but not ``friction3d.py``, an editable install would run the 3-D
 slip guard with the old ``land`` (``tests/test_jit.py`` shows it on two small modules:
-the caller kept the callee's old value). :func:`kernel` therefore adds a digest of its package's
-Python sources to the stamp numba checks (:func:`sources_digest`): any change to the
-package's sources compiles its kernels again. Where a compilation (or the wait for another
-process's) lasts longer than :data:`NOTICE_AFTER`, one line says so on the
-``breakwater`` logger, and where numba can cache nothing, how to let it.
+the caller kept the callee's old value). :func:`kernel` therefore adds a digest of its
+package's Python sources to the stamp numba checks (:func:`sources_digest`): any change
+to the package's sources compiles its kernels again.
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ from typing import Any, Literal
 from breakwater.common.errors import CaseError
 
 __all__ = ["InvalidField", "alternatives", "column_name", "describe", "key_field", "keyed_item",
-           "optional", "positive", "printable", "schema_keys", "setting", "suggest",
+           "optional", "positive", "printable", "schema_keys", "setting", "shown", "suggest",
            "suggest_key", "to_toml", "type_hints", "type_name"]
 
 
@@ -95,6 +95,11 @@ def printable(text: str) -> str:
     if text.isprintable():
         return text
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def shown(value: Any) -> str:
+    """A value given from Python, for a one-line message: its type and its start."""
+    return f"{type(value).__name__} {printable(repr(value))[:60]}"
 
 
 def suggest(word: str, choices: Sequence[str]) -> str:

@@ -24,7 +24,7 @@ from breakwater.config.fields import (
     key_field,
     keyed_item,
     optional,
-    printable,
+    shown,
     suggest,
     suggest_key,
     type_hints,
@@ -60,11 +60,6 @@ def origin_of(spec: str) -> str:
     return spec.origin if isinstance(spec, Override) else OVERRIDE
 
 
-def _shown(value: Any) -> str:
-    """A value's type and start, for a message."""
-    return f"{type(value).__name__} {printable(repr(value))[:60]}"
-
-
 def override_list(overrides: Any, example: str = "load_case(None, ['time.end_time=0.05', "
                   "'contact.interface.friction=0.5'])") -> list[str]:
     """Overrides given from Python as a list of strings (None: none).
@@ -85,12 +80,12 @@ def override_list(overrides: Any, example: str = "load_case(None, ['time.end_tim
         return []
     expected = f"overrides: expected a list of 'key=value' strings (e.g. {example})"
     if isinstance(overrides, str | bytes | Mapping) or not isinstance(overrides, Iterable):
-        what = "a dict" if isinstance(overrides, Mapping) else _shown(overrides)
+        what = "a dict" if isinstance(overrides, Mapping) else shown(overrides)
         raise CaseError(f"{expected}, got {what}")
     items = list(overrides)
     wrong = next((o for o in items if not isinstance(o, str)), None)
     if wrong is not None:
-        raise CaseError(f"{expected}, got an item {_shown(wrong)}")
+        raise CaseError(f"{expected}, got an item {shown(wrong)}")
     return items
 
 
@@ -109,7 +104,7 @@ def file_argument(path: Any, what: str) -> None:
     """
     if not isinstance(path, str | os.PathLike):
         raise CaseError(f"path: expected {what} as a str or a pathlib.Path, got "
-                        f"{_shown(path)}")
+                        f"{shown(path)}")
 
 
 def _split(spec: str) -> tuple[str, str] | None:

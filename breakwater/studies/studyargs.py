@@ -16,14 +16,10 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from breakwater.config.fields import printable
+from breakwater.config.fields import printable, shown
 from breakwater.studies.studyfile import Study
 
 __all__ = ["checked_study_arguments"]
-
-
-def _got(value: Any) -> str:
-    return f"got {type(value).__name__} {printable(repr(value))[:60]}"
 
 
 def checked_study_arguments(study: Any, out: Any, comm: Any, ranks_per_case: Any,
@@ -38,16 +34,16 @@ def checked_study_arguments(study: Any, out: Any, comm: Any, ranks_per_case: Any
                         f"run_study(load_study({printable(repr(os.fspath(study)))}), ...)")
     if not isinstance(study, Study):
         raise TypeError("run_study: study: expected a Study (run_study(load_study("
-                        f"'study.toml'), ...)), {_got(study)}")
+                        f"'study.toml'), ...)), got {shown(study)}")
     if out is not None and not isinstance(out, str | os.PathLike):
         raise TypeError(f"run_study: out: expected a folder as a str or a pathlib.Path "
-                        f"(or None: results/<study name>), {_got(out)}")
+                        f"(or None: results/<study name>), got {shown(out)}")
     if comm is not None and not isinstance(comm, MPI.Intracomm):
         raise TypeError(f"run_study: comm: expected an MPI communicator (e.g. "
-                        f"MPI.COMM_WORLD, or None: every rank), {_got(comm)}")
+                        f"MPI.COMM_WORLD, or None: every rank), got {shown(comm)}")
     if isinstance(ranks_per_case, bool) or not isinstance(ranks_per_case, int | np.integer):
         raise TypeError(f"run_study: ranks_per_case: expected an integer, "
-                        f"{_got(ranks_per_case)}")
+                        f"got {shown(ranks_per_case)}")
     if not isinstance(quiet, bool | np.bool_):
-        raise TypeError(f"run_study: quiet: expected True or False, {_got(quiet)}")
+        raise TypeError(f"run_study: quiet: expected True or False, got {shown(quiet)}")
     return int(ranks_per_case)
