@@ -322,6 +322,24 @@ def test_compiled_projection_in_passes_is_the_reference(nn: int) -> None:
     assert (f >= 0).sum() > m // 2 and (f < 0).sum() > 0
 
 
+@pytest.mark.parametrize("bad", ["collapsed", "nan"])
+def test_compiled_passes_end_on_degenerate_faces(bad: str) -> None:
+    """A collapsed face (its three corners one point: the shortest face size 0) or a
+    non-finite node among the faces: the passes end where the single pass does, in its
+    ZeroDivisionError (the face's plane has no area: Newton's flat start). Before, a
+    radius grown from 0 by ×4 a pass never reached the search radius and the search
+    never ended (measured: still running after 90 s)."""
+    faces = _bumpy(6, 6)
+    faces[3] = faces[3, 0] if bad == "collapsed" else np.nan
+    rng = np.random.default_rng(3)
+    points = np.column_stack([rng.uniform(0, 1, 200), rng.uniform(0, 1, 200),
+                              rng.uniform(-0.1, 0.1, 200)])
+    with pytest.raises(ZeroDivisionError):
+        searchkernels3d._project_within(points, faces, 0.3, 0.3, 1e-9)
+    with pytest.raises(ZeroDivisionError):
+        searchkernels3d.project(points, faces, 0.3, 1e-9)
+
+
 def test_compiled_passes_find_a_bulging_face() -> None:
     """test_a_bulging_face_is_a_candidate in passes: beside the bulging face, a small
     face (the first pass's radius, 0.014) and a flat face 0.1 above the point. The

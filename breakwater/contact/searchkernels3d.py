@@ -334,7 +334,9 @@ def project(points, nodes, radius, tol):  # type: ignore[no-untyped-def]
     r = shortest
     left = np.arange(m)
     while len(left):
-        last = r >= radius or r + widen > radius
+        # The last pass also where a size is 0, NaN or inf (a collapsed face, a diverged
+        # iterate): a growing radius would not reach ``radius`` (the loop never ended).
+        last = not (0.0 < r and r + widen < radius < np.inf)
         if last:
             f, o = _project_within(points[left], nodes, radius, radius, tol)
         else:
