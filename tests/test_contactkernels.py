@@ -391,9 +391,10 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
         lin_next[keep[crawl]] = point[crawl]
         got = none.copy()
         bounds = np.full(len(p.node_pos), guardkernels.FREE, np.int8)
+        acts = np.ones(len(p.node_pos), bool)
         original = step.copy()
         assert guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv,
-                                       chi, none, got, bounds) == fix.sum()
+                                       chi, none, got, bounds, acts) == fix.sum()
         np.testing.assert_allclose(step, expected_step, rtol=0,
                                    atol=1e-12 * np.abs(step).max())
         np.testing.assert_allclose(got, lin_next, rtol=1e-12)
@@ -407,7 +408,7 @@ def test_forces_friction_jacobian_guard(nn: int, integration: str, small: bool) 
                             (guardkernels.NONE, None)):
             step, got = original.copy(), none.copy()
             guardkernels.slip_guard(step, p.v1, facet, N0, t0, p.node_pos, p.pos_m, dv, chi,
-                                    none, got, np.full(len(p.node_pos), state, np.int8))
+                                    none, got, np.full(len(p.node_pos), state, np.int8), acts)
             if grow is None:
                 assert np.isnan(got).all()
             else:

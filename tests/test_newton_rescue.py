@@ -65,7 +65,7 @@ class CubeRootLaw:
         return None
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: object = None) -> int:
         return 0
 
     def true_law(self, crawl: bool = True) -> bool:
@@ -134,7 +134,7 @@ def test_a_solve_converged_on_tangent_lines_is_tested_on_the_law() -> None:
             return 3.0
 
         def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                     dv_dx: float) -> int:
+                     dv_dx: float, bulk: object = None) -> int:
             self.guarded += 1
             self.lin = self.guarded <= 2  # for the next two iterates
             return 0

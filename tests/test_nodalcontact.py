@@ -25,7 +25,9 @@ from mpi4py import MPI
 
 import breakwater.stepping.gn22 as gn22_module
 from breakwater.casefile.case import load_case
+from breakwater.contact.coupling import COUPLING, BulkStiffness
 from breakwater.contact.nodal import NodalContactForces, nodal_contact_applies
+from breakwater.contact.nodalkernels import nodal_state, normal_forces
 from breakwater.stepping.condensed import InterfaceAssembler
 from breakwater.stepping.gn22 import GN22
 from breakwater.stepping.interface import BodyGuard
@@ -166,6 +168,8 @@ def test_compiled_guard_equals_slip_guard() -> None:
         rng = np.random.default_rng(11)  # the same on every rank: interface arrays
         n, dv_dx = solver.n, solver.beta1 * float(solver.dt.value)
         body_guard = BodyGuard(solver.guard, solver.interface, solver.layout, stepper.da)
+        for p in solver.providers:
+            p.begin()  # the law's χ for where the guard acts
         for trial in range(3):
             x = 1e-2 * rng.standard_normal(n)
             v_pred = 1e-6 * rng.standard_normal(n)
@@ -178,6 +182,52 @@ def test_compiled_guard_equals_slip_guard() -> None:
             assert not np.array_equal(got, step)
             np.testing.assert_allclose(got, expected, rtol=0,
                                        atol=1e-12 * np.abs(expected).max())
+            # Where it acts (breakwater.contact.coupling): with a bulk of S = 0 at every
+            # node, as without one; with S = 1e30 I (the bulk holds every slip) at none.
+            acting = step.copy()
+            cut_all = sum(p.precheck(x, acting, v_pred, dv_dx, BulkStiffness(np.zeros((n, n))))
+                          for p in solver.providers)
+            assert cut_all == cut
+            np.testing.assert_array_equal(acting, got)
+            held = step.copy()
+            assert sum(p.precheck(x, held, v_pred, dv_dx, BulkStiffness(1e30 * np.eye(n)))
+                       for p in solver.providers) == 0
+            np.testing.assert_array_equal(held, step)
+    finally:
+        stepper.destroy()
+
+
+def test_guard_reads_the_nodes_normal_forces() -> None:
+    # The nodal guard's normal forces λ_k (nodalkernels.normal_forces, where the guard
+    # acts: breakwater.contact.coupling) are f_c's: the Goda crest is flat, every
+    # point's normal ±ŷ, and the friction is tangential, so λ_k = |f_c,y| at the slave
+    # node's y unknown; to round-off (1e-12 of the largest). At random iterates about
+    # half the nodes are closed; the guard's switch follows λ against S_yy (S = s I): it
+    # acts where μλβ₁Δt/χ ≥ 0.1 s.
+    model, *_ = load_case(None, ["mesh.refinement=0.7"]).build(COMM)
+    stepper = GN22(model, 1e-4)
+    try:
+        solver = stepper.fast
+        assert solver is not None
+        (p,) = [q for q in solver.providers if isinstance(q, NodalContactForces)]
+        p.begin()
+        assert np.allclose(np.abs(p._normal[:, 1]), 1.0)
+        rng = np.random.default_rng(5)
+        y = 1e-1 * rng.standard_normal(p.n)
+        fc = np.zeros(p.n)
+        p.add_vector(y, fc)
+        lam = np.empty(p.nodes.size)
+        ε_n, g0, μ, χ2 = p._law
+        nodal_state(y, p._pos, p._base, *p._coefficients, p._U, p._V)
+        normal_forces(p._U, p._node, p._weight, p._normal, ε_n, g0, lam)
+        ys = p._pos[0, :, 1]
+        assert (ys >= 0).all() and 0 < (lam > 0).sum() < len(lam)
+        np.testing.assert_allclose(lam, np.abs(fc[ys]), rtol=0, atol=1e-12 * lam.max())
+        stick = μ * p._coefficients[1] / np.sqrt(χ2)
+        s = np.median(stick * lam[lam > 0]) / COUPLING
+        acts = p._guarded(y, BulkStiffness(s * np.eye(p.n)))
+        np.testing.assert_array_equal(acts, stick * lam >= COUPLING * s)
+        assert 0 < acts.sum() < len(acts)
     finally:
         stepper.destroy()
 

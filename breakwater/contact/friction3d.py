@@ -439,12 +439,13 @@ def start_slip(pair: Any, frozen_: tuple[np.ndarray, np.ndarray, np.ndarray] | N
 
 @kernel
 def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi, lin, lin_next,  # type: ignore[no-untyped-def]
-               bounds):
+               bounds, acts):
     """A 3-D pair's slip guard on Newton's step (``precheck``; in place).
 
     The 2-D pair's (:func:`breakwater.contact.guardkernels.slip_guard`, its arguments;
     t₀ is the tangent basis T₀ and the crawl points are tangent vectors ``(nodes, 2)``):
-    per slave node with a start-of-step master point and free DOFs, the slip vector of
+    per slave node with a start-of-step master point and free DOFs where it acts
+    (``acts``), the slip vector of
     the iterate c₀ and of Newton's proposal c₁ (the iterate less the step); a step that
     reverses the slip (c₀·c₁ < 0) from outside the stick band (|c₀| > χ) lands at zero
     slip, any other whose linear model (at the node's crawl point where it has one)
@@ -470,7 +471,8 @@ def slip_guard(step, v1, facet0, N0, T0, node_pos, pos_m, dv, chi, lin, lin_next
     for j in range(len(facet0)):
         lin_next[j, 0], lin_next[j, 1] = np.nan, np.nan
         f = facet0[j]
-        if f < 0 or node_pos[j, 0] < 0 or node_pos[j, 1] < 0 or node_pos[j, 2] < 0:
+        if (f < 0 or node_pos[j, 0] < 0 or node_pos[j, 1] < 0 or node_pos[j, 2] < 0
+                or not acts[j]):
             continue
         for d in range(3):
             vs[d], ys[d] = v1[node_pos[j, d]], ext[node_pos[j, d]]

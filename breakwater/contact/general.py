@@ -56,6 +56,7 @@ import numpy as np
 from dolfinx import fem
 
 from breakwater.contact import (
+    coupling,
     forcekernels,
     newtonaids,
     recordkernels,
@@ -262,27 +263,28 @@ class SurfaceForces(SurfaceSearch, newtonaids.Regularised):
             len(self._node_pos), cu, cv, bool(self.spec.friction), lam, k, v_T, unit,
             facet, N0, t0, self._node_pos, mu, chi)
 
-    def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
-        """Newton's slip guard at the slave nodes (:class:`~.newtonaids.CrawlPoints`).
+    def precheck(self, x: np.ndarray, step: np.ndarray,
+                 bulk: coupling.BulkStiffness | None = None) -> int:
+        """Newton's slip guard at the slave nodes (:func:`~.newtonaids.slip_guard`).
 
         A slave node's slip velocity (relative to the master point under its start-of-step
         projection, along the tangent there; linear in Δa) that reverses from outside the
         stick band lands at zero, one in the law's curved zone on the law; one crawling
         along the saturated law stays, the next iterates' law linearised further along
-        until :meth:`true_law` (:mod:`breakwater.contact.guardkernels`).
+        until :meth:`true_law` (:mod:`breakwater.contact.guardkernels`); at the nodes
+        whose law holds their slip against the bulk (:mod:`~breakwater.contact.coupling`).
 
         Args:
             x: The current iterate (Δa at the interface unknowns).
             step: Newton's step, changed in place where cut.
+            bulk: The bulk's stiffness on the unknowns (None: the guard acts everywhere).
 
         Returns:
             The nodes whose step changed (the same on every rank).
         """
         if not self.spec.friction:
             return 0
-        u0, _, v1 = self._state(x)
-        return self.crawl.guard(step, v1, self._frozen(u0), self._node_pos, self._pm,
-                                self.beta1 * self.step_dt(), self._law[3])
+        return newtonaids.slip_guard(self, x, step, self._frozen, bulk)
 
     def true_law(self, crawl: bool = True) -> bool:
         """The iterates' friction is the law itself again; whether it was not."""

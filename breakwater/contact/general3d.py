@@ -39,6 +39,7 @@ from dolfinx import fem
 from breakwater.common.arrays import first_by_position
 from breakwater.common.errors import CaseError
 from breakwater.contact import (
+    coupling,
     forcekernels,
     forcekernels3d,
     friction3d,
@@ -209,24 +210,18 @@ class SurfaceForces3D(SurfaceSearch3D, newtonaids.Regularised):
         return forcekernels.left_product(  # type: ignore[no-any-return]
             np.ascontiguousarray(X, dtype=float), act, A)
 
-    def precheck(self, x: np.ndarray, step: np.ndarray) -> int:
+    def precheck(self, x: np.ndarray, step: np.ndarray,
+                 bulk: coupling.BulkStiffness | None = None) -> int:
         """Newton's slip guard at the slave nodes (:func:`~.friction3d.slip_guard`).
 
-        Its crawl points are the next iterates' (:class:`~.newtonaids.CrawlPoints`), until
-        :meth:`true_law`.
-
-        Args:
-            x: The current iterate (Δa at the interface unknowns).
-            step: Newton's step, changed in place where cut.
-
-        Returns:
-            The nodes whose step changed (the same on every rank).
+        The 2-D pair's (:meth:`~breakwater.contact.general.SurfaceForces.precheck`, its
+        arguments and return): crawl points (:class:`~.newtonaids.CrawlPoints`) until
+        :meth:`true_law`, at the nodes whose law holds their slip against the bulk.
         """
         if not self.spec.friction:
             return 0
-        u0, _, v1 = self._state(x)
-        return self.crawl.guard(step, v1, friction3d.frozen(self, u0), self._node_pos,
-                                self._pm, self.beta1 * self.step_dt(), self._law[3])
+        return newtonaids.slip_guard(self, x, step, lambda u0: friction3d.frozen(self, u0),
+                                     bulk)
 
     def true_law(self, crawl: bool = True) -> bool:
         """The iterates' friction is the law itself again; whether it was not."""

@@ -127,7 +127,7 @@ def crawl_point(force, c1, chi, grow):  # type: ignore[no-untyped-def]
 
 @kernel
 def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next,  # type: ignore[no-untyped-def]
-               bounds):
+               bounds, acts):
     """``SurfaceForces.precheck``: a general pair's slip guard on Newton's step.
 
     Per slave node with a start-of-step master point: the slip velocity along the
@@ -152,6 +152,8 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         lin_next: Out: the next iterate's.
         bounds: The crawl points each node may take, :data:`FREE`, :data:`REVERSED` or
             :data:`NONE` (in/out: a node whose slip reverses becomes REVERSED).
+        acts: Whether the guard acts at each node (else its step stands and it has no
+            crawl point: :func:`breakwater.contact.coupling.guarded_nodes`).
 
     Returns:
         The nodes whose step changed.
@@ -166,7 +168,7 @@ def slip_guard(step, v1, facet0, N0, t0, node_pos, pos_m, dv, chi, lin, lin_next
         lin_next[j] = np.nan
         f = facet0[j]
         p0, p1 = node_pos[j, 0], node_pos[j, 1]
-        if f < 0 or p0 < 0 or p1 < 0:
+        if f < 0 or p0 < 0 or p1 < 0 or not acts[j]:
             continue
         c0 = tangential_slip(v1, j, f, N0, t0, node_pos, pos_m)
         c1 = c0 - dv * tangential_slip(ext, j, f, N0, t0, node_pos, pos_m)

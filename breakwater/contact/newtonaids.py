@@ -5,7 +5,9 @@
 - :func:`resolution`: the round-off of f_c at an iterate, below which the residual
   carries no information (the Newton's test converges there).
 - :class:`CrawlPoints`: the slip guard's decisions, and where it linearises the law of a
-  slip that crawls along the saturated law (:mod:`~breakwater.contact.guardkernels`).
+  slip that crawls along the saturated law (:mod:`~breakwater.contact.guardkernels`);
+  :func:`slip_guard`, the pair's guard at the nodes its law holds
+  (:mod:`~breakwater.contact.coupling`).
 - :class:`Regularised`: the pair's friction law with χ stretched, for the Newton's
   continuation (:mod:`breakwater.stepping.continuation`).
 
@@ -19,20 +21,20 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.common.jit import kernel
-from breakwater.contact import forcekernels, guardkernels
+from breakwater.contact import coupling, forcekernels, guardkernels
 
 if TYPE_CHECKING:
     from breakwater.contact.surfaces import SurfacePair
     from breakwater.contact.surfacesearch import SurfaceSearch
 
 __all__ = ["CrawlPoints", "Regularised", "SlipMemory", "friction_normals", "resolution",
-           "sliding_velocities", "slip_velocities_at"]
+           "sliding_velocities", "slip_guard", "slip_velocities_at"]
 
 
 class SlipMemory:
@@ -347,7 +349,8 @@ class CrawlPoints:
         self._bounds = np.full(nodes, guardkernels.FREE, np.int8)
 
     def guard(self, step: np.ndarray, v1: np.ndarray, frozen: tuple[np.ndarray, ...],
-              node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float) -> int:
+              node_pos: np.ndarray, pos_m: np.ndarray, dv: float, chi: float,
+              acts: np.ndarray) -> int:
         """The slip guard on Newton's step (in place); the crawl points of the next iterate.
 
         Args:
@@ -358,13 +361,14 @@ class CrawlPoints:
             pos_m: The master facets'.
             dv: β₁Δt.
             chi: χ.
+            acts: The nodes where the guard acts (:func:`~.coupling.guarded_nodes`).
 
         Returns:
             The nodes whose step changed.
         """
         facet, N0, t0 = frozen
         fixed = int(self._kernel(step, v1, facet, N0, t0, node_pos, pos_m, dv, chi, self.at,
-                                 self._next, self._bounds))
+                                 self._next, self._bounds, acts))
         self.at, self._next = self._next, self.at
         self.any = not np.isnan(self.at).all()
         self.version += 1
@@ -383,6 +387,33 @@ class CrawlPoints:
             self.version += 1
         self._bounds.fill(guardkernels.FREE if allowed else guardkernels.NONE)
         return was
+
+
+def slip_guard(pair: Any, x: np.ndarray, step: np.ndarray,
+               frozen_at: Callable[[np.ndarray], tuple[np.ndarray, ...]],
+               bulk: coupling.BulkStiffness | None) -> int:
+    """A general pair's slip guard on Newton's step at the iterate x (its ``precheck``).
+
+    :meth:`CrawlPoints.guard` at the nodes where the law sets the slip
+    (:func:`~.coupling.guarded_nodes`, from the nodes' friction normal forces at x).
+
+    Args:
+        pair: The pair (a 2-D or 3-D general pair's forces, with friction; its ``crawl``).
+        x: The iterate (Δa at the interface unknowns).
+        step: Newton's step, cut in place.
+        frozen_at: The slave nodes' start-of-step master points at u₀.
+        bulk: The bulk's stiffness on the unknowns (None: the guard acts everywhere).
+
+    Returns:
+        The nodes whose step changed.
+    """
+    u0, u1, v1 = pair._state(x)
+    frozen = frozen_at(u0)
+    _, _, mu, chi = pair._law
+    dv = pair.beta1 * pair.step_dt()
+    lam, _ = friction_normals(pair._normal(u1)["lam"], frozen[0])
+    acts = coupling.guarded_nodes(lam, mu * dv / chi, bulk, pair._node_pos, frozen[2])
+    return int(pair.crawl.guard(step, v1, frozen, pair._node_pos, pair._pm, dv, chi, acts))
 
 
 class Regularised:

@@ -22,6 +22,7 @@ Coulomb laws the kernels encode); elsewhere the fast solver assembles the UFL fo
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import basix
@@ -32,12 +33,14 @@ from mpi4py import MPI
 
 from breakwater import forms  # type: ignore[attr-defined]
 from breakwater.contact.conforming import InterfaceNodes
+from breakwater.contact.coupling import BulkStiffness, guarded_nodes
 from breakwater.contact.nodalkernels import (
     guard_steps,
     nodal_left_product,
     nodal_residual,
     nodal_state,
     nodal_tangents,
+    normal_forces,
     tangent_block,
 )
 from breakwater.model.layout import MonolithicLayout
@@ -322,19 +325,33 @@ class NodalContactForces:
         return self._node_tangents(y).copy(), self._run_slave, self._run_master
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
         """The pair's slip guard on the interface unknowns; the nodes corrected.
 
         :func:`~breakwater.contact.nodalkernels.guard_steps` with the nodes' averaged
         normals and tangent bases and the law's stick band, as
         :class:`~breakwater.contact.slipguard.SlipGuard` does on body arrays (nothing
-        without the guard).
+        without the guard), at the nodes whose law holds their slip against the bulk's
+        stiffness ``bulk`` (:func:`~breakwater.contact.coupling.guarded_nodes`, the
+        slave side's; None: every node).
         """
         if not self.guarded:
             return 0
         band = self.pair.law.friction.stick_band
         return int(guard_steps(x, step, v_pred, dv_dx, self._pos, self.nodes.normal,
-                               self._tangents, forms.parameter_value(band)))
+                               self._tangents, forms.parameter_value(band),
+                               self._guarded(x, bulk)))
+
+    def _guarded(self, x: np.ndarray, bulk: BulkStiffness | None) -> np.ndarray:
+        """The nodes where the guard acts at the iterate x (their normal forces there)."""
+        ε_n, g0, μ, χ2 = self._law
+        if bulk is None or not χ2 > 0.0:
+            return np.ones(self.nodes.size, bool)
+        nodal_state(x, self._pos, self._base, *self._coefficients, self._U, self._V)
+        lam = np.empty(self.nodes.size)
+        normal_forces(self._U, self._node, self._weight, self._normal, ε_n, g0, lam)
+        return guarded_nodes(lam, μ * self._coefficients[1] / math.sqrt(χ2), bulk,
+                             self._pos[0], self._tangents)
 
     def true_law(self, crawl: bool = True) -> bool:
         """Always the law itself (the guard moves slips alone): False."""

@@ -32,7 +32,7 @@ from breakwater.common.jit import kernel
 from breakwater.contact.guardkernels import land
 
 __all__ = ["closed_nodes", "guard_steps", "nodal_left_product", "nodal_residual", "nodal_state",
-           "nodal_tangents", "tangent_block", "tangent_left_product"]
+           "nodal_tangents", "normal_forces", "tangent_block", "tangent_left_product"]
 
 
 @kernel
@@ -230,9 +230,26 @@ def tangent_block(W: np.ndarray, slave: np.ndarray, master: np.ndarray,
 
 
 @kernel
+def normal_forces(U: np.ndarray, node: np.ndarray, weight: np.ndarray, normal: np.ndarray,
+                  ε_n: float, g0: float, lam: np.ndarray) -> None:
+    """Each node's normal force λ = Σ w p over its points at the nodal state U, into ``lam``.
+
+    p as :func:`_traction`'s (the penalty pressure where the gap is closed).
+    """
+    lam[:] = 0.0
+    for q in range(node.shape[0]):
+        k = node[q]
+        g = g0
+        for i in range(normal.shape[1]):
+            g += (U[0, k, i] - U[1, k, i]) * normal[q, i]
+        if g <= 0.0:
+            lam[k] += weight[q] * (-ε_n * g)
+
+
+@kernel
 def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: float,
                 pos: np.ndarray, normal: np.ndarray, tangents: np.ndarray,
-                band: float) -> int:
+                band: float, acts: np.ndarray) -> int:
     """The slip guard of one pair on the interface unknowns; returns the nodes corrected.
 
     Newton's next iterate is ``x − step``; the velocities of the iterate are
@@ -243,7 +260,8 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     :func:`~breakwater.contact.guardkernels.land` applies. The slave's step becomes
     ``ys − (I − nn) ys + (I − nn) ym + (w₀ − w₁')/dv_dx`` (normal part kept), written in
     ``step`` (:func:`~breakwater.contact.slipguard.guard_slip`,
-    :class:`~breakwater.contact.slipguard.SlipGuard`).
+    :class:`~breakwater.contact.slipguard.SlipGuard`). Only at the nodes where it ``acts``
+    (:func:`~breakwater.contact.coupling.guarded_nodes`).
     """
     nodes, gdim = normal.shape
     ntan = tangents.shape[1]
@@ -257,6 +275,8 @@ def guard_steps(x: np.ndarray, step: np.ndarray, v_pred: np.ndarray, dv_dx: floa
     target = np.empty(ntan)
     corrected = 0
     for k in range(nodes):
+        if not acts[k]:
+            continue
         for side in range(2):
             for i in range(gdim):
                 p = pos[side, k, i]

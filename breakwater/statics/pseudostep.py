@@ -25,6 +25,7 @@ from mpi4py import MPI
 from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms maps to forms/
 from breakwater.contact import searchkernels
 from breakwater.contact.conforming import mean_facet_length
+from breakwater.contact.coupling import BulkStiffness
 from breakwater.contact.general3d import reference_gaps3d, smallest_gap
 from breakwater.model.model import ContactModel
 from breakwater.stepping.gn22 import GN22, GN22Parameters, force_scale
@@ -351,7 +352,7 @@ class _Offset:
         return 0.0
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
         """No guard."""
         return 0
 

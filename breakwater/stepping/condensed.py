@@ -71,6 +71,7 @@ from breakwater.stepping.interface import (
     ContactFactory,
     ContactForces,
     ContactSum,
+    Guard,
     InterfaceUnknowns,
     StateForces,
 )
@@ -192,10 +193,9 @@ class InterfaceAssembler:
         return out.reshape(self.n, self.n)
 
 
-def _surface_guard(pair: SurfaceContact) -> Callable[[np.ndarray, np.ndarray, np.ndarray,
-                                                     float], int]:
-    """A general pair's slip guard (``precheck(x, step)``) as a StateForces guard."""
-    return lambda x, step, v_pred, dv_dx: pair.precheck(x, step)
+def _surface_guard(pair: SurfaceContact) -> Guard:
+    """A general pair's slip guard (``precheck(x, step, bulk)``) as a StateForces guard."""
+    return lambda x, step, v_pred, dv_dx, bulk: pair.precheck(x, step, bulk)
 
 
 class CondensedNewton(StepSolver):

@@ -20,10 +20,15 @@ from mpi4py import MPI
 
 from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
+from breakwater.contact.coupling import BulkStiffness
 from breakwater.model.layout import MonolithicLayout
 
-__all__ = ["BodyGuard", "ContactFactory", "ContactForces", "ContactSum", "InterfaceUnknowns",
-           "StateForces", "StateProvider", "coupled"]
+__all__ = ["BodyGuard", "ContactFactory", "ContactForces", "ContactSum", "Guard",
+           "InterfaceUnknowns", "StateForces", "StateProvider", "coupled"]
+
+#: A provider's slip guard ``guard(x, step, v_pred, dv_dx, bulk) -> corrected``
+#: (:meth:`ContactForces.precheck`).
+Guard = Callable[[np.ndarray, np.ndarray, np.ndarray, float, BulkStiffness | None], int]
 
 
 class ContactForces(Protocol):
@@ -73,10 +78,12 @@ class ContactForces(Protocol):
         ...
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
         """The provider's slip guard on Newton's step (next iterate ``x − step``).
 
-        ``v_pred + dv_dx x`` are the iterate's velocities; ``step`` is cut in place.
+        ``v_pred + dv_dx x`` are the iterate's velocities; ``step`` is cut in place. The
+        guard acts at the nodes whose friction law holds their slip against the bulk's
+        stiffness ``bulk`` (:mod:`breakwater.contact.coupling`; None: at every node).
 
         Returns:
             The nodes corrected (0: ``step`` untouched).
@@ -155,14 +162,12 @@ class StateForces:
         provider: The provider.
         interface: The interface unknowns.
         da: The step's unknown Δa, one Function per body.
-        guard: The provider's slip guard ``(x, step, v_pred, dv_dx) -> corrected``
-            (:meth:`ContactForces.precheck`), or None.
+        guard: The provider's slip guard (:data:`Guard`), or None.
     """
 
     def __init__(self, provider: StateProvider, interface: InterfaceUnknowns,
                  da: Sequence[fem.Function],
-                 guard: Callable[[np.ndarray, np.ndarray, np.ndarray, float], int] | None
-                 = None) -> None:
+                 guard: Guard | None = None) -> None:
         self.provider, self.interface, self.da = provider, interface, da
         self.guard = guard
 
@@ -210,9 +215,9 @@ class StateForces:
         return self.provider.active_jacobian()
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
         """The provider's guard, if any."""
-        return self.guard(x, step, v_pred, dv_dx) if self.guard is not None else 0
+        return self.guard(x, step, v_pred, dv_dx, bulk) if self.guard is not None else 0
 
     def true_law(self, crawl: bool = True) -> bool:
         """The provider's ``true_law(crawl)``, if it has one (a general pair)."""
@@ -257,8 +262,8 @@ class BodyGuard:
         self._arrays = [[np.zeros_like(f.x.array) for f in da] for _ in range(2)]
 
     def __call__(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
-        """Cut ``step`` in place; the nodes corrected."""
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
+        """Cut ``step`` in place; the nodes corrected (at every node: ``bulk`` unused)."""
         velocity = v_pred + dv_dx * x
         v_arrays, step_arrays = self._arrays
         for va, sa, (local, pos) in zip(v_arrays, step_arrays, self.interface.positions,
@@ -439,9 +444,9 @@ class ContactSum:
             return math.sqrt(sum(c.resolution(y) ** 2 for c in self.providers))
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
         """Every provider's slip guard, in turn, on the step; the nodes corrected."""
-        return sum(c.precheck(x, step, v_pred, dv_dx) for c in self.providers)
+        return sum(c.precheck(x, step, v_pred, dv_dx, bulk) for c in self.providers)
 
     def true_law(self, crawl: bool = True) -> bool:
         """Every provider's :meth:`ContactForces.true_law`; whether any's was not."""

@@ -48,6 +48,7 @@ from breakwater.common.arrays import read_only
 from breakwater.common.errors import ConvergenceError
 from breakwater.common.jit import kernel
 from breakwater.common.timings import Timings
+from breakwater.contact.coupling import BulkStiffness
 from breakwater.stepping import continuation
 from breakwater.stepping.factorisations import Factorisation
 from breakwater.stepping.interface import ContactSum
@@ -203,7 +204,7 @@ class InterfaceNewton:
                 reason = int(_R.DIVERGED_LINEAR_SOLVE)
                 break
             if self.guarded:
-                self.flips += self.contact.precheck(x, δ, v_pred, dv_dx)
+                self.flips += self.contact.precheck(x, δ, v_pred, dv_dx, BulkStiffness(S))
             x, δ, (fc, G, F), fnorm, halved = damped_step(
                 lambda y: self._residual(y, X_II, S, z_I), x, δ,
                 fnorm if damped else math.inf)

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from breakwater.common.arrays import read_only
+from breakwater.contact.coupling import BulkStiffness
 
 if TYPE_CHECKING:
     from breakwater.stepping.factorisations import Factorisation
@@ -205,11 +206,15 @@ class NearContact:
         raise OutOfReach
 
     def precheck(self, x: np.ndarray, step: np.ndarray, v_pred: np.ndarray,
-                 dv_dx: float) -> int:
-        """The providers' guards on the whole interface (far steps zero)."""
+                 dv_dx: float, bulk: BulkStiffness | None = None) -> int:
+        """The providers' guards on the whole interface (far steps zero; S on the near)."""
         whole = np.zeros(len(self.base))
         whole[self.near] = step
-        cut = self.contact.precheck(self._whole(x), whole, self.v_pred, dv_dx)
+        if bulk is not None:
+            index = np.full(len(self.base), -1, np.int64)
+            index[self.near] = np.arange(len(self.near))
+            bulk = BulkStiffness(bulk.S, index)
+        cut = self.contact.precheck(self._whole(x), whole, self.v_pred, dv_dx, bulk)
         if whole[self.far].any():
             raise OutOfReach
         step[:] = whole[self.near]
