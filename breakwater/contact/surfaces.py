@@ -18,15 +18,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from dolfinx import fem
+from mpi4py import MPI
 
+from breakwater.common.errors import MeshError
+from breakwater.model.mesh import DEGENERATE
 from breakwater.model.pairs import INTEGRATIONS, SurfacePair, check_pair_settings
 
 if TYPE_CHECKING:
     from breakwater.model.layout import MonolithicLayout
     from breakwater.model.model import ContactModel
 
-__all__ = ["CORNER", "INTEGRATIONS", "TURN", "Surface", "SurfacePair", "check_pair_settings",
-           "chord_sag", "gather_surface", "surface_dofs", "warn_first_order"]
+__all__ = ["CORNER", "INTEGRATIONS", "TURN", "Surface", "SurfacePair", "check_faces",
+           "check_pair_settings", "chord_sag", "collapsed", "gather_surface", "surface_dofs",
+           "warn_first_order"]
 
 log = logging.getLogger("breakwater.contact.surfaces")
 
@@ -98,6 +102,60 @@ def gather_surface(model: ContactModel, layout: MonolithicLayout | None, body: s
     mid = X.mean(axis=1)
     order = np.lexsort(mid.T[::-1])
     return Surface(X[order], dofs[order], interior[order])
+
+
+def collapsed(X: np.ndarray) -> np.ndarray:
+    """Per face (2-D: facet) of ``X`` ``(F, nn, gdim)``, whether it is collapsed.
+
+    In 3-D its corners' triangle has a height below
+    :data:`~breakwater.model.mesh.DEGENERATE` of its longest edge (two corners at one
+    point, or the three on one line; a six-node face whatever its mid-edge nodes), in
+    2-D its ends lie closer than that fraction of the surface's longest facet. (A
+    non-finite node is the mesh's refusal, :class:`~breakwater.model.model.ContactModel`.)
+    """
+    if X.shape[-1] == 3:
+        c = X[:, :3]
+        twice_area = np.linalg.norm(np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]), axis=1)
+        longest = np.linalg.norm(c[:, [1, 2, 0]] - c, axis=2).max(axis=1)
+        return np.asarray(twice_area <= DEGENERATE * longest**2)  # height 2A/l ≤ DEGENERATE l
+    chord = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    return np.asarray(chord <= DEGENERATE * (chord.max() if len(chord) else 0.0))
+
+
+def check_faces(model: ContactModel, spec: SurfacePair, role: str, body: str,
+                group: str) -> None:
+    """Refuse a general pair's surface group with collapsed faces (collective).
+
+    A collapsed face (:func:`collapsed`) has no plane or chord: the search divided by
+    its area or length (Newton's start on a master face's plane or chord, the slave's
+    segmentation on a slave face's plane, the slave's normals) and the run ended in a
+    raw ZeroDivisionError; in 3-D such a face is a facet of a tetrahedron without
+    volume, whose stiffness is NaN, so no search could make the run right. The surface
+    is gathered (the same faces on every rank, in one order) and the decision reduced
+    over the ranks besides: every rank refuses, with the same line.
+
+    Raises:
+        MeshError: One line naming the pair, the side, the group, how many faces and
+            where the first is.
+    """
+    X = gather_surface(model, None, body, (group,)).X
+    flat = collapsed(X)
+    if not model.comm.allreduce(bool(flat.any()), op=MPI.LOR):
+        return
+    kind, corners = ("face", 3) if X.shape[-1] == 3 else ("facet", 2)
+    what = ("no area: two corners at one point or the three on one line" if corners == 3
+            else "no length: its two ends at one point")
+    f = int(np.flatnonzero(flat)[0])
+    centre = X[f, :corners].mean(axis=0)
+    centre[np.abs(centre) <= 1e-12 * np.abs(X[f]).max()] = 0.0  # round-off of a 0
+    raise MeshError(f"contact.{spec.name}.{role}_surface: '{group}' on '{body}' has "
+                    f"{int(flat.sum())} collapsed {kind}(s) ({what}), the first centred at "
+                    f"({_xyz(centre)}) m: remesh there")
+
+
+def _xyz(x: np.ndarray) -> str:
+    """A point's coordinates, ``'0.1, 2, nan'``."""
+    return ", ".join(f"{float(c):.4g}" for c in x)
 
 
 def surface_dofs(model: ContactModel, layout: MonolithicLayout) -> np.ndarray:

@@ -35,6 +35,7 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common import formcache, petscfree
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec
+from breakwater.contact.surfaces import check_faces
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
@@ -138,6 +139,7 @@ class ContactModel(KnownAttributes, ModelGroups):
         self.degree = degree
         if mesh_data.cell_tags is None or mesh_data.facet_tags is None:
             raise MeshError("the mesh needs cell and facet physical groups (name them in gmsh)")
+        _finite_nodes(msh)
         msh.topology.create_connectivity(tdim - 1, tdim)
         self._cell_body = np.full(msh.topology.index_map(tdim).size_local
                                   + msh.topology.index_map(tdim).num_ghosts, -1, np.int32)
@@ -265,14 +267,15 @@ class ContactModel(KnownAttributes, ModelGroups):
         return PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
 
     def _check_surfaces(self, pair: SurfacePair) -> SurfacePair:
-        """A general pair whose surfaces lie on its bodies' boundaries.
+        """A general pair whose surfaces lie on its bodies' boundaries, faces a search takes.
 
         A surface group may lie on several bodies (a conforming interface shared by the
         two, or one group naming facets of both): each side of the pair takes the
         group's facets on its own body (:func:`breakwater.contact.surfaces.surface_dofs`).
         Whether the bodies start overlapped beyond what the pair's search sees is the
         pair's static check (:meth:`breakwater.model.pairs.Pair.static_check`), which the
-        static stage runs before it looks for the initial state.
+        static stage runs before it looks for the initial state. Each group's faces are
+        finite and not collapsed (:func:`breakwater.contact.surfaces.check_faces`).
         """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
                                   *(("master", pair.master, g) for g in pair.master_groups)):
@@ -287,7 +290,36 @@ class ContactModel(KnownAttributes, ModelGroups):
                                 f"body '{', '.join(found)}', not on the {role} '{body}' "
                                 f"(facet groups on '{body}': "
                                 f"{', '.join(self.facet_groups_on(body)) or 'none'})")
+            check_faces(self, pair, role, body, group)
         return pair
+
+
+def _finite_nodes(msh: dolfinx.mesh.Mesh) -> None:
+    """Refuse a mesh node with a non-finite coordinate (NaN, inf), on every rank.
+
+    Before, such a node (a .msh written with ``nan``) ended the case build in a
+    LinAlgError traceback (the rigid modes' eigenvalues), or on a general pair's surface
+    in the search's ZeroDivisionError.
+
+    Raises:
+        MeshError: One line: how many nodes, and where the first (in the input's node
+            order: the same line for any number of ranks).
+    """
+    geometry = msh.geometry
+    owned = geometry.index_map().size_local
+    x = geometry.x[:owned, :geometry.dim]
+    bad = np.flatnonzero(~np.isfinite(x).all(axis=1))
+    count = msh.comm.allreduce(len(bad))
+    if not count:
+        return
+    first = None
+    if len(bad):
+        k = bad[np.argmin(geometry.input_global_indices[bad])]
+        first = (int(geometry.input_global_indices[k]), x[k].tolist())
+    _, where = min(f for f in msh.comm.allgather(first) if f is not None)
+    raise MeshError(f"the mesh has {count} node(s) with a non-finite coordinate (NaN or "
+                    f"inf), the first at ({', '.join(f'{c:.4g}' for c in where)}): fix the "
+                    "mesh file's node coordinates")
 
 
 def _check_interface(model: ContactModel, pair: ContactPair, facets: np.ndarray,
