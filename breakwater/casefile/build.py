@@ -37,7 +37,7 @@ from breakwater.casefile.stormbuild import storm_outputs
 from breakwater.casefile.tables import GODA3D
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, PairProbeSpec, ProbeSpec, TimeSpec
-from breakwater.contact.surfaces import SurfacePair
+from breakwater.contact.surfaces import SurfacePair, check_faces
 from breakwater.model.mesh import group_points, group_tag, mesh_geo
 from breakwater.model.mesh import read_mesh as _read_msh
 from breakwater.model.model import Body, ContactModel, ContactPair, Damping, Fixed, SurfaceLoad
@@ -176,6 +176,7 @@ def build_model(case: CaseSettings, data: gmshio.MeshData,
                          damping=Damping(case.damping.alpha, case.damping.beta)
                          if dynamic else None,
                          degree=case.mesh.degree, surface_pairs=surface_pairs)
+    check_faces(model)  # (before any search: the rigid modes, a calibration)
     if dynamic:
         names = case.initial.loads
         model.initial = InitialSpec(

@@ -122,35 +122,38 @@ def collapsed(X: np.ndarray) -> np.ndarray:
     return np.asarray(chord <= DEGENERATE * (chord.max() if len(chord) else 0.0))
 
 
-def check_faces(model: ContactModel, spec: SurfacePair, role: str, body: str,
-                group: str) -> None:
+def check_faces(model: ContactModel) -> None:
     """Refuse a general pair's surface group with collapsed faces (collective).
 
-    A collapsed face (:func:`collapsed`) has no plane or chord: the search divided by
+    A collapsed face (:func:`collapsed`) has no plane or chord: the search divides by
     its area or length (Newton's start on a master face's plane or chord, the slave's
-    segmentation on a slave face's plane, the slave's normals) and the run ended in a
-    raw ZeroDivisionError; in 3-D such a face is a facet of a tetrahedron without
-    volume, whose stiffness is NaN, so no search could make the run right. The surface
-    is gathered (the same faces on every rank, in one order) and the decision reduced
-    over the ranks besides: every rank refuses, with the same line.
+    segmentation on a slave face's plane, the slave's normals), a raw
+    ZeroDivisionError; in 3-D it is a facet of a tetrahedron without volume, whose
+    stiffness is NaN, so that no search could make the run right. Each group is
+    gathered (the same faces on every rank, in one order) and the decision reduced
+    over the ranks besides: every rank refuses, with the same line. Called where a
+    case's model is built and where a run starts (a model built in Python).
 
     Raises:
         MeshError: One line naming the pair, the side, the group, how many faces and
             where the first is.
     """
-    X = gather_surface(model, None, body, (group,)).X
-    flat = collapsed(X)
-    if not model.comm.allreduce(bool(flat.any()), op=MPI.LOR):
-        return
-    kind, corners = ("face", 3) if X.shape[-1] == 3 else ("facet", 2)
-    what = ("no area: two corners at one point or the three on one line" if corners == 3
-            else "no length: its two ends at one point")
-    f = int(np.flatnonzero(flat)[0])
-    centre = X[f, :corners].mean(axis=0)
-    centre[np.abs(centre) <= 1e-12 * np.abs(X[f]).max()] = 0.0  # round-off of a 0
-    raise MeshError(f"contact.{spec.name}.{role}_surface: '{group}' on '{body}' has "
-                    f"{int(flat.sum())} collapsed {kind}(s) ({what}), the first centred at "
-                    f"({_xyz(centre)}) m: remesh there")
+    for spec in model.surface_pairs:
+        for role, body, group in (("slave", spec.slave, spec.slave_surface),
+                                  *(("master", spec.master, g) for g in spec.master_groups)):
+            X = gather_surface(model, None, body, (group,)).X
+            flat = collapsed(X)
+            if not model.comm.allreduce(bool(flat.any()), op=MPI.LOR):
+                continue
+            kind, corners = ("face", 3) if X.shape[-1] == 3 else ("facet", 2)
+            what = ("no area: two corners at one point or the three on one line"
+                    if corners == 3 else "no length: its two ends at one point")
+            f = int(np.flatnonzero(flat)[0])
+            centre = X[f, :corners].mean(axis=0)
+            centre[np.abs(centre) <= 1e-12 * np.abs(X[f]).max()] = 0.0  # round-off of a 0
+            raise MeshError(f"contact.{spec.name}.{role}_surface: '{group}' on '{body}' has "
+                            f"{int(flat.sum())} collapsed {kind}(s) ({what}), the first "
+                            f"centred at ({_xyz(centre)}) m: remesh there")
 
 
 def _xyz(x: np.ndarray) -> str:

@@ -35,7 +35,6 @@ from breakwater import forms  # type: ignore[attr-defined]  # breakwater.forms m
 from breakwater.common import formcache, petscfree
 from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec
-from breakwater.contact.surfaces import check_faces
 from breakwater.model.built import KnownAttributes, built_parts, gravity_value, initial_setting
 from breakwater.model.groups import ModelGroups
 from breakwater.model.mesh import facet_type, group_tag
@@ -132,14 +131,13 @@ class ContactModel(KnownAttributes, ModelGroups):
     ) -> None:
         _pair_names_once(pairs, surface_pairs)
         self.mesh_data = mesh_data
-        self.mesh = msh = mesh_data.mesh
+        self.mesh = msh = _finite(mesh_data.mesh)
         self.comm = msh.comm
         tdim = msh.topology.dim
         self.gdim = msh.geometry.dim
         self.degree = degree
         if mesh_data.cell_tags is None or mesh_data.facet_tags is None:
             raise MeshError("the mesh needs cell and facet physical groups (name them in gmsh)")
-        _finite_nodes(msh)
         msh.topology.create_connectivity(tdim - 1, tdim)
         self._cell_body = np.full(msh.topology.index_map(tdim).size_local
                                   + msh.topology.index_map(tdim).num_ghosts, -1, np.int32)
@@ -267,15 +265,14 @@ class ContactModel(KnownAttributes, ModelGroups):
         return PairData(pair, s, m, d, dS, n, forms.ContactLaw.of(pair, c))
 
     def _check_surfaces(self, pair: SurfacePair) -> SurfacePair:
-        """A general pair whose surfaces lie on its bodies' boundaries, faces a search takes.
+        """A general pair whose surfaces lie on its bodies' boundaries.
 
         A surface group may lie on several bodies (a conforming interface shared by the
         two, or one group naming facets of both): each side of the pair takes the
         group's facets on its own body (:func:`breakwater.contact.surfaces.surface_dofs`).
         Whether the bodies start overlapped beyond what the pair's search sees is the
         pair's static check (:meth:`breakwater.model.pairs.Pair.static_check`), which the
-        static stage runs before it looks for the initial state. Each group's faces are
-        finite and not collapsed (:func:`breakwater.contact.surfaces.check_faces`).
+        static stage runs before it looks for the initial state.
         """
         for role, body, group in (("slave", pair.slave, pair.slave_surface),
                                   *(("master", pair.master, g) for g in pair.master_groups)):
@@ -290,16 +287,14 @@ class ContactModel(KnownAttributes, ModelGroups):
                                 f"body '{', '.join(found)}', not on the {role} '{body}' "
                                 f"(facet groups on '{body}': "
                                 f"{', '.join(self.facet_groups_on(body)) or 'none'})")
-            check_faces(self, pair, role, body, group)
         return pair
 
 
-def _finite_nodes(msh: dolfinx.mesh.Mesh) -> None:
-    """Refuse a mesh node with a non-finite coordinate (NaN, inf), on every rank.
+def _finite(msh: dolfinx.mesh.Mesh) -> dolfinx.mesh.Mesh:
+    """The mesh, refused if a node has a non-finite coordinate (NaN, inf), on every rank.
 
     Before, such a node (a .msh written with ``nan``) ended the case build in a
-    LinAlgError traceback (the rigid modes' eigenvalues), or on a general pair's surface
-    in the search's ZeroDivisionError.
+    LinAlgError traceback (the rigid modes' eigenvalues).
 
     Raises:
         MeshError: One line: how many nodes, and where the first (in the input's node
@@ -311,7 +306,7 @@ def _finite_nodes(msh: dolfinx.mesh.Mesh) -> None:
     bad = np.flatnonzero(~np.isfinite(x).all(axis=1))
     count = msh.comm.allreduce(len(bad))
     if not count:
-        return
+        return msh
     first = None
     if len(bad):
         k = bad[np.argmin(geometry.input_global_indices[bad])]
