@@ -328,7 +328,11 @@ def test_compiled_passes_end_on_degenerate_faces(bad: str) -> None:
     non-finite node among the faces: the passes end where the single pass does, in its
     ZeroDivisionError (the face's plane has no area: Newton's flat start). Before, a
     radius grown from 0 by ×4 a pass never reached the search radius and the search
-    never ended (measured: still running after 90 s)."""
+    never ended (measured: still running after 90 s). A run never brings such faces
+    here: a case's or a run's set-up refuses them in one line
+    (:func:`breakwater.contact.surfaces.check_faces`, the mesh's non-finite nodes
+    :class:`~breakwater.model.model.ContactModel`; tests/bad_cases/run/y1-y5); the kernel
+    keeps raising, not hanging, for a caller that skipped it."""
     faces = _bumpy(6, 6)
     faces[3] = faces[3, 0] if bad == "collapsed" else np.nan
     rng = np.random.default_rng(3)
@@ -373,6 +377,83 @@ def test_compiled_passes_keep_the_nearest() -> None:
     np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-13)
     f_ref, _ = project(point, faces, FacetGrid(faces, 1.0))
     assert f_ref[0] == 0
+
+
+def _straight(corners: np.ndarray) -> np.ndarray:
+    """A flat 6-node face: its corners and its edges' midpoints (NODES[6]'s order)."""
+    return np.concatenate([corners, 0.5 * (corners[[1, 0, 0]] + corners[[2, 2, 1]])])
+
+
+def test_compiled_pass_grid_is_widened_by_the_box_margin() -> None:
+    """A pass's grid holds every face its box filter can keep: the faces' boxes grown
+    by the pass's radius and by the filter's margin beyond it (a quadratic face's bulge).
+
+    A 6-node face F: corners at z = 0 on the unit triangle, mid-edge nodes at z = h =
+    0.9, its top the centroid at z = 4h/3 = 1.2, 0.3 above its nodes' box. The point
+    is 0.1 above that top, a flat face G 0.2 above the point, and a small face off at
+    x = 5 sets the first pass's radius (its longest edge, 0.0141). The filter's margin
+    is F's 3h = 2.7 (its mid-edge offsets), the search radius 3.5: the passes of
+    0.0141, 0.0566 and 0.226 come before the last. The pass of 0.226 has F (0.1) and G
+    (0.2) within it; the point lies 0.4 above F's box, and the grid of boxes grown by
+    0.226 alone (cells 1.452 across, from z = −0.226) puts it in the cell above F's:
+    that pass took G. Grown by the margin too, the pass takes F, the reference's
+    nearest, at the centroid.
+    """
+    h = 0.9
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    bulging = np.concatenate([corners, [[0.5, 0.5, h], [0.0, 0.5, h], [0.5, 0.0, h]]])
+    point = np.array([[1 / 3, 1 / 3, 4 * h / 3 + 0.1]])
+    above = _straight(corners + np.array([0.0, 0.0, point[0, 2] + 0.2]))
+    far = _straight(0.01 * corners + np.array([5.0, 0.0, 0.0]))
+    faces = np.stack([bulging, above, far])
+    radius, tol = 3.5, 1e-9
+    shortest, widen = searchkernels3d._scales(faces, tol)
+    r = shortest * RADIUS_GROWTH**2
+    assert 0.2 < r < 0.3 and r + widen < radius  # the pass of 0.226, not the last
+    # The pass's grid without the margin holds G, not F; with it both.
+    assert set(searchkernels3d.candidates(point, faces, r)[1]) == {1}
+    assert {0, 1} <= set(searchkernels3d.candidates(point, faces, r + widen)[1])
+    assert searchkernels3d._project_within(point, faces, r, r, tol)[0][0] == 1
+    f_ref, _ = project(point, faces, FacetGrid(faces, radius), tol=tol)
+    assert f_ref[0] == 0
+    face, xi = searchkernels3d.project(point, faces, radius, tol)
+    assert face[0] == 0
+    np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-13)
+
+
+def test_compiled_pass_accepts_within_its_own_radius() -> None:
+    """A pass accepts projections within its own radius, not the search radius: a
+    farther face in a pass's grid does not take a point whose nearest face only a
+    later pass's grid holds.
+
+    The point (−0.5, 0, 0.5) lies 0.495 from a large tilted face G (the plane
+    x + z = 0.7; the foot (−0.15, 0, 0.85) inside G, whose box holds the point) and
+    0.3 above a small flat face F (0.03 across: the first pass's radius 0.0424). A
+    small face off at (5, 0, −2.7) sets the grid's origin: the cells of the passes of
+    0.0424 and 0.170 (3.08 and 3.34 across, from z = −2.7 − r) part the point (z = 0.5,
+    the second cell) from F's box (z = 0.2, the first): F is no candidate of those
+    passes, G is. They accept nothing (G is beyond their radius); the pass of 0.679
+    takes F, the reference's nearest (search radius 1), at (⅓, ⅓) under the point.
+    Accepting up to the search radius, the first pass took G.
+    """
+    tri = np.array([[-0.01, -0.01, 0.0], [0.02, -0.01, 0.0], [-0.01, 0.02, 0.0]])
+    point = np.array([[-0.5, 0.0, 0.5]])
+    small = _straight(tri + np.array([-0.5, 0.0, 0.2]))
+    tilted = _straight(np.array([[-1.0, -1.0, 1.7], [2.0, -1.0, -1.3], [-1.0, 2.0, 1.7]]))
+    far = _straight(tri + np.array([5.0, 0.0, -2.7]))
+    faces = np.stack([small, tilted, far])
+    radius, tol = 1.0, 1e-9
+    shortest, widen = searchkernels3d._scales(faces, tol)
+    for r in (shortest, shortest * RADIUS_GROWTH):  # the passes before the last
+        assert r + widen < radius
+        assert set(searchkernels3d.candidates(point, faces, r + widen)[1]) == {1}
+        assert searchkernels3d._project_within(point, faces, r, r + widen, tol)[0][0] == -1
+        assert searchkernels3d._project_within(point, faces, radius, r + widen, tol)[0][0] == 1
+    f_ref, _ = project(point, faces, FacetGrid(faces, radius), tol=tol)
+    assert f_ref[0] == 0
+    face, xi = searchkernels3d.project(point, faces, radius, tol)
+    assert face[0] == 0
+    np.testing.assert_allclose(xi[0], [1 / 3, 1 / 3], rtol=0, atol=1e-13)
 
 
 def test_dolfinx_p2_tetrahedron_facet_closure_order() -> None:
