@@ -344,6 +344,28 @@ def test_compiled_passes_end_on_degenerate_faces(bad: str) -> None:
         searchkernels3d.project(points, faces, 0.3, 1e-9)
 
 
+def test_collapsed_faces_are_those_the_set_up_refuses() -> None:
+    """surfaces.collapsed (the set-up's refusal, check_faces): a 3-D face whose corners'
+    height is at most 1e-6 (mesh.DEGENERATE) of its longest edge, whatever its mid-edge
+    nodes; a 2-D facet at most 1e-6 of the surface's longest. The height of a triangle
+    with base 1 and apex offset t is t: 0.5e-6 is collapsed, 2e-6 is not."""
+    from breakwater.contact.surfaces import collapsed
+
+    def face(apex: list[float]) -> np.ndarray:
+        return _straight(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], apex]))
+
+    curved = face([2.0, 0.0, 0.0])
+    curved[3:, 2] = 0.3  # corners on a line, mid-edge nodes off it: still no plane
+    faces = np.stack([face([0.0, 1.0, 0.0]), face([0.0, 0.0, 0.0]), face([0.5, 0.0, 0.0]),
+                      curved, face([0.5, 0.5e-6, 0.0]), face([0.5, 2e-6, 0.0]),
+                      np.zeros((6, 3))])
+    np.testing.assert_array_equal(collapsed(faces),
+                                  [False, True, True, True, True, False, True])
+    facets = np.array([[[0.0, 0.0], [1.0, 0.0]], [[1.0, 0.0], [1.0, 0.5e-6]],
+                       [[1.0, 0.0], [1.0, 2e-6]], [[2.0, 1.0], [2.0, 1.0]]])
+    np.testing.assert_array_equal(collapsed(facets), [False, True, False, True])
+
+
 def test_compiled_passes_find_a_bulging_face() -> None:
     """test_a_bulging_face_is_a_candidate in passes: beside the bulging face, a small
     face (the first pass's radius, 0.014) and a flat face 0.1 above the point. The
