@@ -21,7 +21,7 @@ from blocks import two_rectangles
 from mpi4py import MPI
 
 from breakwater.casefile.case import load_case
-from breakwater.common.errors import CaseError
+from breakwater.common.errors import CaseError, MeshError
 from breakwater.config.runspec import InitialSpec, OutputSpec, TimeSpec
 from breakwater.model.built import REBUILD
 from breakwater.model.mesh import read_mesh
@@ -327,4 +327,25 @@ def test_gravity_set_upwards_is_refused_before_the_run(model: ContactModel,
         assert "\n" not in str(e.value)
     finally:
         model.gravity = (0.0, -9.81)  # type: ignore[assignment]
+    assert not out.exists()
+
+
+def test_collapsed_contact_facet_of_a_model_built_in_python(folder: pathlib.Path) -> None:
+    """A model built in Python whose general pair's master surface has a collapsed facet
+    (tests/bad_cases/run/y_collapsed_quad.msh: a quadrilateral with two corners at
+    (0.75, 0)): run() refuses it in one line before the folder is touched, on every
+    rank (the case path refuses it when its model is built: y1_*)."""
+    path = pathlib.Path(__file__).parent / "bad_cases" / "run" / "y_collapsed_quad.msh"
+    material = Material(2314.0, 0.2, shear_modulus=2e9)
+    model = ContactModel(read_mesh(path, COMM), [Body("block", material),
+                                                 Body("base", material)],
+                         fixed=[Fixed("base_bottom")], gravity=(0.0, -9.81), degree=1,
+                         surface_pairs=[SurfacePair("sliding", "block", "base",
+                                                    "block_bottom", "base_top",
+                                                    penalty=5e10)])
+    out = folder / "collapsed_facet"
+    with pytest.raises(MeshError, match=r"^contact\.sliding\.master_surface: 'base_top' on "
+                       r"'base' has 1 collapsed facet\(s\) \(no length: its two ends at one "
+                       r"point\), the first centred at \(0\.75, 0\) m: remesh there$"):
+        run(model, TimeSpec(dt=1e-3, end_time=2e-3), OutputSpec(out), report=False)
     assert not out.exists()

@@ -132,7 +132,9 @@ def check_faces(model: ContactModel) -> None:
     stiffness is NaN, so that no search could make the run right. Each group is
     gathered (the same faces on every rank, in one order) and the decision reduced
     over the ranks besides: every rank refuses, with the same line. Called where a
-    case's model is built and where a run starts (a model built in Python).
+    case's model is built (before a calibration's searches) and by
+    :func:`~breakwater.run.simulation.run` before the output folder is touched (a
+    model built in Python).
 
     Raises:
         MeshError: One line naming the pair, the side, the group, how many faces and

@@ -49,9 +49,11 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
         TypeError: An argument of another type (one line naming it).
         CaseError: A probe naming a body or a pair the model does not have, or a
             gravity that pulls a body off its supports (one line).
-        MeshError: A probe's point outside its body (one line).
+        MeshError: A probe's point outside its body, or a general pair's surface with
+            collapsed faces (:func:`~breakwater.contact.surfaces.check_faces`; one line).
     """
     from breakwater.common.errors import CaseError
+    from breakwater.contact.surfaces import check_faces
     from breakwater.model.model import ContactModel
     from breakwater.model.pairs import probed_pair
     from breakwater.model.pointprobe import check_body, check_point
@@ -73,6 +75,7 @@ def checked_arguments(model: Any, time: Any, output: Any, resolved_case: Any
     why = gravity_problem(model)  # (collective) a gravity set since the build
     if why is not None:
         raise CaseError(f"run: {why}")
+    check_faces(model)  # (collective) collapsed contact faces of a model built in Python
     if resolved_case is None or isinstance(resolved_case, Mapping):
         return resolved_case
     resolved = getattr(resolved_case, "resolved", None)

@@ -20,7 +20,6 @@ from breakwater.common import files
 from breakwater.common.errors import CaseError
 from breakwater.contact.meshedgap import meshed_gap2d, meshed_gap3d
 from breakwater.contact.penetration import meshed_overlap
-from breakwater.contact.surfaces import check_faces
 from breakwater.model.model import ContactModel
 from breakwater.outputs import summary as sm
 from breakwater.outputs.applied import AppliedLoads
@@ -69,7 +68,6 @@ def start(r: Session) -> None:
     for info in r.extra.get("loads", {}).values():
         for line in info.get("warnings", ()):
             log.warning("%s", line)  # the case's loads (breakwater.casefile.loadchecks)
-    check_faces(m)  # a model built in Python (a case's was checked when built)
     for spec in m.surface_pairs if m.gdim == 2 else ():  # meshed into each other (within
         # the search's reach; a 3-D pair refuses an overlap in its static_check)
         line = meshed_overlap(m, spec)
