@@ -16,7 +16,13 @@ from breakwater.common.errors import MeshError
 from breakwater.common.gmshtools import gmsh_session, unsupported_format
 from breakwater.common.parallel import on_rank_zero, shared_tempdir
 from breakwater.common.xdmfinfo import is_xdmf
-from breakwater.model.meshcells import check_cell_type, check_group_nodes, check_meshed
+from breakwater.model.meshcells import (
+    DEGENERATE,
+    THIN,
+    check_cell_type,
+    check_group_nodes,
+    check_meshed,
+)
 from breakwater.model.meshfile import (
     check_names,
     check_offset,
@@ -30,6 +36,7 @@ from breakwater.model.meshfile import (
     no_groups,
     number_cell_nodes_first,
 )
+from breakwater.model.tetcells import check_tetrahedra
 
 log = logging.getLogger("breakwater.model.mesh")
 
@@ -224,6 +231,8 @@ def _merge(path: pathlib.Path, gdim: int | None) -> tuple[int, dict[str, int], i
     if gdim == 2:
         check_plane(path)
         check_cells(path)
+    else:
+        check_tetrahedra(path)
     if left_out:
         log.warning("%s", left_out)
     return gdim, empty_names(path), ungrouped
@@ -253,17 +262,6 @@ def _single_body_cells(path: pathlib.Path, gdim: int) -> None:
                                 f"'{other}' and '{name}' (a cell belongs to one body; "
                                 "meshes merged whose entity tags repeat? give each file's "
                                 "entities distinct tags, or mesh the bodies in one model)")
-
-
-DEGENERATE = 1e-6
-"""A cell whose height is below this fraction of its longest edge is refused as
-degenerate (zero area). The stiffness of such a cell exceeds its neighbours' by
-1/DEGENERATE or more, so the solution would carry errors of the order of its
-condition number times the round-off (1e6 × 1e-16 × the neighbours' own ~1e6);
-a collapsed cell (three collinear vertices) makes the matrix singular (a MUMPS error)."""
-THIN = 1e-2
-"""A cell whose height is below this fraction of its longest edge (an angle below about
-0.6°, an aspect ratio above 100) is accepted with a warning."""
 
 
 def cell_quality(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

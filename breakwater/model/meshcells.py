@@ -15,7 +15,18 @@ import numpy as np
 
 from breakwater.common.errors import MeshError
 
-__all__ = ["check_cell_type", "check_group_nodes", "check_meshed"]
+__all__ = ["DEGENERATE", "THIN", "check_cell_type", "check_group_nodes", "check_meshed"]
+
+DEGENERATE = 1e-6
+"""A cell whose height (a tetrahedron's smallest: :mod:`.tetcells`) is below this fraction
+of its longest edge is refused as degenerate (zero area or volume). The stiffness of such
+a cell exceeds its neighbours' by 1/DEGENERATE or more, so the solution would carry
+errors of the order of its condition number times the round-off (1e6 × 1e-16 × the
+neighbours' own ~1e6); a collapsed cell (three collinear vertices) makes the matrix
+singular (a MUMPS error; a flat tetrahedron's stiffness is NaN)."""
+THIN = 1e-2
+"""A cell whose height is below this fraction of its longest edge (an angle below about
+0.6°, an aspect ratio above 100) is accepted with a warning."""
 
 CELL_FAMILIES = {2: ("Triangle", "Quadrilateral"), 3: ("Tetrahedron", "Hexahedron")}
 """The cells breakwater reads, by the mesh's dimension (gmsh's family names)."""
