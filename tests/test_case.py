@@ -130,6 +130,7 @@ def test_override_mesh_path_is_relative_to_the_working_directory(tmp_path, monke
     assert pathlib.Path(case.mesh.source) == (tmp_path / "m.msh").resolve()
 
 
+@pytest.mark.serial  # the parser alone (no MPI): once is enough
 @pytest.mark.parametrize(("override", "phrase"), [
     ("time.dtt=1", "unknown key 'time.dtt' (did you mean 'dt'?)"),
     ("bodies.mond.density=1", "no entry 'mond' in bodies (did you mean 'mound'?)"),
@@ -176,6 +177,7 @@ def test_enough_bad_cases():
     assert len(BAD_FILES) >= 20
 
 
+@pytest.mark.serial  # the parser alone (no MPI): once is enough
 @pytest.mark.parametrize("path", BAD_FILES, ids=lambda p: p.stem)
 def test_bad_case_message(path):
     with pytest.raises(CaseError) as info:
@@ -186,6 +188,9 @@ def test_bad_case_message(path):
     assert path.name in message.split(": ")[0]  # the file is named first
 
 
+# show-case reads the case alone: the rank-dependent line on this path (the error printed by
+# rank 0) runs on 2 ranks in tests/test_bad_runs.py, through the same cli.main.
+@pytest.mark.serial
 @pytest.mark.parametrize("path", BAD_FILES, ids=lambda p: p.stem)
 def test_bad_case_through_main(path, capsys):
     assert cli.main(["show-case", str(path)]) == 2
@@ -366,6 +371,7 @@ def _get(data: dict, key: str):
     return data
 
 
+@pytest.mark.serial  # the parser alone (no MPI): once is enough
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(sorted(NUMERIC)).flatmap(lambda k: st.tuples(st.just(k), NUMERIC[k])))
 def test_numeric_overrides_round_trip(item):
@@ -383,6 +389,7 @@ SECTIONS = {"": Case, "time.": None, "damping.": None, "bodies.mound.": None,
 KNOWN = {k.rsplit(".", 1)[-1] for k in schema_keys(Case)} | {"name"}
 
 
+@pytest.mark.serial  # the parser alone (no MPI): once is enough
 @settings(max_examples=60, deadline=None)
 @given(st.sampled_from(sorted(SECTIONS)),
        st.text("abcdefghijklmnopqrstuvwxyz_", min_size=1, max_size=16))
@@ -429,6 +436,7 @@ def running_impulse(p: Pulse, t: float) -> float:
     return p.impulse * fraction
 
 
+@pytest.mark.serial  # arithmetic alone (no MPI): once is enough
 @pytest.mark.parametrize("shape", ["triangular", "rectangular", "half-sine"])
 @pytest.mark.parametrize("peak", [0.0, 0.3, 0.5, 1.0])
 def test_pulse_integrates_to_the_impulse(shape, peak):
@@ -511,6 +519,7 @@ def test_build_without_calibration(shared_dir):
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
 
 
+@pytest.mark.serial  # the parser alone (no MPI): once is enough
 @pytest.mark.parametrize("path", sorted(EXAMPLES.rglob("*.toml")),
                          ids=lambda p: p.relative_to(EXAMPLES).as_posix())
 def test_every_example_file_reads(path: pathlib.Path, tmp_path: pathlib.Path) -> None:

@@ -32,6 +32,8 @@ from mpi4py import MPI
 
 from breakwater import cli
 
+pytestmark = pytest.mark.serial  # text and argument parsers alone (no MPI): once is enough
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 OTHER_PYTHONS = {"py", "python3", "py3", "pycon", "ipython", "ipython3", "sage"}
@@ -117,7 +119,6 @@ def test_python_blocks_are_marked() -> None:
                           f"```{{code-block}} python (not run): {unmarked}")
 
 
-@pytest.mark.serial
 @pytest.mark.timeout(900)
 @pytest.mark.parametrize("code", list(PYTHON), ids=[v[0].where for v in PYTHON.values()])
 def test_python_block_runs(code: str, tmp_path: pathlib.Path) -> None:

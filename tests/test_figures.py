@@ -13,6 +13,8 @@ from mpi4py import MPI
 
 from breakwater.outputs import figures
 
+pytestmark = pytest.mark.serial  # files and matplotlib alone (no MPI): once is enough
+
 COMM = MPI.COMM_WORLD
 
 

@@ -41,6 +41,8 @@ import pytest
 
 import breakwater
 
+pytestmark = pytest.mark.serial  # the sources alone (no MPI): once is enough
+
 PACKAGE = pathlib.Path(breakwater.__file__).parent
 FORMS = pathlib.Path(importlib.import_module("breakwater.forms").__file__).parent
 MESHES = pathlib.Path(importlib.import_module("breakwater.meshes").__file__).parent
@@ -196,7 +198,6 @@ def test_module_and_class_sizes() -> None:
     assert long_modules == [] and long_classes == [], "\n".join(long_modules + long_classes)
 
 
-@pytest.mark.serial
 def test_reading_a_case_needs_no_solver_stack() -> None:
     # Reading and checking a case file or a study file imports neither dolfinx nor
     # petsc4py (a login node, a spreadsheet export, ``show-case``): a fresh interpreter.

@@ -8,6 +8,8 @@ import pytest
 
 from breakwater.common.notebookprogress import NotebookLine, in_kernel, progress_line
 
+pytestmark = pytest.mark.serial  # text alone (no MPI): once is enough
+
 
 class _Display:
     """IPython's display: records the texts shown and replaced."""

@@ -22,8 +22,10 @@ example runs under a wall-clock alarm (:func:`time_limit`) besides hypothesis'
 deadline, so that a hang fails instead of stalling the suite.
 
 Pure Python: no mesh is built and nothing runs (the two-block case names a ``.msh``
-file of which the case layer reads only the ``$PhysicalNames`` header). Under MPI each
-rank runs the same examples in a folder of its own, without collectives.
+file of which the case layer reads only the ``$PhysicalNames`` header). Serial only:
+nothing on these paths depends on the rank (no collective; the one rank-dependent line,
+an input error printed by rank 0 alone, runs on 2 ranks in ``tests/test_bad_runs.py``'s
+refused runs, through the same :func:`breakwater.cli.main`).
 """
 
 from __future__ import annotations
@@ -58,17 +60,12 @@ from breakwater.config.fields import schema_keys
 from breakwater.config.tomlfiles import display
 from breakwater.studies.studyfile import check_points, load_study, toml_literal
 
-EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES",
-                              "120" if MPI.COMM_WORLD.size == 1 else "30"))
+pytestmark = pytest.mark.serial  # pure Python, no rank-dependent path (module doc)
+
+EXAMPLES = int(os.environ.get("BREAKWATER_PROPERTY_EXAMPLES", "120"))
 """Examples per test (the file runs in about 20 s of CPU serially). To explore, set
 ``BREAKWATER_PROPERTY_EXAMPLES`` (e.g. 3000) and ``BREAKWATER_PROPERTY_RANDOM=1``
-(new random examples on every run instead of the fixed ones).
-
-Under ``mpiexec``, 30 (and the ``@example`` cases): every rank runs the same examples,
-without collectives, so what the ranks add is only that an input refused is refused
-on every rank (exit status 2, the line printed by rank 0 alone); the first 30 examples,
-loaded and refused ones, check that as the 120 do, which the serial run takes whole
-(2 ranks: 22 s of CPU a rank for the file with 120)."""
+(new random examples on every run instead of the fixed ones)."""
 PROFILE = settings(max_examples=EXAMPLES, database=None,
                    derandomize=not os.environ.get("BREAKWATER_PROPERTY_RANDOM"),
                    deadline=5000,  # ms: an example takes 10-50 ms of CPU; a loaded machine, 10x+

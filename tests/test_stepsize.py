@@ -29,6 +29,8 @@ from breakwater.stepping.stepsize import (
     resolved_step,
 )
 
+pytestmark = pytest.mark.serial  # arithmetic alone (no MPI): once is enough
+
 
 def _steps(step: StepSize) -> list[float]:
     """Accept proposals to the end; the steps taken."""

@@ -15,6 +15,8 @@ from breakwater.storms.rigid import Caisson
 from breakwater.storms.seastate import SeaState
 from breakwater.storms.waves import Site
 
+pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
+
 
 def _case(width: float) -> tuple[Site, Caisson]:
     site = Site(depth=20.0, toe_depth=14.5, berm_depth=11.0, crest_height=5.0,
@@ -95,7 +97,6 @@ def test_storms_neither_a_count_nor_seeds_are_refused():
     assert type(numpy_sea.significant_period) is float and type(numpy_sea.seed) is int
 
 
-@pytest.mark.serial
 def test_storm_rigid_example_refuses_a_bad_argument(tmp_path):
     """``examples/storm_rigid.py abc`` (or ``0``) failed with a traceback (int()'s, or
     expected_sliding's ValueError); now one line naming the argument, exit status 2,

@@ -25,6 +25,8 @@ from breakwater.storms.seastate import SeaState, wave_train
 from breakwater.storms.waveforce import PulseHistory, wave_load
 from breakwater.storms.waves import Site, Wave, WaveLoad, WaveTrain
 
+pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
+
 UNIT = ((-1.0, 1.0), (0.0, 1.0))  # front shape with ∫ s dz = 1 m: P = p₁
 
 

@@ -24,6 +24,8 @@ from breakwater.storms.seastate import (
 )
 from breakwater.storms.waves import Site
 
+pytestmark = pytest.mark.serial  # arrays and files alone (no MPI): once is enough
+
 DEEP = Site(depth=100.0, toe_depth=80.0, berm_depth=70.0, crest_height=5.0, base_width=20.0)
 
 

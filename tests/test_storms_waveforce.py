@@ -10,6 +10,8 @@ from breakwater.loads.wavepressure import GodaRangeError, goda_pressure
 from breakwater.storms.waveforce import ForceProfile, resultants, wave_load
 from breakwater.storms.waves import Site, Wave
 
+pytestmark = pytest.mark.serial  # arrays alone (no MPI): once is enough
+
 PLAIN = Site(depth=20.0, toe_depth=14.5, berm_depth=11.0, crest_height=5.0, base_width=25.0)
 # d/h = 0.4 and B_M ≈ 0.12 L: Takahashi's α_I at its largest, α_I = H/d = 1.25 > α₂ = 0.31
 BERM = Site(depth=20.0, toe_depth=12.0, berm_depth=8.0, crest_height=4.0, base_width=20.0,
