@@ -28,7 +28,7 @@ def test_goda3d_first_steps(folder: pathlib.Path) -> None:
     # pendulum's (eq. 29: M ω (1 + e₀), ω = s₀ sqrt(g/l₀)) over the 10 mm × 10 mm patch,
     # applied so far by GN22's momentum rule Σ Δt ((1 − β₁) F₀ + β₁ F₁) (1e-12): on the
     # rising half of the triangle (peak P = 2I/T at T/2 = 1 ms) the trapezoidal I/2 plus
-    # (β₁ − ½) Δt P. Serial only (the 3D model on 2 and 4 ranks: tests/test_threed.py).
+    # (β₁ − ½) Δt P. Serial only (the 3D model on 4 ranks: tests/test_threed.py).
     case = load_case("goda3d", ["calibration.enabled=false",
                                 "bodies.mound.shear_modulus=2.247e6",
                                 "time.end_time=0.001", "output.figures=false",
