@@ -23,6 +23,10 @@ def _sum_of_squares(x: np.ndarray) -> float:
     return s
 
 
+SUM_OF_SQUARES = f"{_sum_of_squares.__module__}.{_sum_of_squares.__qualname__}"
+"""The name of ``kernel(_sum_of_squares)``'s lock."""
+
+
 def test_kernel_without_a_writable_cache(monkeypatch: pytest.MonkeyPatch) -> None:
     # Where numba finds no directory to cache in (a read-only install, no writable
     # home), njit(cache=True) raises at decoration; kernel() compiles without a cache.
@@ -40,8 +44,8 @@ def test_kernel_without_a_cache_takes_no_lock(monkeypatch: pytest.MonkeyPatch) -
     # lock (3 s; the compilation alone takes well under a second).
     monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])
     compiled = kernel(_sum_of_squares)
-    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3"], stdout=subprocess.PIPE,
-                              text=True)
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3", SUM_OF_SQUARES],
+                              stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
         start = time.perf_counter()
@@ -73,7 +77,9 @@ def _outer(x: np.ndarray) -> float:
 _HOLDER = """
 import fcntl, sys, time
 from breakwater.common.jit import lock_path
-with open(lock_path(), "a") as f:
+path = lock_path(sys.argv[2])
+path.parent.mkdir(parents=True, exist_ok=True)
+with open(path, "a") as f:
     fcntl.flock(f, fcntl.LOCK_EX)
     print("held", flush=True)
     time.sleep(float(sys.argv[1]))
@@ -91,8 +97,8 @@ def test_kernels_take_turns_to_compile(monkeypatch: pytest.MonkeyPatch,
     monkeypatch.setattr(jit, "NOTICE_AFTER", 0.5)
     monkeypatch.setattr(jit, "_noticed", False)
     caplog.set_level(logging.INFO, logger="breakwater")
-    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3"], stdout=subprocess.PIPE,
-                              text=True)
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3", SUM_OF_SQUARES],
+                              stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
         start = time.perf_counter()
@@ -106,7 +112,57 @@ def test_kernels_take_turns_to_compile(monkeypatch: pytest.MonkeyPatch,
     assert len(notices) == 1 and "compiling breakwater's kernels" in notices[0]
     # Re-entrant: a kernel compiles the kernels it calls under the lock it holds.
     assert _outer(np.arange(4.0)) == 12.0
-    assert lock_path().exists()
+    assert lock_path(SUM_OF_SQUARES).exists()
+
+
+@pytest.mark.serial
+def test_a_kernel_does_not_wait_for_another_kernels_lock() -> None:
+    # Each kernel has its own lock: while another process holds another kernel's (3 s),
+    # this one's first call (a cache load or a compilation, well under 2 s) goes on.
+    holder = subprocess.Popen([sys.executable, "-c", _HOLDER, "3", f"{__name__}._outer"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+        start = time.perf_counter()
+        assert kernel(_sum_of_squares)(np.arange(5.0)) == 30.0
+        assert time.perf_counter() - start < 2.0
+    finally:
+        holder.wait(timeout=60)
+
+
+def test_the_kernels_calls_have_no_cycle() -> None:
+    """The kernels' locks cannot deadlock while no kernel calls itself or, through
+    others, a kernel that calls it (:mod:`breakwater.common.jit`): a process waits for a
+    kernel's lock holding only the locks of the kernels it is compiled within, its
+    callers. The graph of the calls between breakwater's kernels, by name (two kernels of
+    the same name are one node: a cycle through them is reported too)."""
+    import ast
+    import pathlib
+
+    import breakwater
+
+    bodies: dict[str, list[ast.FunctionDef]] = {}
+    for path in pathlib.Path(breakwater.__file__).parent.rglob("*.py"):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.FunctionDef) and any(
+                    getattr(d, "id", getattr(d, "attr", None)) == "kernel"
+                    for d in node.decorator_list):
+                bodies.setdefault(node.name, []).append(node)
+    calls = {name: {getattr(c.func, "id", getattr(c.func, "attr", None))
+                    for node in nodes for c in ast.walk(node) if isinstance(c, ast.Call)}
+             & bodies.keys() for name, nodes in bodies.items()}
+    assert len(bodies) > 50 and sum(map(len, calls.values())) > 30  # the graph is read
+    done: set[str] = set()
+
+    def visit(name: str, path: tuple[str, ...]) -> None:
+        assert name not in path, "a cycle of kernel calls: " + " -> ".join((*path, name))
+        if name not in done:
+            for callee in calls[name]:
+                visit(callee, (*path, name))
+            done.add(name)
+
+    for name in bodies:
+        visit(name, ())
 
 
 @pytest.mark.serial
